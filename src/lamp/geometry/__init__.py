@@ -1,0 +1,1 @@
+"""Planar geometry: SE(2) poses, shape footprints, collision and clearance queries."""

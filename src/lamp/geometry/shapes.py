@@ -1,0 +1,61 @@
+"""Shape footprints: outlines as vertex arrays and Shapely geometries, in local or world frame.
+
+Circles are exact in Shapely (buffered points) wherever exactness matters; outlines used
+for drawing and image rasterisation approximate them with ``CIRCLE_SEGMENTS`` vertices.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import shapely
+from numpy.typing import ArrayLike
+
+from lamp.geometry.se2 import transform_points
+from lamp.scene.model import Circle, Obstacle, Polygon, Rectangle, Shape
+
+CIRCLE_SEGMENTS = 64
+
+
+def local_outline(shape: Shape, segments: int = CIRCLE_SEGMENTS) -> np.ndarray:
+    """(V, 2) counter-clockwise boundary vertices in the shape's own frame."""
+    if isinstance(shape, Circle):
+        a = np.linspace(0.0, 2.0 * np.pi, segments, endpoint=False)
+        return shape.radius * np.stack([np.cos(a), np.sin(a)], axis=1)
+    if isinstance(shape, Rectangle):
+        hx, hy = 0.5 * shape.size[0], 0.5 * shape.size[1]
+        return np.array([[-hx, -hy], [hx, -hy], [hx, hy], [-hx, hy]], dtype=float)
+    pts = np.asarray(shape.points, dtype=float)
+    # shoelace: make counter-clockwise
+    area2 = np.sum(pts[:, 0] * np.roll(pts[:, 1], -1) - np.roll(pts[:, 0], -1) * pts[:, 1])
+    return pts if area2 > 0 else pts[::-1].copy()
+
+
+def world_outline(shape: Shape, pose: ArrayLike, segments: int = CIRCLE_SEGMENTS) -> np.ndarray:
+    """(V, 2) boundary vertices of ``shape`` placed at ``pose``."""
+    return transform_points(pose, local_outline(shape, segments))
+
+
+def to_shapely(shape: Shape, pose: ArrayLike = (0.0, 0.0, 0.0)) -> shapely.Geometry:
+    """Shapely geometry of ``shape`` at ``pose`` (circles as exact-ish buffered points)."""
+    pose = np.asarray(pose, dtype=float)
+    if isinstance(shape, Circle):
+        return shapely.Point(pose[0], pose[1]).buffer(shape.radius, quad_segs=32)
+    return shapely.Polygon(world_outline(shape, pose))
+
+
+def obstacle_geometry(obstacle: Obstacle) -> shapely.Geometry:
+    return to_shapely(obstacle.shape, obstacle.pose)
+
+
+def half_extents(shape: Shape) -> tuple[float, float]:
+    """Half extents of the shape's bounding box in its own frame."""
+    if isinstance(shape, Circle):
+        return float(shape.radius), float(shape.radius)
+    if isinstance(shape, Rectangle):
+        return 0.5 * float(shape.size[0]), 0.5 * float(shape.size[1])
+    pts = np.abs(np.asarray(shape.points, dtype=float))
+    return float(pts[:, 0].max()), float(pts[:, 1].max())
+
+
+def is_polygon(shape: Shape) -> bool:
+    return isinstance(shape, (Rectangle, Polygon))
