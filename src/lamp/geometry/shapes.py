@@ -59,3 +59,37 @@ def half_extents(shape: Shape) -> tuple[float, float]:
 
 def is_polygon(shape: Shape) -> bool:
     return isinstance(shape, (Rectangle, Polygon))
+
+
+def signed_distance(shape: Shape, local_points: ArrayLike) -> np.ndarray:
+    """Signed distance from (..., 2) points in the shape's frame to its boundary.
+
+    Negative inside, positive outside. Exact for circles and rectangles; polygons use the
+    minimum distance to their edges with an even-odd inside test.
+    """
+    p = np.asarray(local_points, dtype=float)
+    if isinstance(shape, Circle):
+        return np.hypot(p[..., 0], p[..., 1]) - shape.radius
+    if isinstance(shape, Rectangle):
+        hx, hy = 0.5 * shape.size[0], 0.5 * shape.size[1]
+        qx = np.abs(p[..., 0]) - hx
+        qy = np.abs(p[..., 1]) - hy
+        outside = np.hypot(np.maximum(qx, 0.0), np.maximum(qy, 0.0))
+        inside = np.minimum(np.maximum(qx, qy), 0.0)
+        return outside + inside
+    verts = local_outline(shape)
+    a = verts
+    b = np.roll(verts, -1, axis=0)
+    flat = p.reshape(-1, 2)
+    ab = b - a  # (V, 2)
+    ap = flat[:, None, :] - a[None, :, :]  # (P, V, 2)
+    t = np.clip(np.sum(ap * ab, axis=-1) / np.maximum(np.sum(ab * ab, axis=-1), 1e-18), 0.0, 1.0)
+    closest = a[None] + t[..., None] * ab[None]
+    dist = np.min(np.hypot(*(flat[:, None, :] - closest).transpose(2, 0, 1)), axis=1)
+    # even-odd rule
+    ya, yb = a[None, :, 1], b[None, :, 1]
+    py = flat[:, 1:2]
+    crosses = (ya > py) != (yb > py)
+    xint = a[None, :, 0] + (py - ya) / np.where(yb - ya == 0, 1e-18, yb - ya) * ab[None, :, 0]
+    inside = np.sum(crosses & (flat[:, 0:1] < xint), axis=1) % 2 == 1
+    return np.where(inside, -dist, dist).reshape(p.shape[:-1])

@@ -1,0 +1,43 @@
+"""Tunable parameters of the LAMP planners and the closed loop, with their defaults."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class PlannerConfig:
+    """Parameters shared by LAMP-Lazy, LAMP-A* and the GCo baselines."""
+
+    #: Candidates drawn from the manipulation model per call (K in Alg. 1 line 20).
+    k: int = 16
+    #: Largest robot budget tried by Verify (budgets run from min(N, this) down to 1).
+    max_budget: int = 3
+    #: Candidates per budget that are handed to Gspi before trying a smaller budget.
+    gspi_attempts_per_budget: int = 3
+    #: Wall-clock limit of one Gspi call (seconds).
+    gspi_time_limit: float = 1.0
+    #: Execution drift that triggers replanning (Alg. 2 line 6): metres / radians.
+    drift_position: float = 0.05
+    drift_orientation: float = 0.1
+    #: The closed loop stops pushing once the object is this close to its goal
+    #: (tighter than the success tolerance of 0.1 m / 0.1 rad, to keep a margin).
+    stop_position: float = 0.05
+    stop_orientation: float = 0.07
+    #: At most this many executed segments per object (the paper's 100 iterations).
+    max_segments: int = 100
+    #: Object lattice: translation step (m) and heading bins.
+    lattice_step: float = 0.1
+    n_headings: int = 16
+    #: Cost added to an edge whose verification failed (Alg. 2 line 21, UpdateChange).
+    edge_penalty: float = 10.0
+    #: Penalty added to a re-inserted LAMP-A* state (Alg. 1 line 17): the paper's 1e4.
+    astar_reinsert_penalty: float = 1e4
+    #: Cumulative planning limit per object (s): the paper's 500 s for LAMP-A*.
+    planning_time_limit: float = 500.0
+    #: Robot configurations closer than this (m, per robot) count as the same (D_T keys).
+    robot_match_tolerance: float = 0.05
+    #: How far inside the nominal contact distance a contact may lie (m).
+    contact_tolerance: float = 0.006
+    #: Largest number of D* Lite replans inside one Plan call before giving up.
+    max_plan_iterations: int = 400

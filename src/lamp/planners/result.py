@@ -1,0 +1,92 @@
+"""Run results: what ``lamp run`` writes as ``result.json`` (see the interfaces spec).
+
+``RunResult.to_dict()`` carries exactly the spec's required keys plus a few extras
+(``verify_calls``, ``plan_cache_hits``...). Makespan counts synchronised robot time steps
+of ``MAKESPAN_STEP_S`` seconds (one waypoint of at most 0.02 m at the robot speed).
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+
+from lamp.geometry.se2 import pose_distance
+
+#: Success tolerances of the scene format (position metres, orientation radians).
+SUCCESS_POSITION_TOL = 0.1
+SUCCESS_ORIENTATION_TOL = 0.1
+
+
+def goal_errors(pose: np.ndarray, goal: np.ndarray) -> tuple[float, float]:
+    """(position error, wrapped orientation error) of ``pose`` against ``goal``."""
+    dt, dr = pose_distance(np.asarray(pose, float), np.asarray(goal, float))
+    return float(dt), float(dr)
+
+
+def within_goal(pose, goal, position_tol: float, orientation_tol: float) -> bool:
+    dt, dr = goal_errors(pose, goal)
+    return dt <= position_tol and dr <= orientation_tol
+
+
+@dataclass
+class ObjectResult:
+    """The outcome of moving one object (one entry of result.json's ``objects``)."""
+
+    success: bool
+    final_pose: list[float]
+    goal: list[float]
+    position_error: float
+    orientation_error: float
+    left_workspace: bool
+    segments: int
+    full_horizon_plan: bool
+    failure_reason: str = ""
+    replans: int = 0
+    planning_time_s: float = 0.0
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+@dataclass
+class RunResult:
+    """The outcome of one (scene, planner, seed) run."""
+
+    scene: str
+    planner: str
+    seed: int
+    objects: list[ObjectResult] = field(default_factory=list)
+    planning_time_s: list[float] = field(default_factory=list)
+    makespan: int = 0
+    replans: int = 0
+    wall_time_s: float = 0.0
+    stats: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def success(self) -> bool:
+        return bool(self.objects) and all(o.success for o in self.objects)
+
+    @property
+    def segments(self) -> int:
+        return len(self.planning_time_s)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "scene": self.scene,
+            "planner": self.planner,
+            "seed": self.seed,
+            "success": self.success,
+            "objects": [o.to_dict() for o in self.objects],
+            "segments": self.segments,
+            "planning_time_s": [round(float(t), 6) for t in self.planning_time_s],
+            "total_planning_time_s": round(float(sum(self.planning_time_s)), 6),
+            "median_planning_time_s": (
+                round(float(np.median(self.planning_time_s)), 6) if self.planning_time_s else None
+            ),
+            "makespan": int(self.makespan),
+            "replans": int(self.replans),
+            "wall_time_s": round(float(self.wall_time_s), 3),
+            "stats": self.stats,
+        }

@@ -1,0 +1,55 @@
+"""Synchronised multi-robot trajectories: (N, T, 2) arrays, row t of every robot the same instant.
+
+The executor and the Gspi planner share one contract: consecutive rows are at most
+``MAX_STEP`` metres apart, so a check at the stored points is a check of the motion.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: Largest distance a robot may travel between two consecutive rows.
+MAX_STEP = 0.02
+
+
+def densify(paths: np.ndarray, max_step: float = MAX_STEP) -> np.ndarray:
+    """Insert rows so that no robot moves more than ``max_step`` between consecutive rows.
+
+    Each original interval is split into the same number of sub-steps for all robots
+    (enough for the fastest one), so the paths stay synchronised.
+    """
+    paths = np.asarray(paths, dtype=float)
+    if paths.shape[1] < 2:
+        return paths.copy()
+    step = np.max(np.linalg.norm(np.diff(paths, axis=1), axis=2), axis=0)  # (T-1,)
+    n_sub = np.maximum(1, np.ceil(step / max_step * (1 + 1e-9)).astype(int))
+    if np.all(n_sub == 1):
+        return paths.copy()
+    pieces = [paths[:, :1]]
+    for t, n in enumerate(n_sub):
+        frac = (np.arange(1, n + 1) / n)[None, :, None]
+        pieces.append(paths[:, t : t + 1] + frac * (paths[:, t + 1 : t + 2] - paths[:, t : t + 1]))
+    return np.concatenate(pieces, axis=1)
+
+
+def straight_moves(starts: np.ndarray, ends: np.ndarray, max_step: float = MAX_STEP) -> np.ndarray:
+    """Synchronised straight-line motions from ``starts`` (N, 2) to ``ends`` (N, 2)."""
+    return densify(np.stack([starts, ends], axis=1).astype(float), max_step)
+
+
+def concat(*parts: np.ndarray) -> np.ndarray:
+    """Join synchronised trajectories end to start (a repeated joint row is dropped)."""
+    parts = [p for p in parts if p is not None and p.shape[1] > 0]
+    if not parts:
+        raise ValueError("concat needs at least one non-empty trajectory")
+    out = [parts[0]]
+    for p in parts[1:]:
+        if np.allclose(out[-1][:, -1], p[:, 0], atol=1e-12):
+            p = p[:, 1:]
+        out.append(p)
+    return np.concatenate(out, axis=1)
+
+
+def hold(positions: np.ndarray, steps: int) -> np.ndarray:
+    """Robots standing still at ``positions`` (N, 2) for ``steps`` rows."""
+    return np.repeat(np.asarray(positions, float)[:, None, :], max(1, steps), axis=1)

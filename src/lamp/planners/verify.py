@@ -1,0 +1,229 @@
+"""Verify: can the robots realise one object transition? (paper Sec. III-A-1, Alg. 1 lines 18-26)
+
+Given the object at ``q_from``, a requested motion to ``q_to`` and the robots at ``q_R``:
+for budgets B = min(N, max_budget) down to 1 (line 19), draw K proposals from the
+manipulation model (line 20), drop those whose contacts or push paths collide with the
+obstacles, the border, the object or each other (line 21, ``Collide``), pair robots with
+contacts by shortest distance and send unpaired robots to waiting spots out of the push's
+way (line 22, ``Reassign``), and ask Gspi for approach paths (line 23). The first success
+returns the transition T_R = T_move (+) T_manip (line 24); otherwise failure (line 26).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+
+from lamp.geometry import se2
+from lamp.geometry.shapes import signed_distance
+from lamp.mrmp import plan_paths
+from lamp.planners.task import ManipulationTask
+from lamp.planners.trajectory import MAX_STEP, concat, densify, hold, straight_moves
+
+
+@dataclass
+class Transition:
+    """Verified robot trajectories for one object motion (an edge of LAMP's search)."""
+
+    q_from: np.ndarray  # (3,) object pose before the push
+    q_to: np.ndarray  # (3,) planned object pose after the push
+    contacts: np.ndarray  # (B, 2) contact points, world frame
+    pushes_local: np.ndarray  # (B, H, 2) push paths in the object frame at q_from
+    move: np.ndarray  # (N, Tm, 2) approach: robots to contacts / waiting spots
+    manip: np.ndarray  # (N, Tp, 2) push: contact robots follow pushes, others hold
+
+    @property
+    def robot_paths(self) -> np.ndarray:
+        """T_R = T_move (+) T_manip: the synchronised paths to execute."""
+        return concat(self.move, self.manip)
+
+    @property
+    def robot_start(self) -> np.ndarray:
+        return self.move[:, 0]
+
+    @property
+    def robot_end(self) -> np.ndarray:
+        return self.manip[:, -1]
+
+    @property
+    def steps(self) -> int:
+        """Synchronised time steps of T_R (its makespan)."""
+        return int(self.move.shape[1] + self.manip.shape[1] - 1)
+
+    @property
+    def budget(self) -> int:
+        return int(self.contacts.shape[0])
+
+
+def _pairwise_min_distance(paths: np.ndarray) -> float:
+    """Smallest distance between any two of the (B, T, 2) synchronised paths."""
+    b = paths.shape[0]
+    if b < 2:
+        return np.inf
+    d = paths[:, None] - paths[None, :]
+    dist = np.hypot(d[..., 0], d[..., 1])
+    iu = np.triu_indices(b, 1)
+    return float(dist[iu].min())
+
+
+def collide(task: ManipulationTask, q_from: np.ndarray, contacts: np.ndarray,
+            pushes_local: np.ndarray) -> bool:
+    """``Collide`` (Alg. 1 line 21): is this proposal unusable at ``q_from``?
+
+    A proposal is rejected when a contact or any point of a push path leaves the robots'
+    free space (obstacles, other objects, border), when a contact lies inside the object
+    (deeper than ``contact_tolerance``), or when two pushing robots come closer than 2r.
+    """
+    r = task.robot_radius
+    local_contacts = pushes_local[:, 0]
+    if np.any(signed_distance(task.shape, local_contacts) < r - task.config.contact_tolerance):
+        return True
+    pushes_world = se2.transform_points(q_from, pushes_local)
+    dense = densify(np.asarray(pushes_world), MAX_STEP / 2)
+    if not np.all(task.static_space.is_free(dense.reshape(-1, 2))):
+        return True
+    return _pairwise_min_distance(dense) < 2 * r - 1e-9
+
+
+def reassign(task: ManipulationTask, q_from: np.ndarray, q_to: np.ndarray, q_R: np.ndarray,
+             contacts: np.ndarray, pushes_world: np.ndarray) -> np.ndarray:
+    """``Reassign`` (Alg. 1 line 22): goals for all N robots.
+
+    Robots are paired with contacts by shortest distance (an optimal assignment); every
+    unpaired robot gets a waiting spot: the nearest collision-free place, found by a
+    breadth-first search from where it stands, that keeps clear of the object's swept
+    motion and of the push paths. Returns (N, 2) goals; rows 0..B-1 are the contacts.
+    """
+    n, b = q_R.shape[0], contacts.shape[0]
+    goals = np.empty((n, 2))
+    goals[:b] = contacts
+    if b == n:
+        return goals
+    cost = np.linalg.norm(q_R[:, None, :] - contacts[None, :, :], axis=2)
+    rows, _ = linear_sum_assignment(cost)
+    unpaired = [i for i in range(n) if i not in set(rows.tolist())]
+    space = task.robot_space_at(q_from)
+    r = task.robot_radius
+    swept = se2.interpolate(q_from, q_to, np.linspace(0.0, 1.0, 5))
+    keep_out = [pushes_world.reshape(-1, 2)]
+    chosen: list[np.ndarray] = []
+
+    def clear_of_push(points: np.ndarray) -> np.ndarray:
+        ok = np.ones(points.shape[0], dtype=bool)
+        for pose in swept:
+            local = se2.inverse_transform_points(pose, points)
+            ok &= signed_distance(task.shape, local) >= 2 * r
+        for pts in keep_out + chosen:
+            d = np.linalg.norm(points[:, None, :] - np.asarray(pts).reshape(-1, 2)[None], axis=2)
+            ok &= d.min(axis=1) >= 3 * r
+        return ok
+
+    for slot, i in enumerate(unpaired):
+        spot = space.nearest_free(q_R[i], accept=clear_of_push)
+        if spot is None:
+            spot = q_R[i]
+        goals[b + slot] = spot
+        chosen.append(np.asarray(spot).reshape(1, 2))
+    return goals
+
+
+def leave_contact(task: ManipulationTask, q_from: np.ndarray, q_R: np.ndarray) -> np.ndarray:
+    """Short straight moves that take robots out of collision before they are routed.
+
+    After a push the robots stand touching the object; drift can leave one a few mm
+    inside its configuration-space obstacle. Such a robot first backs off to the nearest
+    free configuration (a move of at most a few centimetres, away from the object).
+    """
+    space = task.robot_space_at(q_from)
+    free = space.is_free(q_R)
+    if np.all(free):
+        return q_R[:, None, :].copy()
+    ends = q_R.copy()
+    for i in np.flatnonzero(~free):
+        spot = space.nearest_free(q_R[i])
+        if spot is not None:
+            ends[i] = spot
+    return straight_moves(q_R, ends)
+
+
+def approach(task: ManipulationTask, q_from: np.ndarray, q_R: np.ndarray,
+             goals: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    """Gspi (Alg. 1 line 23): paths for all robots to ``goals``; (paths, goal_of) or None."""
+    backoff = leave_contact(task, q_from, q_R)
+    starts = backoff[:, -1]
+    task.stats.gspi_calls += 1
+    try:
+        plan = plan_paths(
+            task.scene, starts, goals, object_poses=task.poses_with(q_from),
+            time_limit=task.config.gspi_time_limit, space=task.robot_space_at(q_from),
+            seed=task.seed,
+        )
+    except ValueError:
+        return None
+    if not plan.success:
+        return None
+    task.stats.gspi_success += 1
+    return concat(backoff, plan.paths), np.asarray(plan.goal_of)
+
+
+def push_paths(end_of_move: np.ndarray, goal_of: np.ndarray, pushes_world: np.ndarray) -> np.ndarray:
+    """T_manip for all N robots: robot at contact j follows push j, the others hold."""
+    n = end_of_move.shape[0]
+    h = pushes_world.shape[1]
+    manip = hold(end_of_move, h)
+    for i in range(n):
+        j = int(goal_of[i])
+        if 0 <= j < pushes_world.shape[0]:
+            manip[i] = pushes_world[j]
+            manip[i, 0] = end_of_move[i]
+    return densify(manip)
+
+
+def verify(task: ManipulationTask, q_from: np.ndarray, q_to: np.ndarray, q_R: np.ndarray,
+           attempt: int = 0) -> Transition | None:
+    """``Verify`` (Alg. 1 lines 18-26): robot trajectories that move the object ``q_from -> q_to``."""
+    task.stats.verify_calls += 1
+    q_from = np.asarray(q_from, float)
+    q_to = np.asarray(q_to, float)
+    q_R = np.asarray(q_R, float)
+    motion = se2.relative(q_from, q_to)
+    top = min(task.n_robots, task.config.max_budget)
+    for budget in range(top, 0, -1):  # line 19: budgets N down to 1
+        tried = 0
+        for prop in task.proposals(motion, budget, attempt):  # line 20
+            pushes_local = np.asarray(prop.pushes, float)
+            if collide(task, q_from, np.asarray(prop.contacts, float), pushes_local):  # line 21
+                continue
+            pushes_world = se2.transform_points(q_from, pushes_local)
+            contacts = pushes_world[:, 0]
+            goals = reassign(task, q_from, q_to, q_R, contacts, pushes_world)  # line 22
+            routed = approach(task, q_from, q_R, goals)  # line 23
+            tried += 1
+            if routed is not None:  # line 24
+                move, goal_of = routed
+                task.stats.verify_success += 1
+                return Transition(
+                    q_from=q_from, q_to=q_to, contacts=contacts, pushes_local=pushes_local,
+                    move=move, manip=push_paths(move[:, -1], goal_of, pushes_world),
+                )
+            if tried >= task.config.gspi_attempts_per_budget:
+                break
+    return None  # line 26
+
+
+def reroute(task: ManipulationTask, cached: Transition, q_R: np.ndarray) -> Transition | None:
+    """Alg. 2 lines 27-33: reuse a verified push from new robot positions (new T_move only)."""
+    q_R = np.asarray(q_R, float)
+    pushes_world = se2.transform_points(cached.q_from, cached.pushes_local)
+    goals = reassign(task, cached.q_from, cached.q_to, q_R, cached.contacts, pushes_world)
+    routed = approach(task, cached.q_from, q_R, goals)
+    if routed is None:
+        return None
+    move, goal_of = routed
+    return Transition(
+        q_from=cached.q_from, q_to=cached.q_to, contacts=cached.contacts,
+        pushes_local=cached.pushes_local, move=move,
+        manip=push_paths(move[:, -1], goal_of, pushes_world),
+    )
