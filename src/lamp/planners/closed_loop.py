@@ -1,0 +1,171 @@
+"""Closed-loop execution (paper Alg. 2 lines 3-8): plan, execute a segment in MuJoCo, observe, replan.
+
+Every planner implements ``ObjectPlanner.plan(q_O, q_R, deadline) -> Plan | None`` for one
+object; ``run_object`` drives it with a policy that says when to replan:
+- ``replan_on_drift``: after a segment whose object pose misses the planned one by more
+  than ``drift_position`` / ``drift_orientation`` (LAMP-Lazy, LAMP-A* replan);
+- ``replan_when_done``: when the plan is used up but the object is not at its goal
+  (LAMP-Lazy and GCo, whose "plan" is a single step).
+Multi-object scenes run object by object; the other objects stay physical bodies.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+import numpy as np
+
+from lamp.geometry.se2 import pose_distance
+from lamp.planners.result import ObjectResult, goal_errors, within_goal
+from lamp.planners.task import ManipulationTask
+from lamp.planners.trajectory import concat, straight_moves
+from lamp.planners.verify import Transition, reroute
+
+
+class ObjectPlanner(Protocol):
+    """Plans the motion of one object; see ``lamp.planners.lazy.Plan``."""
+
+    def plan(self, q_O: np.ndarray, q_R: np.ndarray, deadline: float | None = None) -> Any: ...
+
+
+@dataclass(frozen=True)
+class LoopPolicy:
+    replan_on_drift: bool
+    replan_when_done: bool
+    #: Plans yield a full horizon (LAMP); GCo's one-step "plans" do not.
+    full_horizon: bool = True
+    #: A failed plan call ends the object (LAMP) or only wastes one iteration (GCo).
+    failure_is_final: bool = True
+
+
+@dataclass
+class LoopRecord:
+    """What the loop measured while moving one object."""
+
+    planning_time_s: list[float] = field(default_factory=list)
+    makespan: int = 0
+    replans: int = 0
+    frames: list[Any] = field(default_factory=list)
+
+
+#: Robot start positions that differ from a transition's by less than this are joined
+#: with a short straight move; larger differences re-route the robots (Alg. 2 l. 27-33).
+ROBOT_SNAP = 0.01
+
+
+def _adapt_to_robots(task: ManipulationTask, trans: Transition, q_R: np.ndarray) -> Transition | None:
+    gap = np.linalg.norm(trans.robot_start - q_R, axis=1)
+    if np.all(gap < 1e-9):
+        return trans
+    if np.all(gap <= ROBOT_SNAP):
+        move = concat(straight_moves(q_R, trans.robot_start), trans.move)
+        return Transition(trans.q_from, trans.q_to, trans.contacts, trans.pushes_local, move, trans.manip)
+    return reroute(task, trans, q_R)
+
+
+def run_object(task: ManipulationTask, planner: ObjectPlanner, policy: LoopPolicy, sim,
+               record: LoopRecord, render: bool = False, time_limit: float | None = None) -> ObjectResult:
+    """Move ``task``'s object to its goal in ``sim`` with ``planner`` (Alg. 2 lines 2-8)."""
+    cfg = task.config
+    limit = cfg.planning_time_limit if time_limit is None else time_limit
+    goal = task.goal
+    planning_spent = 0.0
+    pending: list[Transition] = []
+    plan_obj = None
+    pending_time = 0.0
+    segments = 0
+    iterations = 0
+    left = False
+    planned_once = False
+    full_horizon = False
+    reason = ""
+    q_O = np.asarray(sim.object_poses[task.index], float)
+    q_R = np.asarray(sim.robot_positions, float)
+    while iterations < cfg.max_segments:
+        if within_goal(q_O, goal, cfg.stop_position, cfg.stop_orientation):
+            break
+        if not pending:
+            if planned_once and not policy.replan_when_done:
+                reason = "plan finished away from the goal (open loop)"
+                break
+            remaining = limit - planning_spent
+            if remaining <= 0:
+                reason = "planning time limit"
+                break
+            t0 = time.perf_counter()
+            plan_obj = planner.plan(q_O, q_R, deadline=t0 + remaining)
+            dt = time.perf_counter() - t0
+            planning_spent += dt
+            pending_time += dt
+            if planned_once:
+                record.replans += 1
+            if not planned_once:
+                full_horizon = plan_obj is not None and policy.full_horizon
+            planned_once = True
+            if plan_obj is None or not plan_obj.transitions:
+                if policy.failure_is_final:
+                    reason = "no plan found"
+                    break
+                iterations += 1
+                continue
+            pending = list(plan_obj.transitions)
+        trans = pending.pop(0)
+        t0 = time.perf_counter()
+        adapted = _adapt_to_robots(task, trans, q_R)
+        dt = time.perf_counter() - t0
+        planning_spent += dt
+        pending_time += dt
+        if adapted is None:
+            pending = []  # robots cannot reach this push from where they are: replan
+            if not policy.replan_when_done and not policy.replan_on_drift:
+                reason = "robots cannot reach the next push (open loop)"
+                break
+            continue
+        paths = adapted.robot_paths
+        out = sim.execute(paths, record_every=8 if render else 0)
+        iterations += 1
+        segments += 1
+        record.planning_time_s.append(pending_time)
+        pending_time = 0.0
+        record.makespan += paths.shape[1] - 1
+        q_O = np.asarray(out.object_poses[task.index], float)
+        q_R = np.asarray(out.robot_positions, float)
+        if render:
+            record.frames.extend(_frames(task, out, plan_obj))
+        if out.left_workspace:
+            left = True
+            reason = "object left the workspace"
+            break
+        dpos, drot = pose_distance(q_O, adapted.q_to)
+        if policy.replan_on_drift and (dpos > cfg.drift_position or drot > cfg.drift_orientation):
+            pending = []  # line 6: drift -> replan from the observed state
+    pos_err, rot_err = goal_errors(q_O, goal)
+    success = (not left) and within_goal(q_O, goal, 0.1, 0.1)
+    if not success and not reason:
+        reason = "segment limit reached" if iterations >= cfg.max_segments else "stopped away from goal"
+    return ObjectResult(
+        success=bool(success), final_pose=[float(v) for v in q_O], goal=[float(v) for v in goal],
+        position_error=pos_err, orientation_error=rot_err, left_workspace=bool(left),
+        segments=segments, full_horizon_plan=bool(full_horizon),
+        failure_reason="" if success else reason, replans=record.replans,
+        planning_time_s=planning_spent,
+    )
+
+
+def _frames(task: ManipulationTask, out, plan_obj) -> list[Any]:
+    from lamp.viz.animation import Frame
+
+    trace = getattr(out, "trace", None)
+    if trace is None:
+        return []
+    path = plan_obj.object_path if plan_obj is not None else None
+    verified = plan_obj.verified_edges if plan_obj is not None else []
+    penalised = plan_obj.penalised_edges if plan_obj is not None else []
+    frames = []
+    for robots, objects in zip(trace.robot_positions, trace.object_poses, strict=False):
+        frames.append(Frame(robot_positions=robots, object_poses=objects, active_object=task.index,
+                            planned_path=path, verified_edges=verified, penalised_edges=penalised,
+                            caption=f"object {task.index + 1}/{len(task.scene.objects)}"))
+    return frames

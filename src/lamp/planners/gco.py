@@ -1,0 +1,77 @@
+"""The GCo baselines (``gco-ori``, ``gco-var``): GCo's own manipulation loop, no verification.
+
+Each iteration (facts sheet, "How GCo itself drives a manipulation"): weighted A* (w = 2)
+for the object alone on a 0.1 m / 0.1 rad lattice, with the object inflated by 0.2 m
+(``gco-ori``) or not at all (``gco-var``); take the waypoint about 0.3 m ahead; clamp the
+step to +-0.2 m and +-0.3 rad; ask the model for ONE sample with budget = number of robots
+(at most 3); route the robots to its contacts with Gspi; execute; repeat. Proposals are
+never checked for collisions and robot-level feasibility is never verified: that is the
+gap LAMP closes, and the baseline keeps it on purpose.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from lamp.geometry import se2
+from lamp.planners.lazy import Plan
+from lamp.planners.task import ManipulationTask
+from lamp.planners.verify import Transition, approach, push_paths, reassign
+from lamp.search.astar import gco_object_path
+
+LOOKAHEAD = 0.3  # m: the waypoint GCo steers towards
+MAX_STEP_XY = 0.2  # m: step clamp per axis
+MAX_STEP_THETA = 0.3  # rad
+
+
+class GCoPlanner:
+    """One GCo iteration per ``plan`` call: a single unverified push towards the goal."""
+
+    def __init__(self, task: ManipulationTask, inflation: float) -> None:
+        self.task = task
+        self.inflation = inflation
+        self.iteration = 0
+
+    def _next_pose(self, q_O: np.ndarray, deadline: float | None) -> np.ndarray | None:
+        path = gco_object_path(self.task.scene, self.task.index, q_O, self.task.object_poses,
+                               self.inflation, deadline=deadline)
+        if path is None or len(path) == 0:
+            return None
+        path = np.asarray(path, float)
+        along = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(path[:, :2], axis=0), axis=1))])
+        idx = int(np.searchsorted(along, LOOKAHEAD))
+        waypoint = path[min(idx, len(path) - 1)]
+        motion = se2.relative(q_O, waypoint)
+        motion[:2] = np.clip(motion[:2], -MAX_STEP_XY, MAX_STEP_XY)
+        motion[2] = np.clip(motion[2], -MAX_STEP_THETA, MAX_STEP_THETA)
+        return se2.compose(q_O, motion)
+
+    def plan(self, q_O: np.ndarray, q_R: np.ndarray, deadline: float | None = None) -> Plan | None:
+        task = self.task
+        self.iteration += 1
+        q_O = np.asarray(q_O, float)
+        q_R = np.asarray(q_R, float)
+        q_to = self._next_pose(q_O, deadline)
+        if q_to is None:
+            return None
+        motion = se2.relative(q_O, q_to)
+        budget = min(task.n_robots, task.config.max_budget)
+        seed = (task.seed * 7919 + self.iteration) % (2**31 - 1)
+        task.stats.model_calls += 1
+        prop = task.model.propose(task.shape, motion=tuple(map(float, motion)), budget=budget,
+                                  k=1, seed=seed)[0]
+        pushes_local = np.asarray(prop.pushes, float)
+        pushes_world = se2.transform_points(q_O, pushes_local)
+        contacts = pushes_world[:, 0]
+        goals = reassign(task, q_O, q_to, q_R, contacts, pushes_world)
+        if deadline is not None and time.perf_counter() > deadline:
+            return None
+        routed = approach(task, q_O, q_R, goals)
+        if routed is None:
+            return None
+        move, goal_of = routed
+        trans = Transition(q_O, q_to, contacts, pushes_local, move,
+                           push_paths(move[:, -1], goal_of, pushes_world))
+        return Plan([trans], [(q_O[:2].copy(), q_to[:2].copy())], [])

@@ -1,0 +1,135 @@
+"""LAMP-A* (paper Alg. 1): A* over coupled object-robot states with eager verification.
+
+A state is (q_O, q_R, parent): the object on a lattice node (or at its continuous start)
+and the robots where the last verified push left them. Expanding a state verifies every
+motion primitive (line 8); each success yields a successor whose edge carries the robot
+trajectories T_R. States that match an explored (q_O, q_R) within a tolerance are merged
+through ``UpdateCost`` (lines 27-37); the expanded state goes back into the open list with
+a penalty (line 17) so that a later expansion can draw fresh model samples.
+
+Edge costs are robot time: the steps of T_R times ``MAX_STEP`` (metres at the robot
+speed); the heuristic is the lattice's object-only lower bound, in metres.
+"""
+
+from __future__ import annotations
+
+import heapq
+import itertools
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from lamp.planners.lazy import Plan
+from lamp.planners.task import ManipulationTask
+from lamp.planners.trajectory import MAX_STEP
+from lamp.planners.verify import Transition, verify
+from lamp.search.lattice import ObjectLattice
+
+
+@dataclass(eq=False)
+class SearchState:
+    """``State(q_O, q_R, parent)`` of Alg. 1 with its cost and the edge that reached it."""
+
+    node: object
+    q_O: np.ndarray
+    q_R: np.ndarray
+    parent: SearchState | None
+    cost: float
+    edge: Transition | None = None
+    children: list[tuple[SearchState, Transition]] = field(default_factory=list)
+    expansions: int = 0
+
+
+def edge_cost(trans: Transition) -> float:
+    return trans.steps * MAX_STEP
+
+
+class LampAStar:
+    """LAMP-A* for one object. ``plan`` searches from scratch from the current state."""
+
+    def __init__(self, task: ManipulationTask) -> None:
+        self.task = task
+        cfg = task.config
+        self.lattice = ObjectLattice(task.object_space, task.goal, step=cfg.lattice_step,
+                                     n_headings=cfg.n_headings)
+
+    def _robot_key(self, q_R: np.ndarray) -> tuple:
+        """Explored-state key for robots: positions on a ``robot_match_tolerance`` grid, sorted
+        (robots are anonymous, so permutations of one configuration are the same state)."""
+        cells = np.round(q_R / self.task.config.robot_match_tolerance).astype(int)
+        return tuple(sorted(map(tuple, cells.tolist())))
+
+    def _successors(self, state: SearchState) -> list[tuple[object, np.ndarray]]:
+        if state.node is None:  # the continuous start joins the lattice by one primitive
+            return [(v, self.lattice.pose(v)) for v, _ in self.lattice.start_connections(state.q_O)]
+        return [(v, self.lattice.pose(v)) for v, _ in self.lattice.successors(state.node)]
+
+    def _h(self, q_O: np.ndarray) -> float:
+        return self.lattice.heuristic_pose(q_O)
+
+    def plan(self, q_O: np.ndarray, q_R: np.ndarray, deadline: float | None = None) -> Plan | None:
+        cfg = self.task.config
+        goal = self.lattice.goal_node
+        start_node = self.lattice.snap(q_O)
+        start = SearchState(start_node, np.asarray(q_O, float), np.asarray(q_R, float), None, 0.0)
+        tie = itertools.count()
+        open_list: list = [(self._h(start.q_O), next(tie), start)]  # line 2
+        penalty: dict[int, float] = {}
+        explored: dict[tuple, SearchState] = {(start_node, self._robot_key(start.q_R)): start}
+        while open_list:  # line 3
+            if deadline is not None and time.perf_counter() > deadline:
+                return None
+            f, _, s = heapq.heappop(open_list)  # line 4
+            if f < s.cost + self._h(s.q_O) + penalty.get(id(s), 0.0) - 1e-9:
+                continue  # stale entry: the state's cost or penalty changed since
+            if s.node == goal:  # line 6
+                return self._backtrack(s)
+            for v, q_next in self._successors(s):  # line 7
+                if deadline is not None and time.perf_counter() > deadline:
+                    return None
+                trans = verify(self.task, s.q_O, q_next, s.q_R, attempt=s.expansions)  # line 8
+                if trans is None:  # line 9
+                    continue
+                child = SearchState(v, q_next, trans.robot_end, s, s.cost + edge_cost(trans), trans)
+                key = (v, self._robot_key(child.q_R))  # line 13
+                prev = explored.get(key)
+                if prev is not None:  # line 14
+                    self._update_cost(child, s, prev, trans, open_list, tie, penalty)
+                else:  # line 15
+                    s.children.append((child, trans))
+                    explored[key] = child
+                    heapq.heappush(open_list, (child.cost + self._h(q_next), next(tie), child))
+            s.expansions += 1  # line 17: re-add with penalty
+            penalty[id(s)] = cfg.astar_reinsert_penalty * s.expansions
+            heapq.heappush(open_list, (s.cost + self._h(s.q_O) + penalty[id(s)], next(tie), s))
+        return None
+
+    def _update_cost(self, s: SearchState, s_curr: SearchState, s_prev: SearchState,
+                     trans: Transition, open_list: list, tie, penalty: dict) -> None:
+        """``UpdateCost`` (Alg. 1 lines 27-37): connect and propagate a cheaper path."""
+        s_curr.children.append((s_prev, trans))  # line 28
+        if s.cost >= s_prev.cost:  # line 29
+            return
+        s_prev.cost, s_prev.parent, s_prev.edge = s.cost, s_curr, trans  # line 30
+        frontier = [(s_prev.cost, next(tie), s_prev)]  # line 31
+        while frontier:  # lines 32-37, best-first by ascending cost
+            _, _, top = heapq.heappop(frontier)
+            heapq.heappush(open_list, (top.cost + self._h(top.q_O) + penalty.get(id(top), 0.0),
+                                       next(tie), top))
+            for child, edge in top.children:
+                new_cost = top.cost + edge_cost(edge)
+                if child.cost > new_cost + 1e-12:
+                    child.cost, child.parent, child.edge = new_cost, top, edge
+                    heapq.heappush(frontier, (child.cost, next(tie), child))
+
+    @staticmethod
+    def _backtrack(s: SearchState) -> Plan:
+        """``BackTrack`` (line 6): the transitions from the start state to ``s``."""
+        edges: list[Transition] = []
+        while s.parent is not None:
+            edges.append(s.edge)
+            s = s.parent
+        edges.reverse()
+        verified = [(t.q_from[:2].copy(), t.q_to[:2].copy()) for t in edges]
+        return Plan(edges, verified, [])

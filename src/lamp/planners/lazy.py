@@ -1,0 +1,134 @@
+"""LAMP-Lazy (paper Alg. 2): D* Lite over object poses, lazy verification, cached transitions.
+
+D* Lite plans object-only paths on the lattice (``lamp.search``), rooted at the goal, so a
+moving start is cheap to repair. ``Plan`` (Alg. 2 lines 9-41) verifies the returned path
+edge by edge until it meets a pose already in ``Tree_eval`` (transitions verified on an
+earlier full path to the goal); a failed edge is penalised in D* Lite (``UpdateChange``)
+and the search repeats. The per-node caches D_T map robot configurations to complete robot
+trajectories, so replanning after drift mostly reuses verified pushes and only re-routes
+the robots (lines 26-33).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Hashable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from lamp.planners.task import ManipulationTask
+from lamp.planners.verify import Transition, reroute, verify
+from lamp.search.dstar_lite import DStarLite
+from lamp.search.lattice import ObjectLattice
+
+Node = Hashable
+
+
+@dataclass
+class TreeEntry:
+    """``Tree_eval[q_O]`` = (q_O^next, C_R, T_manip, D_T) (Alg. 2 line 24)."""
+
+    next_node: Node
+    transition: Transition  # carries C_R and T_manip; its robots' start is one D_T key
+    cache: list[tuple[np.ndarray, Transition]] = field(default_factory=list)  # D_T
+
+    def lookup(self, q_R: np.ndarray, tolerance: float) -> Transition | None:
+        """D_T[q_R]: a cached T_R whose robots started within ``tolerance`` of ``q_R``."""
+        for key, trans in self.cache:
+            if np.max(np.linalg.norm(key - q_R, axis=1)) <= tolerance:
+                return trans
+        return None
+
+
+@dataclass
+class Plan:
+    """A full-horizon plan: transitions to execute in order and the object poses they reach."""
+
+    transitions: list[Transition]
+    verified_edges: list[tuple[np.ndarray, np.ndarray]]
+    penalised_edges: list[tuple[np.ndarray, np.ndarray]]
+
+    @property
+    def object_path(self) -> np.ndarray:
+        if not self.transitions:
+            return np.zeros((0, 3))
+        return np.array([self.transitions[0].q_from] + [t.q_to for t in self.transitions])
+
+
+class LazyPlanner:
+    """LAMP-Lazy for one object (Alg. 2). ``plan`` is called first and after every drift."""
+
+    def __init__(self, task: ManipulationTask) -> None:
+        self.task = task
+        cfg = task.config
+        self.lattice = ObjectLattice(
+            task.object_space, task.goal, step=cfg.lattice_step, n_headings=cfg.n_headings
+        )
+        self.dstar = DStarLite(self.lattice)
+        self.dstar.initialize(self.lattice.goal_node)  # line 1
+        self.tree_eval: dict[Node, TreeEntry] = {}
+        self.failures: dict[tuple[Node, Node], int] = {}
+        self.penalised: list[tuple[np.ndarray, np.ndarray]] = []
+
+    def _penalise(self, u: Node, v: Node) -> None:
+        """``UpdateChange`` (line 21): raise the cost of an edge whose verification failed."""
+        n = self.failures.get((u, v), 0) + 1
+        self.failures[(u, v)] = n
+        self.dstar.update_change(u, v, self.dstar.cost(u, v) + self.task.config.edge_penalty)
+        self.penalised.append((self.lattice.pose(u)[:2].copy(), self.lattice.pose(v)[:2].copy()))
+
+    def plan(self, q_O_now: np.ndarray, q_R_now: np.ndarray, deadline: float | None = None) -> Plan | None:
+        """``Plan`` (Alg. 2 lines 9-41): a full-horizon plan from the current state, or None."""
+        import time
+
+        cfg = self.task.config
+        tol = cfg.robot_match_tolerance
+        goal = self.lattice.goal_node
+        for _ in range(cfg.max_plan_iterations):
+            if deadline is not None and time.perf_counter() > deadline:
+                return None
+            path = self.dstar.plan_shortest_path(q_O_now)  # line 12
+            if not path:
+                return None
+            transitions: list[Transition] = []
+            tree_new: dict[Node, TreeEntry] = {}
+            q_R = np.asarray(q_R_now, float)
+            curr = path[0]
+            failed = False
+            for nxt in path[1:]:  # line 14
+                if curr in self.tree_eval:  # line 15
+                    break
+                attempt = self.failures.get((curr, nxt), 0)
+                trans = verify(self.task, self.dstar.pose(curr), self.dstar.pose(nxt), q_R, attempt)
+                if trans is None:  # lines 18-22
+                    self._penalise(curr, nxt)
+                    failed = True
+                    break
+                transitions.append(trans)  # line 23
+                entry = TreeEntry(nxt, trans, [(q_R.copy(), trans)])
+                tree_new[curr] = entry  # line 24
+                curr, q_R = nxt, trans.robot_end  # line 25
+            if failed:
+                continue
+            if curr != goal and curr in self.tree_eval:  # lines 26-40
+                ok = True
+                while curr != goal:
+                    entry = self.tree_eval[curr]
+                    trans = entry.lookup(q_R, tol)  # line 37: reuse cached
+                    if trans is None:  # lines 28-34: new T_move for these robots
+                        trans = reroute(self.task, entry.transition, q_R)
+                        if trans is None:
+                            self._penalise(curr, entry.next_node)
+                            ok = False
+                            break
+                        entry.cache.append((q_R.copy(), trans))  # line 34: cache
+                    else:
+                        self.task.stats.cache_hits += 1
+                    transitions.append(trans)
+                    curr, q_R = entry.next_node, trans.robot_end
+                if not ok:
+                    continue
+            self.tree_eval.update(tree_new)  # line 41
+            verified = [(t.q_from[:2].copy(), t.q_to[:2].copy()) for t in transitions]
+            return Plan(transitions, verified, list(self.penalised))
+        return None
