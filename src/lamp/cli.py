@@ -141,9 +141,17 @@ def _register_groups() -> None:
     app.add_typer(suite_app, name="suite")
     try:
         from lamp.manip.cli import model_app
-    except ImportError:  # the model group is optional until its module exists
-        return
-    app.add_typer(model_app, name="model")
+
+        app.add_typer(model_app, name="model")
+    except ImportError:  # pragma: no cover - only while the module is being written
+        pass
+    try:
+        from lamp.bench.cli import bench_command, report_command
+
+        app.command("bench")(bench_command)
+        app.command("report")(report_command)
+    except ImportError:  # pragma: no cover
+        pass
 
 
 _register_groups()

@@ -54,6 +54,9 @@ class LoopRecord:
 #: with a short straight move; larger differences re-route the robots (Alg. 2 l. 27-33).
 ROBOT_SNAP = 0.01
 
+#: Physics steps between recorded animation frames when rendering.
+RENDER_EVERY = 40
+
 
 def _adapt_to_robots(task: ManipulationTask, trans: Transition, q_R: np.ndarray) -> Transition | None:
     gap = np.linalg.norm(trans.robot_start - q_R, axis=1)
@@ -124,7 +127,7 @@ def run_object(task: ManipulationTask, planner: ObjectPlanner, policy: LoopPolic
                 break
             continue
         paths = adapted.robot_paths
-        out = sim.execute(paths, record_every=8 if render else 0)
+        out = sim.execute(paths, record_every=RENDER_EVERY if render else None)
         iterations += 1
         segments += 1
         record.planning_time_s.append(pending_time)
