@@ -22,13 +22,13 @@ def densify(paths: np.ndarray, max_step: float = MAX_STEP) -> np.ndarray:
     if paths.shape[1] < 2:
         return paths.copy()
     step = np.max(np.linalg.norm(np.diff(paths, axis=1), axis=2), axis=0)  # (T-1,)
-    n_sub = np.maximum(1, np.ceil(step / max_step * (1 + 1e-9)).astype(int))
+    n_sub = np.maximum(1, np.ceil(step / max_step - 1e-9).astype(int))
     if np.all(n_sub == 1):
         return paths.copy()
     pieces = [paths[:, :1]]
     for t, n in enumerate(n_sub):
         frac = (np.arange(1, n + 1) / n)[None, :, None]
-        pieces.append(paths[:, t : t + 1] + frac * (paths[:, t + 1 : t + 2] - paths[:, t : t + 1]))
+        pieces.append((1.0 - frac) * paths[:, t : t + 1] + frac * paths[:, t + 1 : t + 2])
     return np.concatenate(pieces, axis=1)
 
 
