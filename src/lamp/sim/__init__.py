@@ -12,8 +12,8 @@ from lamp.sim.simulator import (
     SETTLE_TIME,
     WORKSPACE_TOLERANCE,
     ExecutionResult,
-    Simulator,
     SimState,
+    Simulator,
     Trace,
     footprint_outside,
 )

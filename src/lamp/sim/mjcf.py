@@ -38,7 +38,7 @@ import numpy as np
 import shapely
 
 from lamp.geometry.shapes import local_outline
-from lamp.scene.model import Circle, Obstacle, Polygon, Rectangle, Scene, Shape
+from lamp.scene.model import Circle, Obstacle, Rectangle, Scene, Shape
 
 #: Physics time step [s].
 TIMESTEP = 0.002
@@ -190,7 +190,9 @@ def _shape_geoms(
     """Geoms of ``shape`` in a frame where the shape's own origin is at ``offset`` rotated by
     ``angle`` (shape points are mapped p -> R(angle) p + offset)."""
     if isinstance(shape, Circle):
-        return [f'<geom class="{cls}" type="sphere" size="{shape.radius:.10g}" pos="{_fmt([*offset, 0.0])}"/>']
+        return [
+            f'<geom class="{cls}" type="sphere" size="{shape.radius:.10g}" pos="{_fmt([*offset, 0.0])}"/>'
+        ]
     if isinstance(shape, Rectangle):
         c, s = np.cos(0.5 * angle), np.sin(0.5 * angle)
         size = [0.5 * shape.size[0], 0.5 * shape.size[1], half_height]
@@ -295,14 +297,14 @@ def _make_xml(
             f'<joint name="o{k}y" type="slide" axis="0 1 0" damping="{damp:.10g}" '
             f'frictionloss="{GROUND_FRICTIONLOSS:.10g}"/>'
             f'<joint name="o{k}t" type="hinge" axis="0 0 1" damping="{damp * rho2:.10g}" '
-            f'frictionloss="{GROUND_FRICTIONLOSS * rho:.10g}"/>'
-            + "".join(geoms)
-            + "</body>"
+            f'frictionloss="{GROUND_FRICTIONLOSS * rho:.10g}"/>' + "".join(geoms) + "</body>"
         )
         if isinstance(shape, Circle):
             objects.append(ObjectBody((0.0, 0.0), np.zeros((0, 2)), float(shape.radius)))
         else:
-            objects.append(ObjectBody((float(centroid[0]), float(centroid[1])), local_outline(shape), 0.0))
+            objects.append(
+                ObjectBody((float(centroid[0]), float(centroid[1])), local_outline(shape), 0.0)
+            )
     actuators: list[str] = []
     for i in range(n_robots):
         bodies.append(

@@ -47,7 +47,6 @@ from lamp.scene.model import Scene, Shape
 from lamp.sim.mjcf import (
     ROBOT_KP,
     ROBOT_KV,
-    TIMESTEP,
     BuiltModel,
     ObjectBody,
     build_model,
@@ -123,8 +122,11 @@ def footprint_outside(
     x, y = poses[..., 0], poses[..., 1]
     if len(body.outline) == 0:
         r = body.radius
-        return (x - r < -tolerance) | (y - r < -tolerance) | (x + r > w + tolerance) | (
-            y + r > h + tolerance
+        return (
+            (x - r < -tolerance)
+            | (y - r < -tolerance)
+            | (x + r > w + tolerance)
+            | (y + r > h + tolerance)
         )
     c, s = np.cos(poses[..., 2])[..., None], np.sin(poses[..., 2])[..., None]
     px, py = body.outline[:, 0], body.outline[:, 1]
@@ -179,7 +181,9 @@ class Simulator:
         self._roll_object = 1 + self._built.object_qpos
         self.set_state(
             object_poses=scene.object_starts() if object_poses is None else object_poses,
-            robot_positions=scene.robot_starts_array if robot_positions is None else robot_positions,
+            robot_positions=scene.robot_starts_array
+            if robot_positions is None
+            else robot_positions,
         )
 
     # ------------------------------------------------------------------ state
@@ -263,9 +267,7 @@ class Simulator:
         th = poses[:, 2]
         c, s = np.cos(th), np.sin(th)
         cx, cy = self._centroids[:, 0], self._centroids[:, 1]
-        return np.stack(
-            [poses[:, 0] + c * cx - s * cy, poses[:, 1] + s * cx + c * cy, th], axis=1
-        )
+        return np.stack([poses[:, 0] + c * cx - s * cy, poses[:, 1] + s * cx + c * cy, th], axis=1)
 
     # -------------------------------------------------------------- execution
     def targets(self, robot_paths: ArrayLike, settle_time: float = SETTLE_TIME) -> np.ndarray:
@@ -293,7 +295,8 @@ class Simulator:
                 too far from the robot) or a bad ``record_every`` / ``settle_time``.
         """
         if record_every is not None and (
-            isinstance(record_every, bool) or not isinstance(record_every, (int, np.integer))
+            isinstance(record_every, bool)
+            or not isinstance(record_every, (int, np.integer))
             or record_every < 1
         ):
             raise ValueError(f"record_every must be a positive integer, got {record_every!r}")
