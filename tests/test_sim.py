@@ -439,3 +439,31 @@ def test_model_has_walls_and_obstacle_geoms_in_place():
         assert dist > R - 0.002
         assert geom.distance(shapely.Point(*out.robot_positions[0])) < R + 0.002
     assert build_model(scene).model.ngeom == 4 + 3 + 1 + 1  # walls, obstacles, object, robot
+
+
+def test_robots_do_not_pass_through_each_other():
+    """Robots are bodies too: one driven through another that holds still is stopped."""
+    sim = Simulator(make_scene([(Circle(0.1), (2.5, 2.5, 0.0))], [(0.5, 1.0), (1.0, 1.0)]))
+    path = line((0.5, 1.0), (1.5, 1.0))
+    out = sim.execute(np.stack([path, hold((1.0, 1.0), len(path))]), record_every=1)
+    gap = np.linalg.norm(out.trace.robot_positions[:, 0] - out.trace.robot_positions[:, 1], axis=1)
+    assert gap.min() > 2 * R - 0.002
+    assert out.robot_positions[0, 0] < out.robot_positions[1, 0]
+
+
+def test_object_pushed_into_obstacle_does_not_enter_it():
+    post = Obstacle(Circle(0.15), (1.6, 1.05, 0.0))
+    scene = make_scene([(Rectangle((0.3, 0.3)), (1.0, 1.0, 0.0))], [(0.8, 1.0)], [post])
+    out = Simulator(scene).execute(line((0.8, 1.0), (1.6, 1.0))[None], record_every=5)
+    core = to_shapely(post.shape, post.pose).buffer(-0.002)
+    for pose in out.trace.object_poses[:, 0]:
+        assert not core.intersects(to_shapely(Rectangle((0.3, 0.3)), pose))
+    assert out.object_poses[0, 0] < 1.6 - 0.15 - 0.15 + 0.05  # it got stuck or deflected
+
+
+def test_scene_without_objects_runs():
+    scene = Scene("empty", (2.0, 2.0), ((0.5, 0.5),), (), (), R)
+    sim = Simulator(scene)
+    out = sim.execute(line((0.5, 0.5), (1.0, 0.5))[None])
+    assert out.object_poses.shape == (0, 3) and not out.left_workspace
+    assert np.allclose(out.robot_positions, [[1.0, 0.5]], atol=1e-3)
