@@ -485,3 +485,19 @@ def test_robot_stops_at_concave_polygon_obstacle():
     dist = [geom.distance(shapely.Point(*p)) for p in out.trace.robot_positions[::5, 0]]
     assert min(dist) > R - 0.002
     assert np.allclose(out.robot_positions[0], [1.2 + R, 1.2 + R], atol=0.003)  # in the corner
+
+
+def test_chunked_rollout_matches_single_rollout(monkeypatch):
+    """Long calls are rolled out in chunks; the chunk size must not change anything."""
+    import lamp.sim.simulator as simulator
+
+    scene = make_scene([(L_SHAPE, (1.0, 1.0, 0.3))], [(0.6, 1.15)])
+    path = line((0.6, 1.15), (1.6, 1.15))[None]
+    whole = Simulator(scene).execute(path, record_every=9)
+    monkeypatch.setattr(simulator, "_CHUNK", 37)
+    chunked = Simulator(scene).execute(path, record_every=9)
+    assert whole.steps > 10 * 37
+    assert np.array_equal(whole.object_poses, chunked.object_poses)
+    assert np.array_equal(whole.trace.times, chunked.trace.times)
+    assert np.array_equal(whole.trace.object_poses, chunked.trace.object_poses)
+    assert np.array_equal(whole.trace.robot_positions, chunked.trace.robot_positions)

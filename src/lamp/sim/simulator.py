@@ -65,7 +65,8 @@ WORKSPACE_TOLERANCE = 0.002
 
 _STATE_SPEC = mujoco.mjtState.mjSTATE_INTEGRATION
 _ROLLOUT_SPEC = mujoco.mjtState.mjSTATE_FULLPHYSICS
-_STEP_SLACK = 1e-9  # tolerance on MAX_STEP / MAX_START_GAP comparisons
+_STEP_SLACK = 1e-9
+_CHUNK = 4096  # physics steps per rollout call (bounds the memory of recorded states)  # tolerance on MAX_STEP / MAX_START_GAP comparisons
 
 
 @dataclass(frozen=True)
@@ -310,12 +311,20 @@ class Simulator:
         start_time = self.data.time
         first = np.empty(self._nroll)
         mujoco.mj_getState(self.model, self.data, first, _ROLLOUT_SPEC)
-        if n_steps > 0:
+        objects_left = self._outside(first[None]).any(axis=0)
+        rows = [first[None]] if record_every is not None else []
+        # roll out in chunks so that memory stays bounded on long paths; each chunk starts
+        # from the full physics state and warm start the previous one ended in, so chunking
+        # does not change the result
+        for lo in range(0, n_steps, _CHUNK):
+            chunk = ctrl[lo : lo + _CHUNK].reshape(1, -1, ctrl.shape[-1])
+            init = np.empty(self._nroll)
+            mujoco.mj_getState(self.model, self.data, init, _ROLLOUT_SPEC)
             states, _ = mj_rollout.rollout(
                 self.model,
                 self.data,
-                first[None],
-                ctrl.reshape(1, n_steps, -1),
+                init[None],
+                chunk,
                 initial_warmstart=self.data.qacc_warmstart[None].copy(),
             )
             states = states[0]
@@ -324,30 +333,22 @@ class Simulator:
             warm = self.data.qacc_warmstart.copy()
             mujoco.mj_setState(self.model, self.data, states[-1], _ROLLOUT_SPEC)
             self.data.qacc_warmstart[:] = warm
-            self.data.ctrl[:] = ctrl[-1, 0]
+            self.data.ctrl[:] = chunk[0, -1]
+            objects_left |= self._outside(states).any(axis=0)
+            if record_every is not None:
+                steps = lo + 1 + np.arange(len(states))  # step index of each row
+                keep = (steps % record_every == 0) | (steps == n_steps)
+                rows.append(states[keep])
+        if n_steps > 0:
             mujoco.mj_forward(self.model, self.data)
-            all_states = np.concatenate([first[None], states])
-        else:
-            all_states = first[None]
-
-        obj_q = all_states[:, self._roll_object]  # (S+1, K, 3)
-        obj_poses = self._qpos_to_poses(obj_q)
-        left = np.zeros((len(all_states), self.n_objects), dtype=bool)
-        for k, body in enumerate(self._built.objects):
-            left[:, k] = footprint_outside(
-                body, obj_poses[:, k], self.scene.workspace, WORKSPACE_TOLERANCE
-            )
-        objects_left = left.any(axis=0)
 
         trace = None
         if record_every is not None:
-            idx = np.arange(0, n_steps + 1, record_every)
-            if idx[-1] != n_steps:
-                idx = np.append(idx, n_steps)
+            recorded = np.concatenate(rows)
             trace = Trace(
-                times=all_states[idx, 0] - start_time,
-                robot_positions=all_states[idx][:, self._roll_robot],
-                object_poses=obj_poses[idx],
+                times=recorded[:, 0] - start_time,
+                robot_positions=recorded[:, self._roll_robot],
+                object_poses=self._qpos_to_poses(recorded[:, self._roll_object]),
             )
         robot_final = self.robot_positions
         return ExecutionResult(
@@ -360,6 +361,17 @@ class Simulator:
             robot_errors=np.hypot(*(robot_final - paths[:, -1]).T),
             trace=trace,
         )
+
+    def _outside(self, states: np.ndarray) -> np.ndarray:
+        """(S, K) whether each object's footprint is outside the workspace in each rollout
+        state row (beyond ``WORKSPACE_TOLERANCE``)."""
+        poses = self._qpos_to_poses(states[:, self._roll_object])
+        out = np.zeros((len(states), self.n_objects), dtype=bool)
+        for k, body in enumerate(self._built.objects):
+            out[:, k] = footprint_outside(
+                body, poses[:, k], self.scene.workspace, WORKSPACE_TOLERANCE
+            )
+        return out
 
     def _validate(self, robot_paths: ArrayLike) -> np.ndarray:
         try:
