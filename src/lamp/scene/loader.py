@@ -261,17 +261,17 @@ def _polygon_points(ctx: _Ctx, v: Any, field: str) -> tuple[tuple[float, float],
     repeated = np.flatnonzero(np.all(arr == np.roll(arr, -1, axis=0), axis=1))
     if repeated.size:
         i = int(repeated[0])
-        j = (i + 1) % len(pts)
+        first, later = (0, i) if i == len(pts) - 1 else (i, i + 1)
         ctx.fail(
-            f"{field}[{j}]",
-            f"repeats vertex {field}[{i}] {_fmt_xy(pts[i])}; list each vertex once "
+            f"{field}[{later}]",
+            f"repeats vertex {field}[{first}] {_fmt_xy(pts[first])}; list each vertex once "
             "(the polygon closes itself)",
         )
+    if shapely.MultiPoint(arr).convex_hull.area == 0.0:
+        ctx.fail(field, f"polygon must have positive area (all points on one line), got {_show(v)}")
     poly = shapely.Polygon(arr)
-    if not shapely.is_simple(poly.exterior) or not shapely.is_valid(poly):
-        ctx.fail(field, f"polygon must be simple (edges must not cross), got {_show(list(v))}")
-    if not poly.area > 0.0:
-        ctx.fail(field, f"polygon must have positive area, got {_show(list(v))}")
+    if not (shapely.is_simple(poly.exterior) and shapely.is_valid(poly)):
+        ctx.fail(field, f"polygon must be simple (edges must not cross), got {_show(v)}")
     return pts  # type: ignore[return-value]
 
 
