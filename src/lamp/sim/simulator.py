@@ -17,10 +17,16 @@ rest. A path densified to ``MAX_STEP`` = 0.02 m per row therefore takes 0.08 s p
 
 Control. Each robot joint follows its moving target with a force-limited PD law with
 velocity feed-forward, ``f = kp (p* - q) + kv (v* - qdot)``, clipped to
-``ROBOT_FORCE_LIMIT`` per axis. The feed-forward makes the robot track a moving target
-without lag; the force limit makes a robot commanded into a wall, an obstacle or a blocked
-object stop at it instead of passing through (soft contacts then penetrate by about a
-millimetre).
+``lamp.sim.mjcf.ROBOT_FORCE_LIMIT`` per axis (physics step ``lamp.sim.mjcf.TIMESTEP`` =
+2 ms). The feed-forward makes the robot track a moving target closely (0.5 mm, one
+step of motion, in free motion; 1.5 mm while pushing one object); the force limit makes a robot
+commanded into a wall, an obstacle or a blocked object stop at it instead of passing
+through (soft contacts then penetrate by under a millimetre). A robot that was blocked
+while its target ran on catches up quickly (up to about 2 m/s) once it is free again; a
+plan that blocks robots has failed anyway, and ``ExecutionResult.robot_errors`` shows it.
+
+Start states should not overlap: an overlap of d between bodies is pushed apart within a
+few steps and the lighter body travels about 2.5 d.
 
 Workspace. An object "left the workspace" when any part of its footprint lies outside
 [0, W] x [0, H] by more than ``WORKSPACE_TOLERANCE`` (2 mm: soft contacts let an object
@@ -43,7 +49,8 @@ from mujoco import rollout as mj_rollout
 from numpy.typing import ArrayLike
 
 from lamp.geometry.se2 import wrap_angle
-from lamp.scene.model import Scene, Shape
+from lamp.geometry.shapes import local_outline
+from lamp.scene.model import Circle, Scene, Shape
 from lamp.sim.mjcf import (
     ROBOT_KP,
     ROBOT_KV,
@@ -65,8 +72,8 @@ WORKSPACE_TOLERANCE = 0.002
 
 _STATE_SPEC = mujoco.mjtState.mjSTATE_INTEGRATION
 _ROLLOUT_SPEC = mujoco.mjtState.mjSTATE_FULLPHYSICS
-_STEP_SLACK = 1e-9
-_CHUNK = 4096  # physics steps per rollout call (bounds the memory of recorded states)  # tolerance on MAX_STEP / MAX_START_GAP comparisons
+_STEP_SLACK = 1e-9  # tolerance on MAX_STEP / MAX_START_GAP comparisons
+_CHUNK = 4096  # physics steps per rollout call (bounds the memory of recorded states)
 
 
 @dataclass(frozen=True)
@@ -142,9 +149,6 @@ def footprint_outside(
 
 
 def _object_body(shape: Shape) -> ObjectBody:
-    from lamp.geometry.shapes import local_outline
-    from lamp.scene.model import Circle
-
     if isinstance(shape, Circle):
         return ObjectBody((0.0, 0.0), np.zeros((0, 2)), float(shape.radius))
     return ObjectBody((0.0, 0.0), local_outline(shape), 0.0)
