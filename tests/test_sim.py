@@ -326,7 +326,7 @@ def test_execute_validates_input():
     with pytest.raises(ValueError, match=r"robot_paths\[0\] moves 0.0500 m between rows 3 and 4"):
         sim.execute(bad)
     with pytest.raises(ValueError, match=r"robot_paths\[1, 0\].*from robot 1"):
-        sim.execute(good + np.array([0.0, 0.0])[None, None] + np.array([[[0, 0]], [[0.1, 0]]]))
+        sim.execute(good + np.array([[[0.0, 0.0]], [[0.1, 0.0]]]))  # robot 1 starts 0.1 m off
     with pytest.raises(ValueError, match="numeric"):
         sim.execute([["a"]])
     with pytest.raises(ValueError, match="record_every"):
