@@ -1,0 +1,226 @@
+"""Planning lattice over a :class:`RobotSpace` and heuristic distance fields on it.
+
+The lattice has nodes at ``(a * L, b * L)`` (``L`` a multiple of the space's grid spacing
+``h``) wherever the robot is free, and 8-connected edges (axis moves of length ``L``,
+diagonal moves of length ``L * sqrt(2)``) wherever the whole straight motion is free.
+
+Edge check (conservative and continuous): an edge runs along grid nodes spaced ``h``
+(axis) or ``h * sqrt(2)`` (diagonal) apart, whose exact clearances ``c_a, c_b`` are in the
+grid; between two such nodes the clearance is at least ``(c_a + c_b - |ab|) / 2``
+(1-Lipschitz cone bound). Edges failing that bound by less than ``0.75 h`` (motions that
+graze an obstacle) are decided by the exact analytic segment clearance instead.
+
+A distance field is Dijkstra over the lattice from seed nodes with initial costs (the
+straight links from a continuous goal to nearby nodes); it is cached per
+(space key, lattice step, seeds).
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+from collections import OrderedDict
+from typing import Any
+
+import numba as nb
+import numpy as np
+
+from lamp.geometry.robot_space import RobotSpace, _segments_clearance
+
+__all__ = ["Lattice", "get_lattice", "DIRS"]
+
+# 8 lattice directions (da, db); index d and 7 - d are opposite.
+DIRS = np.array(
+    [[1, 0], [1, 1], [0, 1], [-1, 1], [1, -1], [0, -1], [-1, -1], [-1, 0]], dtype=np.int64
+)
+_FIELD_CACHE_SIZE = 512
+
+
+@nb.njit(cache=True)
+def _dijkstra(
+    nbr: np.ndarray, dlen: np.ndarray, seeds: np.ndarray, seed_cost: np.ndarray
+) -> np.ndarray:
+    """Multi-source Dijkstra on the lattice: nbr (V, 8) with -1 for no edge."""
+    V = nbr.shape[0]
+    dist = np.full(V, np.inf)
+    heap = [(0.0, 0)]
+    heap.pop()
+    for k in range(seeds.shape[0]):
+        s = seeds[k]
+        if seed_cost[k] < dist[s]:
+            dist[s] = seed_cost[k]
+            heapq.heappush(heap, (seed_cost[k], s))
+    done = np.zeros(V, dtype=np.bool_)
+    while len(heap) > 0:
+        d, u = heapq.heappop(heap)
+        if done[u]:
+            continue
+        done[u] = True
+        for e in range(8):
+            v = nbr[u, e]
+            if v < 0:
+                continue
+            nd = d + dlen[e]
+            if nd < dist[v]:
+                dist[v] = nd
+                heapq.heappush(heap, (nd, v))
+    return dist
+
+
+class Lattice:
+    """The free 8-connected lattice of step ``step`` over ``space`` (see module doc).
+
+    Attributes: ``coords (V, 2)``; ``nbr (V, 8)`` neighbour ids or -1 in :data:`DIRS`
+    order; ``dlen (8,)`` move lengths; ``ids (nb, na)`` node id per lattice index or -1.
+    """
+
+    def __init__(self, space: RobotSpace, step: float = 0.05) -> None:
+        h = space.resolution
+        s = int(round(step / h))
+        if s < 1 or abs(s * h - step) > 1e-9:
+            raise ValueError(
+                f"lattice step must be a positive multiple of the grid spacing {h}, got {step!r}"
+            )
+        self.space = space
+        self.step = float(step)
+        self.stride = s
+        F = space.field
+        thr = space.threshold
+        ny, nx = F.shape
+        na = (nx - 1) // s + 1
+        nb_ = (ny - 1) // s + 1
+        Fl = F[: s * (nb_ - 1) + 1 : s, : s * (na - 1) + 1 : s]
+        free = Fl >= thr
+        ids = np.full((nb_, na), -1, dtype=np.int64)
+        V = int(free.sum())
+        ids[free] = np.arange(V)
+        bb, aa = np.nonzero(free)
+        self.ids = ids
+        self.coords = np.ascontiguousarray(np.stack([aa * step, bb * step], axis=1), dtype=float)
+        self.ab = np.stack([aa, bb], axis=1)
+
+        # cone bounds per grid interval
+        diag = h * math.sqrt(2.0)
+        Cx = 0.5 * (F[:, :-1] + F[:, 1:] - h)          # (i,j)->(i+1,j)
+        Cy = 0.5 * (F[:-1, :] + F[1:, :] - h)          # (i,j)->(i,j+1)
+        Cd = 0.5 * (F[:-1, :-1] + F[1:, 1:] - diag)    # (i,j)->(i+1,j+1)
+        Ca = 0.5 * (F[:-1, 1:] + F[1:, :-1] - diag)    # (i+1,j)->(i,j+1)
+        k = np.arange(s)
+        A = np.arange(na - 1)
+        B = np.arange(nb_ - 1)
+        # edge bounds, indexed by the lower-left lattice node of the edge's box
+        ex = Cx[s * np.arange(nb_)[:, None, None], s * A[None, :, None] + k].min(-1)  # (nb, na-1)
+        ey = Cy[s * B[:, None, None] + k, s * np.arange(na)[None, :, None]].min(-1)   # (nb-1, na)
+        ed = Cd[s * B[:, None, None] + k, s * A[None, :, None] + k].min(-1)           # (nb-1, na-1)
+        ea = Ca[s * B[:, None, None] + k, s * (A[None, :, None] + 1) - k - 1].min(-1)  # (nb-1,na-1)
+
+        nbr = np.full((V, 8), -1, dtype=np.int64)
+        # pairs of lattice (a,b) endpoints per direction family
+        families = [
+            # (bound array, from (a,b) offsets, to offsets, dir index from->to)
+            (ex, (0, 0), (1, 0), 0),
+            (ed, (0, 0), (1, 1), 1),
+            (ey, (0, 0), (0, 1), 2),
+            (ea, (1, 0), (0, 1), 3),
+        ]
+        self.dlen = np.array(
+            [step * math.hypot(*d) for d in DIRS.tolist()], dtype=float
+        )
+        W, H = space.workspace
+        g = space.geometry
+        for bound, fo, to, d in families:
+            bidx, aidx = np.nonzero(np.ones_like(bound, dtype=bool))
+            u = ids[bidx + fo[1], aidx + fo[0]]
+            v = ids[bidx + to[1], aidx + to[0]]
+            both = (u >= 0) & (v >= 0)
+            bnd = bound[bidx, aidx]
+            ok = both & (bnd >= thr)
+            unsure = both & ~ok & (bnd >= thr - 0.75 * h)
+            if unsure.any():
+                pu = np.ascontiguousarray(self.coords[u[unsure]])
+                pv = np.ascontiguousarray(self.coords[v[unsure]])
+                ex_ok = _segments_clearance(pu, pv, g.circles, g.verts, g.ptr, W, H) >= thr
+                ok[np.nonzero(unsure)[0][ex_ok]] = True
+            uu = u[ok]
+            vv = v[ok]
+            nbr[uu, d] = vv
+            nbr[vv, 7 - d] = uu
+        self.nbr = nbr
+        self.V = V
+        self._fields: OrderedDict[Any, np.ndarray] = OrderedDict()
+
+    # ---------------------------------------------------------------------------
+
+    def nodes_near(self, p: np.ndarray, radius: float) -> np.ndarray:
+        """Ids of free lattice nodes within ``radius`` of point ``p`` (sorted by distance)."""
+        L = self.step
+        nb_, na = self.ids.shape
+        a0 = max(0, int(math.floor((p[0] - radius) / L)))
+        a1 = min(na - 1, int(math.ceil((p[0] + radius) / L)))
+        b0 = max(0, int(math.floor((p[1] - radius) / L)))
+        b1 = min(nb_ - 1, int(math.ceil((p[1] + radius) / L)))
+        if a1 < a0 or b1 < b0:
+            return np.zeros(0, dtype=np.int64)
+        blk = self.ids[b0 : b1 + 1, a0 : a1 + 1].ravel()
+        blk = blk[blk >= 0]
+        d = np.hypot(self.coords[blk, 0] - p[0], self.coords[blk, 1] - p[1])
+        keep = d <= radius + 1e-12
+        blk = blk[keep]
+        return blk[np.argsort(d[keep], kind="stable")]
+
+    def links(
+        self, points: np.ndarray, radius: float, thresholds: np.ndarray
+    ) -> list[tuple[np.ndarray, np.ndarray]]:
+        """For each continuous point: (node ids, lengths) of the lattice nodes within
+        ``radius`` reachable by a straight motion whose exact clearance stays
+        >= ``thresholds[k]``."""
+        space = self.space
+        W, H = space.workspace
+        g = space.geometry
+        cand = [self.nodes_near(p, radius) for p in points]
+        counts = [len(c) for c in cand]
+        out: list[tuple[np.ndarray, np.ndarray]] = []
+        if sum(counts) == 0:
+            return [(np.zeros(0, np.int64), np.zeros(0)) for _ in points]
+        allc = np.concatenate(cand)
+        src = np.repeat(np.asarray(points, dtype=float).reshape(-1, 2), counts, axis=0)
+        dst = self.coords[allc]
+        clr = _segments_clearance(
+            np.ascontiguousarray(src), np.ascontiguousarray(dst), g.circles, g.verts, g.ptr, W, H
+        )
+        thr = np.repeat(np.asarray(thresholds, dtype=float), counts)
+        ok = clr >= thr - 1e-12
+        lens = np.hypot(dst[:, 0] - src[:, 0], dst[:, 1] - src[:, 1])
+        start = 0
+        for c in counts:
+            sl = slice(start, start + c)
+            m = ok[sl]
+            out.append((allc[sl][m], lens[sl][m]))
+            start += c
+        return out
+
+    def field(self, seeds: np.ndarray, seed_cost: np.ndarray, key: Any = None) -> np.ndarray:
+        """Lattice distance (V,) from the seed set (cached by ``key`` when given)."""
+        if key is not None:
+            hit = self._fields.get(key)
+            if hit is not None:
+                self._fields.move_to_end(key)
+                return hit
+        d = _dijkstra(self.nbr, self.dlen, np.asarray(seeds, dtype=np.int64),
+                      np.asarray(seed_cost, dtype=float))
+        d.setflags(write=False)
+        if key is not None:
+            self._fields[key] = d
+            while len(self._fields) > _FIELD_CACHE_SIZE:
+                self._fields.popitem(last=False)
+        return d
+
+
+def get_lattice(space: RobotSpace, step: float = 0.05) -> Lattice:
+    """The lattice of ``space`` with ``step`` (built once per space and step)."""
+    key = ("lattice", float(step))
+    lat = space.derived.get(key)
+    if lat is None:
+        lat = Lattice(space, step)
+        space.derived[key] = lat
+    return lat

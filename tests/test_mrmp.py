@@ -1,0 +1,266 @@
+"""Gspi planner: every plan re-verified by the independent checker (tests/mrmp_checker.py)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from mrmp_checker import check_plan, obstacle_parts, point_clearance, segment_clearance
+
+from lamp.geometry.robot_space import RobotSpace
+from lamp.mrmp import MRMPPlan, plan_paths
+from lamp.mrmp.distance_field import get_lattice
+from lamp.scene.model import Circle, Obstacle, Polygon, Rectangle, Scene, SceneObject
+
+R = 0.05
+
+
+def _scene(W: float, H: float, obstacles=(), objects=(), starts=((0.1, 0.1),)) -> Scene:
+    return Scene("t", (W, H), tuple(map(tuple, starts)), tuple(objects), tuple(obstacles), R)
+
+
+def _random_instance(seed: int, n: int, m: int, k_obs: int, size: float):
+    """Random scene with k_obs obstacles and one object, n starts and m goals, all valid
+    (judged by the checker's own geometry)."""
+    rng = np.random.default_rng(seed)
+    W = H = size
+    obs = []
+    for _ in range(k_obs):
+        x, y = rng.uniform(0.2, size - 0.2, 2)
+        if rng.random() < 0.5:
+            obs.append(Obstacle(Circle(float(rng.uniform(0.05, 0.2))), (x, y, 0.0)))
+        else:
+            obs.append(Obstacle(Rectangle((float(rng.uniform(0.05, 0.5)),
+                                           float(rng.uniform(0.05, 0.5)))),
+                                (x, y, float(rng.uniform(-3, 3)))))
+    obj = SceneObject(Rectangle((0.3, 0.2)), (size / 2, size / 2, float(rng.uniform(-3, 3))),
+                      (size / 2, size / 2, 0.0))
+    scene = _scene(W, H, obs, (obj,))
+    circles, polys = obstacle_parts(scene.to_dict())
+
+    def sample(count: int, taken: list[np.ndarray]) -> np.ndarray:
+        pts: list[np.ndarray] = []
+        for _ in range(4000):
+            if len(pts) == count:
+                break
+            p = rng.uniform(0, size, 2)
+            if point_clearance(p[None], circles, polys, W, H)[0] < R + 1e-3:
+                continue
+            if any(np.hypot(*(p - q)) < 2 * R + 1e-3 for q in pts + taken):
+                continue
+            pts.append(p)
+        return np.array(pts).reshape(-1, 2)
+
+    S = sample(n, [])
+    G = sample(min(m, len(S)), [])
+    return scene, S, G
+
+
+def _plan_and_check(scene, S, G, **kw) -> MRMPPlan:
+    plan = plan_paths(scene, S, G, **kw)
+    check_plan(scene, S, G, plan, object_poses=kw.get("object_poses"),
+               extra_obstacles=kw.get("extra_obstacles", ()))
+    return plan
+
+
+@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(seed=st.integers(0, 2**31 - 1), n=st.integers(1, 6), k=st.integers(0, 8),
+       frac=st.floats(0.0, 1.0))
+def test_random_instances_verified(seed: int, n: int, k: int, frac: float) -> None:
+    m = int(round(frac * n))
+    scene, S, G = _random_instance(seed, n, m, k, 2.0)
+    plan = _plan_and_check(scene, S, G, time_limit=2.0, seed=seed)
+    if not plan.success:
+        assert plan.reason
+
+
+@settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(seed=st.integers(0, 2**31 - 1), n=st.integers(6, 14))
+def test_dense_instances_verified(seed: int, n: int) -> None:
+    """Many robots in a small cluttered map (density up to ~12% of the area)."""
+    scene, S, G = _random_instance(seed, n, n, 3, 1.2)
+    plan = _plan_and_check(scene, S, G, time_limit=2.0, seed=seed)
+    if not plan.success:
+        assert plan.reason
+
+
+def test_dense_instances_mostly_succeed() -> None:
+    ok = 0
+    for seed in range(10):
+        scene, S, G = _random_instance(seed, 10, 10, 3, 1.5)
+        ok += _plan_and_check(scene, S, G, time_limit=2.0).success
+    assert ok >= 8
+
+
+def _corridor():
+    """A single-lane corridor (robots cannot pass each other) along y = 0.25."""
+    walls = (Obstacle(Rectangle((2.0, 0.19)), (1.0, 0.095, 0.0)),
+             Obstacle(Rectangle((2.0, 0.19)), (1.0, 0.5 - 0.095, 0.0)))
+    return _scene(2.0, 0.5, walls)
+
+
+def test_corridor_goal_swapping() -> None:
+    scene = _corridor()
+    S = np.array([[0.3, 0.25], [0.6, 0.25]])
+    G = np.array([[1.2, 0.25], [1.5, 0.25]])
+    # force the crossing assignment: robot 0 (behind) to the far goal
+    plan = _plan_and_check(scene, S, G, initial_goal_of=[1, 0], time_limit=2.0)
+    assert plan.success, plan.reason
+    assert list(plan.goal_of) == [0, 1]  # goals were swapped
+    base = _plan_and_check(scene, S, G, initial_goal_of=[1, 0], goal_swapping=False,
+                           time_limit=2.0)
+    assert not base.success  # plain PIBT cannot pass in a single lane
+    # a robot without a goal standing in the lane hands the goal over / steps aside
+    S3 = np.array([[0.3, 0.25], [0.6, 0.25], [0.9, 0.25]])
+    plan = _plan_and_check(scene, S3, np.array([[1.7, 0.25]]), time_limit=2.0)
+    assert plan.success and plan.goal_of.tolist() == [-1, -1, 0]
+
+
+def test_robots_without_goal_step_aside() -> None:
+    # robot 1 idles on the straight line between robot 0 and its goal in a narrow passage
+    walls = (Obstacle(Rectangle((0.6, 0.4)), (1.0, 0.2, 0.0)),
+             Obstacle(Rectangle((0.6, 0.4)), (1.0, 0.8 + 0.2 + 0.13, 0.0)))
+    scene = _scene(2.0, 1.5, walls)
+    S = np.array([[0.3, 0.465], [1.0, 0.465], [1.7, 1.4]])
+    G = np.array([[1.8, 0.465]])
+    plan = _plan_and_check(scene, S, G, time_limit=2.0)
+    assert plan.success, plan.reason
+    # the idle robot 2 far away never moves
+    assert np.allclose(plan.paths[2], S[2])
+
+
+def test_unreachable_goal_fails_cleanly() -> None:
+    box = (Obstacle(Rectangle((0.6, 0.04)), (1.0, 0.45, 0.0)),
+           Obstacle(Rectangle((0.6, 0.04)), (1.0, 1.05, 0.0)),
+           Obstacle(Rectangle((0.04, 0.64)), (0.7, 0.75, 0.0)),
+           Obstacle(Rectangle((0.04, 0.64)), (1.3, 0.75, 0.0)))
+    scene = _scene(2.0, 1.5, box)
+    S = np.array([[0.2, 0.2], [0.4, 0.2]])
+    plan = _plan_and_check(scene, S, np.array([[1.0, 0.75]]), time_limit=1.0)
+    assert not plan.success and "unreachable" in plan.reason
+    assert plan.time_s < 1.0
+    # a robot inside the box, another goal outside: only the inside robot can take the
+    # inside goal, and the outside goal goes to the other
+    S2 = np.array([[1.0, 0.75], [0.4, 0.2]])
+    G2 = np.array([[1.8, 1.3], [1.1, 0.8]])
+    plan = _plan_and_check(scene, S2, G2, time_limit=1.0)
+    assert plan.success and plan.goal_of.tolist() == [1, 0]
+    # two goals inside, one robot inside: no assignment reaches both
+    S3 = np.array([[1.0, 0.75], [0.4, 0.2]])
+    G3 = np.array([[0.85, 0.6], [1.15, 0.9]])
+    plan = _plan_and_check(scene, S3, G3, time_limit=1.0)
+    assert not plan.success and "assignment" in plan.reason
+
+
+def test_blocked_goal_fails_within_time_limit() -> None:
+    # a goal in a dead-end pocket occupied by a robot that has a goal of its own there:
+    # both robots need the single-lane pocket, one goal lies beyond the other robot's goal
+    scene = _corridor()
+    S = np.array([[1.0, 0.25], [0.3, 0.25]])
+    G = np.array([[1.95 - 0.05, 0.25], [0.05 + 0.01, 0.25]])
+    plan = plan_paths(scene, S, G, time_limit=0.5)
+    check_plan(scene, S, G, plan)
+    assert plan.success  # anonymous: each robot takes the goal on its side
+
+
+def test_contact_goals_next_to_object() -> None:
+    """Three contacts at exactly r (and 1 mm inside r) from a box, the box an obstacle."""
+    obj = SceneObject(Rectangle((0.4, 0.3)), (1.0, 0.75, 0.3), (1.5, 0.75, 0.0))
+    scene = _scene(2.0, 1.5, (Obstacle(Circle(0.15), (0.4, 1.1, 0.0)),), (obj,),
+                   ((0.2, 0.2), (0.4, 0.2), (1.8, 1.3)))
+    c, s = np.cos(0.3), np.sin(0.3)
+    local = np.array([[-0.2 - R, 0.0], [0.0, 0.15 + R - 0.001], [0.2 + R, 0.05]])
+    G = np.stack([1.0 + c * local[:, 0] - s * local[:, 1],
+                  0.75 + s * local[:, 0] + c * local[:, 1]], 1)
+    S = scene.robot_starts_array
+    plan = _plan_and_check(scene, S, G, time_limit=2.0)
+    assert plan.success, plan.reason
+    # with a prebuilt space (as LAMP does) the plan is identical
+    space = RobotSpace.from_scene(scene)
+    plan2 = plan_paths(scene, S, G, space=space, time_limit=2.0)
+    assert np.array_equal(plan.paths, plan2.paths)
+    # 3 mm inside the contact distance is beyond the tolerance
+    G_bad = G.copy()
+    G_bad[1] = [1.0 - s * (0.15 + R - 0.003), 0.75 + c * (0.15 + R - 0.003)]
+    with pytest.raises(ValueError, match=r"goals\[1\]"):
+        plan_paths(scene, S, G_bad)
+
+
+def test_object_poses_and_extra_obstacles_are_obstacles() -> None:
+    obj = SceneObject(Circle(0.2), (1.0, 0.75, 0.0), (1.0, 0.75, 0.0))
+    scene = _scene(2.0, 1.5, (), (obj,))
+    S = np.array([[0.3, 0.75]])
+    G = np.array([[1.7, 0.75]])
+    moved = np.array([[1.0, 0.3, 0.0]])
+    extra = [{"type": "rectangle", "center": [1.0, 1.2], "size": [0.1, 0.6], "angle": 0.0}]
+    plan = _plan_and_check(scene, S, G, object_poses=moved, extra_obstacles=extra)
+    assert plan.success
+    # the path must pass between the moved object (y <= 0.5) and the extra wall (y >= 0.9)
+    x_mid = np.argmin(np.abs(plan.paths[0, :, 0] - 1.0))
+    assert 0.55 <= plan.paths[0, x_mid, 1] <= 0.85
+
+
+def test_determinism_and_trimming() -> None:
+    scene, S, G = _random_instance(11, 6, 5, 6, 2.0)
+    a = plan_paths(scene, S, G, seed=4)
+    b = plan_paths(scene, S, G, seed=4)
+    assert np.array_equal(a.paths, b.paths) and np.array_equal(a.goal_of, b.goal_of)
+    check_plan(scene, S, G, a)
+    # trivial: robots already on their goals -> a single row
+    plan = _plan_and_check(scene, S, S[:3])
+    assert plan.success and plan.paths.shape == (len(S), 1, 2)
+    plan = _plan_and_check(scene, S, np.zeros((0, 2)))
+    assert plan.success and plan.paths.shape[1] == 1 and np.all(plan.goal_of == -1)
+
+
+def test_invalid_arguments_raise() -> None:
+    scene, S, G = _random_instance(5, 3, 3, 2, 2.0)
+    with pytest.raises(ValueError, match="starts"):
+        plan_paths(scene, S[:, :1], G)
+    with pytest.raises(ValueError, match="goals"):
+        plan_paths(scene, S, G.reshape(-1))
+    with pytest.raises(ValueError, match="goals"):
+        plan_paths(scene, S[:2], G)  # M > N
+    bad = S.copy()
+    bad[0, 0] = np.nan
+    with pytest.raises(ValueError, match="starts"):
+        plan_paths(scene, bad, G)
+    with pytest.raises(ValueError, match=r"goals\[0\]"):
+        plan_paths(scene, S, np.array([[1.0, 1.0]]) + 0.0 * G[:1])  # inside the object
+    with pytest.raises(ValueError, match="overlap"):
+        plan_paths(scene, S, np.stack([G[0], G[0] + [0.03, 0.0]]))
+    with pytest.raises(ValueError, match="outside"):
+        plan_paths(scene, S, np.array([[5.0, 1.0]]))
+    with pytest.raises(ValueError, match="object_poses"):
+        plan_paths(scene, S, G, object_poses=np.zeros((2, 3)))
+    with pytest.raises(ValueError, match="time_limit"):
+        plan_paths(scene, S, G, time_limit=0.0)
+
+
+def test_lattice_edges_are_free_by_reference() -> None:
+    """Every lattice edge the planner may use is collision-free by the checker's geometry."""
+    scene, _, _ = _random_instance(21, 1, 1, 10, 2.0)
+    space = RobotSpace.from_scene(scene)
+    lat = get_lattice(space)
+    u, d = np.nonzero(lat.nbr >= 0)
+    v = lat.nbr[u, d]
+    circles, polys = obstacle_parts(scene.to_dict())
+    clr = segment_clearance(lat.coords[u], lat.coords[v], circles, polys, 2.0, 2.0)
+    assert clr.min() >= R - 1e-9
+    # and the lattice is not needlessly sparse: most nodes with free straight moves to
+    # a neighbour have that edge
+    assert len(u) > 0.8 * 8 * lat.V * (1 - 0.2)
+
+
+@pytest.mark.parametrize("poly", [True, False])
+def test_start_in_light_contact_moves_out(poly: bool) -> None:
+    """A robot left 3 mm inside an object (after a push) departs without going deeper."""
+    shape = Polygon(((-0.2, -0.15), (0.2, -0.15), (0.2, 0.15), (-0.2, 0.15))) if poly else \
+        Rectangle((0.4, 0.3))
+    obj = SceneObject(shape, (1.0, 0.75, 0.0), (1.0, 0.75, 0.0))
+    scene = _scene(2.0, 1.5, (), (obj,))
+    S = np.array([[1.0 - 0.2 - R + 0.003, 0.75], [1.0, 0.75 + 0.15 + R]])
+    G = np.array([[0.3, 0.3], [1.7, 1.2]])
+    plan = _plan_and_check(scene, S, G, time_limit=2.0)
+    assert plan.success, plan.reason

@@ -1,0 +1,204 @@
+"""RobotSpace against Shapely (the reference) on random obstacle sets."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import shapely
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from lamp.geometry.robot_space import RobotSpace, clear_caches, obstacle_from_dict
+from lamp.scene.model import Circle, Obstacle, Polygon, Rectangle, Scene, SceneObject
+
+W, H = 2.0, 1.5
+R = 0.05
+BAND = 0.01 * math.sqrt(2) / 2  # documented band of the conservative grid test
+
+
+def _random_obstacles(rng: np.random.Generator, k: int) -> list[Obstacle]:
+    obs: list[Obstacle] = []
+    for _ in range(k):
+        kind = rng.integers(3)
+        x, y = rng.uniform(0.1, W - 0.1), rng.uniform(0.1, H - 0.1)
+        if kind == 0:
+            obs.append(Obstacle(Circle(float(rng.uniform(0.02, 0.3))), (x, y, 0.0)))
+        elif kind == 1:
+            size = (float(rng.uniform(0.02, 0.6)), float(rng.uniform(0.02, 0.6)))
+            obs.append(Obstacle(Rectangle(size), (x, y, float(rng.uniform(-3, 3)))))
+        else:
+            # a random star-shaped (simple, possibly non-convex) polygon
+            n = int(rng.integers(3, 8))
+            ang = np.sort(rng.uniform(0, 2 * np.pi, n))
+            rad = rng.uniform(0.03, 0.3, n)
+            pts = tuple((float(x + rr * np.cos(a)), float(y + rr * np.sin(a)))
+                        for a, rr in zip(ang, rad, strict=True))
+            if shapely.Polygon(pts).is_valid and shapely.Polygon(pts).area > 1e-4:
+                obs.append(Obstacle(Polygon(pts)))
+    return obs
+
+
+def _reference(obs: list[Obstacle]):
+    """Exact reference distances with Shapely: circles as centre + radius."""
+    polys = []
+    circles = []
+    for o in obs:
+        d = o.to_dict()
+        if d["type"] == "circle":
+            circles.append((*d["center"], d["radius"]))
+        elif d["type"] == "rectangle":
+            cx, cy = d["center"]
+            sx, sy = d["size"]
+            c, s = math.cos(d["angle"]), math.sin(d["angle"])
+            loc = np.array([[-sx, -sy], [sx, -sy], [sx, sy], [-sx, sy]]) / 2
+            polys.append(shapely.Polygon(np.c_[cx + c * loc[:, 0] - s * loc[:, 1],
+                                               cy + s * loc[:, 0] + c * loc[:, 1]]))
+        else:
+            polys.append(shapely.Polygon(d["points"]))
+
+    def point_clr(p: np.ndarray) -> np.ndarray:
+        out = np.minimum.reduce([p[:, 0], W - p[:, 0], p[:, 1], H - p[:, 1]])
+        for cx, cy, rad in circles:
+            out = np.minimum(out, np.hypot(p[:, 0] - cx, p[:, 1] - cy) - rad)
+        pts = shapely.points(p)
+        for g in polys:
+            dd = shapely.distance(pts, g)
+            out = np.minimum(out, np.where(shapely.contains(g, pts), -shapely.distance(
+                pts, g.exterior), dd))
+        return out
+
+    def seg_clr(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        out = np.minimum.reduce([a[:, 0], W - a[:, 0], a[:, 1], H - a[:, 1],
+                                 b[:, 0], W - b[:, 0], b[:, 1], H - b[:, 1]])
+        lines = shapely.linestrings(np.stack([a, b], 1))
+        for cx, cy, rad in circles:
+            out = np.minimum(out, shapely.distance(lines, shapely.Point(cx, cy)) - rad)
+        for g in polys:
+            out = np.minimum(out, shapely.distance(lines, g))
+        return out
+
+    return point_clr, seg_clr
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), k=st.integers(0, 12))
+def test_point_queries_match_shapely(seed: int, k: int) -> None:
+    rng = np.random.default_rng(seed)
+    obs = _random_obstacles(rng, k)
+    space = RobotSpace((W, H), obs, radius=R)
+    point_clr, _ = _reference(obs)
+    # random points plus points right at the free threshold (hardest for the grid)
+    p = rng.uniform(0, [W, H], (400, 2))
+    ref = point_clr(p)
+    exact = space.clearance(p, exact=True)
+    # exact clearance equals the reference wherever the robot could be (>= 0)
+    pos = ref >= 0
+    assert np.allclose(exact[pos], ref[pos], atol=1e-9)
+    assert np.all((exact < 0) == (ref < 0) | (np.abs(ref) < 1e-9))
+    free = space.is_free(p)
+    # conservative: never free when the reference says colliding
+    assert not np.any(free & (ref < R - 1e-12))
+    # and only refuses points within the documented band above the threshold
+    assert not np.any(~free & (ref >= R + BAND + 1e-9))
+    assert np.array_equal(space.is_free(p, exact=True), ref >= R - 1e-12) or np.all(
+        np.abs(ref[space.is_free(p, exact=True) != (ref >= R)] - R) < 1e-9)
+    # lower bound holds; bilinear estimate is within a cell's reach of the truth
+    lb = space.clearance_lower(p)
+    capped = np.minimum(ref, space.cap)
+    assert np.all(lb <= capped + 1e-9)
+    inside = (p[:, 0] <= 1.99) & (p[:, 1] <= 1.49)
+    assert np.all(np.abs(space.clearance(p)[inside] - capped[inside]) <= 0.0072)
+
+
+@settings(max_examples=20, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), k=st.integers(1, 10))
+def test_segment_clearance_matches_shapely(seed: int, k: int) -> None:
+    rng = np.random.default_rng(seed)
+    obs = _random_obstacles(rng, k)
+    space = RobotSpace((W, H), obs, radius=R)
+    _, seg_clr = _reference(obs)
+    a = rng.uniform(0, [W, H], (300, 2))
+    b = a + rng.normal(0, 0.15, (300, 2))
+    b = np.clip(b, 0, [W, H])
+    ref = seg_clr(a, b)
+    got = space.segment_clearance(a, b)
+    pos = ref > 1e-9
+    assert np.allclose(got[pos], ref[pos], atol=1e-9)
+    assert np.all(got[~pos] <= 1e-9)
+    assert np.array_equal(space.segment_free(a, b), got >= R)
+
+
+def test_nearest_free_is_free_close_and_avoids() -> None:
+    rng = np.random.default_rng(3)
+    obs = _random_obstacles(rng, 8)
+    space = RobotSpace((W, H), obs, radius=R)
+    point_clr, _ = _reference(obs)
+    ny, nx = space.shape
+    jj, ii = np.mgrid[0:ny, 0:nx]
+    nodes = np.stack([ii * space.resolution, jj * space.resolution], -1).reshape(-1, 2)
+    ok_nodes = space.field.reshape(-1) >= R
+    for q in rng.uniform(0, [W, H], (20, 2)):
+        avoid = np.array([[q[0], q[1], 0.12]])
+        spot = space.nearest_free(q, avoid=avoid, through_free=False)
+        assert spot is not None
+        assert point_clr(spot[None])[0] >= R - 1e-12
+        assert np.hypot(*(spot - q)) > 0.12
+        # searching through every node: the result is the Euclidean-closest valid node
+        d_all = np.hypot(*(nodes - q).T)
+        valid = ok_nodes & (d_all > 0.12)
+        assert np.hypot(*(spot - q)) <= d_all[valid].min() + 1e-9
+    # an unreachable pocket: no spot when searching from inside a sealed box
+    box = [Obstacle(Rectangle((0.6, 0.02)), (1.0, 0.45, 0.0)),
+           Obstacle(Rectangle((0.6, 0.02)), (1.0, 1.05, 0.0)),
+           Obstacle(Rectangle((0.02, 0.62)), (0.7, 0.75, 0.0)),
+           Obstacle(Rectangle((0.02, 0.62)), (1.3, 0.75, 0.0))]
+    sealed = RobotSpace((W, H), box, radius=R)
+    spot = sealed.nearest_free([1.0, 0.75], avoid=[[1.0, 0.75, 0.5]])
+    assert spot is None
+    spot = sealed.nearest_free([1.0, 0.75], avoid=[[1.0, 0.75, 0.5]], through_free=False)
+    assert spot is not None and not (0.7 < spot[0] < 1.3 and 0.45 < spot[1] < 1.05)
+
+
+def test_from_scene_objects_extras_cache_and_exclusion() -> None:
+    clear_caches()
+    obj = SceneObject(Rectangle((0.4, 0.3)), (1.0, 0.7, 0.0), (1.5, 0.7, 0.0))
+    scene = Scene("s", (W, H), ((0.2, 0.2),), (obj,), (Obstacle(Circle(0.1), (0.4, 1.2, 0.0)),))
+    a = RobotSpace.from_scene(scene)
+    assert RobotSpace.from_scene(scene) is a
+    assert not a.is_free([[1.0, 0.7]])[0]
+    b = RobotSpace.from_scene(scene, object_poses=[[1.5, 0.7, 0.3]])
+    assert b is not a and b.is_free([[1.0, 0.7]])[0] and not b.is_free([[1.5, 0.7]])[0]
+    c = RobotSpace.from_scene(scene, exclude_objects=[0])
+    assert c.is_free([[1.0, 0.7]])[0]
+    e = RobotSpace.from_scene(scene, extra_obstacles=[{"type": "circle", "center": [1.7, 0.3],
+                                                       "radius": 0.1}])
+    assert not e.is_free([[1.7, 0.3]])[0] and a.is_free([[1.7, 0.3]])[0]
+    m = RobotSpace.from_scene(scene, margin=0.05)
+    assert m.threshold == pytest.approx(0.1)
+    assert a.clearance([[0.4, 1.2 + 0.1 + 0.08]], exact=True)[0] == pytest.approx(0.08)
+    assert not m.is_free([[0.4, 1.2 + 0.1 + 0.08]])[0] and a.is_free([[0.4, 1.38]])[0]
+
+
+def test_invalid_arguments() -> None:
+    scene = Scene("s", (W, H), ((0.2, 0.2),), (), ())
+    with pytest.raises(ValueError, match="object_poses"):
+        RobotSpace.from_scene(scene, object_poses=[[0, 0, 0]])
+    with pytest.raises(ValueError, match="unknown type"):
+        obstacle_from_dict({"type": "hexagon"})
+    with pytest.raises(ValueError, match="radius"):
+        RobotSpace((W, H), (), radius=-1.0)
+    with pytest.raises(ValueError, match="points"):
+        RobotSpace((W, H), ()).is_free(np.zeros((3, 3)))
+
+
+def test_path_free_and_border() -> None:
+    space = RobotSpace((W, H), [Obstacle(Circle(0.2), (1.0, 0.75, 0.0))], radius=R)
+    assert space.path_free([[0.3, 0.3], [1.7, 0.3], [1.7, 1.2]])
+    assert not space.path_free([[0.3, 0.75], [1.7, 0.75]])
+    assert not space.path_free([[0.3, 0.3], [0.3, 0.04]])  # border
+    # grazing the circle at exactly the threshold is allowed (exact check)
+    y = 0.75 + 0.2 + R + 1e-12
+    assert space.path_free([[0.5, y], [1.5, y]])
+    assert not space.path_free([[0.5, y - 1e-6], [1.5, y - 1e-6]])
