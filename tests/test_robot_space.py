@@ -149,6 +149,23 @@ def test_nearest_free_is_free_close_and_avoids() -> None:
         d_all = np.hypot(*(nodes - q).T)
         valid = ok_nodes & (d_all > 0.12)
         assert np.hypot(*(spot - q)) <= d_all[valid].min() + 1e-9
+    # a predicate (as LAMP's "clear of the push paths") is honoured, nearest again
+    for q in rng.uniform(0, [W, H], (10, 2)):
+        calls: list[int] = []
+
+        def right_of(pts: np.ndarray, q=q, calls=calls) -> np.ndarray:
+            calls.append(len(pts))
+            return pts[:, 0] >= q[0] + 0.3
+
+        spot = space.nearest_free(q, accept=right_of, through_free=False)
+        d_all = np.hypot(*(nodes - q).T)
+        valid = ok_nodes & (nodes[:, 0] >= q[0] + 0.3)
+        if not valid.any():
+            assert spot is None
+            continue
+        assert spot is not None and spot[0] >= q[0] + 0.3
+        assert np.hypot(*(spot - q)) <= d_all[valid].min() + 1e-9
+        assert sum(calls) <= ok_nodes.sum()  # each node judged at most once
     # an unreachable pocket: no spot when searching from inside a sealed box
     box = [Obstacle(Rectangle((0.6, 0.02)), (1.0, 0.45, 0.0)),
            Obstacle(Rectangle((0.6, 0.02)), (1.0, 1.05, 0.0)),

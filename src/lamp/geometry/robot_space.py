@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import math
 from collections import OrderedDict
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from typing import Any
 
 import numba as nb
@@ -382,60 +382,58 @@ def _bilinear(pts: np.ndarray, field: np.ndarray, h: float) -> np.ndarray:
 
 
 @nb.njit(cache=True)
-def _bfs_free(
-    ok: np.ndarray, reach: np.ndarray, si: int, sj: int, px: float, py: float, h: float,
-) -> tuple[int, int]:
-    """8-connected BFS over grid nodes from (si, sj) through ``reach`` nodes until an ``ok``
-    node is found; then keeps expanding the rings that may still hold a closer (Euclidean)
-    ``ok`` node and returns the closest. (-1, -1) when none is reachable."""
+def _bfs_collect(
+    ok: np.ndarray, reach: np.ndarray, si: int, sj: int, max_depth: int,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """8-connected BFS over grid nodes from (si, sj) through ``reach`` nodes (the start
+    node always counts as reached), up to ``max_depth`` hops. Returns the ``ok`` nodes met,
+    in BFS order, as (i, j, depth) arrays."""
     ny, nx = ok.shape
-    depth = np.full((ny, nx), -1, dtype=np.int32)
-    qi = np.empty(ny * nx, dtype=np.int32)
-    qj = np.empty(ny * nx, dtype=np.int32)
+    r0 = max(0, sj - max_depth)
+    r1 = min(ny - 1, sj + max_depth)
+    c0 = max(0, si - max_depth)
+    c1 = min(nx - 1, si + max_depth)
+    h_ = r1 - r0 + 1
+    w_ = c1 - c0 + 1
+    depth = np.full((h_, w_), -1, dtype=np.int32)
+    qi = np.empty(h_ * w_, dtype=np.int32)
+    qj = np.empty(h_ * w_, dtype=np.int32)
+    oi = np.empty(h_ * w_, dtype=np.int32)
+    oj = np.empty(h_ * w_, dtype=np.int32)
+    od = np.empty(h_ * w_, dtype=np.int32)
+    n_ok = 0
     head = 0
-    tail = 0
-    qi[tail] = si
-    qj[tail] = sj
-    tail += 1
-    depth[sj, si] = 0
-    best_i = -1
-    best_j = -1
-    best_d = np.inf
-    stop_depth = 1 << 30
+    tail = 1
+    qi[0] = si
+    qj[0] = sj
+    depth[sj - r0, si - c0] = 0
     while head < tail:
         i = qi[head]
         j = qj[head]
         head += 1
-        dep = depth[j, i]
-        if dep > stop_depth:
-            break
+        dep = depth[j - r0, i - c0]
         if ok[j, i]:
-            dx = i * h - px
-            dy = j * h - py
-            d = dx * dx + dy * dy
-            if d < best_d:
-                best_d = d
-                best_i = i
-                best_j = j
-                # chessboard ring k holds Euclidean distances >= k cells
-                lim = int(math.ceil(math.sqrt(d) / h)) + 1
-                if lim < stop_depth:
-                    stop_depth = lim
+            oi[n_ok] = i
+            oj[n_ok] = j
+            od[n_ok] = dep
+            n_ok += 1
+        if dep >= max_depth:
+            continue
         for dj in range(-1, 2):
             for di in range(-1, 2):
                 if di == 0 and dj == 0:
                     continue
                 ii = i + di
                 jj = j + dj
-                if ii < 0 or jj < 0 or ii >= nx or jj >= ny:
+                if ii < c0 or jj < r0 or ii > c1 or jj > r1:
                     continue
-                if depth[jj, ii] >= 0 or not reach[jj, ii]:
+                if depth[jj - r0, ii - c0] >= 0 or not reach[jj, ii]:
                     continue
-                depth[jj, ii] = dep + 1
+                depth[jj - r0, ii - c0] = dep + 1
                 qi[tail] = ii
                 qj[tail] = jj
                 tail += 1
-    return best_i, best_j
+    return oi[:n_ok], oj[:n_ok], od[:n_ok]
 
 
 # --------------------------------------------------------------------------------------
@@ -715,17 +713,24 @@ class RobotSpace:
         avoid: np.ndarray | Sequence[Sequence[float]] | None = None,
         min_clearance: float | None = None,
         through_free: bool = True,
+        accept: Callable[[np.ndarray], np.ndarray] | None = None,
+        max_distance: float | None = None,
     ) -> np.ndarray | None:
         """A collision-free centre close to ``point``, found by breadth-first search over
-        the grid from ``point`` (LAMP paper, footnote to Alg. 1 line "Reassign": waiting
-        locations by BFS from the robot's current position).
+        the grid from ``point`` (LAMP paper, footnote to Alg. 1 line 22: waiting locations
+        by BFS from the robot's current position until a collision-free configuration is
+        found).
 
         avoid: disks ``(K, 3)`` = (x, y, radius) the centre must stay strictly outside of,
             or a boolean grid mask (shape :attr:`shape`) of nodes to avoid.
         min_clearance: clearance the spot needs (default: threshold).
         through_free: search only through free nodes (spots reachable from ``point``);
             when ``point`` itself is not free the search starts through all nodes.
-        Returns the (2,) spot, exactly a grid node, or None when none exists.
+        accept: optional predicate ``(K, 2) points -> (K,) bool`` a spot must satisfy
+            (e.g. "clear of the push paths"); called on batches of candidate nodes.
+        max_distance: give up beyond this many metres (default: the whole workspace).
+        Returns the (2,) spot, exactly a grid node: among the valid nodes met by the BFS,
+        the one closest to ``point`` in Euclidean distance; None when there is none.
         """
         p = np.asarray(point, dtype=np.float64).reshape(2)
         if not np.all(np.isfinite(p)):
@@ -741,7 +746,6 @@ class RobotSpace:
                 ok = ok & ~avoid
             else:
                 disks = np.asarray(avoid, dtype=np.float64).reshape(-1, 3)
-                ok = ok.copy()
                 for x, y, rad in disks:
                     i0 = max(0, int(math.floor((x - rad) / h)))
                     i1 = min(nx - 1, int(math.ceil((x + rad) / h)))
@@ -759,10 +763,41 @@ class RobotSpace:
             reach = self.free_grid
         else:
             reach = np.ones(self.shape, dtype=bool)
-        bi, bj = _bfs_free(ok, reach, si, sj, float(p[0]), float(p[1]), h)
-        if bi < 0:
-            return None
-        return np.array([bi * h, bj * h], dtype=np.float64)
+        limit = max(nx, ny) if max_distance is None else int(math.ceil(max_distance / h)) + 1
+        depth_cap = min(16, limit)
+        judged = np.full(ny * nx, -1, dtype=np.int8) if accept is not None else None
+        while True:
+            ci, cj, cd = _bfs_collect(ok, reach, si, sj, depth_cap)
+            good = np.ones(len(ci), dtype=bool)
+            if judged is not None and len(ci):
+                flat = cj.astype(np.int64) * nx + ci
+                todo = flat[judged[flat] < 0]
+                if len(todo):
+                    pts = np.stack([(todo % nx) * h, (todo // nx) * h], axis=1).astype(np.float64)
+                    res = np.asarray(accept(pts), dtype=bool).reshape(-1)  # type: ignore[misc]
+                    if res.shape != (len(todo),):
+                        raise ValueError("accept must return one bool per point")
+                    judged[todo] = res
+                good = judged[flat] == 1
+            if good.any():
+                d_first = int(cd[good].min())
+                # BFS depth counts 8-connected hops (chessboard distance in the open); a
+                # node at Euclidean distance e has depth >= e / h, so nodes closer than the
+                # first find lie within depth ceil(first Euclidean distance / h)
+                xy = np.stack([ci * h - p[0], cj * h - p[1]], axis=1)
+                e = np.hypot(xy[:, 0], xy[:, 1])
+                need = int(math.ceil(e[good][cd[good] == d_first].min() / h)) + 1
+                if need <= depth_cap or depth_cap >= limit:
+                    sel = good & (cd <= need)
+                    k = int(np.argmin(np.where(sel, e, np.inf)))
+                    if max_distance is not None and e[k] > max_distance:
+                        return None
+                    return np.array([ci[k] * h, cj[k] * h], dtype=np.float64)
+                depth_cap = min(limit, max(need, 2 * depth_cap))
+                continue
+            if depth_cap >= limit:
+                return None
+            depth_cap = min(limit, 2 * depth_cap)
 
     def __repr__(self) -> str:
         W, H = self.workspace

@@ -49,9 +49,10 @@ from lamp.geometry.robot_space import RobotSpace
 from lamp.mrmp.distance_field import Lattice, get_lattice
 from lamp.scene.model import Scene
 
-__all__ = ["MRMPPlan", "plan_paths"]
+__all__ = ["MRMPPlan", "plan_paths", "warmup"]
 
 _BIG = 1e9
+_EPS = 1e-6
 _UNDECIDED, _TENTATIVE, _DECIDED = 0, 1, 2
 
 
@@ -403,6 +404,32 @@ def _check_points(
     return clr
 
 
+_WARM = False
+
+
+def warmup() -> None:
+    """Compile (or load from Numba's cache) every kernel on a tiny problem.
+
+    Called by the first :func:`plan_paths` of a process *before* its clock starts, so that
+    compilation (about 20 s the very first time, about 0.5 s loading from the on-disk
+    cache later) never eats into ``time_limit``.
+    """
+    global _WARM
+    if _WARM:
+        return
+    _WARM = True
+    from lamp.scene.model import Circle, Obstacle, Rectangle
+
+    sc = Scene("warmup", (0.6, 0.6), ((0.1, 0.1), (0.1, 0.5)), (),
+               (Obstacle(Circle(0.05), (0.3, 0.3, 0.0)),
+                Obstacle(Rectangle((0.05, 0.05)), (0.5, 0.1, 0.0))))
+    sp = RobotSpace.from_scene(sc)
+    sp.is_free(np.array([[0.2, 0.2]]))
+    sp.clearance(np.array([[0.2, 0.2]]))
+    sp.nearest_free(np.array([0.3, 0.3]))
+    plan_paths(sc, sc.robot_starts_array, np.array([[0.5, 0.5], [0.1, 0.3]]), time_limit=1e6)
+
+
 def plan_paths(
     scene: Scene,
     starts: ArrayLike,
@@ -459,6 +486,8 @@ def plan_paths(
     outside the workspace, inside/overlapping obstacles beyond the tolerance, overlapping
     each other. Unreachable or blocked goals are *not* errors: ``success=False``.
     """
+    if not _WARM:
+        warmup()
     t_begin = time.perf_counter()
     if not isinstance(scene, Scene):
         raise ValueError(f"scene must be a lamp Scene, got {type(scene).__name__}")
@@ -552,7 +581,9 @@ def plan_paths(
         if len(nodes):
             key = (round(float(G[m, 0]), 9), round(float(G[m, 1]), 9), float(c_goal[m] >= thr),
                    R)
-            Hm[m, :V] = lat.field(nodes, lens, key=key)
+            # + _EPS: a lattice node that coincides with the goal must not tie with the
+            # goal vertex itself (a robot at its goal would then wander off by 0 m)
+            Hm[m, :V] = lat.field(nodes, lens, key=key) + _EPS
         Hm[m, gv0 + m] = 0.0
     for i, (nodes, lens) in enumerate(s_links):
         if len(nodes):
