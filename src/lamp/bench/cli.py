@@ -1,0 +1,365 @@
+"""``lamp bench`` and ``lamp report``: run the paper's experiments and rebuild their report.
+
+Registered by ``lamp.cli`` as ``app.command("bench")(bench_command)`` and
+``app.command("report")(report_command)``. Exit status: 0 when the run finished (whatever
+the planners' outcomes), 2 for bad input (unknown suite or planner, bad numbers, a non-empty
+output folder without ``--resume``, caps differing from the run being resumed, Ray missing),
+130 when interrupted (resume with ``--resume``).
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import os
+import platform
+import shlex
+import subprocess
+import sys
+from collections import Counter
+from pathlib import Path
+from typing import Any
+
+import typer
+
+from lamp.bench.jobs import (
+    LIMITED_PLANNERS,
+    RESULTS_FILE,
+    Job,
+    enumerate_jobs,
+    load_suite,
+    pending_jobs,
+    read_records,
+)
+from lamp.bench.runner import BACKENDS, DEFAULT_JOB_FN
+
+#: Planner names of the interfaces spec (used if ``lamp.planners.run`` cannot be imported).
+SPEC_PLANNERS = ("lazy", "astar", "astar-replan", "gco-ori", "gco-var")
+DEFAULT_SUITES = "random,maze,tilt,warehouse"
+#: Default cumulative planning limit for LAMP-A* (the paper: 500 s). 100 scenes x 2 LAMP-A*
+#: variants at 500 s each would alone take ~14 h of CPU; 60 s keeps a full run near 2 h on
+#: 2 cores. The value used is recorded in config.json, results.jsonl and report.md.
+DEFAULT_PLANNING_LIMIT = 60.0
+DEFAULT_TIME_CAP = 600.0
+#: A rendering job gets this many times its usual cap (frame capture and GIF encoding).
+RENDER_CAP_FACTOR = 2.0
+CONFIG_FILE = "config.json"
+IROS_GIF = "iros.gif"
+
+
+def _fail(message: str) -> None:
+    typer.echo(f"error: {message}", err=True)
+    raise typer.Exit(code=2)
+
+
+def known_planners() -> tuple[str, ...]:
+    try:
+        from lamp.planners.run import PLANNERS
+    except Exception:  # the planners may be mid-rewrite; the spec's names still hold
+        return SPEC_PLANNERS
+    return tuple(PLANNERS)
+
+
+def _split(value: str) -> list[str]:
+    out: list[str] = []
+    for item in value.split(","):
+        item = item.strip()
+        if item and item not in out:
+            out.append(item)
+    return out
+
+
+def _git(*args: str) -> str | None:
+    import lamp
+
+    repo = Path(lamp.__file__).resolve().parents[2]
+    try:
+        res = subprocess.run(["git", "-C", str(repo), *args], capture_output=True, text=True,
+                             timeout=10, check=False)
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return res.stdout.strip() if res.returncode == 0 else None
+
+
+def machine_info() -> dict[str, Any]:
+    """CPU, memory, OS and Python of this machine (for config.json)."""
+    cpu = platform.processor() or "?"
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    try:
+        mem = round(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") / 2**30, 1)
+    except (ValueError, OSError, AttributeError):
+        mem = None
+    return {"hostname": platform.node(), "platform": platform.platform(), "cpu": cpu,
+            "cpu_count": os.cpu_count(), "memory_gb": mem,
+            "python": platform.python_version()}
+
+
+def _package_versions() -> dict[str, str]:
+    from importlib import metadata
+
+    out = {}
+    for name in ("lamp", "numpy", "scipy", "shapely", "numba", "mujoco", "torch", "ray"):
+        try:
+            out[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            continue
+    return out
+
+
+def planner_limits(planners: list[str], planning_limit: float) -> dict[str, float]:
+    """The cumulative planning limit per object each planner runs under."""
+    out = {}
+    for p in planners:
+        if p in LIMITED_PLANNERS:
+            out[p] = planning_limit
+            continue
+        try:
+            from lamp.planners.run import default_config
+
+            out[p] = float(default_config(p).planning_time_limit)
+        except Exception:  # planners unavailable: leave it out rather than guess
+            continue
+    return out
+
+
+def _session(argv: list[str] | None = None) -> dict[str, Any]:
+    status = _git("status", "--porcelain", "--untracked-files=no")
+    return {
+        "command": shlex.join(["lamp", *(argv if argv is not None else sys.argv[1:])]),
+        "date": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+        "git_commit": _git("rev-parse", "HEAD"), "git_dirty": bool(status) if status is not None
+        else None, "packages": _package_versions(),
+    }
+
+
+def write_config(out: Path, previous: dict[str, Any], *, suites: list[str], planners: list[str],
+                 seeds: list[int], workers: int, backend: str, model: str, time_cap: float,
+                 planning_limit: float, scenes: int | None, job_fn: str) -> dict[str, Any]:
+    """Write ``out/config.json``: this invocation's settings plus every session's provenance."""
+    from lamp.io import write_json_atomic
+
+    def union(key: str, new: list) -> list:
+        old = list(previous.get(key) or [])
+        return old + [x for x in new if x not in old]
+
+    all_planners = union("planners", planners)
+    config = {
+        "format": "lamp-bench/1",
+        "suites": union("suites", suites), "planners": all_planners,
+        "seeds": union("seeds", seeds), "scenes_per_suite": scenes,
+        "workers": workers, "backend": backend, "model": model,
+        "time_cap_s": time_cap, "time_cap_note": "per job, times the number of objects of the "
+        "scene; a job past its cap is killed and recorded as a failure ('timeout')",
+        "planning_limit_s": planning_limit,
+        "planning_limit_note": "cumulative planning limit per object for LAMP-A* (astar, "
+        "astar-replan); the paper uses 500 s",
+        "planner_planning_limits_s": planner_limits(all_planners, planning_limit),
+        "job_fn": job_fn, "machine": machine_info(),
+        "sessions": [*(previous.get("sessions") or []), _session()],
+    }
+    write_json_atomic(out / CONFIG_FILE, config)
+    return config
+
+
+def _check_resume_config(previous: dict[str, Any], *, time_cap: float, planning_limit: float,
+                         model: str, job_fn: str) -> None:
+    for key, given in (("time_cap_s", time_cap), ("planning_limit_s", planning_limit),
+                       ("model", model), ("job_fn", job_fn)):
+        if key in previous and previous[key] != given:
+            _fail(f"resuming a run recorded with {key}={previous[key]!r} but given {given!r}: "
+                  "the results would mix settings; pass the recorded value or use a new --out")
+
+
+def _render_jobs(jobs: list[Job], pending: list[Job], out: Path, time_cap: float
+                 ) -> list[Job]:
+    """Pending jobs with the IROS animation requested (``--render-iros``).
+
+    The first LAMP-Lazy IROS job renders while it runs; if it already ran (resume) and the
+    GIF is missing, a render-only job (not recorded) re-runs it with the same seed.
+    """
+    from dataclasses import replace
+
+    gif = out / IROS_GIF
+    if gif.exists():
+        return pending
+    iros = [j for j in jobs if j.suite == "iros" and j.planner == "lazy"]
+    target = min(iros, key=lambda j: j.seed) if iros else None
+    if target is not None and target in pending:
+        return [replace(j, render_to=str(gif), time_cap_s=j.time_cap_s * RENDER_CAP_FACTOR)
+                if j == target else j for j in pending]
+    base = target or next((j for j in jobs if j.suite == "iros"), None)
+    if base is None:
+        return pending
+    render = replace(base, planner="lazy", render_to=str(gif), record=False,
+                     time_cap_s=time_cap * len(base.scene.objects) * RENDER_CAP_FACTOR)
+    return [*pending, render]
+
+
+def bench_command(
+    suite: str = typer.Option(DEFAULT_SUITES, "--suite", help="Comma-separated suites "
+                              "(random, maze, tilt, warehouse, iros) or folders of scene files."),
+    planners: str = typer.Option(",".join(SPEC_PLANNERS), "--planners",
+                                 help="Comma-separated: lazy, astar, astar-replan, gco-ori, "
+                                      "gco-var."),
+    seeds: int = typer.Option(1, "--seeds", help="Number of seeds per scene (0..N-1)."),
+    workers: int = typer.Option(os.cpu_count() or 1, "--workers", "-j",
+                                help="Jobs run at the same time (one core each)."),
+    out: Path = typer.Option(..., "--out", "-o", help="Output folder (results.jsonl, "
+                             "config.json, report.md, figures)."),
+    resume: bool = typer.Option(False, "--resume", help="Continue a run in --out: skip jobs "
+                                "already recorded."),
+    time_cap: float = typer.Option(DEFAULT_TIME_CAP, "--time-cap", help="Wall-clock cap per "
+                                   "job in seconds, per object of the scene; a job past it is "
+                                   "killed and recorded as a failure ('timeout')."),
+    planning_limit: float = typer.Option(DEFAULT_PLANNING_LIMIT, "--planning-limit",
+                                         help="Cumulative planning limit per object for "
+                                              "LAMP-A* (astar, astar-replan), seconds. The "
+                                              "paper uses 500 s; the default keeps a full run "
+                                              "near 2 h on 2 cores."),
+    model: str = typer.Option("learned", "--model", help="Manipulation model: learned or "
+                              "geometric."),
+    backend: str = typer.Option("local", "--backend", help="local (process pool) or ray."),
+    ray_address: str = typer.Option(None, "--ray-address", help="Ray cluster address (e.g. "
+                                    "auto); default: start a local Ray instance."),
+    scenes: int = typer.Option(None, "--scenes", help="Only the first N scenes of each suite "
+                               "(quick runs)."),
+    render_iros: bool = typer.Option(False, "--render-iros", help="Also render the LAMP-Lazy "
+                                     "IROS run to DIR/iros.gif (needs --suite iros)."),
+    retry_errors: bool = typer.Option(True, "--retry-errors/--keep-errors", help="On --resume, "
+                                      "re-run jobs that errored or crashed."),
+    report: bool = typer.Option(True, "--report/--no-report", help="Write DIR/report.md at "
+                                "the end."),
+    progress: bool = typer.Option(True, "--progress/--no-progress", help="Progress bar."),
+    dry_run: bool = typer.Option(False, "--dry-run", help="List the jobs and exit."),
+    job_fn: str = typer.Option(DEFAULT_JOB_FN, "--job-fn", hidden=True,
+                               help="module:function that runs one job (testing)."),
+) -> None:
+    """Run planners over benchmark suites; write results.jsonl, config.json and report.md."""
+    known = known_planners()
+    planner_list = _split(planners)
+    for p in planner_list:
+        if p not in known:
+            _fail(f"--planners: unknown planner {p!r}; expected one of: {', '.join(known)}")
+    if not planner_list:
+        _fail("--planners: no planner given")
+    suite_list = _split(suite)
+    if not suite_list:
+        _fail("--suite: no suite given")
+    if model not in ("learned", "geometric"):
+        _fail(f"--model: unknown model {model!r}; expected 'learned' or 'geometric'")
+    if backend not in BACKENDS:
+        _fail(f"--backend: unknown backend {backend!r}; expected one of: {', '.join(BACKENDS)}")
+    for name, value in (("--seeds", seeds), ("--workers", workers)):
+        if value < 1:
+            _fail(f"{name} must be at least 1, got {value}")
+    for name, fvalue in (("--time-cap", time_cap), ("--planning-limit", planning_limit)):
+        if not fvalue > 0:
+            _fail(f"{name} must be positive, got {fvalue}")
+    if scenes is not None and scenes < 1:
+        _fail(f"--scenes must be at least 1, got {scenes}")
+    try:
+        from lamp.bench.runner import job_fn_spec
+
+        job_fn_spec(job_fn)
+    except ValueError as exc:
+        _fail(f"--job-fn: {exc}")
+    if backend == "ray" and not dry_run:
+        try:
+            from lamp.bench.runner import import_ray
+
+            import_ray()
+        except RuntimeError as exc:
+            _fail(f"--backend ray: {exc}")
+
+    previous: dict[str, Any] = {}
+    if not dry_run and out.exists():
+        if not out.is_dir():
+            _fail(f"--out: {out} exists and is not a folder")
+        if any(out.iterdir()) and not resume:
+            _fail(f"--out: {out} is not empty; pass --resume to continue the run recorded "
+                  "there, or choose a new folder")
+    if resume and (out / CONFIG_FILE).exists():
+        try:
+            previous = json.loads((out / CONFIG_FILE).read_text())
+        except json.JSONDecodeError:
+            previous = {}
+        _check_resume_config(previous, time_cap=time_cap, planning_limit=planning_limit,
+                             model=model, job_fn=job_fn)
+
+    try:
+        loaded = [load_suite(name) for name in suite_list]
+        seed_list = list(range(seeds))
+        jobs = enumerate_jobs(loaded, planner_list, seed_list, scenes_per_suite=scenes,
+                              model=model, time_cap_s=time_cap, planning_limit_s=planning_limit)
+    except ValueError as exc:
+        _fail(f"--suite: {exc}")
+    except Exception as exc:  # a scene that fails to load is bad input too
+        _fail(f"--suite: {type(exc).__name__}: {exc}")
+    if render_iros and not any(j.suite == "iros" for j in jobs):
+        _fail("--render-iros needs the iros suite in --suite")
+    records = read_records(out / RESULTS_FILE) if resume else []
+    pending = pending_jobs(jobs, records, retry_errors=retry_errors)
+    if render_iros:
+        pending = _render_jobs(jobs, pending, out, time_cap)
+
+    per = Counter((j.suite, j.planner) for j in pending if j.record)
+    typer.echo(f"{len(jobs)} jobs ({len({(j.suite, j.scene_name) for j in jobs})} scenes x "
+               f"{len(planner_list)} planners x {seeds} seeds); {len(pending)} to run"
+               + (f", {len(jobs) - sum(per.values())} already recorded" if resume else ""))
+    if dry_run:
+        for (s, p), n in sorted(per.items()):
+            typer.echo(f"  {s:12s} {p:14s} {n}")
+        for j in pending:
+            if j.render_to:
+                typer.echo(f"  renders {j.render_to} ({j.label})")
+        return
+
+    out.mkdir(parents=True, exist_ok=True)
+    write_config(out, previous, suites=list(dict.fromkeys(j.suite for j in jobs)),
+                 planners=planner_list,
+                 seeds=seed_list, workers=workers, backend=backend, model=model,
+                 time_cap=time_cap, planning_limit=planning_limit, scenes=scenes, job_fn=job_fn)
+    from lamp.bench.runner import execute
+
+    try:
+        summary = execute(pending, out, job_fn=job_fn, backend=backend, workers=workers,
+                          ray_address=ray_address, progress=progress, log_dir=out / "logs")
+    except KeyboardInterrupt:
+        typer.echo(f"\ninterrupted: finished jobs are in {out / RESULTS_FILE}; continue with "
+                   "the same command plus --resume", err=True)
+        raise typer.Exit(code=130) from None
+    done = sum(summary.statuses.values())
+    typer.echo(f"ran {done} jobs in {summary.wall_time_s:.0f} s: {summary.successes} solved; "
+               + ", ".join(f"{k} {v}" for k, v in sorted(summary.statuses.items())))
+    for path in summary.rendered:
+        typer.echo(f"wrote {path}")
+    if report:
+        _write_report(out)
+
+
+def _write_report(run_dir: Path) -> None:
+    from lamp.bench.report import build_report, family_records, load_results, success_table
+
+    path = build_report(run_dir)
+    records = load_results(run_dir)
+    table = success_table(records)
+    if family_records(records):
+        typer.echo("success rate (Table I):")
+        for p, row in table.items():
+            typer.echo(f"  {p:14s} " + "  ".join(f"{f} {r.percent()}" for f, r in row.items()))
+    typer.echo(f"wrote {path}")
+
+
+def report_command(
+    run_dir: Path = typer.Argument(..., help="A folder written by lamp bench."),
+) -> None:
+    """Rebuild DIR/report.md and its figures from DIR/results.jsonl (no rerun)."""
+    if not (run_dir / RESULTS_FILE).exists():
+        _fail(f"{run_dir}: no {RESULTS_FILE} here (is it a lamp bench output folder?)")
+    _write_report(run_dir)
