@@ -1,0 +1,108 @@
+"""``lamp model ...``: generate push data, train and evaluate the manipulation model.
+
+Registered by ``lamp.cli`` as the ``model`` group. Commands only parse arguments, call the
+library (``lamp.manip.dataset`` / ``train`` / ``evaluate``) and write files.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import typer
+
+model_app = typer.Typer(
+    help="The learned manipulation model: push data, training, evaluation.",
+    no_args_is_help=True,
+    add_completion=False,
+)
+
+DEFAULT_DATA = Path("data/manip_train.npz")
+
+
+def _threads(n: int) -> None:
+    for var in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS"):
+        os.environ.setdefault(var, str(n))
+    import torch
+
+    torch.set_num_threads(n)
+
+
+@model_app.command("data")
+def data_cmd(
+    out: Path = typer.Option(DEFAULT_DATA, "--out", "-o", help="Dataset file (.npz) to write."),
+    attempts: int = typer.Option(26000, help="Pushes to simulate (about 80% are kept)."),
+    seed: int = typer.Option(0, help="Seed of the generator."),
+    workers: int = typer.Option(max(1, os.cpu_count() or 1), help="Worker processes."),
+    accept_translation: float = typer.Option(0.1, help="Keep pushes within this error [m]."),
+    accept_rotation: float = typer.Option(0.3, help="... and within this error [rad]."),
+) -> None:
+    """Simulate pushes with the contact strategies and keep those that land near the request."""
+    from lamp.manip.dataset import generate
+
+    if attempts < 1 or workers < 1:
+        typer.echo("error: --attempts and --workers must be >= 1", err=True)
+        raise typer.Exit(code=2)
+    ds = generate(attempts, seed=seed, workers=workers, accept_translation=accept_translation,
+                  accept_rotation=accept_rotation)
+    ds.save(out)
+    typer.echo(json.dumps(ds.meta, indent=1))
+    typer.echo(f"wrote {len(ds)} samples to {out}")
+
+
+@model_app.command("train")
+def train_cmd(
+    data: Path = typer.Option(DEFAULT_DATA, "--data", help="Dataset (.npz from `lamp model data`)."),
+    run_dir: Path = typer.Option(Path("data/manip_run"), "--run-dir",
+                                 help="Run directory (resumes from it if it holds a state)."),
+    epochs: int = typer.Option(30, help="Total epochs (a resumed run continues up to this)."),
+    seed: int = typer.Option(0, help="Seed (initialisation, split, batches)."),
+    threads: int = typer.Option(1, help="Torch threads."),
+    max_minutes: float = typer.Option(None, help="Stop after the epoch crossing this budget."),
+    export_to: Path = typer.Option(None, "--export", help="Also write the model here."),
+) -> None:
+    """Train (or resume training) the flow-matching proposer; logs losses per epoch."""
+    _threads(threads)
+    from lamp.manip.dataset import PushDataset
+    from lamp.manip.train import TrainConfig, train
+
+    if not data.is_file():
+        typer.echo(f"error: no dataset at {data} (run `lamp model data` first)", err=True)
+        raise typer.Exit(code=2)
+    ds = PushDataset.load(data)
+    summary = train(ds, run_dir, TrainConfig(epochs=epochs, seed=seed, threads=threads),
+                    max_minutes=max_minutes)
+    if export_to is not None:
+        import shutil
+
+        export_to.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(run_dir / "model.pt", export_to)
+        typer.echo(f"exported {export_to}")
+    typer.echo(json.dumps(summary, indent=1))
+
+
+@model_app.command("eval")
+def eval_cmd(
+    model: Path = typer.Option(None, "--model", help="Checkpoint (default: the shipped one)."),
+    cases: int = typer.Option(60, help="Held-out (shape, motion) cases per budget."),
+    k: int = typer.Option(4, help="Proposals executed per case."),
+    seed: int = typer.Option(12345, help="Seed of the held-out cases."),
+    threads: int = typer.Option(1, help="Torch threads."),
+    out: Path = typer.Option(None, "--out", help="Write the report as JSON here."),
+    geometric: bool = typer.Option(True, help="Run the geometric proposer side by side."),
+) -> None:
+    """Execute proposals for held-out shapes and motions in the simulator; report accuracy."""
+    _threads(threads)
+    from lamp.manip import GeometricProposer, load_model
+    from lamp.manip.evaluate import evaluate, format_report
+
+    proposers = {"flow": load_model(model)}
+    if geometric:
+        proposers["geometric"] = GeometricProposer()
+    report = evaluate(proposers, cases_per_budget=cases, k=k, seed=seed)
+    typer.echo(format_report(report))
+    if out is not None:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_text(json.dumps(report, indent=1))
+        typer.echo(f"wrote {out}")

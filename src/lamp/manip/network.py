@@ -1,0 +1,367 @@
+"""The learned proposer: a small CNN + MLP flow-matching network and its sampler.
+
+Architecture (GCo_DC-like, sized for CPUs): a CNN encodes the object mask (64 x 64, see
+``lamp.manip.image``) into a vector; embeddings of the noisy contact tokens, the noisy
+trajectory, the requested motion, the budget and the flow time are concatenated with it
+and fed through a residual MLP trunk with two heads: token logits (clean-token posterior)
+and trajectory velocity. See ``lamp.manip.flow`` for the paths and losses.
+
+``FlowProposer.propose`` draws K candidates in one batched pass per step (10 Euler steps),
+caching the image embedding per shape, under ``torch.inference_mode``. Contacts come out as
+grid cells; they are snapped onto the contact ring (robot radius + 5 mm outside the object)
+and a slot is dropped when its robot would overlap an earlier one (so b may be < budget,
+never 0).
+"""
+
+from __future__ import annotations
+
+import json
+from collections import OrderedDict
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+from numpy.typing import ArrayLike
+from torch import nn
+
+from lamp.manip.contacts import (
+    HORIZON,
+    MAX_ROBOTS,
+    ROBOT_RADIUS,
+    as_shape,
+    check_budget,
+    check_motion,
+    project_to_contacts,
+)
+from lamp.manip.flow import (
+    N_CLASSES,
+    N_INPUT_TOKENS,
+    NOISE,
+    NONE,
+    detokenize,
+    jump_probability,
+    smoothness_grad,
+    time_embedding,
+)
+from lamp.manip.image import IMAGE_SIZE, object_image
+from lamp.manip.proposals import Proposal, ShapeLike, check_k, make_rng
+from lamp.scene.model import Shape
+
+MOTION_SCALE = (0.2, 0.2, 0.5)
+"""Requested motions are divided by these before entering the network (training range)."""
+DEFAULT_CHECKPOINT = Path(__file__).parent / "checkpoints" / "flow_dc.pt"
+
+
+@dataclass(frozen=True)
+class NetConfig:
+    """Hyper-parameters of ``FlowNet`` (stored in checkpoints)."""
+
+    image_size: int = IMAGE_SIZE
+    channels: tuple[int, ...] = (8, 16, 32, 32)
+    image_dim: int = 128
+    token_dim: int = 32
+    traj_dim: int = 256
+    cond_dim: int = 64
+    time_dim: int = 64
+    hidden: int = 384
+    blocks: int = 3
+    slots: int = MAX_ROBOTS
+    horizon: int = HORIZON
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> NetConfig:
+        d = dict(d)
+        d["channels"] = tuple(d["channels"])
+        return cls(**d)
+
+
+class ImageEncoder(nn.Module):
+    """Strided 3x3 convolutions (each halves the resolution), then a linear projection."""
+
+    def __init__(self, cfg: NetConfig) -> None:
+        super().__init__()
+        layers: list[nn.Module] = []
+        c_in, size = 1, cfg.image_size
+        for c in cfg.channels:
+            layers += [nn.Conv2d(c_in, c, 3, stride=2, padding=1), nn.SiLU()]
+            c_in, size = c, (size + 1) // 2
+        self.conv = nn.Sequential(*layers)
+        self.proj = nn.Sequential(nn.Flatten(), nn.Linear(c_in * size * size, cfg.image_dim),
+                                  nn.SiLU())
+
+    def forward(self, img: torch.Tensor) -> torch.Tensor:
+        return self.proj(self.conv(img))
+
+
+class ResBlock(nn.Module):
+    def __init__(self, width: int) -> None:
+        super().__init__()
+        self.net = nn.Sequential(nn.LayerNorm(width), nn.Linear(width, width), nn.SiLU(),
+                                 nn.Linear(width, width))
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        return x + self.net(x)
+
+
+class FlowNet(nn.Module):
+    """Joint denoiser: (image embedding, x_t tokens, x_t trajectory, motion, budget, t) ->
+    (clean-token logits (B, 2S, N_CLASSES), velocity (B, S, H-1, 2))."""
+
+    def __init__(self, cfg: NetConfig | None = None) -> None:
+        super().__init__()
+        self.cfg = cfg = cfg or NetConfig()
+        n_tok = 2 * cfg.slots
+        self.traj_numel = cfg.slots * (cfg.horizon - 1) * 2
+        self.image = ImageEncoder(cfg)
+        self.tok_emb = nn.Embedding(N_INPUT_TOKENS, cfg.token_dim)
+        self.tok_pos = nn.Parameter(torch.zeros(n_tok, cfg.token_dim))
+        self.traj_in = nn.Sequential(nn.Linear(self.traj_numel, cfg.traj_dim), nn.SiLU())
+        self.cond_in = nn.Sequential(nn.Linear(3 + cfg.slots, cfg.cond_dim), nn.SiLU(),
+                                     nn.Linear(cfg.cond_dim, cfg.cond_dim), nn.SiLU())
+        self.time_in = nn.Sequential(nn.Linear(cfg.time_dim, cfg.time_dim), nn.SiLU())
+        width_in = (cfg.image_dim + n_tok * cfg.token_dim + cfg.traj_dim + cfg.cond_dim
+                    + cfg.time_dim + 3)
+        self.trunk_in = nn.Linear(width_in, cfg.hidden)
+        self.trunk = nn.Sequential(*[ResBlock(cfg.hidden) for _ in range(cfg.blocks)],
+                                   nn.LayerNorm(cfg.hidden), nn.SiLU())
+        self.token_head = nn.Linear(cfg.hidden, n_tok * N_CLASSES)
+        self.vel_head = nn.Linear(cfg.hidden, self.traj_numel)
+        nn.init.normal_(self.tok_pos, std=0.02)
+
+    def encode_image(self, img: torch.Tensor) -> torch.Tensor:
+        """(B, S, S) or (B, 1, S, S) masks -> (B, image_dim)."""
+        if img.dim() == 3:
+            img = img[:, None]
+        return self.image(img)
+
+    def forward(
+        self,
+        img_emb: torch.Tensor,
+        tokens: torch.Tensor,
+        traj: torch.Tensor,
+        motion: torch.Tensor,
+        budget: torch.Tensor,
+        t: torch.Tensor,
+    ) -> tuple[torch.Tensor, torch.Tensor]:
+        b = tokens.shape[0]
+        tok = (self.tok_emb(tokens) + self.tok_pos).reshape(b, -1)
+        onehot = nn.functional.one_hot(budget.long() - 1, self.cfg.slots).to(motion.dtype)
+        cond = self.cond_in(torch.cat([motion, onehot], dim=-1))
+        h = torch.cat([img_emb, tok, self.traj_in(traj.reshape(b, -1)), cond,
+                       self.time_in(time_embedding(t, self.cfg.time_dim)), motion], dim=-1)
+        h = self.trunk(self.trunk_in(h))
+        logits = self.token_head(h).view(b, 2 * self.cfg.slots, N_CLASSES)
+        vel = self.vel_head(h).view(b, self.cfg.slots, self.cfg.horizon - 1, 2)
+        return logits, vel
+
+
+@dataclass
+class SamplerConfig:
+    """Sampling settings: Euler steps, smoothness guidance weight, token temperature."""
+
+    steps: int = 10
+    guidance: float = 0.05
+    temperature: float = 1.0
+
+
+@dataclass
+class RawSamples:
+    """Batched sampler output before conversion to ``Proposal`` objects (numpy, object
+    frame): contacts (B, S, 2) with NaN rows for dropped slots, pushes (B, S, H, 2)."""
+
+    contacts: np.ndarray
+    pushes: np.ndarray
+
+
+class FlowProposer:
+    """The trained discrete-continuous flow-matching proposer (``ProposalModel``)."""
+
+    horizon: int = HORIZON
+
+    def __init__(
+        self,
+        net: FlowNet,
+        traj_scale: float,
+        sampler: SamplerConfig | None = None,
+        meta: dict[str, Any] | None = None,
+        cache_size: int = 256,
+    ) -> None:
+        self.net = net.eval()
+        self.traj_scale = float(traj_scale)
+        self.sampler = sampler or SamplerConfig()
+        self.meta = meta or {}
+        self._cache: OrderedDict[Any, torch.Tensor] = OrderedDict()
+        self._cache_size = cache_size
+        self.horizon = net.cfg.horizon
+
+    # ------------------------------------------------------------------ image cache
+    def image_embedding(self, shape: Shape) -> torch.Tensor:
+        """(1, image_dim) embedding of the shape's mask, cached per shape."""
+        try:
+            key: Any = shape
+            hash(key)
+        except TypeError:
+            key = json.dumps(shape.to_dict(), sort_keys=True)
+        emb = self._cache.get(key)
+        if emb is None:
+            img = torch.from_numpy(np.array(object_image(shape, self.net.cfg.image_size)))
+            with torch.inference_mode():
+                emb = self.net.encode_image(img[None])
+            self._cache[key] = emb
+            if len(self._cache) > self._cache_size:
+                self._cache.popitem(last=False)
+        else:
+            self._cache.move_to_end(key)
+        return emb
+
+    # ------------------------------------------------------------------ sampling
+    def sample(
+        self,
+        shape: ShapeLike,
+        motions: ArrayLike,
+        budget: int,
+        k: int,
+        seed: int | np.random.Generator | None = None,
+    ) -> RawSamples:
+        """k candidates for each of M motions (M, 3): arrays of M * k rows, motion-major."""
+        shp = as_shape(shape)
+        b = check_budget(budget)
+        k = check_k(k)
+        m = np.asarray(motions, dtype=float).reshape(-1, 3)
+        for row in m:
+            check_motion(row)
+        rng = make_rng(seed)
+        gen = torch.Generator().manual_seed(int(rng.integers(0, 2**63 - 1)))
+        cfg = self.net.cfg
+        n = len(m) * k
+        s = cfg.slots
+        used = torch.arange(s) < b  # (S,)
+        tok_used = used.repeat_interleave(2)  # (2S,)
+        with torch.inference_mode():
+            emb = self.image_embedding(shp).expand(n, -1)
+            motion = torch.from_numpy(np.repeat(m / np.array(MOTION_SCALE), k, axis=0)).float()
+            bud = torch.full((n,), b, dtype=torch.long)
+            tokens = torch.full((n, 2 * s), NOISE, dtype=torch.long)
+            tokens[:, ~tok_used] = NONE
+            x = torch.randn((n, s, cfg.horizon - 1, 2), generator=gen)
+            x[:, ~used] = 0.0
+            steps = self.sampler.steps
+            h = 1.0 / steps
+            for i in range(steps):
+                t = i * h
+                logits, v = self.net(emb, tokens, x, motion, bud, torch.full((n,), t))
+                # continuous: Euler step with smoothness guidance at the predicted endpoint
+                if self.sampler.guidance > 0:
+                    v = v - self.sampler.guidance * smoothness_grad(x + (1 - t) * v)
+                x = x + h * v
+                x[:, ~used] = 0.0
+                # discrete: NOISE tokens jump to a clean value (never NONE inside the budget)
+                p = jump_probability(t, h)
+                jump = (tokens == NOISE) & (torch.rand(tokens.shape, generator=gen) < p)
+                if jump.any():
+                    lg = logits / self.sampler.temperature
+                    lg[..., NONE] = float("-inf")
+                    u = torch.rand(lg.shape, generator=gen).clamp_(1e-12, 1.0)
+                    draw = torch.argmax(lg - torch.log(-torch.log(u)), dim=-1)
+                    tokens = torch.where(jump, draw, tokens)
+        contacts = detokenize(tokens.numpy())  # (n, S, 2), NaN beyond the budget
+        disp = x.numpy().astype(float) * self.traj_scale
+        return self._finish(shp, contacts, disp)
+
+    def _finish(self, shape: Shape, contacts: np.ndarray, disp: np.ndarray) -> RawSamples:
+        """Snap contacts onto the contact ring, build pushes, drop overlapping robots."""
+        n, s, _ = contacts.shape
+        used = ~np.isnan(contacts[..., 0])
+        snapped = contacts.copy()
+        if used.any():
+            snapped[used] = project_to_contacts(shape, contacts[used])
+        # a robot overlapping an earlier robot of the same candidate is dropped
+        for j in range(1, s):
+            for i in range(j):
+                d = np.hypot(*(snapped[:, j] - snapped[:, i]).T)
+                clash = used[:, j] & used[:, i] & (d < 2.0 * ROBOT_RADIUS)
+                used[clash, j] = False
+        snapped[~used] = np.nan
+        pushes = np.concatenate([np.zeros((n, s, 1, 2)), disp], axis=2) + snapped[:, :, None, :]
+        return RawSamples(snapped, pushes)
+
+    @staticmethod
+    def _to_proposals(raw: RawSamples, rows: range) -> list[Proposal]:
+        out = []
+        for r in rows:
+            keep = ~np.isnan(raw.contacts[r, :, 0])
+            out.append(Proposal(raw.contacts[r, keep].copy(), raw.pushes[r, keep].copy(), "flow"))
+        return out
+
+    def propose(
+        self,
+        shape: ShapeLike,
+        motion: ArrayLike,
+        budget: int,
+        k: int = 16,
+        seed: int | np.random.Generator | None = None,
+    ) -> list[Proposal]:
+        """``k`` sampled proposals for moving ``shape`` by ``motion`` (object frame)."""
+        m = check_motion(motion)
+        raw = self.sample(shape, m[None], budget, k, seed)
+        return self._to_proposals(raw, range(check_k(k)))
+
+    def propose_batch(
+        self,
+        shape: ShapeLike,
+        motions: Sequence[ArrayLike] | np.ndarray,
+        budget: int,
+        k: int = 16,
+        seed: int | np.random.Generator | None = None,
+    ) -> list[list[Proposal]]:
+        """``k`` proposals for each of several motions, all sampled in one batched pass."""
+        m = np.asarray(motions, dtype=float).reshape(-1, 3)
+        raw = self.sample(shape, m, budget, k, seed)
+        return [self._to_proposals(raw, range(i * k, (i + 1) * k)) for i in range(len(m))]
+
+
+# --------------------------------------------------------------------------- checkpoints
+@dataclass
+class Checkpoint:
+    """What a shipped checkpoint holds (all plain types, loadable with weights_only=True)."""
+
+    config: dict[str, Any]
+    state_dict: dict[str, torch.Tensor]
+    traj_scale: float
+    sampler: dict[str, Any] = field(default_factory=lambda: asdict(SamplerConfig()))
+    meta: dict[str, Any] = field(default_factory=dict)
+
+    def to_payload(self, half: bool = False) -> dict[str, Any]:
+        sd = {k: (v.half() if half and v.is_floating_point() else v).contiguous()
+              for k, v in self.state_dict.items()}
+        cfg = dict(self.config)
+        cfg["channels"] = list(cfg["channels"])
+        return {"format": "lamp-flow-dc/1", "config": cfg, "state_dict": sd,
+                "traj_scale": float(self.traj_scale), "sampler": dict(self.sampler),
+                "meta_json": json.dumps(self.meta)}
+
+
+def save_checkpoint(ck: Checkpoint, path: str | Path, half: bool = False) -> None:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    torch.save(ck.to_payload(half), path)
+
+
+def load_model(path: str | Path | None = None, threads: int | None = None) -> FlowProposer:
+    """Load a ``FlowProposer`` from a checkpoint (default: the shipped one), weights only."""
+    p = Path(path) if path is not None else DEFAULT_CHECKPOINT
+    if not p.is_file():
+        raise FileNotFoundError(f"no model checkpoint at {p}")
+    if threads is not None:
+        torch.set_num_threads(int(threads))
+    payload = torch.load(p, map_location="cpu", weights_only=True)
+    if payload.get("format") != "lamp-flow-dc/1":
+        raise ValueError(f"{p} is not a lamp flow-dc checkpoint (format {payload.get('format')!r})")
+    net = FlowNet(NetConfig.from_dict(payload["config"]))
+    net.load_state_dict({k: v.float() if v.is_floating_point() else v
+                         for k, v in payload["state_dict"].items()})
+    sampler = SamplerConfig(**payload.get("sampler", {}))
+    return FlowProposer(net, payload["traj_scale"], sampler, json.loads(payload["meta_json"]))
