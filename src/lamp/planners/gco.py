@@ -19,7 +19,7 @@ from lamp.geometry import se2
 from lamp.planners.lazy import Plan
 from lamp.planners.task import ManipulationTask
 from lamp.planners.verify import Transition, approach, push_paths, reassign
-from lamp.search.astar import gco_object_path
+from lamp.search.gco_lattice import gco_object_path
 
 LOOKAHEAD = 0.3  # m: the waypoint GCo steers towards
 MAX_STEP_XY = 0.2  # m: step clamp per axis
@@ -35,8 +35,9 @@ class GCoPlanner:
         self.iteration = 0
 
     def _next_pose(self, q_O: np.ndarray, deadline: float | None) -> np.ndarray | None:
+        remaining = None if deadline is None else max(1e-3, deadline - time.perf_counter())
         path = gco_object_path(self.task.scene, self.task.index, q_O, self.task.object_poses,
-                               self.inflation, deadline=deadline)
+                               self.inflation, time_limit=remaining)
         if path is None or len(path) == 0:
             return None
         path = np.asarray(path, float)

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from lamp.planners.lazy import Plan
+from lamp.planners.lazy import Plan, join_lattice
 from lamp.planners.task import ManipulationTask
 from lamp.planners.trajectory import MAX_STEP
 from lamp.planners.verify import Transition, verify
@@ -61,17 +61,21 @@ class LampAStar:
         return tuple(sorted(map(tuple, cells.tolist())))
 
     def _successors(self, state: SearchState) -> list[tuple[object, np.ndarray]]:
-        if state.node is None:  # the continuous start joins the lattice by one primitive
-            return [(v, self.lattice.pose(v)) for v, _ in self.lattice.start_connections(state.q_O)]
-        return [(v, self.lattice.pose(v)) for v, _ in self.lattice.successors(state.node)]
+        if not self.lattice.is_node(state.node):  # the continuous start joins the lattice
+            edges = self._start_edges
+        else:
+            edges = self.lattice.successors(state.node)
+        return [(v, self.lattice.pose(v)) for v, _ in edges]
 
     def _h(self, q_O: np.ndarray) -> float:
-        return self.lattice.heuristic_pose(q_O)
+        return float(self.lattice.distance(q_O, self.task.goal))
 
     def plan(self, q_O: np.ndarray, q_R: np.ndarray, deadline: float | None = None) -> Plan | None:
         cfg = self.task.config
         goal = self.lattice.goal_node
-        start_node = self.lattice.snap(q_O)
+        start_node, self._start_edges = join_lattice(self.lattice, np.asarray(q_O, float))
+        if self._start_edges == []:
+            return None
         start = SearchState(start_node, np.asarray(q_O, float), np.asarray(q_R, float), None, 0.0)
         tie = itertools.count()
         open_list: list = [(self._h(start.q_O), next(tie), start)]  # line 2

@@ -55,6 +55,26 @@ class Plan:
         return np.array([self.transitions[0].q_from] + [t.q_to for t in self.transitions])
 
 
+#: A continuous pose this close to a lattice node (heuristic metric) is that node.
+SNAP_DISTANCE = 1e-3
+#: Footprint shrinkage tried, in order, when a drifted pose touches an obstacle so that no
+#: connecting motion is free at zero tolerance (the object may always move away from it).
+JOIN_TOLERANCES = (0.0, 0.01, 0.02)
+
+
+def join_lattice(lattice: ObjectLattice, q_O: np.ndarray) -> tuple[Node, list | None]:
+    """The search vertex for the object at ``q_O``: a lattice node when ``q_O`` is on one,
+    otherwise a virtual node (the pose tuple) with its connecting edges."""
+    near = lattice.nearest_nodes(q_O, SNAP_DISTANCE)
+    if near:
+        return near[0][0], None
+    for tol in JOIN_TOLERANCES:
+        edges = lattice.start_connections(q_O, tolerance=tol)
+        if edges:
+            return tuple(float(v) for v in q_O), edges
+    return tuple(float(v) for v in q_O), []
+
+
 class LazyPlanner:
     """LAMP-Lazy for one object (Alg. 2). ``plan`` is called first and after every drift."""
 
@@ -74,7 +94,7 @@ class LazyPlanner:
         """``UpdateChange`` (line 21): raise the cost of an edge whose verification failed."""
         n = self.failures.get((u, v), 0) + 1
         self.failures[(u, v)] = n
-        self.dstar.update_change(u, v, self.dstar.cost(u, v) + self.task.config.edge_penalty)
+        self.dstar.penalize(u, v, self.task.config.edge_penalty)
         self.penalised.append((self.lattice.pose(u)[:2].copy(), self.lattice.pose(v)[:2].copy()))
 
     def plan(self, q_O_now: np.ndarray, q_R_now: np.ndarray, deadline: float | None = None) -> Plan | None:
@@ -87,7 +107,10 @@ class LazyPlanner:
         for _ in range(cfg.max_plan_iterations):
             if deadline is not None and time.perf_counter() > deadline:
                 return None
-            path = self.dstar.plan_shortest_path(q_O_now)  # line 12
+            start, edges = join_lattice(self.lattice, np.asarray(q_O_now, float))
+            if edges == []:
+                return None
+            path = self.dstar.plan_shortest_path(start, edges)  # line 12
             if not path:
                 return None
             transitions: list[Transition] = []
@@ -96,21 +119,22 @@ class LazyPlanner:
             curr = path[0]
             failed = False
             for nxt in path[1:]:  # line 14
-                if curr in self.tree_eval:  # line 15
+                if self.lattice.is_node(curr) and curr in self.tree_eval:  # line 15
                     break
                 attempt = self.failures.get((curr, nxt), 0)
-                trans = verify(self.task, self.dstar.pose(curr), self.dstar.pose(nxt), q_R, attempt)
+                trans = verify(self.task, self.lattice.pose(curr), self.lattice.pose(nxt), q_R, attempt)
                 if trans is None:  # lines 18-22
                     self._penalise(curr, nxt)
                     failed = True
                     break
                 transitions.append(trans)  # line 23
                 entry = TreeEntry(nxt, trans, [(q_R.copy(), trans)])
-                tree_new[curr] = entry  # line 24
+                if self.lattice.is_node(curr):  # virtual starts are never reused
+                    tree_new[curr] = entry  # line 24
                 curr, q_R = nxt, trans.robot_end  # line 25
             if failed:
                 continue
-            if curr != goal and curr in self.tree_eval:  # lines 26-40
+            if curr != goal and self.lattice.is_node(curr) and curr in self.tree_eval:  # l. 26-40
                 ok = True
                 while curr != goal:
                     entry = self.tree_eval[curr]
