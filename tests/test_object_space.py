@@ -202,6 +202,12 @@ def test_from_scene_uses_other_objects():
 def test_bad_arguments():
     with pytest.raises(ValueError, match="inflation"):
         ObjectSpace(Circle(0.1), (W, H), [], inflation=-1.0)
+    with pytest.raises(ValueError, match="inflation"):
+        ObjectSpace(Rectangle((0.1, 0.3)), (W, H), [], inflation=-0.05)
+    with pytest.raises(ValueError, match="inflation"):
+        ObjectSpace(Circle(0.1), (W, H), [], inflation=float("nan"))
+    shrunk = ObjectSpace(Rectangle((0.4, 0.2)), (W, H), [], inflation=-0.05)
+    np.testing.assert_allclose(shrunk.clearance([0.5, 1.0, 0.0]), 0.35)
     with pytest.raises(ValueError, match="workspace"):
         ObjectSpace(Circle(0.1), (0.0, H), [])
     space = ObjectSpace(Circle(0.1), (W, H), [])

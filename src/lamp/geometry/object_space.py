@@ -52,7 +52,9 @@ Guarantees (tested against Shapely in ``tests/test_object_space.py``)
 Inflation semantics (as GCo): circles grow in radius by ``inflation``; rectangles grow by
 ``inflation`` on every side (size + 2 * inflation, sharp corners); polygons are offset by
 ``inflation`` per edge with mitred corners (Shapely ``buffer(join_style="mitre")``, whose
-mitre limit of 5 bevels only very sharp spikes).
+mitre limit of 5 bevels only very sharp spikes). A negative inflation shrinks the footprint
+the same way; it is meant for tolerating a small penetration when leaving a drifted pose
+(``ObjectLattice.start_connections(tolerance=...)``), and must leave a non-empty footprint.
 """
 
 from __future__ import annotations
@@ -81,15 +83,23 @@ def inflated_outline(shape: Shape, inflation: float) -> np.ndarray | None:
     ``radius + inflation``).
     """
     if isinstance(shape, Circle):
+        if shape.radius + inflation <= 0:
+            raise ValueError(
+                f"inflation {inflation} makes the circle of radius {shape.radius} vanish"
+            )
         return None
     if isinstance(shape, Rectangle):
         hx = 0.5 * shape.size[0] + inflation
         hy = 0.5 * shape.size[1] + inflation
+        if min(hx, hy) <= 0:
+            raise ValueError(f"inflation {inflation} makes the rectangle {shape.size} vanish")
         return np.array([[-hx, -hy], [hx, -hy], [hx, hy], [-hx, hy]], dtype=float)
     pts = local_outline(shape)
     if inflation == 0.0:
         return pts
     poly = shapely.Polygon(pts).buffer(inflation, join_style="mitre")
+    if poly.is_empty or poly.geom_type != "Polygon":
+        raise ValueError(f"inflation {inflation} does not leave a single polygon footprint")
     out = np.asarray(poly.exterior.coords, dtype=float)[:-1]
     area2 = np.sum(out[:, 0] * np.roll(out[:, 1], -1) - np.roll(out[:, 0], -1) * out[:, 1])
     return out if area2 > 0 else out[::-1].copy()
@@ -117,6 +127,7 @@ def _footprint_disks(
     polygon (V, 2) or an empty (0, 2) array for circles).
     """
     if isinstance(shape, Circle):
+        inflated_outline(shape, inflation)  # validates that the disk does not vanish
         c = np.zeros((1, 2))
         r = np.array([shape.radius + inflation])
         return c, r, c.copy(), r.copy(), np.zeros((0, 2))
@@ -345,8 +356,8 @@ class ObjectSpace:
         w, h = (float(v) for v in workspace)
         if not (w > 0 and h > 0 and math.isfinite(w) and math.isfinite(h)):
             raise ValueError(f"workspace must be two positive finite numbers, got {workspace!r}")
-        if not (inflation >= 0 and math.isfinite(inflation)):
-            raise ValueError(f"inflation must be finite and >= 0, got {inflation!r}")
+        if not math.isfinite(inflation):
+            raise ValueError(f"inflation must be finite, got {inflation!r}")
         if not (resolution > 0 and math.isfinite(resolution)):
             raise ValueError(f"resolution must be finite and > 0, got {resolution!r}")
         spacing = resolution if sample_spacing is None else float(sample_spacing)

@@ -1,0 +1,389 @@
+"""D* Lite (Koenig and Likhachev, 2002), optimised version, generic over a graph protocol.
+
+The search runs backwards from the goal: ``g(s)`` and ``rhs(s)`` estimate the cost from
+``s`` to the goal, and the priority queue ``U`` orders locally inconsistent vertices by
+``[min(g, rhs) + h(s_start, s) + k_m; min(g, rhs)]``. Comments ``{NN'}`` cite the lines of
+the optimised pseudocode (Fig. 4 of S. Koenig and M. Likhachev, "D* Lite", AAAI 2002).
+
+LAMP-Lazy (the paper's Alg. 2) uses it through the paper's three procedures:
+``initialize(goal)`` (Alg. 2 line 1), ``plan_shortest_path(start)`` (line 13) and
+``update_change(u, v, cost)`` (lines 21 and 36: a failed transition is penalised).
+
+Departures from the pseudocode, each for a reason:
+
+* Moving start, lazily: instead of updating ``k_m`` when edge costs change ({38'}),
+  ``plan_shortest_path`` adds ``h(s_last, s_start)`` whenever the start has moved since the
+  last call. Keys computed earlier stay lower bounds because ``h`` obeys the triangle
+  inequality, which is all {14'} needs.
+* Virtual start: the start may be a continuous pose that is not a graph vertex; it is a
+  virtual vertex with the out-edges given to ``plan_shortest_path(start_edges=...)``. It
+  has no in-edges, so replacing it by the next virtual start never invalidates another
+  vertex's ``rhs``. ``graph.heuristic`` must accept it (``ObjectLattice`` takes poses).
+* Termination {10'} uses ``rhs(s_start) != g(s_start)`` (the basic version's test) rather
+  than ``>``, so the start is always locally consistent when the path is read off.
+* ``U`` is a ``heapq`` with lazy deletion (a dict holds each queued vertex's current key);
+  stale entries are skipped when they reach the top, and the heap is rebuilt when stale
+  entries dominate.
+* Expansion and time limits: ``compute_shortest_path`` stops with a status; its state stays
+  consistent, so a later call simply continues.
+"""
+
+from __future__ import annotations
+
+import enum
+import heapq
+import itertools
+import math
+import time
+from collections.abc import Hashable, Iterable, Sequence
+from dataclasses import dataclass, field
+from typing import Protocol
+
+INF = math.inf
+
+Key = tuple[float, float]
+
+
+class Graph(Protocol):
+    """What D* Lite and A* need from a graph. Vertices are hashable.
+
+    ``successors(u)`` / ``predecessors(v)`` list the finite-cost edges ``(u -> v)`` as
+    ``(v, cost)`` / ``(u, cost)`` pairs; ``cost(u, v)`` is ``inf`` when there is no edge;
+    ``heuristic(a, b)`` is a consistent lower bound of the cost from ``a`` to ``b``.
+    """
+
+    def successors(self, u: Hashable) -> Iterable[tuple[Hashable, float]]: ...
+
+    def predecessors(self, v: Hashable) -> Iterable[tuple[Hashable, float]]: ...
+
+    def cost(self, u: Hashable, v: Hashable) -> float: ...
+
+    def heuristic(self, a: Hashable, b: Hashable) -> float: ...
+
+
+class SearchStatus(enum.Enum):
+    SUCCESS = "success"
+    NO_PATH = "no_path"
+    EXPANSION_LIMIT = "expansion_limit"
+    TIME_LIMIT = "time_limit"
+    NOT_INITIALIZED = "not_initialized"
+
+
+@dataclass
+class DStarStats:
+    """Counters since construction (``expansions``) and for the last call (``last_*``)."""
+
+    expansions: int = 0
+    calls: int = 0
+    last_expansions: int = 0
+    last_time_s: float = 0.0
+    edge_updates: int = 0
+    history: list[tuple[int, float]] = field(default_factory=list)
+
+
+class DStarLite:
+    """Incremental shortest paths to a fixed goal from a moving start.
+
+    Args:
+        graph: see :class:`Graph`.
+        max_expansions: per ``plan_shortest_path`` call (None: unlimited).
+        time_limit: seconds per ``plan_shortest_path`` call (None: unlimited).
+    """
+
+    def __init__(
+        self,
+        graph: Graph,
+        *,
+        max_expansions: int | None = None,
+        time_limit: float | None = None,
+    ) -> None:
+        if max_expansions is not None and max_expansions < 1:
+            raise ValueError(f"max_expansions must be >= 1 or None, got {max_expansions!r}")
+        if time_limit is not None and not time_limit > 0:
+            raise ValueError(f"time_limit must be > 0 or None, got {time_limit!r}")
+        self.graph = graph
+        self.max_expansions = max_expansions
+        self.time_limit = time_limit
+        self.goal: Hashable | None = None
+        self.status = SearchStatus.NOT_INITIALIZED
+        self.stats = DStarStats()
+        self._reset()
+
+    def _reset(self) -> None:
+        self.km = 0.0
+        self.g: dict[Hashable, float] = {}
+        self.rhs: dict[Hashable, float] = {}
+        self._heap: list[tuple[float, float, int, Hashable]] = []
+        self._open: dict[Hashable, Key] = {}
+        self._seq = itertools.count()
+        self.start: Hashable | None = None
+        self._last: Hashable | None = None
+        self._vstart: Hashable | None = None
+        self._vedges: dict[Hashable, float] = {}
+        self._over_out: dict[Hashable, dict[Hashable, float]] = {}
+        self._over_in: dict[Hashable, dict[Hashable, float]] = {}
+
+    # ----------------------------------------------------------- edges
+    def _succ(self, u: Hashable) -> Iterable[tuple[Hashable, float]]:
+        if u == self._vstart and self._vstart is not None:
+            edges: Iterable[tuple[Hashable, float]] = self._vedges.items()
+        else:
+            edges = self.graph.successors(u)
+        ov = self._over_out.get(u)
+        if ov:
+            return [(v, ov.get(v, c)) for v, c in edges]
+        return edges
+
+    def _pred(self, v: Hashable) -> list[tuple[Hashable, float]] | Iterable[tuple[Hashable, float]]:
+        vs = self._vstart
+        if vs is not None and v == vs:
+            return ()  # the virtual start has no in-edges
+        edges: Iterable[tuple[Hashable, float]] = self.graph.predecessors(v)
+        if vs is not None and v in self._vedges:
+            edges = [*edges, (vs, self._vedges[v])]
+        ov = self._over_in.get(v)
+        if ov:
+            return [(u, ov.get(u, c)) for u, c in edges]
+        return edges
+
+    def base_cost(self, u: Hashable, v: Hashable) -> float:
+        """The edge cost before any ``update_change`` (``inf`` when not an edge)."""
+        if u == self._vstart and self._vstart is not None:
+            return self._vedges.get(v, INF)
+        return self.graph.cost(u, v)
+
+    def cost(self, u: Hashable, v: Hashable) -> float:
+        """The current cost c(u, v), including changes made by ``update_change``."""
+        ov = self._over_out.get(u)
+        if ov is not None and v in ov:
+            return ov[v]
+        return self.base_cost(u, v)
+
+    # ----------------------------------------------------------- queue
+    def _h(self, s: Hashable) -> float:
+        return self.graph.heuristic(self.start, s)
+
+    def calculate_key(self, s: Hashable) -> Key:
+        """{01'} [min(g, rhs) + h(s_start, s) + k_m; min(g, rhs)]."""
+        m = min(self.g.get(s, INF), self.rhs.get(s, INF))
+        return (m + self._h(s) + self.km, m)
+
+    def _push(self, s: Hashable, key: Key) -> None:
+        self._open[s] = key
+        heapq.heappush(self._heap, (key[0], key[1], next(self._seq), s))
+        if len(self._heap) > 4 * len(self._open) + 1024:
+            self._heap = [(k[0], k[1], next(self._seq), n) for n, k in self._open.items()]
+            heapq.heapify(self._heap)
+
+    def _top(self) -> tuple[Key, Hashable | None]:
+        heap, open_ = self._heap, self._open
+        while heap:
+            k1, k2, _, s = heap[0]
+            cur = open_.get(s)
+            if cur is not None and cur[0] == k1 and cur[1] == k2:
+                return (k1, k2), s
+            heapq.heappop(heap)
+        return (INF, INF), None
+
+    def update_vertex(self, u: Hashable) -> None:
+        """{07'}-{09'}: (re)queue ``u`` iff it is locally inconsistent."""
+        g, rhs = self.g.get(u, INF), self.rhs.get(u, INF)
+        if g != rhs:
+            self._push(u, self.calculate_key(u))  # {07'} update / {08'} insert
+        elif u in self._open:
+            del self._open[u]  # {09'} remove (lazily from the heap)
+
+    # ----------------------------------------------------------- API
+    def initialize(self, goal: Hashable) -> None:
+        """{02'}-{06'}: an empty search rooted at ``goal`` (Alg. 2 line 1).
+
+        The goal's first key uses h = 0 (the start is not known yet); {14'} corrects it.
+        """
+        self._reset()
+        self.goal = goal
+        self.rhs[goal] = 0.0  # {05'}
+        self._push(goal, (0.0, 0.0))  # {06'}
+        self.status = SearchStatus.NOT_INITIALIZED
+
+    def _set_start(
+        self, start: Hashable, start_edges: Sequence[tuple[Hashable, float]] | None
+    ) -> None:
+        """Move the start, update k_m ({38'}-{39'}) and the virtual start's edges."""
+        if self._last is None:
+            self._last = start  # {29'}
+        elif start != self._last:
+            self.km += self.graph.heuristic(self._last, start)  # {38'}
+            self._last = start  # {39'}
+        self.start = start
+        old_v = self._vstart
+        if old_v is not None and (start_edges is None or old_v != start):
+            # the previous virtual start has no in-edges: dropping it affects no rhs
+            self.g.pop(old_v, None)
+            self.rhs.pop(old_v, None)
+            self._open.pop(old_v, None)
+            self._over_out.pop(old_v, None)
+            for v in self._vedges:
+                d = self._over_in.get(v)
+                if d is not None:
+                    d.pop(old_v, None)
+            self._vstart, self._vedges = None, {}
+        if start_edges is None:
+            return
+        if start == self.goal:
+            raise ValueError("a virtual start must not be the goal vertex")
+        edges: dict[Hashable, float] = {}
+        for v, c in start_edges:
+            if not (c >= 0):
+                raise ValueError(f"start edge cost must be >= 0, got {c!r} to {v!r}")
+            edges[v] = min(float(c), edges.get(v, INF))
+        self._vstart, self._vedges = start, edges
+        # rhs of the virtual start from its (possibly new) out-edges, {27'}-style
+        self.rhs[start] = min((c + self.g.get(v, INF) for v, c in self._succ(start)), default=INF)
+        self.update_vertex(start)
+
+    def compute_shortest_path(self) -> SearchStatus:
+        """{10'}-{28'}: repair g until the start is consistent and no key below it is queued."""
+        if self.goal is None or self.start is None:
+            raise RuntimeError("call initialize(goal) and plan_shortest_path(start) first")
+        t0 = time.perf_counter()
+        start = self.start
+        g, rhs = self.g, self.rhs
+        goal = self.goal
+        n = 0
+        max_exp = self.max_expansions
+        deadline = None if self.time_limit is None else t0 + self.time_limit
+        status = SearchStatus.SUCCESS
+        while True:
+            k_old, u = self._top()  # {11'}-{12'}
+            k_start = self.calculate_key(start)
+            if not (k_old < k_start or rhs.get(start, INF) != g.get(start, INF)):  # {10'}
+                break
+            if u is None:  # queue empty: the start cannot be made consistent
+                break
+            if max_exp is not None and n >= max_exp:
+                status = SearchStatus.EXPANSION_LIMIT
+                break
+            if deadline is not None and (n & 63) == 0 and time.perf_counter() > deadline:
+                status = SearchStatus.TIME_LIMIT
+                break
+            n += 1
+            k_new = self.calculate_key(u)  # {13'}
+            g_u, rhs_u = g.get(u, INF), rhs.get(u, INF)
+            if k_old < k_new:  # {14'}
+                self._push(u, k_new)  # {15'}
+            elif g_u > rhs_u:  # {16'} overconsistent
+                g[u] = rhs_u  # {17'}
+                del self._open[u]  # {18'}
+                for s, c in self._pred(u):  # {19'}
+                    if s != goal:
+                        v = c + rhs_u
+                        if v < rhs.get(s, INF):
+                            rhs[s] = v  # {20'}
+                    self.update_vertex(s)  # {21'}
+            else:  # {22'} underconsistent
+                g_old = g_u  # {23'}
+                g[u] = INF  # {24'}
+                for s, c in self._pred(u):  # {25'}
+                    if s != goal and rhs.get(s, INF) == c + g_old:  # {26'}
+                        rhs[s] = min(  # {27'}
+                            (c2 + g.get(s2, INF) for s2, c2 in self._succ(s)), default=INF
+                        )
+                    self.update_vertex(s)  # {28'}
+                self.update_vertex(u)  # {25'}-{28'} for s = u
+        dt = time.perf_counter() - t0
+        self.stats.expansions += n
+        self.stats.last_expansions = n
+        self.stats.last_time_s = dt
+        return status
+
+    def plan_shortest_path(
+        self,
+        start: Hashable,
+        start_edges: Sequence[tuple[Hashable, float]] | None = None,
+    ) -> list[Hashable]:
+        """Compute or repair the shortest path from ``start`` to the goal (Alg. 2 line 13).
+
+        ``start`` is a graph vertex, or, when ``start_edges`` is given, a virtual vertex
+        (hashable, not in the graph, e.g. a pose tuple) with out-edges ``[(v, cost)]``.
+        Returns the vertex path ``[start, ..., goal]``, or ``[]`` on failure; ``status``
+        says why (``NO_PATH``, ``EXPANSION_LIMIT``, ``TIME_LIMIT``) and ``path_cost()``
+        gives the cost.
+        """
+        if self.goal is None:
+            raise RuntimeError("call initialize(goal) before plan_shortest_path")
+        self.stats.calls += 1
+        self._set_start(start, start_edges)
+        status = self.compute_shortest_path()
+        self.stats.history.append((self.stats.last_expansions, self.stats.last_time_s))
+        if status is not SearchStatus.SUCCESS:
+            self.status = status
+            return []
+        if self.g.get(start, INF) == INF:
+            self.status = SearchStatus.NO_PATH
+            return []
+        self.status = SearchStatus.SUCCESS
+        return self._extract_path(start)
+
+    def path_cost(self, start: Hashable | None = None) -> float:
+        """g(start): the cost of the current shortest path (``inf`` when none)."""
+        return self.g.get(self.start if start is None else start, INF)
+
+    def _extract_path(self, start: Hashable) -> list[Hashable]:
+        """{34'}: follow argmin_{s'} c(s, s') + g(s') from the start to the goal."""
+        path = [start]
+        s = start
+        seen = {start}
+        g = self.g
+        while s != self.goal:
+            best, best_v = INF, None
+            for v, c in self._succ(s):
+                val = c + g.get(v, INF)
+                if val < best:
+                    best, best_v = val, v
+            if best_v is None or best_v in seen:
+                # cannot happen for a consistent start and positive costs
+                raise RuntimeError(f"D* Lite path extraction failed at {s!r}")
+            path.append(best_v)
+            seen.add(best_v)
+            s = best_v
+        return path
+
+    def update_change(self, u: Hashable, v: Hashable, new_cost: float) -> None:
+        """{40'}-{47'}: the cost of edge u -> v becomes ``new_cost`` (``inf`` marks it
+        invalid). Used by LAMP-Lazy to penalise a transition that failed verification
+        (Alg. 2 lines 21 and 36). The path is repaired by the next ``plan_shortest_path``.
+        """
+        if self.goal is None:
+            raise RuntimeError("call initialize(goal) before update_change")
+        if not (new_cost >= 0):
+            raise ValueError(f"new_cost must be >= 0 (or inf), got {new_cost!r}")
+        if self.base_cost(u, v) == INF:
+            raise ValueError(f"({u!r}, {v!r}) is not an edge of the graph")
+        c_old = self.cost(u, v)  # {41'}
+        new_cost = float(new_cost)
+        self._over_out.setdefault(u, {})[v] = new_cost  # {42'}
+        self._over_in.setdefault(v, {})[u] = new_cost
+        self.stats.edge_updates += 1
+        if u == self.goal:
+            return
+        g_v = self.g.get(v, INF)
+        if c_old > new_cost:  # {43'}
+            if new_cost + g_v < self.rhs.get(u, INF):
+                self.rhs[u] = new_cost + g_v  # {44'}
+        elif self.rhs.get(u, INF) == c_old + g_v:  # {45'}
+            self.rhs[u] = min(  # {46'}
+                (c + self.g.get(s, INF) for s, c in self._succ(u)), default=INF
+            )
+        if self.start is not None:
+            self.update_vertex(u)  # {47'}
+        elif self.g.get(u, INF) != self.rhs.get(u, INF):
+            self._push(u, (0.0, 0.0))  # no start yet: a lower-bound key, fixed by {14'}
+
+    def penalize(self, u: Hashable, v: Hashable, penalty: float) -> float:
+        """Increase the cost of u -> v by ``penalty`` (the paper's edge penalty); returns
+        the new cost."""
+        if not (penalty >= 0):
+            raise ValueError(f"penalty must be >= 0, got {penalty!r}")
+        new = self.cost(u, v) + penalty
+        self.update_change(u, v, new)
+        return new

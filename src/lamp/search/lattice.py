@@ -1,0 +1,450 @@
+"""SE(2) lattice of object poses anchored at one pose (the goal for LAMP, the start for GCo).
+
+Nodes are the poses ``anchor_xy + step * (i, j)`` (world axes) with headings
+``anchor_theta + k * 2 pi / n_headings``, restricted to positions inside the workspace.
+Because LAMP anchors the lattice at the object's goal pose, the goal is a node and every
+lattice path ends exactly on it.
+
+Node ids are flat Python ints ``(ii * n_j + jj) * n_headings + k`` with ``ii = i - i_min``
+and ``jj = j - j_min`` (cheap to hash and to store in arrays). Virtual nodes for a
+continuous pose (the current, drifted pose of the object) are plain ``(x, y, theta)``
+tuples; :meth:`ObjectLattice.heuristic` accepts both.
+
+Motion primitives (26, ``PRIMITIVES``), as lattice offsets ``(di, dj, dk)``:
+
+* the 8 translations ``(di, dj) in {-1, 0, 1}^2 \\ {(0, 0)}`` (axis steps of ``step``,
+  diagonals of ``step * sqrt(2)``), each with a heading change ``dk in {-1, 0, +1}`` bins
+  (24 primitives);
+* the 2 pure rotations ``(0, 0, +-1)``.
+
+The same set is GCo's "8 neighbours or stay, times rotation {0, +-1}, minus stay". A
+primitive moves the object along ``se2.interpolate`` (translation and rotation blended
+linearly), which is the object motion the manipulation model is asked for. With the
+defaults (0.1 m, 16 headings = 0.39 rad) every primitive lies in the model's trained range
+(|dx|, |dy| <= 0.2 m in the object frame, |dtheta| <= 0.5 rad); the constructor checks it.
+
+Edge cost = translation length + ``w_rot * |dtheta|``. The default ``w_rot`` is the
+object's bounding radius (m/rad), so a rotation costs the arc length travelled by the
+object's farthest point: rotating a large object is as expensive as the sweep it causes.
+The heuristic ``hypot(dx, dy) + w_rot * |wrap(dtheta)|`` is a metric (triangle inequality),
+a lower bound of every path cost, hence admissible and consistent; it also satisfies the
+triangle inequality between continuous poses, which D* Lite's key modifier needs.
+
+A node is valid when its pose is free (``ObjectSpace.pose_free``); an edge is valid when
+both ends are valid and its swept motion is free (``ObjectSpace.motions_free``). Both are
+computed lazily, in batches of one node's 26 primitives, and cached (``int8`` arrays,
+-1 = unknown). Edge validity is symmetric (the reverse motion sweeps the same set), so each
+motion is checked once, from the lower node id, and both directions are filled in.
+
+Continuous poses join the lattice through :meth:`start_connections` (one free straight
+motion to a node within the model's range); the goal node is among them whenever it is
+within range, which gives the final approach to the exact goal pose for free.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from lamp.geometry import se2
+from lamp.geometry.object_space import ObjectSpace
+from lamp.scene.model import Scene
+
+Node = int
+VirtualNode = tuple[float, float, float]
+
+TWO_PI = 2.0 * math.pi
+
+#: the 26 primitives (di, dj, dk): 8 translations x {-1, 0, +1} heading bins, 2 rotations
+PRIMITIVES: tuple[tuple[int, int, int], ...] = tuple(
+    (di, dj, dk)
+    for di in (-1, 0, 1)
+    for dj in (-1, 0, 1)
+    for dk in (-1, 0, 1)
+    if (di, dj, dk) != (0, 0, 0)
+)
+#: index of the reverse primitive
+_REVERSE = tuple(PRIMITIVES.index((-di, -dj, -dk)) for di, dj, dk in PRIMITIVES)
+
+#: the manipulation model's trained range (object frame): |dx|, |dy| and |dtheta|
+MODEL_MAX_TRANSLATION = 0.2
+MODEL_MAX_ROTATION = 0.5
+
+
+class ObjectLattice:
+    """Lazily collision-checked SE(2) lattice over one :class:`ObjectSpace`.
+
+    Args:
+        space: collision queries for the object (its inflation is the lattice's).
+        anchor: the pose that is node ``(0, 0, 0)`` (LAMP: the goal).
+        step: translation step (m).
+        n_headings: number of heading bins over 2 pi.
+        w_rot: rotation cost weight (m/rad); default: the object's bounding radius.
+        max_translation, max_rotation: the model's range; primitives and start
+            connections stay within it (|dx|, |dy| <= max_translation in the object frame,
+            |dtheta| <= max_rotation).
+    """
+
+    def __init__(
+        self,
+        space: ObjectSpace,
+        anchor: ArrayLike,
+        step: float = 0.1,
+        n_headings: int = 16,
+        w_rot: float | None = None,
+        max_translation: float = MODEL_MAX_TRANSLATION,
+        max_rotation: float = MODEL_MAX_ROTATION,
+    ) -> None:
+        anchor = np.asarray(anchor, dtype=float)
+        if anchor.shape != (3,) or not np.all(np.isfinite(anchor)):
+            raise ValueError(f"anchor must be a finite (x, y, theta) pose, got {anchor!r}")
+        if not (step > 0 and math.isfinite(step)):
+            raise ValueError(f"step must be finite and > 0, got {step!r}")
+        if not (isinstance(n_headings, (int, np.integer)) and n_headings >= 3):
+            raise ValueError(f"n_headings must be an integer >= 3, got {n_headings!r}")
+        if w_rot is None:
+            w_rot = float(space.shape.bounding_radius)
+        if not (w_rot >= 0 and math.isfinite(w_rot)):
+            raise ValueError(f"w_rot must be finite and >= 0, got {w_rot!r}")
+        dtheta = TWO_PI / n_headings
+        if step * math.sqrt(2.0) > max_translation + 1e-12:
+            raise ValueError(
+                f"step {step} gives diagonal primitives beyond max_translation {max_translation}"
+            )
+        if dtheta > max_rotation + 1e-12:
+            raise ValueError(
+                f"n_headings {n_headings} gives rotations of {dtheta:.3f} rad beyond "
+                f"max_rotation {max_rotation}"
+            )
+        self.space = space
+        self.anchor = anchor.copy()
+        self.anchor[2] = se2.wrap_angle(anchor[2])
+        self.step = float(step)
+        self.n_headings = int(n_headings)
+        self.dtheta = dtheta
+        self.w_rot = float(w_rot)
+        self.max_translation = float(max_translation)
+        self.max_rotation = float(max_rotation)
+
+        w, h = space.workspace
+        ax, ay = self.anchor[0], self.anchor[1]
+        eps = 1e-9
+        self.i_min = math.ceil(-ax / step - eps)
+        self.i_max = math.floor((w - ax) / step + eps)
+        self.j_min = math.ceil(-ay / step - eps)
+        self.j_max = math.floor((h - ay) / step + eps)
+        self.n_i = max(0, self.i_max - self.i_min + 1)
+        self.n_j = max(0, self.j_max - self.j_min + 1)
+        if self.n_i == 0 or self.n_j == 0:
+            raise ValueError(
+                f"anchor {anchor.tolist()} gives an empty lattice in {space.workspace}"
+            )
+        self.n_nodes = self.n_i * self.n_j * self.n_headings
+        #: id of the anchor pose (LAMP: the goal node)
+        self.anchor_node: Node = self.node_id(0, 0, 0)
+
+        prim = np.array(PRIMITIVES, dtype=int)
+        self._prim = prim
+        self._prim_cost = step * np.hypot(prim[:, 0], prim[:, 1]) + self.w_rot * dtheta * np.abs(
+            prim[:, 2]
+        )
+        self._node_valid = np.full(self.n_nodes, -1, dtype=np.int8)
+        self._edge_valid = np.full((self.n_nodes, len(PRIMITIVES)), -1, dtype=np.int8)
+        self._succ: dict[Node, list[tuple[Node, float]]] = {}
+        self._tolerant: dict[float, ObjectSpace] = {}
+        #: statistics: poses and motions checked so far
+        self.n_pose_checks = 0
+        self.n_motion_checks = 0
+
+    @classmethod
+    def from_scene(
+        cls,
+        scene: Scene,
+        object_index: int,
+        object_poses: ArrayLike | None = None,
+        inflation: float = 0.0,
+        **kwargs: float,
+    ) -> ObjectLattice:
+        """LAMP's lattice for ``scene.objects[object_index]``, anchored at its goal, with the
+        scene's obstacles and the other objects (at ``object_poses``) as obstacles."""
+        space = ObjectSpace.from_scene(scene, object_index, object_poses, inflation)
+        return cls(space, scene.objects[object_index].goal, **kwargs)
+
+    @property
+    def goal_node(self) -> Node:
+        """The anchor's id: the goal node of a lattice anchored at the goal (LAMP)."""
+        return self.anchor_node
+
+    # ------------------------------------------------------------------ ids
+    def node_id(self, i: int, j: int, k: int) -> Node:
+        """Flat id of lattice offset (i, j, k) from the anchor (k taken modulo n_headings)."""
+        ii, jj = i - self.i_min, j - self.j_min
+        if not (0 <= ii < self.n_i and 0 <= jj < self.n_j):
+            raise ValueError(f"lattice offset ({i}, {j}) lies outside the workspace")
+        return (ii * self.n_j + jj) * self.n_headings + (k % self.n_headings)
+
+    def ijk(self, u: Node) -> tuple[int, int, int]:
+        """Lattice offset (i, j, k) of node ``u`` (inverse of :meth:`node_id`)."""
+        rest, k = divmod(int(u), self.n_headings)
+        ii, jj = divmod(rest, self.n_j)
+        return ii + self.i_min, jj + self.j_min, k
+
+    def is_node(self, u: object) -> bool:
+        return isinstance(u, (int, np.integer)) and 0 <= u < self.n_nodes
+
+    def pose(self, u: Node | VirtualNode) -> np.ndarray:
+        """(3,) pose of a node (a virtual node is its own pose)."""
+        if not isinstance(u, (int, np.integer)):
+            return np.asarray(u, dtype=float)
+        i, j, k = self.ijk(u)
+        return np.array(
+            [
+                self.anchor[0] + i * self.step,
+                self.anchor[1] + j * self.step,
+                se2.wrap_angle(self.anchor[2] + k * self.dtheta),
+            ]
+        )
+
+    def poses(self, nodes: Sequence[Node] | np.ndarray) -> np.ndarray:
+        """(N, 3) poses of node ids (vectorised)."""
+        u = np.asarray(nodes, dtype=np.int64)
+        rest, k = np.divmod(u, self.n_headings)
+        ii, jj = np.divmod(rest, self.n_j)
+        x = self.anchor[0] + (ii + self.i_min) * self.step
+        y = self.anchor[1] + (jj + self.j_min) * self.step
+        th = se2.wrap_angle(self.anchor[2] + k * self.dtheta)
+        return np.stack([x, y, np.asarray(th, dtype=float).reshape(x.shape)], axis=-1)
+
+    def _xyt(self, u: Node | VirtualNode) -> tuple[float, float, float]:
+        if isinstance(u, (int, np.integer)):
+            rest, k = divmod(int(u), self.n_headings)
+            ii, jj = divmod(rest, self.n_j)
+            return (
+                self.anchor[0] + (ii + self.i_min) * self.step,
+                self.anchor[1] + (jj + self.j_min) * self.step,
+                self.anchor[2] + k * self.dtheta,
+            )
+        return float(u[0]), float(u[1]), float(u[2])
+
+    # ------------------------------------------------------------ validity
+    def _ensure_nodes(self, nodes: np.ndarray) -> None:
+        unknown = nodes[self._node_valid[nodes] < 0]
+        if len(unknown):
+            unknown = np.unique(unknown)
+            self._node_valid[unknown] = self.space.pose_free(self.poses(unknown))
+            self.n_pose_checks += len(unknown)
+
+    def node_valid(self, u: Node) -> bool:
+        """Whether the node's pose is free (cached)."""
+        self._ensure_nodes(np.array([u], dtype=np.int64))
+        return bool(self._node_valid[u])
+
+    def validate_all_nodes(self) -> np.ndarray:
+        """Check every node at once (one batch) and return the (n_nodes,) validity mask."""
+        self._ensure_nodes(np.arange(self.n_nodes, dtype=np.int64))
+        return self._node_valid.astype(bool)
+
+    def _neighbours(self, u: Node) -> tuple[np.ndarray, np.ndarray]:
+        """(primitive indices, neighbour ids) of the primitives from ``u`` that stay on the grid."""
+        rest, k = divmod(int(u), self.n_headings)
+        ii, jj = divmod(rest, self.n_j)
+        p = self._prim
+        ni = ii + p[:, 0]
+        nj = jj + p[:, 1]
+        ok = (ni >= 0) & (ni < self.n_i) & (nj >= 0) & (nj < self.n_j)
+        idx = np.nonzero(ok)[0]
+        nk = (k + p[idx, 2]) % self.n_headings
+        return idx, (ni[idx] * self.n_j + nj[idx]) * self.n_headings + nk
+
+    def successors(self, u: Node) -> list[tuple[Node, float]]:
+        """Valid out-edges ``[(v, cost)]`` of node ``u`` (empty when ``u`` is invalid)."""
+        cached = self._succ.get(u)
+        if cached is not None:
+            return cached
+        if not self.node_valid(u):
+            self._succ[u] = []
+            return []
+        idx, nbrs = self._neighbours(u)
+        self._ensure_nodes(nbrs)
+        ok_node = self._node_valid[nbrs] == 1
+        idx, nbrs = idx[ok_node], nbrs[ok_node]
+        todo = self._edge_valid[u, idx] < 0
+        if todo.any():
+            t_idx, t_nbrs = idx[todo], nbrs[todo]
+            pu = self.pose(u)
+            pv = self.poses(t_nbrs)
+            # check each motion from its lower-id end so both directions agree
+            fwd = t_nbrs > u
+            a = np.where(fwd[:, None], pu[None, :], pv)
+            b = np.where(fwd[:, None], pv, pu[None, :])
+            free = self.space.motions_free(a, b)
+            self.n_motion_checks += len(free)
+            self._edge_valid[u, t_idx] = free
+            rev = np.array(_REVERSE)[t_idx]
+            self._edge_valid[t_nbrs, rev] = free
+        good = self._edge_valid[u, idx] == 1
+        out = [
+            (int(v), float(c)) for v, c in zip(nbrs[good], self._prim_cost[idx[good]], strict=True)
+        ]
+        self._succ[u] = out
+        return out
+
+    def predecessors(self, v: Node) -> list[tuple[Node, float]]:
+        """Valid in-edges ``[(u, cost(u, v))]``; the primitive set is closed under reversal
+        and edge validity and cost are symmetric, so these are the successors."""
+        return self.successors(v)
+
+    def cost(self, u: Node, v: Node) -> float:
+        """Cost of the lattice edge u -> v; ``inf`` when it is not a valid edge."""
+        for w, c in self.successors(u):
+            if w == v:
+                return c
+        return math.inf
+
+    def primitive(self, u: Node, v: Node) -> np.ndarray:
+        """The object-frame motion (dx, dy, dtheta) from node/pose ``u`` to ``v``: the
+        ``m_O`` of ``GetPrimitive`` in the paper's Alg. 2 (``se2.relative``)."""
+        return se2.relative(self.pose(u), self.pose(v))
+
+    # ----------------------------------------------------------- heuristic
+    def heuristic(self, u: Node | VirtualNode, v: Node | VirtualNode) -> float:
+        """Admissible, consistent lower bound of the path cost between nodes or poses:
+        ``hypot(dx, dy) + w_rot * |wrap(dtheta)|``."""
+        ax, ay, at = self._xyt(u)
+        bx, by, bt = self._xyt(v)
+        d = abs(at - bt) % TWO_PI
+        return math.hypot(ax - bx, ay - by) + self.w_rot * min(d, TWO_PI - d)
+
+    def distance(self, a: ArrayLike, b: ArrayLike) -> np.ndarray | float:
+        """The heuristic's metric between (..., 3) poses (vectorised)."""
+        dt, dr = se2.pose_distance(a, b)
+        return dt + self.w_rot * dr
+
+    # ---------------------------------------------------- continuous poses
+    def _candidates(self, pose: np.ndarray, radius: float, max_dk: int) -> np.ndarray:
+        """Ids of nodes within ``radius`` (translation) and ``max_dk`` heading bins of pose."""
+        fi = (pose[0] - self.anchor[0]) / self.step
+        fj = (pose[1] - self.anchor[1]) / self.step
+        r = radius / self.step
+        i0 = max(self.i_min, math.floor(fi - r))
+        i1 = min(self.i_max, math.ceil(fi + r))
+        j0 = max(self.j_min, math.floor(fj - r))
+        j1 = min(self.j_max, math.ceil(fj + r))
+        if i1 < i0 or j1 < j0:
+            return np.zeros(0, dtype=np.int64)
+        fk = se2.wrap_angle(pose[2] - self.anchor[2]) / self.dtheta
+        k0 = math.floor(fk)
+        if 2 * max_dk + 2 >= self.n_headings:
+            ks = np.arange(self.n_headings)
+        else:
+            ks = np.unique(np.arange(k0 - max_dk, k0 + max_dk + 2) % self.n_headings)
+        ii = np.arange(i0, i1 + 1) - self.i_min
+        jj = np.arange(j0, j1 + 1) - self.j_min
+        grid = (ii[:, None, None] * self.n_j + jj[None, :, None]) * self.n_headings + ks
+        return grid.reshape(-1).astype(np.int64)
+
+    def nearest_nodes(
+        self, pose: ArrayLike, max_dist: float, valid_only: bool = True
+    ) -> list[tuple[Node, float]]:
+        """Nodes within ``max_dist`` of ``pose`` in the heuristic's metric, nearest first,
+        as ``[(node, distance)]`` (only free nodes unless ``valid_only`` is False)."""
+        pose = np.asarray(pose, dtype=float)
+        max_dk = (
+            self.n_headings if self.w_rot == 0 else math.ceil(max_dist / self.w_rot / self.dtheta)
+        )
+        cand = self._candidates(pose, max_dist, max_dk)
+        if len(cand) == 0:
+            return []
+        d = self.distance(pose, self.poses(cand))
+        keep = d <= max_dist
+        cand, d = cand[keep], d[keep]
+        if valid_only and len(cand):
+            self._ensure_nodes(cand)
+            ok = self._node_valid[cand] == 1
+            cand, d = cand[ok], d[ok]
+        order = np.argsort(d, kind="stable")
+        return [(int(cand[o]), float(d[o])) for o in order]
+
+    def in_model_range(self, a: ArrayLike, b: ArrayLike) -> np.ndarray | bool:
+        """Whether the motion a -> b (object frame) is within the model's trained range."""
+        m = se2.relative(a, b)
+        ok = (
+            (np.abs(m[..., 0]) <= self.max_translation + 1e-9)
+            & (np.abs(m[..., 1]) <= self.max_translation + 1e-9)
+            & (np.abs(m[..., 2]) <= self.max_rotation + 1e-9)
+        )
+        return bool(ok) if np.ndim(ok) == 0 else ok
+
+    def start_connections(
+        self, pose: ArrayLike, tolerance: float = 0.0
+    ) -> list[tuple[Node, float]]:
+        """Nodes reachable from the continuous ``pose`` by one free straight motion within
+        the model's range, as ``[(node, motion cost)]`` cheapest first.
+
+        The planner treats ``pose`` as a virtual start node with these out-edges (see
+        ``DStarLite.plan_shortest_path(start_edges=...)``). The goal node is included
+        whenever it is within range, so a pose near the goal connects straight to it.
+        ``tolerance > 0`` checks these connecting motions for the footprint shrunk by
+        ``tolerance`` (use it when execution drift left the object touching an obstacle,
+        closer than the collision checker's band, so that it can move away).
+        """
+        pose = np.asarray(pose, dtype=float)
+        if pose.shape != (3,) or not np.all(np.isfinite(pose)):
+            raise ValueError(f"pose must be a finite (x, y, theta), got {pose!r}")
+        if tolerance < 0 or not math.isfinite(tolerance):
+            raise ValueError(f"tolerance must be finite and >= 0, got {tolerance!r}")
+        radius = self.max_translation * math.sqrt(2.0)
+        cand = self._candidates(pose, radius, math.ceil(self.max_rotation / self.dtheta))
+        if len(cand) == 0:
+            return []
+        targets = self.poses(cand)
+        in_range = self.in_model_range(pose, targets)
+        cand, targets = cand[in_range], targets[in_range]
+        if len(cand) == 0:
+            return []
+        self._ensure_nodes(cand)
+        ok = self._node_valid[cand] == 1
+        cand, targets = cand[ok], targets[ok]
+        space = self._tolerant_space(tolerance)
+        free = space.motions_free(np.broadcast_to(pose, targets.shape), targets)
+        self.n_motion_checks += len(free)
+        cand, targets = cand[free], targets[free]
+        cost = self.distance(pose, targets)
+        order = np.argsort(cost, kind="stable")
+        return [(int(cand[o]), float(cost[o])) for o in order]
+
+    def connection_cost(self, a: ArrayLike, b: ArrayLike, tolerance: float = 0.0) -> float | None:
+        """Cost of the direct motion between two continuous poses (e.g. a drifted pose and
+        the exact goal), or None when it leaves the model's range or is not free."""
+        a = np.asarray(a, dtype=float)
+        b = np.asarray(b, dtype=float)
+        if not self.in_model_range(a, b):
+            return None
+        if not self._tolerant_space(tolerance).motion_free(a, b):
+            return None
+        return float(self.distance(a, b))
+
+    def _tolerant_space(self, tolerance: float) -> ObjectSpace:
+        if tolerance == 0.0:
+            return self.space
+        sp = self._tolerant.get(tolerance)
+        if sp is None:
+            base = self.space
+            sp = ObjectSpace(
+                base.shape,
+                base.workspace,
+                base.obstacles,
+                base.inflation - tolerance,
+                resolution=base.resolution,
+                sample_spacing=base.sample_spacing,
+                motion_margin=base.motion_margin,
+            )
+            self._tolerant[tolerance] = sp
+        return sp
+
+    def path_poses(self, path: Sequence[Node | VirtualNode]) -> np.ndarray:
+        """(P, 3) poses of a path of nodes and virtual nodes."""
+        return np.array([self.pose(u) for u in path], dtype=float).reshape(-1, 3)

@@ -1,0 +1,256 @@
+"""D* Lite against Dijkstra from scratch, on random graphs and on small object lattices."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from scipy.sparse import csr_matrix
+from scipy.sparse.csgraph import dijkstra
+
+from lamp.geometry.object_space import ObjectSpace
+from lamp.scene.model import Circle, Obstacle, Rectangle
+from lamp.search.dstar_lite import DStarLite, SearchStatus
+from lamp.search.lattice import ObjectLattice
+
+INF = math.inf
+
+
+class RandomGraph:
+    """Directed graph on points in the plane; costs >= Euclidean length, so the Euclidean
+    heuristic is consistent and obeys the triangle inequality (virtual starts are points)."""
+
+    def __init__(self, pts: np.ndarray, edges: dict[tuple[int, int], float]) -> None:
+        self.pts = pts
+        self.edges = edges
+        self.out: dict[int, list[tuple[int, float]]] = {i: [] for i in range(len(pts))}
+        self.inn: dict[int, list[tuple[int, float]]] = {i: [] for i in range(len(pts))}
+        for (u, v), c in edges.items():
+            self.out[u].append((v, c))
+            self.inn[v].append((u, c))
+
+    def successors(self, u):
+        return self.out[u]
+
+    def predecessors(self, v):
+        return self.inn[v]
+
+    def cost(self, u, v):
+        return self.edges.get((u, v), INF)
+
+    def _pt(self, u):
+        return np.asarray(u[1:]) if isinstance(u, tuple) else self.pts[u]
+
+    def heuristic(self, a, b):
+        return float(np.hypot(*(self._pt(a) - self._pt(b))))
+
+
+@st.composite
+def random_graphs(draw):
+    n = draw(st.integers(2, 25))
+    seed = draw(st.integers(0, 2**31 - 1))
+    rng = np.random.default_rng(seed)
+    pts = rng.uniform(0, 10, size=(n, 2))
+    density = draw(st.floats(0.05, 0.5))
+    edges = {}
+    for u in range(n):
+        for v in range(n):
+            if u != v and rng.random() < density:
+                d = float(np.hypot(*(pts[u] - pts[v])))
+                edges[(u, v)] = d * (1.0 + rng.exponential(0.5)) + 0.01
+    return RandomGraph(pts, edges), rng
+
+
+def distances_to_goal(n: int, costs: dict[tuple[int, int], float], goal: int) -> np.ndarray:
+    """Dijkstra from scratch on the reversed graph: cost from every vertex to the goal."""
+    rows, cols, vals = [], [], []
+    for (u, v), c in costs.items():
+        if c < INF:
+            rows.append(v)
+            cols.append(u)
+            vals.append(c)
+    mat = csr_matrix((vals, (rows, cols)), shape=(n, n))
+    return dijkstra(mat, directed=True, indices=goal)
+
+
+def check_path(dstar: DStarLite, path, start, goal, cost: float) -> None:
+    assert path[0] == start and path[-1] == goal
+    total = sum(dstar.cost(a, b) for a, b in zip(path, path[1:], strict=False))
+    assert total == pytest.approx(cost, rel=1e-9, abs=1e-9)
+    assert len(set(path)) == len(path)
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(data=random_graphs(), n_ops=st.integers(1, 25))
+def test_random_graphs_match_dijkstra(data, n_ops):
+    graph, rng = data
+    n = len(graph.pts)
+    goal = int(rng.integers(n))
+    costs = dict(graph.edges)
+    dstar = DStarLite(graph)
+    dstar.initialize(goal)
+    start = int(rng.integers(n))
+    for _ in range(n_ops):
+        op = rng.integers(5)
+        if op == 0 and costs:  # change a cost (increase or decrease, keep >= base length)
+            u, v = list(costs)[rng.integers(len(costs))]
+            new = graph.edges[(u, v)] * float(rng.choice([0.5, 1.0, 2.0, 10.0])) + 0.01
+            new = max(new, graph.heuristic(u, v) + 1e-6)
+            costs[(u, v)] = new
+            dstar.update_change(u, v, new)
+        elif op == 1 and costs:  # mark invalid
+            u, v = list(costs)[rng.integers(len(costs))]
+            costs[(u, v)] = INF
+            dstar.update_change(u, v, INF)
+        elif op == 2 and costs:  # restore the base cost
+            u, v = list(costs)[rng.integers(len(costs))]
+            costs[(u, v)] = graph.edges[(u, v)]
+            dstar.update_change(u, v, graph.edges[(u, v)])
+        elif op == 3:  # start moves to another vertex
+            start = int(rng.integers(n))
+        dist = distances_to_goal(n, costs, goal)
+        if op == 4:  # a virtual start (a point) with out-edges to some vertices
+            p = rng.uniform(0, 10, size=2)
+            vstart = ("virtual", float(p[0]), float(p[1]))
+            targets = rng.choice(n, size=int(rng.integers(0, min(n, 4) + 1)), replace=False)
+            vedges = [(int(t), float(np.hypot(*(p - graph.pts[t]))) * 1.2 + 0.01) for t in targets]
+            path = dstar.plan_shortest_path(vstart, vedges)
+            expected = min((c + dist[t] for t, c in vedges), default=INF)
+            s = vstart
+        else:
+            path = dstar.plan_shortest_path(start)
+            expected = dist[start]
+            s = start
+        if expected == INF:
+            assert path == [] and dstar.status is SearchStatus.NO_PATH
+            assert dstar.path_cost() == INF
+        else:
+            assert dstar.status is SearchStatus.SUCCESS
+            assert dstar.path_cost() == pytest.approx(expected, rel=1e-9, abs=1e-9)
+            check_path(dstar, path, s, goal, expected)
+
+
+def lattice_reference(lat: ObjectLattice, dstar: DStarLite) -> np.ndarray:
+    """Dijkstra over the whole lattice with D* Lite's current edge costs."""
+    costs = {}
+    for u in range(lat.n_nodes):
+        for v, _ in lat.successors(u):
+            costs[(u, v)] = dstar.cost(u, v)
+    return distances_to_goal(lat.n_nodes, costs, lat.goal_node)
+
+
+@settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(seed=st.integers(0, 2**31 - 1), n_ops=st.integers(1, 8))
+def test_small_lattices_match_dijkstra(seed, n_ops):
+    rng = np.random.default_rng(seed)
+    obstacles = [
+        Obstacle(Circle(float(rng.uniform(0.03, 0.12))), (*rng.uniform(0, 1.0, 2), 0.0))
+        for _ in range(int(rng.integers(0, 4)))
+    ]
+    space = ObjectSpace(Rectangle((0.16, 0.08)), (1.0, 0.8), obstacles)
+    goal = (*rng.uniform(0.2, 0.8, 2), float(rng.uniform(-math.pi, math.pi)))
+    goal = (min(goal[0], 0.8), min(goal[1], 0.6), goal[2])
+    lat = ObjectLattice(space, goal, step=0.1, n_headings=8, max_rotation=0.8)
+    dstar = DStarLite(lat)
+    dstar.initialize(lat.goal_node)
+    valid = np.nonzero(lat.validate_all_nodes())[0]
+    for _ in range(n_ops):
+        op = rng.integers(3)
+        if op == 0:  # penalise or invalidate a few valid edges
+            for _ in range(3):
+                u = int(rng.choice(valid))
+                succ = lat.successors(u)
+                if succ:
+                    v, _ = succ[rng.integers(len(succ))]
+                    if rng.random() < 0.5:
+                        dstar.penalize(u, v, 1e4)
+                    else:
+                        dstar.update_change(u, v, INF)
+        elif op == 1:  # restore some penalised edge
+            for u, ov in list(dstar._over_out.items()):
+                if isinstance(u, int) and ov:
+                    v = next(iter(ov))
+                    dstar.update_change(u, v, lat.cost(u, v))
+                    break
+        dist = lattice_reference(lat, dstar)
+        if rng.random() < 0.5:
+            start = int(rng.choice(valid))
+            path = dstar.plan_shortest_path(start)
+            expected = dist[start]
+        else:
+            p = rng.uniform([0.1, 0.1, -math.pi], [0.9, 0.7, math.pi])
+            start = (float(p[0]), float(p[1]), float(p[2]))
+            edges = lat.start_connections(start)
+            path = dstar.plan_shortest_path(start, edges)
+            expected = min((c + dist[v] for v, c in edges), default=INF)
+        if expected == INF:
+            assert path == []
+        else:
+            assert dstar.path_cost() == pytest.approx(expected, rel=1e-9, abs=1e-9)
+            check_path(dstar, path, start, lat.goal_node, expected)
+            # every step of the path is a valid lattice edge or start connection
+            for a, b in zip(path[1:], path[2:], strict=False):
+                assert lat.cost(a, b) < INF
+
+
+def chain_graph(n: int) -> RandomGraph:
+    pts = np.stack([np.arange(n, dtype=float), np.zeros(n)], axis=1)
+    edges = {}
+    for i in range(n - 1):
+        edges[(i, i + 1)] = 1.0
+        edges[(i + 1, i)] = 1.0
+    return RandomGraph(pts, edges)
+
+
+def test_limits_give_clear_status_and_resume():
+    graph = chain_graph(50)
+    dstar = DStarLite(graph, max_expansions=10)
+    dstar.initialize(49)
+    assert dstar.plan_shortest_path(0) == []
+    assert dstar.status is SearchStatus.EXPANSION_LIMIT
+    # the state stays consistent: further calls continue the same search
+    for _ in range(10):
+        path = dstar.plan_shortest_path(0)
+        if path:
+            break
+    assert path == list(range(50))
+    assert dstar.path_cost() == pytest.approx(49.0)
+
+
+def test_replan_after_penalty_reuses_search():
+    graph = chain_graph(30)
+    # add a detour around edge 10 -> 11 via an extra vertex
+    pts = np.vstack([graph.pts, [[10.5, 1.0]]])
+    edges = dict(graph.edges)
+    edges[(10, 30)] = 2.0
+    edges[(30, 11)] = 2.0
+    graph = RandomGraph(pts, edges)
+    dstar = DStarLite(graph)
+    dstar.initialize(29)
+    first = dstar.plan_shortest_path(0)
+    assert 30 not in first and dstar.path_cost() == pytest.approx(29.0)
+    full = dstar.stats.last_expansions
+    dstar.penalize(10, 11, 1e4)  # LAMP-Lazy: a transition failed verification
+    second = dstar.plan_shortest_path(5)  # the start has moved on meanwhile
+    assert second[:7] == [5, 6, 7, 8, 9, 10, 30] and dstar.path_cost() == pytest.approx(27.0)
+    assert dstar.stats.last_expansions < full
+    assert dstar.cost(10, 11) == pytest.approx(1e4 + 1.0)
+
+
+def test_bad_calls():
+    graph = chain_graph(3)
+    dstar = DStarLite(graph)
+    with pytest.raises(RuntimeError, match="initialize"):
+        dstar.plan_shortest_path(0)
+    dstar.initialize(2)
+    with pytest.raises(ValueError, match="not an edge"):
+        dstar.update_change(0, 2, 1.0)
+    with pytest.raises(ValueError, match="new_cost"):
+        dstar.update_change(0, 1, -1.0)
+    with pytest.raises(ValueError, match="max_expansions"):
+        DStarLite(graph, max_expansions=0)
+    assert dstar.plan_shortest_path(2) == [2]
+    assert dstar.plan_shortest_path(0) == [0, 1, 2]
