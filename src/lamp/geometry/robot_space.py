@@ -444,9 +444,10 @@ _BASE_CACHE: OrderedDict[Any, tuple[np.ndarray, GeometrySet]] = OrderedDict()
 _SPACE_CACHE: OrderedDict[Any, RobotSpace] = OrderedDict()
 
 
-def clear_caches() -> None:
-    """Drop all cached base layers and spaces (tests, memory)."""
-    _BASE_CACHE.clear()
+def clear_caches(keep_base: bool = False) -> None:
+    """Drop cached spaces (and, unless ``keep_base``, the static base layers)."""
+    if not keep_base:
+        _BASE_CACHE.clear()
     _SPACE_CACHE.clear()
 
 

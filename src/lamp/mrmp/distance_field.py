@@ -25,7 +25,7 @@ from typing import Any
 import numba as nb
 import numpy as np
 
-from lamp.geometry.robot_space import RobotSpace, _segments_clearance
+from lamp.geometry.robot_space import RobotSpace, _segment_clearance, _segments_clearance
 
 __all__ = ["Lattice", "get_lattice", "DIRS"]
 
@@ -67,6 +67,62 @@ def _dijkstra(
     return dist
 
 
+@nb.njit(cache=True)
+def _build_edges(
+    F: np.ndarray, ids: np.ndarray, s: int, h: float, thr: float,
+    circles: np.ndarray, verts: np.ndarray, ptr: np.ndarray, W: float, H: float, V: int,
+) -> np.ndarray:
+    """(V, 8) neighbour table: an edge exists when both nodes are free and the motion
+    keeps clearance >= thr, by the cone bound over the grid nodes it passes through
+    (exact field values), or, when that bound misses by less than 0.75 h, by the exact
+    segment clearance."""
+    nb_, na = ids.shape
+    nbr = np.full((V, 8), -1, dtype=np.int64)
+    diag = h * math.sqrt(2.0)
+    L = s * h
+    for b in range(nb_):
+        for a in range(na):
+            u = ids[b, a]
+            if u < 0:
+                continue
+            i0 = s * a
+            j0 = s * b
+            # forward directions 0 (1,0), 1 (1,1), 2 (0,1), 3 (-1,1); opposite = 7 - d
+            for d in range(4):
+                if d == 0:
+                    da, db, di, dj, step_len = 1, 0, 1, 0, h
+                elif d == 1:
+                    da, db, di, dj, step_len = 1, 1, 1, 1, diag
+                elif d == 2:
+                    da, db, di, dj, step_len = 0, 1, 0, 1, h
+                else:
+                    da, db, di, dj, step_len = -1, 1, -1, 1, diag
+                a2 = a + da
+                b2 = b + db
+                if a2 < 0 or a2 >= na or b2 >= nb_:
+                    continue
+                v = ids[b2, a2]
+                if v < 0:
+                    continue
+                lo = np.inf
+                for k in range(s):
+                    f0 = F[j0 + k * dj, i0 + k * di]
+                    f1 = F[j0 + (k + 1) * dj, i0 + (k + 1) * di]
+                    c = 0.5 * (f0 + f1 - step_len)
+                    if c < lo:
+                        lo = c
+                ok = lo >= thr
+                if not ok and lo >= thr - 0.75 * h:
+                    ax = a * L
+                    ay = b * L
+                    ok = _segment_clearance(ax, ay, a2 * L, b2 * L, circles, verts, ptr,
+                                            W, H) >= thr
+                if ok:
+                    nbr[u, d] = v
+                    nbr[v, 7 - d] = u
+    return nbr
+
+
 class Lattice:
     """The free 8-connected lattice of step ``step`` over ``space`` (see module doc).
 
@@ -99,52 +155,10 @@ class Lattice:
         self.coords = np.ascontiguousarray(np.stack([aa * step, bb * step], axis=1), dtype=float)
         self.ab = np.stack([aa, bb], axis=1)
 
-        # cone bounds per grid interval
-        diag = h * math.sqrt(2.0)
-        Cx = 0.5 * (F[:, :-1] + F[:, 1:] - h)          # (i,j)->(i+1,j)
-        Cy = 0.5 * (F[:-1, :] + F[1:, :] - h)          # (i,j)->(i,j+1)
-        Cd = 0.5 * (F[:-1, :-1] + F[1:, 1:] - diag)    # (i,j)->(i+1,j+1)
-        Ca = 0.5 * (F[:-1, 1:] + F[1:, :-1] - diag)    # (i+1,j)->(i,j+1)
-        k = np.arange(s)
-        A = np.arange(na - 1)
-        B = np.arange(nb_ - 1)
-        # edge bounds, indexed by the lower-left lattice node of the edge's box
-        ex = Cx[s * np.arange(nb_)[:, None, None], s * A[None, :, None] + k].min(-1)  # (nb, na-1)
-        ey = Cy[s * B[:, None, None] + k, s * np.arange(na)[None, :, None]].min(-1)   # (nb-1, na)
-        ed = Cd[s * B[:, None, None] + k, s * A[None, :, None] + k].min(-1)           # (nb-1, na-1)
-        ea = Ca[s * B[:, None, None] + k, s * (A[None, :, None] + 1) - k - 1].min(-1)  # (nb-1,na-1)
-
-        nbr = np.full((V, 8), -1, dtype=np.int64)
-        # pairs of lattice (a,b) endpoints per direction family
-        families = [
-            # (bound array, from (a,b) offsets, to offsets, dir index from->to)
-            (ex, (0, 0), (1, 0), 0),
-            (ed, (0, 0), (1, 1), 1),
-            (ey, (0, 0), (0, 1), 2),
-            (ea, (1, 0), (0, 1), 3),
-        ]
-        self.dlen = np.array(
-            [step * math.hypot(*d) for d in DIRS.tolist()], dtype=float
-        )
+        self.dlen = np.array([step * math.hypot(*d) for d in DIRS.tolist()], dtype=float)
         W, H = space.workspace
         g = space.geometry
-        for bound, fo, to, d in families:
-            bidx, aidx = np.nonzero(np.ones_like(bound, dtype=bool))
-            u = ids[bidx + fo[1], aidx + fo[0]]
-            v = ids[bidx + to[1], aidx + to[0]]
-            both = (u >= 0) & (v >= 0)
-            bnd = bound[bidx, aidx]
-            ok = both & (bnd >= thr)
-            unsure = both & ~ok & (bnd >= thr - 0.75 * h)
-            if unsure.any():
-                pu = np.ascontiguousarray(self.coords[u[unsure]])
-                pv = np.ascontiguousarray(self.coords[v[unsure]])
-                ex_ok = _segments_clearance(pu, pv, g.circles, g.verts, g.ptr, W, H) >= thr
-                ok[np.nonzero(unsure)[0][ex_ok]] = True
-            uu = u[ok]
-            vv = v[ok]
-            nbr[uu, d] = vv
-            nbr[vv, 7 - d] = uu
+        nbr = _build_edges(F, ids, s, h, thr, g.circles, g.verts, g.ptr, W, H, V)
         self.nbr = nbr
         self.V = V
         self._fields: OrderedDict[Any, np.ndarray] = OrderedDict()

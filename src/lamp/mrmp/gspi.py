@@ -141,25 +141,148 @@ def _conflict(
     return math.sqrt(mx * mx + my * my) < thr - 1e-9
 
 
+# ---- lazy heuristic: one resumable Dijkstra per goal ---------------------------------
+# State ``hs`` = (dist (M, V), pos (M, V), heap (M, V), hsize (M,), sdone (M, N+M),
+# sval (M, N+M)): lattice distance to goal m (seeded with the goal's links), heap position
+# of each node (-1 unseen, -2 settled), an indexed binary heap per goal, and memoised
+# values for the special (start / goal) vertices. A value is computed only when asked
+# for (as pypibt's lazy DistTable), so a 3-robot call near the object settles a few
+# hundred nodes instead of the whole map.
+
+
 @nb.njit(cache=True)
-def _h(H: np.ndarray, goal: np.ndarray, i: int, v: int) -> float:
+def _heap_up(m: int, i: int, dist: np.ndarray, pos: np.ndarray, heap: np.ndarray) -> None:
+    v = heap[m, i]
+    dv = dist[m, v]
+    while i > 0:
+        p = (i - 1) >> 1
+        u = heap[m, p]
+        if dist[m, u] <= dv:
+            break
+        heap[m, i] = u
+        pos[m, u] = i
+        i = p
+    heap[m, i] = v
+    pos[m, v] = i
+
+
+@nb.njit(cache=True)
+def _heap_pop(m: int, dist: np.ndarray, pos: np.ndarray, heap: np.ndarray,
+              hsize: np.ndarray) -> int:
+    top = heap[m, 0]
+    n = hsize[m] - 1
+    hsize[m] = n
+    pos[m, top] = -2
+    if n > 0:
+        v = heap[m, n]
+        dv = dist[m, v]
+        i = 0
+        while True:
+            c = 2 * i + 1
+            if c >= n:
+                break
+            if c + 1 < n and dist[m, heap[m, c + 1]] < dist[m, heap[m, c]]:
+                c += 1
+            u = heap[m, c]
+            if dist[m, u] >= dv:
+                break
+            heap[m, i] = u
+            pos[m, u] = i
+            i = c
+        heap[m, i] = v
+        pos[m, v] = i
+    return top
+
+
+@nb.njit(cache=True)
+def _seed_goal(m: int, nodes: np.ndarray, cost: np.ndarray, hs: tuple) -> None:
+    dist, pos, heap, hsize, _, _ = hs
+    for k in range(nodes.shape[0]):
+        v = nodes[k]
+        if cost[k] < dist[m, v]:
+            dist[m, v] = cost[k]
+            if pos[m, v] == -1:
+                heap[m, hsize[m]] = v
+                pos[m, v] = hsize[m]
+                hsize[m] += 1
+            _heap_up(m, pos[m, v], dist, pos, heap)
+
+
+@nb.njit(cache=True)
+def _lattice_h(m: int, v: int, nbr: np.ndarray, dlen: np.ndarray, hs: tuple) -> float:
+    """Distance from lattice node v to goal m, running goal m's Dijkstra until v settles."""
+    dist, pos, heap, hsize, _, _ = hs
+    while pos[m, v] != -2 and hsize[m] > 0:
+        u = _heap_pop(m, dist, pos, heap, hsize)
+        du = dist[m, u]
+        for e in range(8):
+            w = nbr[u, e]
+            if w < 0 or pos[m, w] == -2:
+                continue
+            nd = du + dlen[e]
+            if nd < dist[m, w]:
+                dist[m, w] = nd
+                if pos[m, w] == -1:
+                    heap[m, hsize[m]] = w
+                    pos[m, w] = hsize[m]
+                    hsize[m] += 1
+                _heap_up(m, pos[m, w], dist, pos, heap)
+    if pos[m, v] == -2:
+        return dist[m, v]
+    return np.inf
+
+
+@nb.njit(cache=True)
+def _hval(m: int, v: int, gr: tuple, V: int, gv0: int, hs: tuple) -> float:
+    """Heuristic distance of vertex v (lattice or special) to goal m."""
+    coords, nbr, dlen, xptr, xidx = gr
+    if v < V:
+        return _lattice_h(m, v, nbr, dlen, hs)
+    _, _, _, _, sdone, sval = hs
+    k = v - V
+    if sdone[m, k]:
+        return sval[m, k]
+    best = np.inf
+    if v == gv0 + m:
+        best = 0.0
+    else:
+        for e in range(xptr[v], xptr[v + 1]):
+            n = xidx[e]
+            dx = coords[v, 0] - coords[n, 0]
+            dy = coords[v, 1] - coords[n, 1]
+            ln = math.sqrt(dx * dx + dy * dy)
+            if n < V:
+                c = ln + _lattice_h(m, n, nbr, dlen, hs)
+            elif n == gv0 + m:
+                c = ln + _EPS
+            else:
+                continue
+            if c < best:
+                best = c
+    sdone[m, k] = True
+    sval[m, k] = best
+    return best
+
+
+@nb.njit(cache=True)
+def _h(goal: np.ndarray, i: int, v: int, gr: tuple, V: int, gv0: int, hs: tuple) -> float:
     g = goal[i]
     if g < 0:
         return 0.0
-    return H[g, v]
+    return _hval(g, v, gr, V, gv0, hs)
 
 
 @nb.njit(cache=True)
 def _build_cands(
-    i: int, v: int, nbr: np.ndarray, xptr: np.ndarray, xidx: np.ndarray, V: int,
-    H: np.ndarray, goal: np.ndarray, seed: int, t: int, cand: np.ndarray, ncand: np.ndarray,
+    i: int, v: int, gr: tuple, V: int, gv0: int, hs: tuple, goal: np.ndarray, seed: int,
+    t: int, cand: np.ndarray, ncand: np.ndarray,
 ) -> None:
     """Candidates of robot i at vertex v sorted by heuristic (wait included); ties are
     broken by a seeded hash; a robot without a goal tries waiting first."""
+    _, nbr, _, xptr, xidx = gr
     keys = np.empty(cand.shape[1])
-    n = 0
     cand[i, 0] = v
-    keys[0] = -1.0 if goal[i] < 0 else _h(H, goal, i, v)
+    keys[0] = -1.0 if goal[i] < 0 else _h(goal, i, v, gr, V, gv0, hs)
     n = 1
     if v < V:
         for e in range(8):
@@ -171,7 +294,7 @@ def _build_cands(
         cand[i, n] = xidx[k]
         n += 1
     for k in range(1, n):
-        hv = _h(H, goal, i, cand[i, k])
+        hv = _h(goal, i, cand[i, k], gr, V, gv0, hs)
         if hv == np.inf:
             keys[k] = np.inf
         else:
@@ -198,13 +321,13 @@ def _build_cands(
 
 @nb.njit(cache=True)
 def _pibt_step(
-    coords: np.ndarray, nbr: np.ndarray, xptr: np.ndarray, xidx: np.ndarray,
-    V: int, gv0: int, H: np.ndarray, cur: np.ndarray, goal: np.ndarray, prio: np.ndarray,
-    two_r: float, seed: int, t: int, nxt: np.ndarray,
+    gr: tuple, V: int, gv0: int, hs: tuple, cur: np.ndarray, goal: np.ndarray,
+    prio: np.ndarray, two_r: float, seed: int, t: int, nxt: np.ndarray,
     cand: np.ndarray, ncand: np.ndarray, ci: np.ndarray, status: np.ndarray,
     stack: np.ndarray,
 ) -> None:
     """One PIBT step (priority inheritance with backtracking), iterative."""
+    coords = gr[0]
     N = cur.shape[0]
     for k in range(N):
         status[k] = _UNDECIDED
@@ -215,7 +338,7 @@ def _pibt_step(
         if status[r0] != _UNDECIDED:
             continue
         status[r0] = _TENTATIVE
-        _build_cands(r0, cur[r0], nbr, xptr, xidx, V, H, goal, seed, t, cand, ncand)
+        _build_cands(r0, cur[r0], gr, V, gv0, hs, goal, seed, t, cand, ncand)
         ci[r0] = 0
         stack[0] = r0
         sp = 1
@@ -267,8 +390,7 @@ def _pibt_step(
             if blocker >= 0:
                 # priority inheritance: the blocker decides first, then i re-checks c
                 status[blocker] = _TENTATIVE
-                _build_cands(blocker, cur[blocker], nbr, xptr, xidx, V, H, goal, seed, t,
-                             cand, ncand)
+                _build_cands(blocker, cur[blocker], gr, V, gv0, hs, goal, seed, t, cand, ncand)
                 ci[blocker] = 0
                 stack[sp] = blocker
                 sp += 1
@@ -278,7 +400,8 @@ def _pibt_step(
 
 
 @nb.njit(cache=True)
-def _swap_goals(H: np.ndarray, cur: np.ndarray, goal: np.ndarray, prio: np.ndarray) -> int:
+def _swap_goals(gr: tuple, V: int, gv0: int, hs: tuple, cur: np.ndarray, goal: np.ndarray,
+                prio: np.ndarray) -> int:
     """Pairwise goal swaps that lower the summed heuristic (priorities travel along)."""
     N = cur.shape[0]
     nswap = 0
@@ -291,11 +414,11 @@ def _swap_goals(H: np.ndarray, cur: np.ndarray, goal: np.ndarray, prio: np.ndarr
             now = 0.0
             sw = 0.0
             if gi >= 0:
-                now += H[gi, cur[i]]
-                sw += H[gi, cur[j]]
+                now += _hval(gi, cur[i], gr, V, gv0, hs)
+                sw += _hval(gi, cur[j], gr, V, gv0, hs)
             if gj >= 0:
-                now += H[gj, cur[j]]
-                sw += H[gj, cur[i]]
+                now += _hval(gj, cur[j], gr, V, gv0, hs)
+                sw += _hval(gj, cur[i], gr, V, gv0, hs)
             if sw < now - 1e-9:
                 goal[i] = gj
                 goal[j] = gi
@@ -308,10 +431,9 @@ def _swap_goals(H: np.ndarray, cur: np.ndarray, goal: np.ndarray, prio: np.ndarr
 
 @nb.njit(cache=True)
 def _run_steps(
-    coords: np.ndarray, nbr: np.ndarray, xptr: np.ndarray, xidx: np.ndarray,
-    V: int, gv0: int, H: np.ndarray, cur: np.ndarray, goal: np.ndarray, prio: np.ndarray,
-    two_r: float, seed: int, swap: bool, hist: np.ndarray, hsum: np.ndarray,
-    t0: int, t1: int, maxc: int,
+    gr: tuple, V: int, gv0: int, hs: tuple, cur: np.ndarray, goal: np.ndarray,
+    prio: np.ndarray, two_r: float, seed: int, swap: bool, hist: np.ndarray,
+    hsum: np.ndarray, t0: int, t1: int, maxc: int,
 ) -> tuple[int, bool]:
     """Run Gspi steps t0..t1-1; hist[t+1] receives the vertices after step t and
     hsum[t+1] the summed heuristic. Returns (rows filled - 1, all goals reached)."""
@@ -331,9 +453,9 @@ def _run_steps(
         if done:
             return t, True
         if swap:
-            _swap_goals(H, cur, goal, prio)
-        _pibt_step(coords, nbr, xptr, xidx, V, gv0, H, cur, goal, prio, two_r, seed, t,
-                   nxt, cand, ncand, ci, status, stack)
+            _swap_goals(gr, V, gv0, hs, cur, goal, prio)
+        _pibt_step(gr, V, gv0, hs, cur, goal, prio, two_r, seed, t, nxt, cand, ncand, ci,
+                   status, stack)
         s = 0.0
         for i in range(N):
             cur[i] = nxt[i]
@@ -343,7 +465,7 @@ def _run_steps(
                 prio[i] = prio[i] - math.floor(prio[i])
             else:
                 prio[i] += 1.0
-                s += min(H[g, cur[i]], 1e6)
+                s += min(_hval(g, cur[i], gr, V, gv0, hs), 1e6)
         hsum[t + 1] = s
     done = True
     for i in range(N):
@@ -351,6 +473,16 @@ def _run_steps(
             done = False
             break
     return t1, done
+
+
+@nb.njit(cache=True)
+def _start_costs(gr: tuple, V: int, gv0: int, hs: tuple, N: int, M: int) -> np.ndarray:
+    """(N, M) heuristic distance from each start vertex to each goal."""
+    C = np.empty((N, M))
+    for i in range(N):
+        for m in range(M):
+            C[i, m] = _hval(m, V + i, gr, V, gv0, hs)
+    return C
 
 
 # --------------------------------------------------------------------------------------
@@ -572,33 +704,23 @@ def plan_paths(
     np.add.at(xptr, src_a + 1, 1)
     xptr = np.cumsum(xptr)
     xidx = np.ascontiguousarray(dst_a)
-    max_extra = int(np.max(np.diff(xptr))) if Vt else 0
+    max_extra = int(np.max(np.diff(xptr)))
     maxc = 9 + max_extra
 
-    # ---- heuristic fields -------------------------------------------------------
-    Hm = np.full((M, Vt), np.inf)
+    # ---- heuristic: lazy Dijkstra per goal, seeded with the goal's links ------------
+    # + _EPS on every vertex but the goal itself: a lattice node (or start) that coincides
+    # with the goal must not tie with the goal vertex (a robot would wander off by 0 m)
+    hs = (
+        np.full((M, V), np.inf), np.full((M, V), -1, dtype=np.int64),
+        np.empty((M, V), dtype=np.int64), np.zeros(M, dtype=np.int64),
+        np.zeros((M, N + M), dtype=np.bool_), np.zeros((M, N + M)),
+    )
     for m, (nodes, lens) in enumerate(g_links):
-        if len(nodes):
-            key = (round(float(G[m, 0]), 9), round(float(G[m, 1]), 9), float(c_goal[m] >= thr),
-                   R)
-            # + _EPS: a lattice node that coincides with the goal must not tie with the
-            # goal vertex itself (a robot at its goal would then wander off by 0 m)
-            Hm[m, :V] = lat.field(nodes, lens, key=key) + _EPS
-        Hm[m, gv0 + m] = 0.0
-    for i, (nodes, lens) in enumerate(s_links):
-        if len(nodes):
-            Hm[:, V + i] = np.min(lens[None, :] + Hm[:, nodes], axis=1)
-    for m, (nodes, lens) in enumerate(g_links):
-        if len(nodes):
-            other = np.min(lens[None, :] + Hm[:, nodes], axis=1)
-            other[m] = 0.0
-            Hm[:, gv0 + m] = other
-    # direct links
-    for i, m in zip(si.tolist(), gi.tolist(), strict=True):
-        Hm[m, V + i] = min(Hm[m, V + i], dSG[i, m])
+        _seed_goal(m, nodes.astype(np.int64), lens + _EPS, hs)
+    gr = (coords, lat.nbr, lat.dlen, xptr, xidx)
 
     # ---- initial assignment (optimal, on heuristic distances) ---------------------
-    C = Hm[:, V : V + N].T  # (N, M)
+    C = _start_costs(gr, V, gv0, hs, N, M)  # (N, M)
     reach_goal = np.isfinite(C).any(axis=0)
     if not reach_goal.all():
         bad = np.nonzero(~reach_goal)[0].tolist()
@@ -645,8 +767,8 @@ def plan_paths(
     seed_i = int(seed) & 0x7FFFFFFF
     while True:
         t1 = min(t + chunk, max_steps)
-        t_new, done = _run_steps(coords, lat.nbr, xptr, xidx, V, gv0, Hm, cur, goal, prio,
-                                 2.0 * r, seed_i, goal_swapping, hist, hsum, t, t1, maxc)
+        t_new, done = _run_steps(gr, V, gv0, hs, cur, goal, prio, 2.0 * r, seed_i,
+                                 goal_swapping, hist, hsum, t, t1, maxc)
         for k in range(t + 1, t_new + 1):
             if hsum[k] < best_h - 1e-9:
                 best_h = hsum[k]
