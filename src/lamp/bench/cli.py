@@ -128,10 +128,10 @@ def planner_limits(planners: list[str], planning_limit: float) -> dict[str, floa
     return out
 
 
-def _session(argv: list[str] | None = None) -> dict[str, Any]:
+def _session(command: str) -> dict[str, Any]:
     status = _git("status", "--porcelain", "--untracked-files=no")
     return {
-        "command": shlex.join(["lamp", *(argv if argv is not None else sys.argv[1:])]),
+        "command": command, "argv": shlex.join(sys.argv),
         "date": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
         "git_commit": _git("rev-parse", "HEAD"), "git_dirty": bool(status) if status is not None
         else None, "packages": _package_versions(),
@@ -140,7 +140,8 @@ def _session(argv: list[str] | None = None) -> dict[str, Any]:
 
 def write_config(out: Path, previous: dict[str, Any], *, suites: list[str], planners: list[str],
                  seeds: list[int], workers: int, backend: str, model: str, time_cap: float,
-                 planning_limit: float, scenes: int | None, job_fn: str) -> dict[str, Any]:
+                 planning_limit: float, scenes: int | None, job_fn: str, command: str
+                 ) -> dict[str, Any]:
     """Write ``out/config.json``: this invocation's settings plus every session's provenance."""
     from lamp.io import write_json_atomic
 
@@ -161,10 +162,27 @@ def write_config(out: Path, previous: dict[str, Any], *, suites: list[str], plan
         "astar-replan); the paper uses 500 s",
         "planner_planning_limits_s": planner_limits(all_planners, planning_limit),
         "job_fn": job_fn, "machine": machine_info(),
-        "sessions": [*(previous.get("sessions") or []), _session()],
+        "sessions": [*(previous.get("sessions") or []), _session(command)],
     }
     write_json_atomic(out / CONFIG_FILE, config)
     return config
+
+
+def canonical_command(suites: list[str], planners: list[str], *, seeds: int, workers: int,
+                      out: Path, time_cap: float, planning_limit: float, model: str,
+                      backend: str, scenes: int | None, render_iros: bool, job_fn: str) -> str:
+    """The ``lamp bench`` command line that reproduces this run, every setting explicit."""
+    args = ["lamp", "bench", "--suite", ",".join(suites), "--planners", ",".join(planners),
+            "--seeds", str(seeds), "--workers", str(workers), "--out", str(out),
+            "--time-cap", f"{time_cap:g}", "--planning-limit", f"{planning_limit:g}",
+            "--model", model, "--backend", backend]
+    if scenes is not None:
+        args += ["--scenes", str(scenes)]
+    if render_iros:
+        args.append("--render-iros")
+    if job_fn != DEFAULT_JOB_FN:
+        args += ["--job-fn", job_fn]
+    return shlex.join(args)
 
 
 def _check_resume_config(previous: dict[str, Any], *, time_cap: float, planning_limit: float,
@@ -320,8 +338,12 @@ def bench_command(
                 typer.echo(f"  renders {j.render_to} ({j.label})")
         return
 
+    command = canonical_command(
+        suite_list, planner_list, seeds=seeds, workers=workers, out=out, time_cap=time_cap,
+        planning_limit=planning_limit, model=model, backend=backend, scenes=scenes,
+        render_iros=render_iros, job_fn=job_fn)
     out.mkdir(parents=True, exist_ok=True)
-    write_config(out, previous, suites=list(dict.fromkeys(j.suite for j in jobs)),
+    write_config(out, previous, command=command, suites=list(dict.fromkeys(j.suite for j in jobs)),
                  planners=planner_list,
                  seeds=seed_list, workers=workers, backend=backend, model=model,
                  time_cap=time_cap, planning_limit=planning_limit, scenes=scenes, job_fn=job_fn)

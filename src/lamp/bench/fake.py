@@ -86,3 +86,15 @@ def error_job(job: Job) -> dict[str, Any]:
 def crash_job(job: Job) -> dict[str, Any]:
     """Kills its own process without a result, as a segfault or the OOM killer would."""
     os._exit(3)
+
+
+def mixed_job(job: Job) -> dict[str, Any]:
+    """One way to end per planner: ``lazy`` never finishes, ``astar`` raises,
+    ``astar-replan`` crashes, every other planner returns :func:`synthetic_job`."""
+    if job.planner == "lazy":
+        return slow_job(job)
+    if job.planner == "astar":
+        return error_job(job)
+    if job.planner == "astar-replan":
+        return crash_job(job)
+    return synthetic_job(job)

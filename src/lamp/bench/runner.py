@@ -275,6 +275,10 @@ def _keep_log(r: _Running, outcome: JobOutcome, log_dir: str | Path | None) -> N
 
 
 # ----------------------------------------------------------------------------- ray backend
+#: Added to a Ray task's cap: worker start-up and imports happen after submission.
+RAY_START_GRACE_S = 30.0
+
+
 def _ray_task(spec: str, job: Job) -> tuple[str, Any, str]:
     return call_job(spec, job)
 
@@ -291,14 +295,16 @@ def import_ray():
 
 def run_ray(jobs: Sequence[Job], job_fn: str | JobFn, workers: int | None,
             on_done: Callable[[JobOutcome], None], *, address: str | None = None,
-            on_start: Callable[[Job], None] | None = None) -> None:
+            on_start: Callable[[Job], None] | None = None,
+            start_grace_s: float = RAY_START_GRACE_S) -> None:
     """Run ``jobs`` as Ray tasks, at most ``workers`` at a time (default: the cluster's CPUs).
 
     Connects to ``address`` (e.g. ``"auto"`` or ``"ray://head:10001"``) when given, else
     starts a private local cluster of ``workers`` CPUs and shuts it down afterwards. Each
     task runs in a fresh worker process (``max_calls=1``); a task past its cap is cancelled
-    with ``force=True``, which kills its worker. The cap counts from submission, and at most
-    as many tasks as there are CPUs are in flight, so queueing does not eat into it.
+    with ``force=True``, which kills its worker. The cap counts from submission plus
+    ``start_grace_s`` (a fresh Ray worker takes seconds to start and import); at most as
+    many tasks as there are slots are in flight, so queueing does not eat into it.
     """
     ray = import_ray()
     spec = job_fn_spec(job_fn)
@@ -310,7 +316,7 @@ def run_ray(jobs: Sequence[Job], job_fn: str | JobFn, workers: int | None,
                                   "runtime_env": {"env_vars": env}}
         if address:
             ray.init(address=address, **kwargs)
-        else:
+        else:  # a private single-machine instance, shut down when the run ends
             ray.init(num_cpus=workers or os.cpu_count() or 1, **kwargs)
         started_here = True
     try:
@@ -325,14 +331,15 @@ def run_ray(jobs: Sequence[Job], job_fn: str | JobFn, workers: int | None,
                 if on_start is not None:
                     on_start(job)
             now = time.monotonic()
-            timeout = max(0.0, min(t0 + j.time_cap_s for j, t0 in running.values()) - now)
+            timeout = max(0.0, min(t0 + j.time_cap_s + start_grace_s
+                                   for j, t0 in running.values()) - now)
             ready, _ = ray.wait(list(running), num_returns=1, timeout=timeout)
             now = time.monotonic()
             for ref in ready:
                 job, t0 = running.pop(ref)
                 on_done(_ray_outcome(ray, ref, job, now - t0))
             for ref, (job, t0) in list(running.items()):
-                if now >= t0 + job.time_cap_s:
+                if now >= t0 + job.time_cap_s + start_grace_s:
                     ray.cancel(ref, force=True)
                     del running[ref]
                     on_done(JobOutcome(job, "timeout", None, now - t0))
