@@ -264,3 +264,46 @@ def test_start_in_light_contact_moves_out(poly: bool) -> None:
     G = np.array([[0.3, 0.3], [1.7, 1.2]])
     plan = _plan_and_check(scene, S, G, time_limit=2.0)
     assert plan.success, plan.reason
+
+
+def test_finer_lattice_fallback_reaches_narrow_channel() -> None:
+    """A channel whose free band (centres at y in [0.26, 0.29]) holds no 5 cm lattice row:
+    the 5 cm attempt fails, the 3 cm lattice (row y = 0.27) succeeds."""
+    walls = (Obstacle(Rectangle((1.2, 0.21)), (1.0, 0.105, 0.0)),
+             Obstacle(Rectangle((1.2, 0.3)), (1.0, 0.34 + 0.15, 0.0)))
+    scene = _scene(2.0, 1.0, walls)
+    S = np.array([[0.2, 0.8], [1.8, 0.8]])
+    G = np.array([[1.0, 0.27]])
+    only5 = plan_paths(scene, S, G, lattice_step=0.05, time_limit=2.0)
+    check_plan(scene, S, G, only5)
+    assert not only5.success and "connected" in only5.reason
+    plan = _plan_and_check(scene, S, G, time_limit=2.0)
+    assert plan.success, plan.reason
+    assert [a["lattice_step"] for a in plan.stats["attempts"]] == [0.05, 0.03]
+
+
+@settings(max_examples=10, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1))
+def test_lazy_heuristic_equals_full_dijkstra(seed: int) -> None:
+    """The resumable per-goal Dijkstra gives, in any query order, the full Dijkstra field,
+    which is never below the straight-line distance (a true shortest-path metric)."""
+    from lamp.mrmp.gspi import _lattice_h, _seed_goal
+
+    scene, _, G = _random_instance(seed, 1, 1, 8, 2.0)
+    lat = get_lattice(RobotSpace.from_scene(scene))
+    rng = np.random.default_rng(seed)
+    seeds = rng.choice(lat.V, size=3, replace=False)
+    cost = rng.uniform(0, 0.05, 3)
+    full = lat.field(seeds, cost)
+    V = lat.V
+    hs = (np.full((1, V), np.inf), np.full((1, V), -1, dtype=np.int64),
+          np.empty((1, V), dtype=np.int64), np.zeros(1, dtype=np.int64),
+          np.zeros((1, 1), dtype=np.bool_), np.zeros((1, 1)))
+    _seed_goal(0, seeds.astype(np.int64), cost, hs)
+    order = rng.permutation(V)
+    lazy = np.array([_lattice_h(0, int(v), lat.nbr, lat.dlen, hs) for v in order])
+    assert np.allclose(lazy, full[order], rtol=0, atol=1e-12)  # inf == inf counts as close
+    fin = np.isfinite(full)
+    euclid = np.min(np.hypot(*(lat.coords[:, None] - lat.coords[seeds][None]).transpose(2, 0, 1))
+                    + cost[None], axis=1)
+    assert np.all(full[fin] >= euclid[fin] - 1e-9)

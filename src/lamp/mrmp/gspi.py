@@ -572,7 +572,7 @@ def plan_paths(
     *,
     space: RobotSpace | None = None,
     seed: int = 0,
-    lattice_step: float = 0.05,
+    lattice_step: float | tuple[float, ...] = (0.05, 0.03),
     link_radius: float | None = None,
     goal_swapping: bool = True,
     max_spacing: float = 0.02,
@@ -596,7 +596,10 @@ def plan_paths(
         ``extra_obstacles`` are ignored); its threshold ``r + margin`` is the clearance
         every lattice position keeps.
     seed: tie-breaking seed (the plan is a deterministic function of all arguments).
-    lattice_step: lattice spacing L (multiple of the space's 1 cm grid).
+    lattice_step: lattice spacing L (multiple of the space's 1 cm grid), or a sequence
+        of them tried in turn while time is left: after a failure that a finer lattice can
+        fix (a goal or start that cannot be linked, a passage narrower than the lattice, a
+        stall), the next step is tried. Default (0.05, 0.03): GCo's 5 cm, then 3 cm.
     link_radius: how far a start or goal may be from the lattice nodes it connects to by a
         straight move (default 1.5 L).
     goal_swapping: False gives plain PIBT with a fixed optimal assignment (baseline).
@@ -640,8 +643,6 @@ def plan_paths(
         space = RobotSpace.from_scene(scene, object_poses, extra_obstacles)
     elif not isinstance(space, RobotSpace):
         raise ValueError(f"space must be a RobotSpace, got {type(space).__name__}")
-    r = space.radius
-    thr = space.threshold
     c_start = _check_points(space, S, "starts", start_tolerance)
     c_goal = _check_points(space, G, "goals", goal_tolerance)
     goal0: np.ndarray | None = None
@@ -653,6 +654,54 @@ def plan_paths(
         if len(np.unique(used)) != M or len(used) != M:
             raise ValueError("initial_goal_of must give every goal to exactly one robot")
 
+    if M == 0:
+        return MRMPPlan(True, S[:, None, :].copy(), np.full(N, -1, np.int64), "", 0,
+                        time.perf_counter() - t_begin, {})
+    steps = (lattice_step,) if np.isscalar(lattice_step) else tuple(lattice_step)  # type: ignore[arg-type]
+    if not steps:
+        raise ValueError("lattice_step must be a step or a non-empty sequence of steps")
+    deadline = t_begin + float(time_limit)
+    stats: dict[str, Any] = {"attempts": []}
+    reasons: list[str] = []
+    out: _Attempt | None = None
+    for L in steps:
+        if out is not None and time.perf_counter() >= deadline:
+            break
+        out = _attempt(space, S, G, c_start, c_goal, float(L), link_radius, goal_swapping,
+                       max_spacing, max_steps, stall_steps, goal0, seed, deadline,
+                       float(time_limit))
+        stats["attempts"].append({"lattice_step": float(L), **out.stats})
+        stats.update(out.stats)
+        if out.success or not out.retry:
+            break
+        reasons.append(f"lattice {L:g} m: {out.reason}")
+    assert out is not None
+    reason = out.reason if out.success or len(reasons) <= 1 else "; ".join(reasons)
+    return MRMPPlan(out.success, out.paths, out.goal_of, reason, out.iterations,
+                    time.perf_counter() - t_begin, stats)
+
+
+@dataclass
+class _Attempt:
+    success: bool
+    reason: str
+    paths: np.ndarray
+    goal_of: np.ndarray
+    iterations: int
+    retry: bool  # a finer lattice may succeed (static or stall failure, time left)
+    stats: dict[str, Any]
+
+
+def _attempt(
+    space: RobotSpace, S: np.ndarray, G: np.ndarray, c_start: np.ndarray, c_goal: np.ndarray,
+    lattice_step: float, link_radius: float | None, goal_swapping: bool, max_spacing: float,
+    max_steps: int | None, stall_steps: int | None, goal0: np.ndarray | None, seed: int,
+    deadline: float, time_limit: float,
+) -> _Attempt:
+    """Gspi on one lattice."""
+    N, M = len(S), len(G)
+    r = space.radius
+    thr = space.threshold
     lat: Lattice = get_lattice(space, lattice_step)
     L = lat.step
     R = 1.5 * L if link_radius is None else float(link_radius)
@@ -662,12 +711,8 @@ def plan_paths(
     stats: dict[str, Any] = {"lattice_nodes": V}
 
     def result(success: bool, reason: str, paths: np.ndarray, goal_of: np.ndarray,
-               iters: int) -> MRMPPlan:
-        return MRMPPlan(success, paths, goal_of, reason, iters, time.perf_counter() - t_begin,
-                        stats)
-
-    if M == 0:
-        return result(True, "", S[:, None, :].copy(), np.full(N, -1, np.int64), 0)
+               iters: int, retry: bool = False) -> _Attempt:
+        return _Attempt(success, reason, paths, goal_of, iters, retry, stats)
 
     # ---- special vertices and their links ----------------------------------------
     coords = np.concatenate([lat.coords, S, G]).astype(np.float64)
@@ -730,13 +775,14 @@ def plan_paths(
                not direct[:, m].any() else " is unreachable from every start")
             for m in bad
         ]
-        return result(False, "; ".join(why), S[:, None, :].copy(), np.full(N, -1, np.int64), 0)
+        return result(False, "; ".join(why), S[:, None, :].copy(), np.full(N, -1, np.int64), 0,
+                      retry=True)
     if goal0 is None:
         rows, cols = linear_sum_assignment(np.where(np.isfinite(C), C, _BIG))
         if np.any(~np.isfinite(C[rows, cols])):
             return result(False, "no assignment of robots to goals reaches every goal "
                           "(some goals are reachable only by the same robots)",
-                          S[:, None, :].copy(), np.full(N, -1, np.int64), 0)
+                          S[:, None, :].copy(), np.full(N, -1, np.int64), 0, retry=True)
         goal = np.full(N, -1, dtype=np.int64)
         goal[rows] = cols
     else:
@@ -763,9 +809,14 @@ def plan_paths(
     t = 0
     done = False
     reason = ""
+    retry = False
     chunk = 16
     seed_i = int(seed) & 0x7FFFFFFF
+    t_chunk = time.perf_counter()
+    t_prev = 0
     while True:
+        t_chunk = time.perf_counter()
+        t_prev = t
         t1 = min(t + chunk, max_steps)
         t_new, done = _run_steps(gr, V, gv0, hs, cur, goal, prio, 2.0 * r, seed_i,
                                  goal_swapping, hist, hsum, t, t1, maxc)
@@ -778,14 +829,20 @@ def plan_paths(
             break
         if t >= max_steps:
             reason = f"step budget of {max_steps} Gspi steps exhausted"
+            retry = True
             break
         if t - best_t > stall_steps:
             reason = f"no progress for {stall_steps} steps (deadlock or livelock)"
+            retry = True
             break
-        if time.perf_counter() - t_begin > time_limit:
+        now = time.perf_counter()
+        if now > deadline:
             reason = f"time limit of {time_limit:g} s reached after {t} steps"
             break
-        chunk = min(chunk * 2, 256)
+        # next chunk: at most ~20 ms of work, so the time limit is kept closely
+        per_step = (now - t_chunk) / max(1, t - t_prev)
+        chunk = int(max(1, min(256, 2 * chunk, 0.02 / max(per_step, 1e-7),
+                               (deadline - now) / max(per_step, 1e-7) + 1)))
 
     # ---- output: drop all-wait steps, densify --------------------------------------
     P = coords[hist[: t + 1]]  # (t+1, N, 2)
@@ -814,4 +871,4 @@ def plan_paths(
         if final_ok and np.all(counts == 1):
             return result(True, "", paths, goal_of, t)
         reason = "internal error: final positions do not match the goals"  # pragma: no cover
-    return result(False, reason, paths, goal_of, t)
+    return result(False, reason, paths, goal_of, t, retry)
