@@ -230,9 +230,11 @@ def test_ray_backend_runs_the_same_jobs():
 
 # --------------------------------------------------------------------------- report
 def _res(suite_name, scene, planner, success, times, makespan, fh, seed=0, n_objects=1):
-    objects = [{"success": success, "full_horizon_plan": fh, "segments": len(times),
-                "planning_time_s": float(sum(times)), "failure_reason": "" if success else "x"}
-               for _ in range(n_objects)]
+    share = [len(times) // n_objects] * n_objects  # segments split between the objects
+    share[-1] += len(times) - sum(share)
+    objects = [{"success": success, "full_horizon_plan": fh, "segments": share[i],
+                "planning_time_s": float(sum(times)) / n_objects,
+                "failure_reason": "" if success else "x"} for i in range(n_objects)]
     return {"suite": suite_name, "scene": scene, "planner": planner, "seed": seed,
             "status": "ok", "success": success, "objects": objects, "segments": len(times),
             "planning_time_s": times, "total_planning_time_s": float(sum(times)),
@@ -270,8 +272,8 @@ def test_report_tables_equal_hand_computed_numbers():
         "lazy": {"random": (2, 2), "maze": (1, 2), "all": (3, 4)},
     }
     med = median_planning_time_table(SYNTHETIC)
-    assert med["lazy"] == {"random": (2.5, 4), "maze": (2.0, 2), "all": (2.0, 6)}
-    assert med["astar"]["all"] == (7.5, 4)
+    assert med["lazy"] == {"random": (3.0, 2), "maze": (2.0, 1), "all": (2.0, 3)}
+    assert med["astar"] == {"random": (7.5, 2), "maze": (None, 0), "all": (7.5, 2)}
     costs = path_cost_comparison(SYNTHETIC)
     g = costs["gco-var"]
     assert (g.n, g.dnf_baseline, g.dnf_reference, g.both_failed) == (1, 2, 1, 0)
@@ -282,6 +284,34 @@ def test_report_tables_equal_hand_computed_numbers():
     pts = planning_time_points(SYNTHETIC, fail_value=60.0)
     assert sorted(v for _, v, _ in pts["lazy"]) == [2.0, 2.0, 4.0, 60.0]
     assert [bad for _, v, bad in pts["lazy"] if v == 60.0] == [True]
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.tuples(st.sampled_from(["random", "maze", "tilt", "warehouse", "iros"]),
+                          st.integers(0, 3), st.sampled_from(["lazy", "astar", "gco-var"]),
+                          st.booleans(), st.booleans()), max_size=40))
+def test_tables_count_the_raw_records(rows):
+    """Every Table I/II cell (and its Markdown) is the brute-force count of the raw lines."""
+    from lamp.bench.report import full_horizon_markdown, success_markdown
+
+    records = list(latest_by_key(
+        _res(f, f"{f}-{i}", p, ok, [1.0], 10, fh) for f, i, p, ok, fh in rows).values())
+    t1, t2 = success_table(records), full_horizon_table(records)
+    fams = sorted({r["suite"] for r in records if r["suite"] != "iros"})
+    md1 = success_markdown(t1, fams)
+    for p in {r["planner"] for r in records if r["suite"] != "iros"}:
+        for f in [*fams, "all"]:
+            cell = [r for r in records if r["planner"] == p and r["suite"] != "iros"
+                    and f in ("all", r["suite"])]
+            k = sum(r["success"] for r in cell)
+            assert (t1[p][f].k, t1[p][f].n) == (k, len(cell))
+            if cell:
+                assert f"{round(100 * k / len(cell))}% ({k}/{len(cell)})" in md1
+            if p != "gco-var":
+                kf = sum(r["objects"][0]["full_horizon_plan"] for r in cell)
+                assert (t2[p][f].k, t2[p][f].n) == (kf, len(cell))
+    assert "gco-var" not in t2
+    full_horizon_markdown(t2, fams)
 
 
 def test_lamp_report_rebuilds_from_results(tmp_path):
@@ -296,7 +326,7 @@ def test_lamp_report_rebuilds_from_results(tmp_path):
     assert "| GCo_var | 50% (1/2) [paper 68%] | 50% (1/2) [paper 12%] | 50% (2/4) |" in md
     assert "| LAMP-A*_ori | 50% (1/2) [paper 100%] | 50% (1/2) [paper 8%] | 50% (2/4) |" in md
     assert "| LAMP-Lazy vs GCo_var | 1 | 1.250 | 1.250 | 2 | 1 | 0 |" in md
-    assert "| LAMP-Lazy | 2.5 (n=4) | 2 (n=2) | 2 (n=6) |" in md
+    assert "| LAMP-Lazy | 3 (n=2) | 2 (n=1) | 2 (n=3) |" in md
     assert "| LAMP-Lazy | 0 | yes | 2/2 | 3 | 2 | 6 |" in md  # IROS: mean 6 s / 3 segments
     for fig in ("planning_time.png", "planning_time_by_family.png", "path_cost.png",
                 "iros_planning_time.png"):

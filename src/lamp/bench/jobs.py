@@ -317,7 +317,9 @@ def load_suite(name: str) -> list[SuiteScene]:
     if name in known:
         from lamp.suites import registry
 
-        return [SuiteScene(name, sc, sc.source or f"{name}/{sc.name}.yaml")
+        # a portable name (suite/file), not the path inside this installation
+        return [SuiteScene(name, sc, f"{name}/{Path(sc.source).name}" if sc.source
+                           else f"{name}/{sc.name}.yaml")
                 for sc in registry.suite_scenes(name)]
     path = Path(name)
     if path.is_dir():
