@@ -8,6 +8,7 @@ import torch
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from lamp.manip.contacts import rigid_displacements, rigid_pushes
 from lamp.manip.dataset import synthetic_dataset
 from lamp.manip.flow import (
     GRID_EXTENT,
@@ -137,10 +138,10 @@ def test_object_image_axes_and_polygons():
 
 def test_make_batch_symmetries_preserve_geometry():
     ds = synthetic_dataset(40, seed=1)
-    scale = trajectory_scale(ds)
+    scale = trajectory_scale(ds, residual=False)
     idx = np.arange(40)
-    plain = make_batch(ds, idx, scale, None, 64)
-    aug = make_batch(ds, idx, scale, np.random.default_rng(0), 64)
+    plain = make_batch(ds, idx, scale, None, 64, residual=False)
+    aug = make_batch(ds, idx, scale, np.random.default_rng(0), 64, residual=False)
     # symmetries keep lengths: |motion_xy|, |dtheta|, each slot's displacement norms, areas
     np.testing.assert_allclose(np.linalg.norm(aug.motion[:, :2], axis=1),
                                np.linalg.norm(plain.motion[:, :2], axis=1), rtol=1e-5)
@@ -163,3 +164,20 @@ def test_make_batch_symmetries_preserve_geometry():
     # tokens are cell centres: allow the cell error times the rotation
     np.testing.assert_allclose(d[..., 0][used], ex[used], atol=0.004)
     np.testing.assert_allclose(d[..., 1][used], ey[used], atol=0.004)
+
+
+def test_residual_encoding_of_rigid_pushes_is_zero_under_symmetries():
+    # synthetic labels are exact rigid pushes: their residual is 0 for every D4 symmetry
+    ds = synthetic_dataset(30, seed=2)
+    b = make_batch(ds, np.arange(30), 0.01, np.random.default_rng(1), 64, residual=True)
+    assert float(b.traj.abs().max()) < 1e-5
+    assert float(b.traj[b.used].abs().max()) < 1e-5
+
+
+@settings(max_examples=30, deadline=None)
+@given(pts=st.lists(st.tuples(coord, coord), min_size=1, max_size=3),
+       motion=st.tuples(st.floats(-0.2, 0.2), st.floats(-0.2, 0.2), st.floats(-0.5, 0.5)))
+def test_rigid_displacements_match_rigid_pushes(pts, motion):
+    c = np.array(pts)
+    ref = rigid_pushes(c, motion) - c[:, None, :]
+    np.testing.assert_allclose(rigid_displacements(c, np.array(motion)), ref, atol=1e-12)

@@ -78,7 +78,10 @@ def train_cmd(
 
         export_to.parent.mkdir(parents=True, exist_ok=True)
         shutil.copyfile(run_dir / "model.pt", export_to)
-        typer.echo(f"exported {export_to}")
+        meta = {"checkpoint": export_to.name, "data_file": str(data),
+                "data_meta": ds.meta, **summary}
+        export_to.with_suffix(".json").write_text(json.dumps(meta, indent=1) + "\n")
+        typer.echo(f"exported {export_to} and {export_to.with_suffix('.json').name}")
     typer.echo(json.dumps(summary, indent=1))
 
 
@@ -91,6 +94,7 @@ def eval_cmd(
     threads: int = typer.Option(1, help="Torch threads."),
     out: Path = typer.Option(None, "--out", help="Write the report as JSON here."),
     geometric: bool = typer.Option(True, help="Run the geometric proposer side by side."),
+    record: bool = typer.Option(False, help="Add the figures to the checkpoint's .json."),
 ) -> None:
     """Execute proposals for held-out shapes and motions in the simulator; report accuracy."""
     _threads(threads)
@@ -106,3 +110,11 @@ def eval_cmd(
         out.parent.mkdir(parents=True, exist_ok=True)
         out.write_text(json.dumps(report, indent=1))
         typer.echo(f"wrote {out}")
+    if record:
+        from lamp.manip.network import DEFAULT_CHECKPOINT
+
+        meta_path = (model or DEFAULT_CHECKPOINT).with_suffix(".json")
+        meta = json.loads(meta_path.read_text()) if meta_path.is_file() else {}
+        meta["evaluation"] = report
+        meta_path.write_text(json.dumps(meta, indent=1) + "\n")
+        typer.echo(f"recorded the figures in {meta_path}")

@@ -245,3 +245,20 @@ def contacts_valid(
         if np.any(d < 2.0 * robot_radius - tol):
             return False
     return True
+
+
+def rigid_displacements(
+    contacts: ArrayLike, motion: ArrayLike, horizon: int = HORIZON
+) -> np.ndarray:
+    """Batched ``rigid_pushes`` minus the contacts: (..., S, 2) contacts and (..., 3) motions
+    -> (..., S, horizon, 2) displacements of each contact carried rigidly with the object
+    (zero at waypoint 0; NaN contacts give NaN)."""
+    c = np.asarray(contacts, dtype=float)
+    m = np.asarray(motion, dtype=float)
+    s = np.linspace(0.0, 1.0, horizon)
+    th = m[..., None, None, 2] * s  # (..., 1, H)
+    cos, sin = np.cos(th), np.sin(th)
+    cx, cy = c[..., 0:1], c[..., 1:2]  # (..., S, 1)
+    dx = m[..., None, None, 0] * s + (cos - 1.0) * cx - sin * cy
+    dy = m[..., None, None, 1] * s + sin * cx + (cos - 1.0) * cy
+    return np.stack([dx, dy], axis=-1)

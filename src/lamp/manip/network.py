@@ -28,6 +28,7 @@ from numpy.typing import ArrayLike
 from torch import nn
 
 from lamp.manip.contacts import (
+    CONTACT_OFFSET,
     HORIZON,
     MAX_ROBOTS,
     ROBOT_RADIUS,
@@ -35,6 +36,8 @@ from lamp.manip.contacts import (
     check_budget,
     check_motion,
     project_to_contacts,
+    rigid_displacements,
+    signed_distance,
 )
 from lamp.manip.flow import (
     N_CLASSES,
@@ -46,6 +49,7 @@ from lamp.manip.flow import (
     smoothness_grad,
     time_embedding,
 )
+from lamp.manip.geometric import contact_ring
 from lamp.manip.image import IMAGE_SIZE, object_image
 from lamp.manip.proposals import Proposal, ShapeLike, check_k, make_rng
 from lamp.scene.model import Shape
@@ -53,6 +57,12 @@ from lamp.scene.model import Shape
 MOTION_SCALE = (0.2, 0.2, 0.5)
 """Requested motions are divided by these before entering the network (training range)."""
 DEFAULT_CHECKPOINT = Path(__file__).parent / "checkpoints" / "flow_dc.pt"
+TRAJECTORY_PARAMS = ("residual", "displacement")
+"""How the continuous part encodes a push (both are displacements from the contact,
+divided by a data scale): ``displacement`` is the raw displacement of each waypoint;
+``residual`` subtracts the displacement the contact would have if carried rigidly with the
+object along the requested motion (``rigid_displacements``), which is known in closed form
+once the contact is, so the flow only has to generate the (small) deviation from it."""
 
 
 @dataclass(frozen=True)
@@ -70,11 +80,22 @@ class NetConfig:
     blocks: int = 3
     slots: int = MAX_ROBOTS
     horizon: int = HORIZON
+    trajectory: str = "residual"
+
+    def __post_init__(self) -> None:
+        if self.trajectory not in TRAJECTORY_PARAMS:
+            raise ValueError(f"trajectory must be one of {TRAJECTORY_PARAMS}, "
+                             f"got {self.trajectory!r}")
+
+    @property
+    def residual(self) -> bool:
+        return self.trajectory == "residual"
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> NetConfig:
         d = dict(d)
         d["channels"] = tuple(d["channels"])
+        d.setdefault("trajectory", "displacement")  # checkpoints from before the option
         return cls(**d)
 
 
@@ -269,15 +290,28 @@ class FlowProposer:
                     tokens = torch.where(jump, draw, tokens)
         contacts = detokenize(tokens.numpy())  # (n, S, 2), NaN beyond the budget
         disp = x.numpy().astype(float) * self.traj_scale
-        return self._finish(shp, contacts, disp)
+        return self._finish(shp, contacts, disp, np.repeat(m, k, axis=0))
 
-    def _finish(self, shape: Shape, contacts: np.ndarray, disp: np.ndarray) -> RawSamples:
-        """Snap contacts onto the contact ring, build pushes, drop overlapping robots."""
+    def _finish(
+        self, shape: Shape, contacts: np.ndarray, disp: np.ndarray, motions: np.ndarray
+    ) -> RawSamples:
+        """Snap contacts onto the contact ring, build pushes, drop overlapping robots.
+
+        contacts (n, S, 2) cell centres (NaN: unused), disp (n, S, H-1, 2) the generated
+        continuous part in metres, motions (n, 3) the requested motions.
+        """
         n, s, _ = contacts.shape
         used = ~np.isnan(contacts[..., 0])
         snapped = contacts.copy()
         if used.any():
             snapped[used] = project_to_contacts(shape, contacts[used])
+            # near a concave corner the projection can land too close to another edge:
+            # take the nearest sample of the (valid by construction) contact ring instead
+            bad = used & (signed_distance(shape, np.nan_to_num(snapped)) < CONTACT_OFFSET - 1e-4)
+            if bad.any():
+                ring = contact_ring(shape).points
+                d2 = ((snapped[bad][:, None, :] - ring[None]) ** 2).sum(-1)
+                snapped[bad] = ring[np.argmin(d2, axis=1)]
         # a robot overlapping an earlier robot of the same candidate is dropped
         for j in range(1, s):
             for i in range(j):
@@ -286,6 +320,8 @@ class FlowProposer:
                 used[clash, j] = False
         snapped[~used] = np.nan
         pushes = np.concatenate([np.zeros((n, s, 1, 2)), disp], axis=2) + snapped[:, :, None, :]
+        if self.net.cfg.residual:
+            pushes = pushes + rigid_displacements(snapped, motions, pushes.shape[2])
         return RawSamples(snapped, pushes)
 
     @staticmethod

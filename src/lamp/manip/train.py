@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 import torch
 
-from lamp.manip.contacts import HORIZON, MAX_ROBOTS
+from lamp.manip.contacts import HORIZON, MAX_ROBOTS, rigid_displacements
 from lamp.manip.dataset import PushDataset
 from lamp.manip.flow import (
     NOISE,
@@ -87,8 +87,13 @@ def make_batch(
     traj_scale: float,
     rng: np.random.Generator | None,
     image_size: int,
+    residual: bool = True,
 ) -> Batch:
-    """Assemble samples ``idx`` (with a random D4 symmetry each when ``rng`` is given)."""
+    """Assemble samples ``idx`` (with a random D4 symmetry each when ``rng`` is given).
+
+    ``residual``: encode the pushes as deviations from the rigid displacement of the
+    contact along the (achieved) motion, see ``lamp.manip.network.TRAJECTORY_PARAMS``.
+    """
     kind = ds.shape_kind[idx].astype(int)
     params = ds.shape_params[idx].copy()
     motion = ds.achieved[idx].copy()
@@ -108,7 +113,10 @@ def make_batch(
     contacts = np.take_along_axis(contacts, order[..., None], axis=1)
     paths = np.take_along_axis(paths, order[..., None, None], axis=1)
     used = ~np.isnan(contacts[..., 0])
-    disp = np.nan_to_num((paths[:, :, 1:] - paths[:, :, :1]) / traj_scale)
+    disp = paths[:, :, 1:] - paths[:, :, :1]
+    if residual:
+        disp = disp - rigid_displacements(contacts, motion, paths.shape[2])[:, :, 1:]
+    disp = np.nan_to_num(disp / traj_scale)
     return Batch(
         images=torch.from_numpy(batch_images(kind, params, image_size)),
         tokens=torch.from_numpy(tokenize(contacts)),
@@ -119,10 +127,12 @@ def make_batch(
     )
 
 
-def trajectory_scale(ds: PushDataset) -> float:
-    """Standard deviation of the displacements of all used waypoints (normalisation)."""
+def trajectory_scale(ds: PushDataset, residual: bool = True) -> float:
+    """Root mean square of the encoded pushes over all used waypoints (normalisation)."""
     disp = ds.paths[:, :, 1:] - ds.paths[:, :, :1]
-    return float(np.sqrt(np.nanmean(disp**2)))
+    if residual:
+        disp = disp - rigid_displacements(ds.contacts, ds.achieved, ds.paths.shape[2])[:, :, 1:]
+    return float(max(np.sqrt(np.nanmean(disp**2)), 1e-3))
 
 
 # --------------------------------------------------------------------------- steps
@@ -161,7 +171,7 @@ def evaluate_losses(
     count = 0
     for s in range(0, len(idx), batch_size):
         part = idx[s:s + batch_size]
-        b = make_batch(ds, part, traj_scale, None, net.cfg.image_size)
+        b = make_batch(ds, part, traj_scale, None, net.cfg.image_size, net.cfg.residual)
         ce, mse, acc = batch_losses(net, b, 2, gen)
         for key, v in zip(("ce", "mse", "acc"), (ce, mse, acc), strict=True):
             tot[key] += float(v) * len(part)
@@ -196,7 +206,7 @@ def train(
     run.mkdir(parents=True, exist_ok=True)
     torch.set_num_threads(cfg.threads)
     state_path = run / "train_state.pt"
-    traj_scale = trajectory_scale(ds)
+    traj_scale = None
     start_epoch = 0
     if state_path.is_file():
         st = torch.load(state_path, map_location="cpu", weights_only=True)
@@ -208,6 +218,8 @@ def train(
         traj_scale = float(st["traj_scale"])
         start_epoch = int(st["epoch"])
     net_cfg = net_cfg or NetConfig()
+    if traj_scale is None:
+        traj_scale = trajectory_scale(ds, net_cfg.residual)
     torch.manual_seed(cfg.seed)  # parameter initialisation only
     net = FlowNet(net_cfg)
     opt = torch.optim.AdamW(net.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
@@ -228,6 +240,8 @@ def train(
     if (run / "losses.jsonl").is_file() and start_epoch:
         history = [json.loads(x) for x in (run / "losses.jsonl").read_text().splitlines()
                    if x.strip()][:start_epoch]
+        # drop log lines of an epoch whose state was never saved (killed in between)
+        (run / "losses.jsonl").write_text("".join(json.dumps(h) + "\n" for h in history))
     t_start = time.perf_counter()
     net.train()
     for epoch in range(start_epoch, cfg.epochs):
@@ -244,7 +258,7 @@ def train(
                 grp["lr"] = lr_at(step)
             part = perm[i * cfg.images_per_step:(i + 1) * cfg.images_per_step]
             batch = make_batch(ds, part, traj_scale, rng if cfg.augment else None,
-                               net_cfg.image_size)
+                               net_cfg.image_size, net_cfg.residual)
             ce, mse, acc = batch_losses(net, batch, cfg.draws_per_image, gen)
             loss = ce + cfg.mse_weight * mse
             opt.zero_grad(set_to_none=True)
