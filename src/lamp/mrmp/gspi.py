@@ -576,7 +576,7 @@ def plan_paths(
     link_radius: float | None = None,
     goal_swapping: bool = True,
     max_spacing: float = 0.02,
-    goal_tolerance: float = 0.002,
+    goal_tolerance: float = 0.006,
     start_tolerance: float = 0.01,
     max_steps: int | None = None,
     stall_steps: int | None = None,
@@ -605,7 +605,8 @@ def plan_paths(
     goal_swapping: False gives plain PIBT with a fixed optimal assignment (baseline).
     max_spacing: largest distance between consecutive output rows of a robot.
     goal_tolerance: a goal may have exact clearance down to ``threshold - goal_tolerance``
-        (contacts from the manipulation model touch the object), and two goals may be
+        (contacts from the manipulation model touch the object and come on a 7.8 mm pixel
+        grid; 6 mm is LAMP's ``contact_tolerance``), and two goals may be
         ``2r - goal_tolerance`` apart; the last approach then never gets closer than the
         goal itself (non-worsening rule). Deeper goals raise ValueError.
     start_tolerance: the same for starts (robots left in contact after a push); motions
