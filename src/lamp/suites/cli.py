@@ -1,5 +1,37 @@
-"""``lamp suite``: list and export the built-in benchmark suites (placeholder until written)."""
+"""``lamp suite``: list and export the built-in benchmark suites."""
+
+from __future__ import annotations
+
+from pathlib import Path
 
 import typer
 
+from lamp.suites.registry import SUITES, export_suite, suite_files
+
 suite_app = typer.Typer(help="Built-in benchmark suites.", no_args_is_help=True)
+
+
+@suite_app.command("list")
+def list_command() -> None:
+    """Print each suite with its number of scenes and a one-line description."""
+    width = max(len(n) for n in SUITES)
+    for name, info in SUITES.items():
+        n = len(suite_files(name))
+        typer.echo(f"{name:<{width}}  {n:>3} scene{'s' if n != 1 else ' '}  {info.description}")
+
+
+@suite_app.command("export")
+def export_command(
+    name: str = typer.Argument(..., help=f"Suite name: {', '.join(SUITES)}."),
+    directory: Path = typer.Argument(..., help="Folder to write the scene files and manifest.json to."),
+) -> None:
+    """Write a suite's scene files (and its manifest.json) to DIRECTORY."""
+    if name not in SUITES:
+        typer.echo(f"error: unknown suite {name!r}; valid names: {', '.join(SUITES)}", err=True)
+        raise typer.Exit(code=2)
+    try:
+        written = export_suite(name, directory)
+    except OSError as exc:
+        typer.echo(f"error: cannot write to {directory}: {exc.strerror or exc}", err=True)
+        raise typer.Exit(code=2) from None
+    typer.echo(f"wrote {len(written) - 1} scene file(s) and manifest.json to {directory}")

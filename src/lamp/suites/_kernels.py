@@ -1,0 +1,520 @@
+"""Compiled (Numba) geometry and lattice-search kernels behind ``lamp.suites.checks``.
+
+These kernels compute *exact* Euclidean clearances between convex pieces (disks and convex
+polygons) and certify straight SE(2) motions by bisection with a Lipschitz bound, so the
+suite checks do not depend on a rasterisation. They are deliberately independent of
+``lamp.geometry.object_space`` (a conservative distance-grid checker): the suite generator
+searches with these kernels and ``checks.verify_route`` re-verifies every route with
+``ObjectSpace``, so each implementation is an oracle for the other.
+
+World representation (all float64, C-contiguous):
+- ``circ``: (n, 3) obstacle disks ``[cx, cy, r]``;
+- ``pv``: (m, V, 2) convex obstacle polygons (world frame, counter-clockwise, padded by
+  repeating the last vertex), ``pn``: (m,) vertex counts, ``pb``: (m, 3) bounding circles;
+- the workspace border ``[0, W] x [0, H]`` is a wall.
+An object is either a disk (``obj_r > 0``, no pieces) or a union of convex polygon pieces
+``ov`` (k, V, 2) / ``on`` (k,) in its own frame, with ``obj_reach`` the largest distance of
+a vertex from the object origin.
+
+Clearance convention: the distance between the footprint and the nearest obstacle or the
+border when they are disjoint; a negative number when they overlap (the magnitude is not
+meaningful). Motions are certified with the bound used throughout: on a straight SE(2)
+motion every point of the object travels at most ``delta = |dxy| + reach * |dtheta|``, so
+every intermediate pose has clearance at least ``min(c_a, c_b) - delta / 2``.
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+
+import numba
+import numpy as np
+
+BIG = 1.0e9
+
+
+@numba.njit(cache=True, inline="always")
+def _seg_dist(px: float, py: float, ax: float, ay: float, bx: float, by: float) -> float:
+    """Distance from point p to segment ab."""
+    dx = bx - ax
+    dy = by - ay
+    l2 = dx * dx + dy * dy
+    t = 0.0
+    if l2 > 0.0:
+        t = ((px - ax) * dx + (py - ay) * dy) / l2
+        t = min(1.0, max(0.0, t))
+    qx = ax + t * dx - px
+    qy = ay + t * dy - py
+    return math.sqrt(qx * qx + qy * qy)
+
+
+@numba.njit(cache=True)
+def _point_poly_dist(px: float, py: float, v: np.ndarray, n: int) -> float:
+    """Signed distance from a point to a convex CCW polygon (negative inside)."""
+    inside = True
+    best = BIG
+    for i in range(n):
+        j = i + 1 if i + 1 < n else 0
+        ax, ay = v[i, 0], v[i, 1]
+        bx, by = v[j, 0], v[j, 1]
+        if (bx - ax) * (py - ay) - (by - ay) * (px - ax) < 0.0:
+            inside = False
+        d = _seg_dist(px, py, ax, ay, bx, by)
+        if d < best:
+            best = d
+    return -best if inside else best
+
+
+@numba.njit(cache=True)
+def _separated(a: np.ndarray, na: int, b: np.ndarray, nb: int) -> bool:
+    """Separating-axis test over the edge normals of CCW polygon ``a``."""
+    for i in range(na):
+        j = i + 1 if i + 1 < na else 0
+        ex = a[j, 0] - a[i, 0]
+        ey = a[j, 1] - a[i, 1]
+        # outward normal of a CCW edge is (ey, -ex); b separated if all its vertices are beyond
+        sep = True
+        for k in range(nb):
+            if ey * (b[k, 0] - a[i, 0]) - ex * (b[k, 1] - a[i, 1]) <= 0.0:
+                sep = False
+                break
+        if sep:
+            return True
+    return False
+
+
+@numba.njit(cache=True)
+def _poly_poly_dist(a: np.ndarray, na: int, b: np.ndarray, nb: int) -> float:
+    """Distance between two convex CCW polygons; -1 when they overlap."""
+    if not (_separated(a, na, b, nb) or _separated(b, nb, a, na)):
+        return -1.0
+    best = BIG
+    for i in range(na):
+        for j in range(nb):
+            k = j + 1 if j + 1 < nb else 0
+            d = _seg_dist(a[i, 0], a[i, 1], b[j, 0], b[j, 1], b[k, 0], b[k, 1])
+            if d < best:
+                best = d
+    for i in range(nb):
+        for j in range(na):
+            k = j + 1 if j + 1 < na else 0
+            d = _seg_dist(b[i, 0], b[i, 1], a[j, 0], a[j, 1], a[k, 0], a[k, 1])
+            if d < best:
+                best = d
+    return best
+
+
+@numba.njit(cache=True)
+def pose_clearance(
+    x: float,
+    y: float,
+    th: float,
+    obj_r: float,
+    ov: np.ndarray,
+    on: np.ndarray,
+    obj_reach: float,
+    circ: np.ndarray,
+    pv: np.ndarray,
+    pn: np.ndarray,
+    pb: np.ndarray,
+    width: float,
+    height: float,
+    stop_below: float,
+) -> float:
+    """Exact clearance of the object at pose (x, y, th); may return early once <= stop_below."""
+    if obj_r > 0.0:
+        best = min(x - obj_r, width - x - obj_r, y - obj_r, height - y - obj_r)
+        if best <= stop_below:
+            return best
+        for i in range(circ.shape[0]):
+            d = math.hypot(circ[i, 0] - x, circ[i, 1] - y) - circ[i, 2] - obj_r
+            if d < best:
+                best = d
+                if best <= stop_below:
+                    return best
+        for i in range(pv.shape[0]):
+            if math.hypot(pb[i, 0] - x, pb[i, 1] - y) - pb[i, 2] - obj_r >= best:
+                continue
+            d = _point_poly_dist(x, y, pv[i], pn[i]) - obj_r
+            if d < best:
+                best = d
+                if best <= stop_below:
+                    return best
+        return best
+    c = math.cos(th)
+    s = math.sin(th)
+    kmax = ov.shape[1]
+    wv = np.empty((ov.shape[0], kmax, 2))
+    best = BIG
+    for p in range(ov.shape[0]):
+        for i in range(on[p]):
+            wx = x + c * ov[p, i, 0] - s * ov[p, i, 1]
+            wy = y + s * ov[p, i, 0] + c * ov[p, i, 1]
+            wv[p, i, 0] = wx
+            wv[p, i, 1] = wy
+            d = min(wx, width - wx, wy, height - wy)
+            if d < best:
+                best = d
+    if best <= stop_below:
+        return best
+    for i in range(circ.shape[0]):
+        if math.hypot(circ[i, 0] - x, circ[i, 1] - y) - circ[i, 2] - obj_reach >= best:
+            continue
+        for p in range(ov.shape[0]):
+            d = _point_poly_dist(circ[i, 0], circ[i, 1], wv[p], on[p]) - circ[i, 2]
+            if d < best:
+                best = d
+        if best <= stop_below:
+            return best
+    for i in range(pv.shape[0]):
+        if math.hypot(pb[i, 0] - x, pb[i, 1] - y) - pb[i, 2] - obj_reach >= best:
+            continue
+        for p in range(ov.shape[0]):
+            d = _poly_poly_dist(wv[p], on[p], pv[i], pn[i])
+            if d < best:
+                best = d
+        if best <= stop_below:
+            return best
+    return best
+
+
+@numba.njit(cache=True)
+def batch_clearance(
+    poses: np.ndarray,
+    obj_r: float,
+    ov: np.ndarray,
+    on: np.ndarray,
+    obj_reach: float,
+    circ: np.ndarray,
+    pv: np.ndarray,
+    pn: np.ndarray,
+    pb: np.ndarray,
+    width: float,
+    height: float,
+) -> np.ndarray:
+    """Exact clearance for (M, 3) poses."""
+    out = np.empty(poses.shape[0])
+    for m in range(poses.shape[0]):
+        out[m] = pose_clearance(
+            poses[m, 0], poses[m, 1], poses[m, 2], obj_r, ov, on, obj_reach,
+            circ, pv, pn, pb, width, height, -BIG,
+        )  # fmt: skip
+    return out
+
+
+@numba.njit(cache=True)
+def point_clearance(
+    points: np.ndarray,
+    circ: np.ndarray,
+    pv: np.ndarray,
+    pn: np.ndarray,
+    pb: np.ndarray,
+    width: float,
+    height: float,
+    border: bool = True,
+) -> np.ndarray:
+    """Exact distance from (M, 2) points to the obstacles and (when ``border``) the
+    workspace border (negative inside an obstacle)."""
+    out = np.empty(points.shape[0])
+    for m in range(points.shape[0]):
+        x = points[m, 0]
+        y = points[m, 1]
+        best = min(x, width - x, y, height - y) if border else BIG
+        for i in range(circ.shape[0]):
+            d = math.hypot(circ[i, 0] - x, circ[i, 1] - y) - circ[i, 2]
+            if d < best:
+                best = d
+        for i in range(pv.shape[0]):
+            if math.hypot(pb[i, 0] - x, pb[i, 1] - y) - pb[i, 2] >= best:
+                continue
+            d = _point_poly_dist(x, y, pv[i], pn[i])
+            if d < best:
+                best = d
+        out[m] = best
+    return out
+
+
+@numba.njit(cache=True)
+def motion_ok(
+    a: np.ndarray,
+    b: np.ndarray,
+    ca: float,
+    cb: float,
+    tau: float,
+    max_depth: int,
+    obj_r: float,
+    ov: np.ndarray,
+    on: np.ndarray,
+    obj_reach: float,
+    circ: np.ndarray,
+    pv: np.ndarray,
+    pn: np.ndarray,
+    pb: np.ndarray,
+    width: float,
+    height: float,
+) -> bool:
+    """Certify that the straight SE(2) motion a -> b (linear in x, y and the *unwrapped*
+    theta) keeps clearance >= tau, given the end clearances ca, cb (bisection on the
+    Lipschitz bound of the module docstring; unresolved after ``max_depth`` halvings
+    counts as not certified)."""
+    if ca < tau or cb < tau:
+        return False
+    dx = b[0] - a[0]
+    dy = b[1] - a[1]
+    dth = b[2] - a[2]
+    delta = math.hypot(dx, dy) + obj_reach * abs(dth)
+    # explicit stack of intervals (t0, c0, t1, c1, depth)
+    st_t0 = np.empty(max_depth + 2)
+    st_c0 = np.empty(max_depth + 2)
+    st_t1 = np.empty(max_depth + 2)
+    st_c1 = np.empty(max_depth + 2)
+    st_d = np.empty(max_depth + 2, dtype=np.int64)
+    top = 0
+    st_t0[0], st_c0[0], st_t1[0], st_c1[0], st_d[0] = 0.0, ca, 1.0, cb, 0
+    while top >= 0:
+        t0, c0, t1, c1, d = st_t0[top], st_c0[top], st_t1[top], st_c1[top], st_d[top]
+        top -= 1
+        if min(c0, c1) - 0.5 * delta * (t1 - t0) >= tau:
+            continue
+        if d >= max_depth:
+            return False
+        tm = 0.5 * (t0 + t1)
+        cm = pose_clearance(
+            a[0] + tm * dx, a[1] + tm * dy, a[2] + tm * dth, obj_r, ov, on, obj_reach,
+            circ, pv, pn, pb, width, height, tau,
+        )  # fmt: skip
+        if cm < tau:
+            return False
+        top += 1
+        st_t0[top], st_c0[top], st_t1[top], st_c1[top], st_d[top] = t0, c0, tm, cm, d + 1
+        top += 1
+        st_t0[top], st_c0[top], st_t1[top], st_c1[top], st_d[top] = tm, cm, t1, c1, d + 1
+    return True
+
+
+@numba.njit(cache=True)
+def sampled_min_clearance(
+    poses: np.ndarray,
+    step: float,
+    obj_r: float,
+    ov: np.ndarray,
+    on: np.ndarray,
+    obj_reach: float,
+    circ: np.ndarray,
+    pv: np.ndarray,
+    pn: np.ndarray,
+    pb: np.ndarray,
+    width: float,
+    height: float,
+) -> float:
+    """Minimum exact clearance over a polyline of poses sampled so that no object point
+    moves more than ``step`` between samples."""
+    best = BIG
+    for i in range(poses.shape[0] - 1):
+        a = poses[i]
+        b = poses[i + 1]
+        delta = math.hypot(b[0] - a[0], b[1] - a[1]) + obj_reach * abs(b[2] - a[2])
+        n = max(1, int(math.ceil(delta / step)))
+        for k in range(n + 1):
+            t = k / n
+            c = pose_clearance(
+                a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), a[2] + t * (b[2] - a[2]),
+                obj_r, ov, on, obj_reach, circ, pv, pn, pb, width, height, -BIG,
+            )  # fmt: skip
+            if c < best:
+                best = c
+    return best
+
+
+@numba.njit(cache=True)
+def _node_clear(
+    node: int,
+    cache: np.ndarray,
+    nx: int,
+    ny: int,
+    h: float,
+    dth: float,
+    obj_r: float,
+    ov: np.ndarray,
+    on: np.ndarray,
+    obj_reach: float,
+    circ: np.ndarray,
+    pv: np.ndarray,
+    pn: np.ndarray,
+    pb: np.ndarray,
+    width: float,
+    height: float,
+) -> float:
+    c = cache[node]
+    if math.isnan(c):
+        i = node % nx
+        j = (node // nx) % ny
+        k = node // (nx * ny)
+        c = pose_clearance(
+            (i + 1) * h, (j + 1) * h, k * dth, obj_r, ov, on, obj_reach,
+            circ, pv, pn, pb, width, height, -BIG,
+        )  # fmt: skip
+        cache[node] = c
+    return c
+
+
+@numba.njit(cache=True)
+def lattice_astar(
+    nx: int,
+    ny: int,
+    nh: int,
+    h: float,
+    dth: float,
+    tau: float,
+    rot_weight: float,
+    src_nodes: np.ndarray,
+    src_costs: np.ndarray,
+    dst_nodes: np.ndarray,
+    dst_costs: np.ndarray,
+    goal_x: float,
+    goal_y: float,
+    cache: np.ndarray,
+    max_depth: int,
+    obj_r: float,
+    ov: np.ndarray,
+    on: np.ndarray,
+    obj_reach: float,
+    circ: np.ndarray,
+    pv: np.ndarray,
+    pn: np.ndarray,
+    pb: np.ndarray,
+    width: float,
+    height: float,
+) -> tuple[np.ndarray, int, float]:
+    """A* on the SE(2) lattice: node (i, j, k) is the pose ((i+1) h, (j+1) h, k dth) with
+    heading index k cyclic modulo ``nh``; moves are the 8 planar neighbours (cost = step
+    length) and +-1 heading step (cost ``rot_weight * dth``). A node is usable when its
+    clearance is >= tau, a move when ``motion_ok`` certifies it. Multi-source
+    (``src_nodes`` with initial costs) and multi-target (``dst_nodes`` with the cost of
+    the final connector). Returns (parent array, reached target node or -1, total cost)."""
+    n_nodes = nx * ny * nh
+    g = np.full(n_nodes, np.inf)
+    parent = np.full(n_nodes, -1, dtype=np.int64)
+    closed = np.zeros(n_nodes, dtype=np.bool_)
+    dst_cost = np.full(n_nodes, np.inf)
+    for m in range(dst_nodes.shape[0]):
+        dst_cost[dst_nodes[m]] = min(dst_cost[dst_nodes[m]], dst_costs[m])
+    slack = h * 0.7072
+    heap = [(0.0, np.int64(0))]
+    heap.pop()
+    for m in range(src_nodes.shape[0]):
+        s = src_nodes[m]
+        if src_costs[m] < g[s]:
+            g[s] = src_costs[m]
+            parent[s] = -2  # a source
+            i = s % nx
+            j = (s // nx) % ny
+            hx = (i + 1) * h - goal_x
+            hy = (j + 1) * h - goal_y
+            heapq.heappush(heap, (g[s] + max(0.0, math.hypot(hx, hy) - slack), np.int64(s)))
+    best_total = np.inf
+    best_node = -1
+    di = np.array([1, -1, 0, 0, 1, 1, -1, -1])
+    dj = np.array([0, 0, 1, -1, 1, -1, 1, -1])
+    a = np.empty(3)
+    b = np.empty(3)
+    while len(heap) > 0:
+        f, u = heapq.heappop(heap)
+        if closed[u]:
+            continue
+        if f >= best_total:
+            break
+        closed[u] = True
+        if dst_cost[u] < np.inf and g[u] + dst_cost[u] < best_total:
+            best_total = g[u] + dst_cost[u]
+            best_node = u
+        i = u % nx
+        j = (u // nx) % ny
+        k = u // (nx * ny)
+        cu = _node_clear(u, cache, nx, ny, h, dth, obj_r, ov, on, obj_reach, circ, pv, pn, pb, width, height)
+        a[0] = (i + 1) * h
+        a[1] = (j + 1) * h
+        a[2] = k * dth
+        n_moves = 8 + (2 if nh > 1 else 0)
+        for mv in range(n_moves):
+            if mv < 8:
+                ii = i + di[mv]
+                jj = j + dj[mv]
+                kk = k
+                if ii < 0 or ii >= nx or jj < 0 or jj >= ny:
+                    continue
+                step = h * (1.0 if mv < 4 else math.sqrt(2.0))
+                b[0] = (ii + 1) * h
+                b[1] = (jj + 1) * h
+                b[2] = a[2]
+            else:
+                ii = i
+                jj = j
+                sgn = 1 if mv == 8 else -1
+                kk = (k + sgn) % nh
+                step = rot_weight * dth
+                b[0] = a[0]
+                b[1] = a[1]
+                b[2] = a[2] + sgn * dth
+            v = (kk * ny + jj) * nx + ii
+            if closed[v]:
+                continue
+            ng = g[u] + step
+            if ng >= g[v]:
+                continue
+            cv = _node_clear(v, cache, nx, ny, h, dth, obj_r, ov, on, obj_reach, circ, pv, pn, pb, width, height)
+            if cv < tau:
+                continue
+            if not motion_ok(a, b, cu, cv, tau, max_depth, obj_r, ov, on, obj_reach, circ, pv, pn, pb, width, height):
+                continue
+            g[v] = ng
+            parent[v] = u
+            hx = b[0] - goal_x
+            hy = b[1] - goal_y
+            heapq.heappush(heap, (ng + max(0.0, math.hypot(hx, hy) - slack), np.int64(v)))
+    return parent, best_node, best_total
+
+
+@numba.njit(cache=True)
+def shortcut(
+    poses: np.ndarray,
+    clear: np.ndarray,
+    tau: float,
+    max_rot: float,
+    max_depth: int,
+    obj_r: float,
+    ov: np.ndarray,
+    on: np.ndarray,
+    obj_reach: float,
+    circ: np.ndarray,
+    pv: np.ndarray,
+    pn: np.ndarray,
+    pb: np.ndarray,
+    width: float,
+    height: float,
+) -> np.ndarray:
+    """Greedy shortcutting of a certified pose polyline: from each kept waypoint jump to
+    the farthest later waypoint reachable by one certified straight motion (clearance
+    >= tau, rotation <= max_rot). Returns the indices of the kept waypoints."""
+    n = poses.shape[0]
+    keep = np.empty(n, dtype=np.int64)
+    m = 0
+    i = 0
+    keep[m] = 0
+    m += 1
+    while i < n - 1:
+        nxt = i + 1
+        j = n - 1
+        while j > i + 1:
+            if abs(poses[j, 2] - poses[i, 2]) <= max_rot and motion_ok(
+                poses[i], poses[j], clear[i], clear[j], tau, max_depth,
+                obj_r, ov, on, obj_reach, circ, pv, pn, pb, width, height,
+            ):  # fmt: skip
+                nxt = j
+                break
+            j -= 1
+        keep[m] = nxt
+        m += 1
+        i = nxt
+    return keep[:m]

@@ -1,0 +1,122 @@
+"""Build the suites' scene files and manifests (driven by ``scripts/generate_suites.py``).
+
+``build_suite(name)`` returns the exact bytes of every file of ``data/<name>/``: the
+scene files (``registry.scene_yaml``) and ``manifest.json`` (sorted keys, 1-space
+indent, trailing newline). Everything is a pure function of the code, so running the
+script again reproduces the committed files byte for byte.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import logging
+from collections.abc import Callable
+from typing import Any
+
+from lamp.suites import checks as C
+from lamp.suites import generators as G
+from lamp.suites import iros
+from lamp.suites.registry import SUITES, scene_yaml
+
+log = logging.getLogger(__name__)
+
+MANIFEST_FORMAT = "lamp-suite-manifest/1"
+
+
+def _object_summary(d: dict[str, Any]) -> dict[str, Any]:
+    keys = ("type", "size", "radius", "points", "start", "goal")
+    return {k: d[k] for k in keys if k in d}
+
+
+def _check_settings() -> dict[str, Any]:
+    return {
+        "free_clearance": C.FREE_CLEARANCE,
+        "robot_room": C.ROBOT_ROOM,
+        "clearance_ladder": list(C.CLEARANCE_LADDER),
+        "lattice_resolution": C.RESOLUTION,
+        "headings_per_period": C.N_HEADINGS,
+        "tight_min_extra": C.TIGHT_MIN_EXTRA,
+        "tight_min_ratio": C.TIGHT_MIN_RATIO,
+        "end_clearance": G.END_CLEARANCE,
+        "tight_slack": list(G.TIGHT_SLACK),
+    }
+
+
+def manifest_json(manifest: dict[str, Any]) -> str:
+    return json.dumps(manifest, indent=1, sort_keys=True) + "\n"
+
+
+def family_entry(gen: G.Generated, text: str) -> dict[str, Any]:
+    """Manifest entry of one generated family scene."""
+    obj = {**_object_summary(gen.scene_dict["objects"][0]), **gen.report.to_dict()}
+    return {
+        "name": gen.scene_dict["name"],
+        "file": f"{gen.scene_dict['name']}.yaml",
+        "sha256": hashlib.sha256(text.encode()).hexdigest(),
+        "n_obstacles": len(gen.scene_dict["obstacles"]),
+        "aimed_tight": gen.want_tight,
+        "attempts": gen.attempts,
+        "layout": gen.layout_info,
+        "objects": [obj],
+    }
+
+
+def build_suite(
+    name: str, progress: Callable[[str], None] | None = None
+) -> dict[str, str]:
+    """File name -> file text for every file of suite ``name``."""
+    if name not in SUITES:
+        raise ValueError(f"unknown suite {name!r}; valid names: {', '.join(SUITES)}")
+    files: dict[str, str] = {}
+    entries = []
+    if name == "iros":
+        d, scene, steps = iros.build()
+        bad = [s.piece for s in steps if not s.ok]
+        if bad or not iros.goal_footprints_disjoint(scene):
+            raise RuntimeError(f"iros-01 fails its checks: {bad or 'goal footprints overlap'}")
+        text = scene_yaml(d)
+        files["iros-01.yaml"] = text
+        entries.append(
+            {
+                "name": "iros-01",
+                "file": "iros-01.yaml",
+                "sha256": hashlib.sha256(text.encode()).hexdigest(),
+                "n_obstacles": len(d["obstacles"]),
+                "approach_distance": iros.APPROACH,
+                "objects": [
+                    {**_object_summary(o), **s.to_dict()}
+                    for o, s in zip(d["objects"], steps, strict=True)
+                ],
+            }
+        )
+        generator = {"module": "lamp.suites.iros"}
+    else:
+        for k in range(G.SCENES_PER_FAMILY):
+            gen = G.generate_scene(name, k)
+            text = scene_yaml(gen.scene_dict)
+            files[f"{gen.scene_dict['name']}.yaml"] = text
+            entries.append(family_entry(gen, text))
+            if progress is not None:
+                rep = gen.report
+                progress(
+                    f"{gen.scene_dict['name']}: attempts {gen.attempts}, tight "
+                    f"{rep.tight_shortest_route}, L0 {rep.free_route.length:.2f} "  # type: ignore[union-attr]
+                    f"LR {rep.robot_route.length:.2f}"  # type: ignore[union-attr]
+                )
+        generator = {
+            "module": "lamp.suites.generators",
+            "seed": G.SUITE_SEED,
+            "rng": f"numpy.random.default_rng([{G.SUITE_SEED}, {G.FAMILIES.index(name)}, index])",
+            "tight_share": G.TIGHT_SHARE,
+        }
+    manifest = {
+        "format": MANIFEST_FORMAT,
+        "suite": name,
+        "description": SUITES[name].description,
+        "generator": {"script": "scripts/generate_suites.py", **generator},
+        "checks": _check_settings(),
+        "scenes": entries,
+    }
+    files["manifest.json"] = manifest_json(manifest)
+    return files

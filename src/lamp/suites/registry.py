@@ -1,0 +1,155 @@
+"""The built-in benchmark suites shipped with the package (``src/lamp/suites/data``).
+
+Each suite is a folder ``data/<name>/`` of scene files ``<name>-NN.yaml`` plus a
+``manifest.json`` written by ``scripts/generate_suites.py`` (file hashes, generator
+settings and the check results of every scene: routes, clearances, robot reachability).
+
+>>> from lamp.suites import list_suites, suite_scenes
+>>> list_suites()
+['random', 'maze', 'tilt', 'warehouse', 'iros']
+>>> len(suite_scenes("maze"))
+25
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import shutil
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from lamp.scene.loader import load_scene
+from lamp.scene.model import Scene
+
+DATA_DIR = Path(str(resources.files("lamp.suites") / "data"))
+
+
+@dataclass(frozen=True)
+class SuiteInfo:
+    """Name, one-line description and expected number of scenes of a suite."""
+
+    name: str
+    description: str
+    n_scenes: int
+
+
+SUITES: dict[str, SuiteInfo] = {
+    s.name: s
+    for s in (
+        SuiteInfo("random", "sparse scattered circles and boxes (LAMP paper: Random)", 25),
+        SuiteInfo("maze", "corridor maze with roomy and object-tight corridors (LAMP paper: Maze)", 25),
+        SuiteInfo("tilt", "blocks at oblique angles forming diagonal channels (LAMP paper: Tilt)", 25),
+        SuiteInfo(
+            "warehouse",
+            "shelf rows, pallets, cargo and traffic barriers (LAMP paper: Warehouse)",
+            25,
+        ),
+        SuiteInfo("iros", "9 objects moved one by one to spell I R O S (LAMP paper: long-horizon case study)", 1),
+    )
+}
+
+
+def list_suites() -> list[str]:
+    """Names of the built-in suites, in the paper's order."""
+    return list(SUITES)
+
+
+def suite_info(name: str) -> SuiteInfo:
+    """Description of suite ``name``; ValueError listing the valid names when unknown."""
+    try:
+        return SUITES[name]
+    except KeyError:
+        raise ValueError(
+            f"unknown suite {name!r}; valid names: {', '.join(SUITES)}"
+        ) from None
+
+
+def suite_dir(name: str) -> Path:
+    """Folder holding the suite's scene files and manifest."""
+    suite_info(name)
+    return DATA_DIR / name
+
+
+def suite_files(name: str) -> list[Path]:
+    """The suite's scene files, sorted by name."""
+    return sorted(suite_dir(name).glob(f"{name}-*.yaml"))
+
+
+def suite_scenes(name: str) -> list[Scene]:
+    """Load (and validate) every scene of suite ``name``, sorted by name."""
+    return [load_scene(p) for p in suite_files(name)]
+
+
+def suite_manifest(name: str) -> dict[str, Any]:
+    """The suite's manifest (see ``scripts/generate_suites.py``)."""
+    with open(suite_dir(name) / "manifest.json", encoding="utf-8") as f:
+        return json.load(f)
+
+
+def export_suite(name: str, directory: str | Path) -> list[Path]:
+    """Copy the suite's scene files and manifest into ``directory`` (created if needed);
+    returns the written paths."""
+    src = suite_dir(name)
+    out = Path(directory)
+    out.mkdir(parents=True, exist_ok=True)
+    written = []
+    for p in [*suite_files(name), src / "manifest.json"]:
+        dst = out / p.name
+        shutil.copyfile(p, dst)
+        written.append(dst)
+    return written
+
+
+def sha256_of(path: str | Path) -> str:
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+# --------------------------------------------------------------------------- writing
+def _num(v: Any) -> str:
+    """A YAML number: ``repr`` of the float (shortest round-trip form, always with a dot
+    or exponent), integers as floats so that the file reads back as floats."""
+    f = float(v)
+    if f == 0.0:
+        f = 0.0
+    text = repr(f)
+    if "e" in text and "." not in text.split("e")[0]:
+        m, e = text.split("e")
+        text = f"{m}.0e{e}"
+    return text
+
+
+def _flow(v: Any) -> str:
+    if isinstance(v, dict):
+        return "{" + ", ".join(f"{k}: {_flow(x)}" for k, x in v.items()) + "}"
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(_flow(x) for x in v) + "]"
+    if isinstance(v, str):
+        return v
+    return _num(v)
+
+
+def scene_yaml(d: dict[str, Any]) -> str:
+    """Deterministic, readable YAML text of a scene-file dict (obstacles one per line)."""
+    lines = [
+        f"format: {d['format']}",
+        f"name: {d['name']}",
+        f"workspace: {_flow(d['workspace'])}",
+        "robots:",
+        f"  radius: {_num(d['robots']['radius'])}",
+        "  starts:",
+    ]
+    lines += [f"    - {_flow(p)}" for p in d["robots"]["starts"]]
+    if d.get("obstacles"):
+        lines.append("obstacles:")
+        lines += [f"  - {_flow(o)}" for o in d["obstacles"]]
+    lines.append("objects:")
+    for o in d["objects"]:
+        first = True
+        for k, v in o.items():
+            prefix = "  - " if first else "    "
+            lines.append(f"{prefix}{k}: {_flow(v)}")
+            first = False
+    return "\n".join(lines) + "\n"
