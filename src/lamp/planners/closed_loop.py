@@ -47,6 +47,9 @@ class LoopRecord:
     planning_time_s: list[float] = field(default_factory=list)
     makespan: int = 0
     replans: int = 0
+    #: Planning time after the last executed segment (a failed search, say): it belongs
+    #: to no segment, so result.json reports it apart from ``planning_time_s``.
+    unexecuted_planning_s: float = 0.0
     frames: list[Any] = field(default_factory=list)
 
 
@@ -144,6 +147,7 @@ def run_object(task: ManipulationTask, planner: ObjectPlanner, policy: LoopPolic
         dpos, drot = pose_distance(q_O, adapted.q_to)
         if policy.replan_on_drift and (dpos > cfg.drift_position or drot > cfg.drift_orientation):
             pending = []  # line 6: drift -> replan from the observed state
+    record.unexecuted_planning_s += pending_time
     pos_err, rot_err = goal_errors(q_O, goal)
     success = (not left) and within_goal(q_O, goal, 0.1, 0.1)
     if not success and not reason:

@@ -99,6 +99,7 @@ def solve_with_frames(scene: Scene, planner: str = "lazy", seed: int = 0, *,
     result = RunResult(scene=scene.name, planner=planner, seed=int(seed))
     totals = TaskStats()
     frames: list[Any] = []
+    unexecuted = 0.0
     for index in range(len(scene.objects)):
         task = ManipulationTask(scene, index, np.asarray(sim.object_poses, float), proposer, cfg,
                                 seed=int(seed) * 1000 + index)
@@ -110,9 +111,11 @@ def solve_with_frames(scene: Scene, planner: str = "lazy", seed: int = 0, *,
         result.makespan += record.makespan
         result.replans += record.replans
         totals.add(task.stats)
+        unexecuted += record.unexecuted_planning_s
         frames.extend(record.frames)
         if progress is not None:
             progress(index, obj)
     result.wall_time_s = time.perf_counter() - t_start
-    result.stats = {**vars(totals), "failure_reasons": [o.failure_reason for o in result.objects]}
+    result.stats = {**vars(totals), "unexecuted_planning_time_s": round(unexecuted, 6),
+                    "failure_reasons": [o.failure_reason for o in result.objects]}
     return Solution(result, frames)
