@@ -358,9 +358,9 @@ def test_bench_end_to_end_resume_and_render(tmp_path):
     assert all(r["scene_file"].endswith(f"{r['scene']}.yaml") for r in recs)
     assert (out / "iros.gif").exists() and not (out / "report.md").exists()
     config = json.loads((out / "config.json").read_text())
-    assert config["time_cap_s"] == 30.0 and config["planning_limit_s"] == 60.0
+    assert config["time_cap_s"] == 30.0 and config["planning_limit_s"] == 30.0
     assert config["sessions"][0]["command"].startswith("lamp bench --suite")
-    assert "--time-cap 30 --planning-limit 60" in config["sessions"][0]["command"]
+    assert "--time-cap 30 --planning-limit 30" in config["sessions"][0]["command"]
 
     # a killed run: two results lost, a half-written line left, the animation missing
     lines = (out / "results.jsonl").read_bytes().splitlines(keepends=True)
@@ -418,3 +418,35 @@ def test_fake_synthetic_job_is_deterministic():
     assert a == b and a["segments"] == len(a["planning_time_s"])
     assert np.isclose(a["total_planning_time_s"], sum(a["planning_time_s"]))
     assert isinstance(job, Job)
+
+
+def test_solve_job_wiring_and_render_failure(monkeypatch, tmp_path):
+    """solve_job passes the job's settings to solve_with_frames; a failing GIF writer
+    costs only the animation, never the run's result."""
+    import sys
+    import types
+
+    import lamp.planners.run as run_mod
+    from lamp.bench.runner import solve_job
+    from lamp.planners.result import RunResult
+
+    calls = []
+
+    def fake_solve(scene, planner, seed, *, model, render, time_limit):
+        calls.append((scene.name, planner, seed, model, render, time_limit))
+        return run_mod.Solution(RunResult(scene=scene.name, planner=planner, seed=seed), [])
+
+    def broken_writer(scene, frames, path):
+        raise OSError("disk full")
+
+    monkeypatch.setattr(run_mod, "solve_with_frames", fake_solve)
+    monkeypatch.setitem(sys.modules, "lamp.viz.animation",
+                        types.SimpleNamespace(write_animation=broken_writer))
+    jobs = enumerate_jobs([suite("iros", 1)], ["lazy", "astar"], [2], model="geometric",
+                          planning_limit_s=12.0)
+    out = solve_job(dataclasses.replace(jobs[0], render_to=str(tmp_path / "iros.gif")))
+    assert out["render_error"] == "OSError: disk full" and out["scene"] == "iros-00"
+    assert not (tmp_path / "iros.gif").exists()
+    solve_job(jobs[1])
+    assert calls == [("iros-00", "lazy", 2, "geometric", True, None),
+                     ("iros-00", "astar", 2, "geometric", False, 12.0)]

@@ -317,10 +317,12 @@ def load_suite(name: str) -> list[SuiteScene]:
     if name in known:
         from lamp.suites import registry
 
+        scenes = registry.suite_scenes(name)
+        if not scenes:
+            raise ValueError(f"built-in suite {name!r} has no scene files in this installation")
         # a portable name (suite/file), not the path inside this installation
         return [SuiteScene(name, sc, f"{name}/{Path(sc.source).name}" if sc.source
-                           else f"{name}/{sc.name}.yaml")
-                for sc in registry.suite_scenes(name)]
+                           else f"{name}/{sc.name}.yaml") for sc in scenes]
     path = Path(name)
     if path.is_dir():
         from lamp.scene import load_scene

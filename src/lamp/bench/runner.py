@@ -56,20 +56,29 @@ MAX_TRACEBACK = 4000
 
 
 def solve_job(job: Job) -> dict[str, Any]:
-    """Run one job with the real planners; write ``job.render_to`` when rendering is asked."""
+    """Run one job with the real planners; write ``job.render_to`` when rendering is asked.
+
+    A failure to write the animation is reported on stderr (kept in the job's log) and in
+    the result's ``render_error`` key; it never costs the run's result.
+    """
     from lamp.planners.run import solve_with_frames
 
     render = job.render_to is not None
     solution = solve_with_frames(job.scene, job.planner, job.seed, model=job.model,
                                  render=render, time_limit=job.time_limit)
+    result = solution.result.to_dict()
     if render:
-        from lamp.viz.animation import write_animation
-
-        target = Path(job.render_to)
+        target = Path(str(job.render_to))
         partial = target.with_name(f".{target.stem}.partial{target.suffix}")
-        write_animation(job.scene, solution.frames, partial)
-        os.replace(partial, target)
-    return solution.result.to_dict()
+        try:
+            from lamp.viz.animation import write_animation
+
+            write_animation(job.scene, solution.frames, partial)
+            os.replace(partial, target)
+        except Exception as exc:  # the run itself is still a valid result
+            traceback.print_exc()
+            result["render_error"] = f"{type(exc).__name__}: {exc}"
+    return result
 
 
 def resolve_job_fn(spec: str | JobFn) -> JobFn:
