@@ -30,6 +30,10 @@ How it works
   is tested for containment in the footprint polygon (exact, no sampling).
 * **Border.** The workspace is convex, so the distance of a polygon to the border is
   attained at a vertex: the border part is exact (vertices; circle: centre minus radius).
+* **Coarse first.** Boolean queries of polygonal footprints first try a handful of disks
+  covering the whole footprint (one per ``cover_cell`` cell of its bounding box): when
+  they are all clear, that looser bound already decides; only otherwise are the boundary
+  disks and representative points consulted. ``clearance`` always uses the tight bound.
 * **Motions** use conservative advancement: at a checked pose with clearance lower bound
   ``c > margin``, the next pose checked is one where no point of the object has moved by
   more than ``c + margin / 2``; with both ends having clearance ``> margin`` every pose in
@@ -74,6 +78,7 @@ from lamp.scene.model import Circle, Obstacle, Rectangle, Scene, Shape
 
 DEFAULT_RESOLUTION = 0.004
 DEFAULT_MOTION_MARGIN = 0.005
+DEFAULT_COVER_CELL = 0.08
 
 
 def inflated_outline(shape: Shape, inflation: float) -> np.ndarray | None:
@@ -204,16 +209,18 @@ def _pose_clearance(
     res: float,
     width: float,
     height: float,
-    dpts: np.ndarray,
-    drad: np.ndarray,
-    bpts: np.ndarray,
-    brad: np.ndarray,
-    poly: np.ndarray,
-    reps: np.ndarray,
+    fp: tuple,
     reach2: float,
     stop_below: float,
+    quick: bool,
 ) -> float:
-    """Clearance lower bound of the footprint at (x, y, th); returns early once <= stop_below."""
+    """Clearance lower bound of the footprint ``fp`` at (x, y, th).
+
+    Returns early once the bound is <= ``stop_below``. With ``quick``, a coarse bound from
+    the covering disks that is already > ``stop_below`` is returned as is (it is a valid,
+    looser lower bound: boolean queries do not need the tight value).
+    """
+    dpts, drad, bpts, brad, poly, reps, cpts, crad = fp
     c = math.cos(th)
     s = math.sin(th)
     ny, nx = sd.shape
@@ -227,14 +234,27 @@ def _pose_clearance(
             best = d
             if best <= stop_below:
                 return best
+    if quick and cpts.shape[0] > 0:
+        # coarse: disks covering the whole footprint (interior included)
+        coarse = best
+        for j in range(cpts.shape[0]):
+            px = x + c * cpts[j, 0] - s * cpts[j, 1]
+            py = y + s * cpts[j, 0] + c * cpts[j, 1]
+            ci = min(max(int(math.floor(px / res)), 0), nx - 1)
+            ri = min(max(int(math.floor(py / res)), 0), ny - 1)
+            d = sd[ri, ci] - crad[j]
+            if d < coarse:
+                coarse = d
+                if coarse <= stop_below:
+                    break
+        if coarse > stop_below:
+            return coarse
     # obstacles: boundary disks against the distance grid
     for j in range(dpts.shape[0]):
         px = x + c * dpts[j, 0] - s * dpts[j, 1]
         py = y + s * dpts[j, 0] + c * dpts[j, 1]
-        ci = int(math.floor(px / res))
-        ri = int(math.floor(py / res))
-        ci = min(max(ci, 0), nx - 1)
-        ri = min(max(ri, 0), ny - 1)
+        ci = min(max(int(math.floor(px / res)), 0), nx - 1)
+        ri = min(max(int(math.floor(py / res)), 0), ny - 1)
         d = sd[ri, ci] - drad[j]
         if d < best:
             best = d
@@ -261,20 +281,16 @@ def _batch_clearance(
     res: float,
     width: float,
     height: float,
-    dpts: np.ndarray,
-    drad: np.ndarray,
-    bpts: np.ndarray,
-    brad: np.ndarray,
-    poly: np.ndarray,
-    reps: np.ndarray,
+    fp: tuple,
     reach2: float,
     stop_below: float,
+    quick: bool,
 ) -> np.ndarray:
     out = np.empty(poses.shape[0])
     for i in range(poses.shape[0]):
         out[i] = _pose_clearance(
             poses[i, 0], poses[i, 1], poses[i, 2], sd, res, width, height,
-            dpts, drad, bpts, brad, poly, reps, reach2, stop_below,
+            fp, reach2, stop_below, quick,
         )  # fmt: skip
     return out
 
@@ -289,12 +305,7 @@ def _batch_motions_free(
     res: float,
     width: float,
     height: float,
-    dpts: np.ndarray,
-    drad: np.ndarray,
-    bpts: np.ndarray,
-    brad: np.ndarray,
-    poly: np.ndarray,
-    reps: np.ndarray,
+    fp: tuple,
     reach2: float,
 ) -> np.ndarray:
     """Conservative advancement along ``se2.interpolate`` for each (start, end) pair."""
@@ -313,7 +324,7 @@ def _batch_motions_free(
         while True:
             c = _pose_clearance(
                 x0 + t * dx, y0 + t * dy, t0 + t * dth, sd, res, width, height,
-                dpts, drad, bpts, brad, poly, reps, reach2, margin,
+                fp, reach2, margin, True,
             )  # fmt: skip
             if c <= margin:
                 ok = False
@@ -324,6 +335,23 @@ def _batch_motions_free(
             t = min(1.0, t + (c + 0.5 * margin) / length)
         out[m] = ok
     return out
+
+
+def _cover_disks(poly: np.ndarray, cell: float) -> tuple[np.ndarray, np.ndarray]:
+    """Disks covering a polygon: one per cell (side <= ``cell``) of its bounding box that
+    meets the polygon, centred on the cell with the half diagonal as radius."""
+    x0, y0 = poly.min(axis=0)
+    x1, y1 = poly.max(axis=0)
+    nx = max(1, math.ceil((x1 - x0) / cell))
+    ny = max(1, math.ceil((y1 - y0) / cell))
+    sx, sy = (x1 - x0) / nx, (y1 - y0) / ny
+    xs = x0 + sx * (np.arange(nx) + 0.5)
+    ys = y0 + sy * (np.arange(ny) + 0.5)
+    gx, gy = (a.ravel() for a in np.meshgrid(xs, ys))
+    boxes = shapely.box(gx - sx / 2, gy - sy / 2, gx + sx / 2, gy + sy / 2)
+    keep = shapely.intersects(shapely.Polygon(poly), boxes)
+    centres = np.stack([gx[keep], gy[keep]], axis=1)
+    return centres, np.full(len(centres), 0.5 * math.hypot(sx, sy))
 
 
 class ObjectSpace:
@@ -338,6 +366,8 @@ class ObjectSpace:
         resolution: obstacle grid cell side in metres.
         sample_spacing: maximal spacing of boundary samples (default: ``resolution``).
         motion_margin: clearance a motion must keep at its checked poses.
+        cover_cell: cell size of the coarse covering disks (a fast first test for
+            polygonal footprints in boolean queries; does not change any answer's guarantee).
 
     See the module docstring for the conservativeness guarantee and the error ``band``.
     """
@@ -352,6 +382,7 @@ class ObjectSpace:
         resolution: float = DEFAULT_RESOLUTION,
         sample_spacing: float | None = None,
         motion_margin: float = DEFAULT_MOTION_MARGIN,
+        cover_cell: float = DEFAULT_COVER_CELL,
     ) -> None:
         w, h = (float(v) for v in workspace)
         if not (w > 0 and h > 0 and math.isfinite(w) and math.isfinite(h)):
@@ -365,6 +396,8 @@ class ObjectSpace:
             raise ValueError(f"sample_spacing must be finite and > 0, got {sample_spacing!r}")
         if not (motion_margin > 0 and math.isfinite(motion_margin)):
             raise ValueError(f"motion_margin must be finite and > 0, got {motion_margin!r}")
+        if not (cover_cell > 0 and math.isfinite(cover_cell)):
+            raise ValueError(f"cover_cell must be finite and > 0, got {cover_cell!r}")
         self.shape = shape
         self.workspace = (w, h)
         self.obstacles = tuple(obstacles)
@@ -372,25 +405,29 @@ class ObjectSpace:
         self.resolution = float(resolution)
         self.sample_spacing = spacing
         self.motion_margin = float(motion_margin)
+        self.cover_cell = float(cover_cell)
         #: width of the band (m) within which clearance may under-estimate the truth
         self.band = 4.0 * self.resolution / math.sqrt(2.0) + 0.5 * spacing
 
         self._sd = self._distance_grid()
         dpts, drad, bpts, brad, poly = _footprint_disks(shape, self.inflation, spacing)
-        self._dpts, self._drad, self._bpts, self._brad, self._poly = (
-            np.ascontiguousarray(a, dtype=float) for a in (dpts, drad, bpts, brad, poly)
+        if len(poly):
+            cpts, crad = _cover_disks(poly, cover_cell)
+            self._reach2 = float(np.max(np.sum(poly**2, axis=1))) + 1e-12
+            rep_pts = [obstacle_geometry(o).representative_point() for o in self.obstacles]
+            reps = np.array([[p.x, p.y] for p in rep_pts], dtype=float).reshape(-1, 2)
+        else:  # a circle is its own single disk
+            cpts, crad = np.zeros((0, 2)), np.zeros(0)
+            self._reach2 = 0.0
+            reps = np.zeros((0, 2))
+        self._fp = tuple(
+            np.ascontiguousarray(a, dtype=float)
+            for a in (dpts, drad, bpts, brad, poly, reps, cpts, crad)
         )
         #: max distance of any footprint disk centre / vertex from the object origin
         self.reach = float(
-            max(np.max(np.hypot(dpts[:, 0], dpts[:, 1])), np.max(np.hypot(bpts[:, 0], bpts[:, 1])))
+            max(np.max(np.hypot(p[:, 0], p[:, 1]), initial=0.0) for p in (dpts, bpts, cpts))
         )
-        if len(poly):
-            self._reach2 = float(np.max(np.sum(poly**2, axis=1))) + 1e-12
-            reps = [obstacle_geometry(o).representative_point() for o in self.obstacles]
-            self._reps = np.array([[p.x, p.y] for p in reps], dtype=float).reshape(-1, 2)
-        else:
-            self._reach2 = 0.0
-            self._reps = np.zeros((0, 2))
 
     @classmethod
     def from_scene(
@@ -442,11 +479,10 @@ class ObjectSpace:
         return np.ascontiguousarray(outside - two_h)
 
     # --------------------------------------------------------------- queries
-    def _clearance_flat(self, poses: np.ndarray, stop_below: float) -> np.ndarray:
+    def _clearance_flat(self, poses: np.ndarray, stop_below: float, quick: bool) -> np.ndarray:
         return _batch_clearance(
             poses, self._sd, self.resolution, self.workspace[0], self.workspace[1],
-            self._dpts, self._drad, self._bpts, self._brad, self._poly, self._reps,
-            self._reach2, stop_below,
+            self._fp, self._reach2, stop_below, quick,
         )  # fmt: skip
 
     @staticmethod
@@ -462,7 +498,7 @@ class ObjectSpace:
         At most ``self.band`` below the truth (obstacles) and exact for the border."""
         arr = self._as_poses(poses)
         flat = np.ascontiguousarray(arr.reshape(-1, 3))
-        out = self._clearance_flat(flat, -np.inf)
+        out = self._clearance_flat(flat, -np.inf, False)
         return out.reshape(arr.shape[:-1])
 
     def pose_free(self, poses: ArrayLike) -> np.ndarray:
@@ -470,7 +506,7 @@ class ObjectSpace:
         overlaps no obstacle (conservative: never True for a colliding pose)."""
         arr = self._as_poses(poses)
         flat = np.ascontiguousarray(arr.reshape(-1, 3))
-        out = self._clearance_flat(flat, 0.0) > 0.0
+        out = self._clearance_flat(flat, 0.0, True) > 0.0
         return out.reshape(arr.shape[:-1])
 
     def motions_free(self, starts: ArrayLike, ends: ArrayLike) -> np.ndarray:
@@ -485,7 +521,7 @@ class ObjectSpace:
         return _batch_motions_free(
             np.ascontiguousarray(a), np.ascontiguousarray(b), self.motion_margin, self.reach,
             self._sd, self.resolution, self.workspace[0], self.workspace[1],
-            self._dpts, self._drad, self._bpts, self._brad, self._poly, self._reps, self._reach2,
+            self._fp, self._reach2,
         )  # fmt: skip
 
     def motion_free(self, a: ArrayLike, b: ArrayLike) -> bool:

@@ -20,7 +20,16 @@ Departures from the pseudocode, each for a reason:
   has no in-edges, so replacing it by the next virtual start never invalidates another
   vertex's ``rhs``. ``graph.heuristic`` must accept it (``ObjectLattice`` takes poses).
 * Termination {10'} uses ``rhs(s_start) != g(s_start)`` (the basic version's test) rather
-  than ``>``, so the start is always locally consistent when the path is read off.
+  than ``>``, so the start is always locally consistent when the path is read off; and it
+  keeps expanding vertices whose first key component is within a relative ``1e-9`` of the
+  start's. On a lattice with a Euclidean heuristic every vertex of a straight shortest
+  path has exactly the start's first key component, so floating-point rounding alone
+  decides whether it is expanded; an inconsistent one left behind breaks the path read
+  off by {34'} (found by ``benchmarks/bench_search.py``, now a regression test).
+* ``UpdateVertex`` ({21'}, {28'}) is called only for vertices whose ``rhs`` changed: for
+  the others g, rhs and queue membership are unchanged and a queued key, being a lower
+  bound, stays valid ({14'} refreshes it). This saves most calls on a 26-connected lattice.
+* ``h(s_start, .)`` is memoised per start.
 * ``U`` is a ``heapq`` with lazy deletion (a dict holds each queued vertex's current key);
   stale entries are skipped when they reach the top, and the heap is rebuilt when stale
   entries dominate.
@@ -40,6 +49,8 @@ from dataclasses import dataclass, field
 from typing import Protocol
 
 INF = math.inf
+#: relative tolerance on key comparisons in the termination test (see compute_shortest_path)
+KEY_RTOL = 1e-9
 
 Key = tuple[float, float]
 
@@ -117,6 +128,7 @@ class DStarLite:
         self._open: dict[Hashable, Key] = {}
         self._seq = itertools.count()
         self.start: Hashable | None = None
+        self._hcache: dict[Hashable, float] = {}
         self._last: Hashable | None = None
         self._vstart: Hashable | None = None
         self._vedges: dict[Hashable, float] = {}
@@ -161,7 +173,11 @@ class DStarLite:
 
     # ----------------------------------------------------------- queue
     def _h(self, s: Hashable) -> float:
-        return self.graph.heuristic(self.start, s)
+        """h(s_start, s), memoised for the current start."""
+        h = self._hcache.get(s)
+        if h is None:
+            h = self._hcache[s] = self.graph.heuristic(self.start, s)
+        return h
 
     def calculate_key(self, s: Hashable) -> Key:
         """{01'} [min(g, rhs) + h(s_start, s) + k_m; min(g, rhs)]."""
@@ -214,6 +230,8 @@ class DStarLite:
         elif start != self._last:
             self.km += self.graph.heuristic(self._last, start)  # {38'}
             self._last = start  # {39'}
+        if start != self.start:
+            self._hcache = {}
         self.start = start
         old_v = self._vstart
         if old_v is not None and (start_edges is None or old_v != start):
@@ -256,7 +274,11 @@ class DStarLite:
         while True:
             k_old, u = self._top()  # {11'}-{12'}
             k_start = self.calculate_key(start)
-            if not (k_old < k_start or rhs.get(start, INF) != g.get(start, INF)):  # {10'}
+            # {10'} with a rounding tolerance on the first key component: vertices on a
+            # shortest path have k1 equal to the start's in exact arithmetic, and a stale one
+            # left behind by an ulp would derail the path extraction
+            tol = KEY_RTOL * (1.0 + abs(k_start[0])) if k_start[0] < INF else 0.0
+            if not (k_old[0] <= k_start[0] + tol or rhs.get(start, INF) != g.get(start, INF)):
                 break
             if u is None:  # queue empty: the start cannot be made consistent
                 break
@@ -279,7 +301,7 @@ class DStarLite:
                         v = c + rhs_u
                         if v < rhs.get(s, INF):
                             rhs[s] = v  # {20'}
-                    self.update_vertex(s)  # {21'}
+                            self.update_vertex(s)  # {21'} (only when rhs(s) changed)
             else:  # {22'} underconsistent
                 g_old = g_u  # {23'}
                 g[u] = INF  # {24'}
@@ -288,7 +310,7 @@ class DStarLite:
                         rhs[s] = min(  # {27'}
                             (c2 + g.get(s2, INF) for s2, c2 in self._succ(s)), default=INF
                         )
-                    self.update_vertex(s)  # {28'}
+                        self.update_vertex(s)  # {28'} (only when rhs(s) was recomputed)
                 self.update_vertex(u)  # {25'}-{28'} for s = u
         dt = time.perf_counter() - t0
         self.stats.expansions += n

@@ -84,6 +84,7 @@ class GCoLattice(ObjectLattice):
                     resolution=sp.resolution,
                     sample_spacing=sp.sample_spacing,
                     motion_margin=sp.motion_margin,
+                    cover_cell=sp.cover_cell,
                 )
         return self._exact
 

@@ -155,6 +155,7 @@ class ObjectLattice:
         self._edge_valid = np.full((self.n_nodes, len(PRIMITIVES)), -1, dtype=np.int8)
         self._succ: dict[Node, list[tuple[Node, float]]] = {}
         self._tolerant: dict[float, ObjectSpace] = {}
+        self._table: tuple[list[float], list[float], list[float]] | None = None
         #: statistics: poses and motions checked so far
         self.n_pose_checks = 0
         self.n_motion_checks = 0
@@ -218,7 +219,23 @@ class ObjectLattice:
         th = se2.wrap_angle(self.anchor[2] + k * self.dtheta)
         return np.stack([x, y, np.asarray(th, dtype=float).reshape(x.shape)], axis=-1)
 
+    def _node_table(self) -> tuple[list[float], list[float], list[float]]:
+        """Per-node x, y, theta (unwrapped) as Python lists: fast scalar lookups."""
+        if self._table is None:
+            ids = np.arange(self.n_nodes, dtype=np.int64)
+            rest, k = np.divmod(ids, self.n_headings)
+            ii, jj = np.divmod(rest, self.n_j)
+            self._table = (
+                (self.anchor[0] + (ii + self.i_min) * self.step).tolist(),
+                (self.anchor[1] + (jj + self.j_min) * self.step).tolist(),
+                (self.anchor[2] + k * self.dtheta).tolist(),
+            )
+        return self._table
+
     def _xyt(self, u: Node | VirtualNode) -> tuple[float, float, float]:
+        if type(u) is int:
+            xs, ys, ts = self._table or self._node_table()
+            return xs[u], ys[u], ts[u]
         if isinstance(u, (int, np.integer)):
             rest, k = divmod(int(u), self.n_headings)
             ii, jj = divmod(rest, self.n_j)
@@ -441,6 +458,7 @@ class ObjectLattice:
                 resolution=base.resolution,
                 sample_spacing=base.sample_spacing,
                 motion_margin=base.motion_margin,
+                cover_cell=base.cover_cell,
             )
             self._tolerant[tolerance] = sp
         return sp

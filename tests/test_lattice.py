@@ -1,0 +1,197 @@
+"""ObjectLattice: ids, primitives within the model's range, validity against ObjectSpace,
+heuristic admissibility/consistency, start connections and nearest nodes."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.sparse import csr_matrix
+from scipy.sparse.csgraph import dijkstra
+
+from lamp.geometry import se2
+from lamp.geometry.object_space import ObjectSpace
+from lamp.scene.model import Circle, Obstacle, Rectangle, Scene, SceneObject
+from lamp.search.lattice import PRIMITIVES, ObjectLattice
+
+OBSTACLES = (
+    Obstacle(Circle(0.15), (0.7, 0.6, 0.0)),
+    Obstacle(Rectangle((0.1, 0.6)), (1.2, 0.9, 0.3)),
+)
+
+
+@pytest.fixture(scope="module")
+def lattice() -> ObjectLattice:
+    space = ObjectSpace(Rectangle((0.3, 0.16)), (1.6, 1.3), OBSTACLES)
+    return ObjectLattice(space, (1.33, 0.41, 0.7))
+
+
+def test_primitive_set():
+    assert len(PRIMITIVES) == 26 and len(set(PRIMITIVES)) == 26
+    assert (0, 0, 0) not in PRIMITIVES
+    for di, dj, dk in PRIMITIVES:
+        assert (-di, -dj, -dk) in PRIMITIVES
+    assert sum(1 for di, dj, _ in PRIMITIVES if (di, dj) == (0, 0)) == 2
+
+
+def test_ids_and_poses(lattice):
+    goal = lattice.pose(lattice.goal_node)
+    np.testing.assert_allclose(goal, [1.33, 0.41, 0.7])
+    assert lattice.ijk(lattice.goal_node) == (0, 0, 0)
+    ids = np.arange(0, lattice.n_nodes, 7)
+    poses = lattice.poses(ids)
+    for u, p in zip(ids[:200], poses[:200], strict=True):
+        assert lattice.node_id(*lattice.ijk(int(u))) == u
+        np.testing.assert_allclose(lattice.pose(int(u)), p, atol=1e-12)
+    w, h = lattice.space.workspace
+    assert np.all((poses[:, 0] >= -1e-9) & (poses[:, 0] <= w + 1e-9))
+    assert np.all((poses[:, 1] >= -1e-9) & (poses[:, 1] <= h + 1e-9))
+    with pytest.raises(ValueError, match="outside"):
+        lattice.node_id(100, 0, 0)
+
+
+def test_successors_match_object_space(lattice):
+    space = lattice.space
+    rng = np.random.default_rng(0)
+    for u in rng.choice(lattice.n_nodes, 150, replace=False):
+        u = int(u)
+        succ = lattice.successors(u)
+        if not space.pose_free(lattice.pose(u)):
+            assert succ == []
+            continue
+        got = {v: c for v, c in succ}
+        i, j, k = lattice.ijk(u)
+        for di, dj, dk in PRIMITIVES:
+            try:
+                v = lattice.node_id(i + di, j + dj, k + dk)
+            except ValueError:
+                continue
+            pu, pv = lattice.pose(u), lattice.pose(v)
+            lo, hi = (pu, pv) if u < v else (pv, pu)
+            expect = bool(space.pose_free(pv)) and space.motion_free(lo, hi)
+            assert (v in got) == expect
+            if expect:
+                cost = lattice.step * math.hypot(di, dj) + lattice.w_rot * lattice.dtheta * abs(dk)
+                assert got[v] == pytest.approx(cost)
+                # the model's range, in the object frame at u
+                m = se2.relative(pu, pv)
+                assert abs(m[0]) <= 0.2 and abs(m[1]) <= 0.2 and abs(m[2]) <= 0.5
+                np.testing.assert_allclose(lattice.primitive(u, v), m)
+                # symmetric: v's successors contain u at the same cost
+                assert dict(lattice.predecessors(v))[u] == pytest.approx(got[v])
+                assert lattice.cost(u, v) == pytest.approx(got[v])
+
+
+def test_heuristic_admissible_and_consistent(lattice):
+    valid = np.nonzero(lattice.validate_all_nodes())[0]
+    rows, cols, vals = [], [], []
+    for u in valid:
+        for v, c in lattice.successors(int(u)):
+            rows.append(v)
+            cols.append(int(u))
+            vals.append(c)
+    mat = csr_matrix((vals, (rows, cols)), shape=(lattice.n_nodes, lattice.n_nodes))
+    dist = dijkstra(mat, indices=lattice.goal_node)
+    reach = valid[np.isfinite(dist[valid])]
+    assert len(reach) > 100
+    for u in reach:
+        h = lattice.heuristic(int(u), lattice.goal_node)
+        assert h <= dist[u] + 1e-9
+        for v, c in lattice.successors(int(u)):
+            assert h <= c + lattice.heuristic(v, lattice.goal_node) + 1e-9
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    st.lists(st.tuples(st.floats(0, 2), st.floats(0, 2), st.floats(-7, 7)), min_size=3, max_size=3)
+)
+def test_heuristic_triangle_inequality_on_poses(poses):
+    space = ObjectSpace(Circle(0.1), (2.0, 2.0), [])
+    lat = ObjectLattice(space, (1.0, 1.0, 0.0))
+    a, b, c = poses
+    assert lat.heuristic(a, c) <= lat.heuristic(a, b) + lat.heuristic(b, c) + 1e-9
+    assert lat.heuristic(a, b) == pytest.approx(lat.heuristic(b, a))
+    assert lat.heuristic(a, b) == pytest.approx(float(lat.distance(a, b)))
+
+
+def test_start_connections(lattice):
+    space = lattice.space
+    rng = np.random.default_rng(1)
+    n_some = 0
+    for _ in range(40):
+        pose = rng.uniform([0.2, 0.2, -math.pi], [1.4, 1.1, math.pi])
+        conns = lattice.start_connections(pose)
+        n_some += bool(conns)
+        costs = [c for _, c in conns]
+        assert costs == sorted(costs)
+        for v, c in conns:
+            pv = lattice.pose(v)
+            assert lattice.in_model_range(pose, pv)
+            assert space.pose_free(pv) and space.motion_free(pose, pv)
+            assert c == pytest.approx(float(lattice.distance(pose, pv)))
+        # completeness: every in-range node with a free motion is listed
+        listed = {v for v, _ in conns}
+        for v in lattice._candidates(pose, 0.3, 3):
+            pv = lattice.pose(int(v))
+            if (
+                lattice.in_model_range(pose, pv)
+                and space.pose_free(pv)
+                and space.motion_free(pose, pv)
+            ):
+                assert int(v) in listed
+    assert n_some > 10
+    # near the goal, the goal itself is reachable directly (final approach)
+    goal = lattice.pose(lattice.goal_node)
+    near = goal + np.array([0.03, -0.05, 0.1])
+    assert lattice.goal_node in {v for v, _ in lattice.start_connections(near)}
+    assert lattice.connection_cost(near, goal) == pytest.approx(float(lattice.distance(near, goal)))
+    assert lattice.connection_cost(near, goal + np.array([0.3, 0.0, 0.0])) is None
+
+
+def test_start_connections_tolerance_leaves_contact():
+    wall = Obstacle(Rectangle((0.1, 1.0)), (0.55, 0.5, 0.0))
+    space = ObjectSpace(Rectangle((0.2, 0.2)), (1.0, 1.0), [wall])
+    lat = ObjectLattice(space, (0.25, 0.5, 0.0))
+    touching = np.array([0.395, 0.5, 0.0])  # 5 mm from the wall: inside the checker's band
+    assert not space.pose_free(touching)
+    assert lat.start_connections(touching) == []
+    conns = lat.start_connections(touching, tolerance=0.02)
+    assert conns and all(lat.pose(v)[0] < 0.4 for v, _ in conns)
+
+
+def test_nearest_nodes(lattice):
+    pose = np.array([0.41, 1.02, -2.0])
+    near = lattice.nearest_nodes(pose, 0.15, valid_only=False)
+    d = [x for _, x in near]
+    assert d == sorted(d) and all(x <= 0.15 for x in d)
+    brute = lattice.distance(pose, lattice.poses(np.arange(lattice.n_nodes)))
+    assert len(near) == int(np.sum(brute <= 0.15))
+    on_node = lattice.pose(lattice.goal_node)
+    assert lattice.nearest_nodes(on_node, 1e-6)[0][0] == lattice.goal_node
+
+
+def test_from_scene_and_bad_arguments():
+    scene = Scene(
+        name="t",
+        workspace=(1.0, 1.0),
+        robot_starts=((0.05, 0.05),),
+        objects=(
+            SceneObject(Circle(0.1), (0.3, 0.3, 0.0), (0.7, 0.7, 0.0)),
+            SceneObject(Circle(0.1), (0.7, 0.3, 0.0), (0.3, 0.7, 0.0)),
+        ),
+    )
+    lat = ObjectLattice.from_scene(scene, 0)
+    np.testing.assert_allclose(lat.pose(lat.goal_node), [0.7, 0.7, 0.0])
+    assert not lat.node_valid(lat.node_id(0, -4, 0))  # object 1 sits at (0.7, 0.3)
+    space = lat.space
+    with pytest.raises(ValueError, match="step"):
+        ObjectLattice(space, (0.5, 0.5, 0.0), step=0.2)
+    with pytest.raises(ValueError, match="n_headings"):
+        ObjectLattice(space, (0.5, 0.5, 0.0), n_headings=8)
+    with pytest.raises(ValueError, match="anchor"):
+        ObjectLattice(space, (0.5, 0.5))
+    with pytest.raises(ValueError, match="tolerance"):
+        lat.start_connections((0.5, 0.5, 0.0), tolerance=-1.0)
