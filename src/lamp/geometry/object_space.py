@@ -296,6 +296,53 @@ def _batch_clearance(
 
 
 @numba.njit(cache=True)
+def motion_free_kernel(
+    x0: float,
+    y0: float,
+    t0: float,
+    x1: float,
+    y1: float,
+    t1: float,
+    margin: float,
+    reach: float,
+    sd: np.ndarray,
+    res: float,
+    width: float,
+    height: float,
+    fp: tuple,
+    reach2: float,
+) -> bool:
+    """Conservative advancement along ``se2.interpolate`` from (x0, y0, t0) to (x1, y1, t1)
+    (for compiled callers such as the lattice; see ``ObjectSpace.kernel_args``)."""
+    dx = x1 - x0
+    dy = y1 - y0
+    dth = (t1 - t0 + math.pi) % (2.0 * math.pi) - math.pi
+    # upper bound of any footprint disk centre's displacement over the whole motion
+    length = math.hypot(dx, dy) + reach * abs(dth)
+    t = 0.0
+    while True:
+        c = _pose_clearance(
+            x0 + t * dx, y0 + t * dy, t0 + t * dth, sd, res, width, height,
+            fp, reach2, margin, True,
+        )  # fmt: skip
+        if c <= margin:
+            return False
+        if t >= 1.0 or length <= 0.0:
+            return True
+        # next check where no disk centre moved more than c + margin / 2 (see module doc)
+        t = min(1.0, t + (c + 0.5 * margin) / length)
+
+
+@numba.njit(cache=True)
+def pose_free_kernel(
+    x: float, y: float, th: float, sd: np.ndarray, res: float, width: float, height: float,
+    fp: tuple, reach2: float,
+) -> bool:  # fmt: skip
+    """``ObjectSpace.pose_free`` for one pose (for compiled callers)."""
+    return _pose_clearance(x, y, th, sd, res, width, height, fp, reach2, 0.0, True) > 0.0
+
+
+@numba.njit(cache=True)
 def _batch_motions_free(
     starts: np.ndarray,
     ends: np.ndarray,
@@ -308,32 +355,12 @@ def _batch_motions_free(
     fp: tuple,
     reach2: float,
 ) -> np.ndarray:
-    """Conservative advancement along ``se2.interpolate`` for each (start, end) pair."""
-    m_count = starts.shape[0]
-    out = np.empty(m_count, dtype=np.bool_)
-    two_pi = 2.0 * math.pi
-    for m in range(m_count):
-        x0, y0, t0 = starts[m, 0], starts[m, 1], starts[m, 2]
-        dx = ends[m, 0] - x0
-        dy = ends[m, 1] - y0
-        dth = (ends[m, 2] - t0 + math.pi) % two_pi - math.pi
-        # upper bound of any footprint disk centre's displacement over the whole motion
-        length = math.hypot(dx, dy) + reach * abs(dth)
-        t = 0.0
-        ok = True
-        while True:
-            c = _pose_clearance(
-                x0 + t * dx, y0 + t * dy, t0 + t * dth, sd, res, width, height,
-                fp, reach2, margin, True,
-            )  # fmt: skip
-            if c <= margin:
-                ok = False
-                break
-            if t >= 1.0 or length <= 0.0:
-                break
-            # next check where no disk centre moved more than c + margin / 2 (see module doc)
-            t = min(1.0, t + (c + 0.5 * margin) / length)
-        out[m] = ok
+    out = np.empty(starts.shape[0], dtype=np.bool_)
+    for m in range(starts.shape[0]):
+        out[m] = motion_free_kernel(
+            starts[m, 0], starts[m, 1], starts[m, 2], ends[m, 0], ends[m, 1], ends[m, 2],
+            margin, reach, sd, res, width, height, fp, reach2,
+        )  # fmt: skip
     return out
 
 
@@ -522,6 +549,16 @@ class ObjectSpace:
             np.ascontiguousarray(a), np.ascontiguousarray(b), self.motion_margin, self.reach,
             self._sd, self.resolution, self.workspace[0], self.workspace[1],
             self._fp, self._reach2,
+        )  # fmt: skip
+
+    @property
+    def kernel_args(self) -> tuple:
+        """``(margin, reach, sd, res, width, height, fp, reach2)``: the arguments that
+        :func:`motion_free_kernel` takes after the two poses (``pose_free_kernel`` takes
+        ``sd`` to ``reach2``), for compiled callers."""
+        return (
+            self.motion_margin, self.reach, self._sd, self.resolution,
+            self.workspace[0], self.workspace[1], self._fp, self._reach2,
         )  # fmt: skip
 
     def motion_free(self, a: ArrayLike, b: ArrayLike) -> bool:

@@ -46,11 +46,12 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
+import numba
 import numpy as np
 from numpy.typing import ArrayLike
 
 from lamp.geometry import se2
-from lamp.geometry.object_space import ObjectSpace
+from lamp.geometry.object_space import ObjectSpace, motion_free_kernel, pose_free_kernel
 from lamp.scene.model import Scene
 
 Node = int
@@ -72,6 +73,88 @@ _REVERSE = tuple(PRIMITIVES.index((-di, -dj, -dk)) for di, dj, dk in PRIMITIVES)
 #: the manipulation model's trained range (object frame): |dx|, |dy| and |dtheta|
 MODEL_MAX_TRANSLATION = 0.2
 MODEL_MAX_ROTATION = 0.5
+
+
+@numba.njit(cache=True)
+def _successor_kernel(
+    u: int,
+    n_j: int,
+    n_k: int,
+    i_min: int,
+    j_min: int,
+    ax: float,
+    ay: float,
+    at: float,
+    step: float,
+    dth: float,
+    prim: np.ndarray,
+    rev: np.ndarray,
+    node_valid: np.ndarray,
+    edge_valid: np.ndarray,
+    out_ids: np.ndarray,
+    out_prim: np.ndarray,
+    margin: float,
+    reach: float,
+    sd: np.ndarray,
+    res: float,
+    width: float,
+    height: float,
+    fp: tuple,
+    reach2: float,
+) -> tuple[int, int, int]:
+    """Fill ``out_ids``/``out_prim`` with u's valid edges, checking (and caching in
+    ``node_valid``/``edge_valid``) what is unknown. Returns (count, pose checks, motion
+    checks). Poses are computed exactly as ``ObjectLattice.poses`` does; each motion is
+    checked from its lower-id end and stored for both directions."""
+    n_i = node_valid.shape[0] // (n_j * n_k)
+    rest = u // n_k
+    k = u - rest * n_k
+    ii = rest // n_j
+    jj = rest - ii * n_j
+    two_pi = 2.0 * math.pi
+    xu = ax + (ii + i_min) * step
+    yu = ay + (jj + j_min) * step
+    tu = (at + k * dth + math.pi) % two_pi - math.pi
+    n_pose = 0
+    n_motion = 0
+    if node_valid[u] < 0:
+        node_valid[u] = pose_free_kernel(xu, yu, tu, sd, res, width, height, fp, reach2)
+        n_pose += 1
+    if node_valid[u] == 0:
+        return 0, n_pose, n_motion
+    n = 0
+    for p in range(prim.shape[0]):
+        ni = ii + prim[p, 0]
+        nj = jj + prim[p, 1]
+        if ni < 0 or ni >= n_i or nj < 0 or nj >= n_j:
+            continue
+        nk = (k + prim[p, 2]) % n_k
+        v = (ni * n_j + nj) * n_k + nk
+        xv = ax + (ni + i_min) * step
+        yv = ay + (nj + j_min) * step
+        tv = (at + nk * dth + math.pi) % two_pi - math.pi
+        if node_valid[v] < 0:
+            node_valid[v] = pose_free_kernel(xv, yv, tv, sd, res, width, height, fp, reach2)
+            n_pose += 1
+        if node_valid[v] == 0:
+            continue
+        if edge_valid[u, p] < 0:
+            if u < v:
+                free = motion_free_kernel(
+                    xu, yu, tu, xv, yv, tv, margin, reach, sd, res, width, height, fp, reach2
+                )
+            else:
+                free = motion_free_kernel(
+                    xv, yv, tv, xu, yu, tu, margin, reach, sd, res, width, height, fp, reach2
+                )
+            n_motion += 1
+            edge_valid[u, p] = free
+            edge_valid[v, rev[p]] = free
+        if edge_valid[u, p] == 1:
+            out_ids[n] = v
+            out_prim[n] = p
+            n += 1
+    return n, n_pose, n_motion
 
 
 class ObjectLattice:
@@ -151,6 +234,10 @@ class ObjectLattice:
         self._prim_cost = step * np.hypot(prim[:, 0], prim[:, 1]) + self.w_rot * dtheta * np.abs(
             prim[:, 2]
         )
+        self._prim_cost_list = self._prim_cost.tolist()
+        self._rev = np.array(_REVERSE, dtype=np.int64)
+        self._out_ids = np.empty(len(PRIMITIVES), dtype=np.int64)
+        self._out_prim = np.empty(len(PRIMITIVES), dtype=np.int64)
         self._node_valid = np.full(self.n_nodes, -1, dtype=np.int8)
         self._edge_valid = np.full((self.n_nodes, len(PRIMITIVES)), -1, dtype=np.int8)
         self._succ: dict[Node, list[tuple[Node, float]]] = {}
@@ -281,31 +368,17 @@ class ObjectLattice:
         cached = self._succ.get(u)
         if cached is not None:
             return cached
-        if not self.node_valid(u):
-            self._succ[u] = []
-            return []
-        idx, nbrs = self._neighbours(u)
-        self._ensure_nodes(nbrs)
-        ok_node = self._node_valid[nbrs] == 1
-        idx, nbrs = idx[ok_node], nbrs[ok_node]
-        todo = self._edge_valid[u, idx] < 0
-        if todo.any():
-            t_idx, t_nbrs = idx[todo], nbrs[todo]
-            pu = self.pose(u)
-            pv = self.poses(t_nbrs)
-            # check each motion from its lower-id end so both directions agree
-            fwd = t_nbrs > u
-            a = np.where(fwd[:, None], pu[None, :], pv)
-            b = np.where(fwd[:, None], pv, pu[None, :])
-            free = self.space.motions_free(a, b)
-            self.n_motion_checks += len(free)
-            self._edge_valid[u, t_idx] = free
-            rev = np.array(_REVERSE)[t_idx]
-            self._edge_valid[t_nbrs, rev] = free
-        good = self._edge_valid[u, idx] == 1
-        out = [
-            (int(v), float(c)) for v, c in zip(nbrs[good], self._prim_cost[idx[good]], strict=True)
-        ]
+        n, n_pose, n_motion = _successor_kernel(
+            int(u), self.n_j, self.n_headings, self.i_min, self.j_min,
+            self.anchor[0], self.anchor[1], self.anchor[2], self.step, self.dtheta,
+            self._prim, self._rev, self._node_valid, self._edge_valid,
+            self._out_ids, self._out_prim, *self.space.kernel_args,
+        )  # fmt: skip
+        self.n_pose_checks += n_pose
+        self.n_motion_checks += n_motion
+        cost = self._prim_cost_list
+        ids = self._out_ids[:n].tolist()
+        out = list(zip(ids, [cost[p] for p in self._out_prim[:n].tolist()], strict=True))
         self._succ[u] = out
         return out
 
