@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -116,6 +117,9 @@ def test_save_scene_png(scene: Scene, tmp_path: Path) -> None:
     blue = np.all(np.abs(img[..., :3].astype(float) - rgb255(ROBOT_COLOR)) <= 12, axis=-1)
     assert blue.sum() > 10  # robots too
     assert sorted(p.name for p in (tmp_path / "sub").iterdir()) == ["scene.png"]
+    umask = os.umask(0)
+    os.umask(umask)
+    assert out.stat().st_mode & 0o777 == 0o666 & ~umask  # not mkstemp's private 0600
 
 
 def test_save_scene_png_shape_and_obstacle_pixels(tmp_path: Path) -> None:

@@ -249,6 +249,9 @@ def atomic_output(path: str | Path) -> Iterator[Path]:
     )
     os.close(fd)
     try:
+        umask = os.umask(0)  # mkstemp makes 0600 files; give the usual 0666 & ~umask instead
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)
         yield Path(tmp)
         os.replace(tmp, path)
     except BaseException:
