@@ -1,11 +1,14 @@
 """Benchmark of the Gspi multi-robot motion planner (``lamp.mrmp.plan_paths``).
 
 (a) LAMP's common case: 3 robots to 3 contact points around the object being pushed (the
-    object is an obstacle), 100 instances per map family. Scenes come from the built-in
-    suites (``lamp.suites``) when they are available, else from this file's own cluttered
-    map families with the same names (random, maze, tilt, warehouse). Two start kinds:
-    ``contact`` (robots stand in contact after the previous push, 1 mm clear) and
-    ``spread`` (robots anywhere in the map).
+    object is an obstacle), 100 instances per map family (50 per start kind). Scenes come
+    from the built-in suites (``lamp.suites``: the object placed at its start or at a
+    random pose near its way to the goal, at least 1 cm from obstacles) when they are
+    available, else from this file's own cluttered map families with the same names.
+    Start kinds: ``contact`` (robots stand in contact after the previous push, 1 mm
+    clear) and ``spread`` (robots anywhere within 1.5 m of the object on suite maps).
+    Timed cold (the space for the new object pose built inside the call; LAMP's first
+    Gspi call at a pose) and with the space prebuilt (LAMP's further proposals there).
 (b) 10, 30 and 100 robots in an open 4 m x 4 m map with scattered obstacles, each robot's
     own goal 1-3 m from its start (the planner may assign them differently).
 (c) the same instances with the baseline: PIBT without goal swapping (same optimal initial
@@ -13,9 +16,10 @@
 
 Every successful plan is re-verified by the independent checker in ``tests/``.
 
-Run: ``python benchmarks/bench_mrmp.py [--quick] [--families random,maze] [--n 100]``.
-Figures: wall-clock per call on one core (``OMP_NUM_THREADS=1``); median and p95 over
-instances; times of failed calls included.
+Run: ``python benchmarks/bench_mrmp.py [--quick] [--families random,maze] [--n 50]``.
+Figures: per call on one thread (``OMP_NUM_THREADS=1``), CPU (process) time and wall
+time; median and p95 over instances; failed calls included. Ratios use CPU time, which a
+busy shared machine disturbs much less than wall time.
 """
 
 from __future__ import annotations
@@ -179,6 +183,64 @@ def contact_instance(family: str, seed: int, start_kind: str):
     return None
 
 
+def _suite_scenes(family: str) -> list[Scene] | None:
+    """The built-in suite's scenes, or None when the suites are not available."""
+    try:
+        from lamp.suites.registry import suite_scenes
+    except ImportError:
+        return None
+    try:
+        return list(suite_scenes(family))
+    except Exception as exc:  # noqa: BLE001 - a suite being regenerated must not stop us
+        print(f"  (suite {family!r} not loadable: {exc}; using own maps)")
+        return None
+
+
+def suite_instance(scene: Scene, seed: int, start_kind: str):
+    """Case (a) on a suite scene: the first object at a pose on (or near) its way from
+    start to goal, 3 contacts around it; robots in contact (after a push) or spread
+    within 1.5 m. None when sampling failed."""
+    rng = np.random.default_rng(seed)
+    W, H = scene.workspace
+    obj = scene.objects[0]
+    others = [to_shapely(o.shape, o.start) for o in scene.objects[1:]]
+    geoms = [to_shapely(o.shape, o.pose) for o in scene.obstacles] + others
+    border = shapely.box(0, 0, W, H).exterior
+    a = np.array(obj.start, float)
+    b = np.array(obj.goal, float)
+    for _ in range(200):
+        u = rng.uniform(0, 1)
+        pose = a + u * (b - a) + np.r_[rng.normal(0, 0.25, 2), rng.uniform(-np.pi, np.pi)]
+        if seed % 4 == 0:
+            pose = a.copy()
+        og = to_shapely(obj.shape, pose)
+        if not shapely.box(0, 0, W, H).contains(og) or shapely.distance(og, border) < 0.01:
+            continue
+        if any(shapely.distance(og, g) < 0.01 for g in geoms):
+            continue
+        allg = geoms + [og]
+        goals = _contacts(obj.shape, pose, rng, 3)
+        if not all(_free(allg, g, W, H, R) for g in goals):
+            continue
+        if min(np.hypot(*(goals[i] - goals[j])) for i in range(3) for j in range(i)) < 2 * R:
+            continue
+        if start_kind == "contact":
+            starts = _contacts(obj.shape, pose, rng, 3)
+            if not all(_free(allg, q, W, H, R) for q in starts):
+                continue
+            if min(np.hypot(*(starts[i] - starts[j])) for i in range(3) for j in range(i)) < 2 * R:
+                continue
+        else:
+            box = (np.maximum(pose[:2] - 1.5, 0), np.minimum(pose[:2] + 1.5, [W, H]))
+            starts = _sample_points(rng, allg, 3, W, H, box=box)
+            if starts is None:
+                continue
+        poses = scene.object_starts()
+        poses[0] = pose
+        return scene, poses, starts, goals
+    return None
+
+
 def many_robot_instance(n: int, seed: int, size: float = 4.0):
     """Case (b): n robots, scattered obstacles, each robot's own goal 1-3 m away."""
     rng = np.random.default_rng(seed)
@@ -230,36 +292,42 @@ def _run(inst, swap: bool, time_limit: float, verify: bool = True, warm: bool = 
         clear_caches(keep_base=True)
         RobotSpace.from_scene(scene, exclude_objects=range(len(scene.objects)))
     t0 = time.perf_counter()
+    c0 = time.process_time()
     plan = plan_paths(scene, S, G, object_poses=poses, time_limit=time_limit,
                       goal_swapping=swap)
+    dc = time.process_time() - c0
     dt = time.perf_counter() - t0
     if verify:
         check_plan(scene, S, G, plan, object_poses=poses)
-    return plan.success, dt, plan.iterations, plan.paths.shape[1]
+    return plan.success, dt, plan.iterations, plan.paths.shape[1], dc
 
 
-def _summ(label: str, res: list[tuple[bool, float, int, int]]) -> tuple[float, float, float]:
+def _summ(label: str, res: list[tuple]) -> tuple[float, float, float]:
+    """Print success and times; returns (success rate, median, p95) of the CPU time."""
     ok = np.array([r[0] for r in res])
     t = np.array([r[1] for r in res]) * 1e3
     it = np.array([r[2] for r in res])
     T = np.array([r[3] for r in res])
-    print(f"  {label:<28} success {ok.mean() * 100:5.1f}% ({ok.sum()}/{len(ok)})  "
-          f"time median {np.median(t):7.2f} ms  p95 {np.percentile(t, 95):8.2f} ms  "
-          f"max {t.max():8.1f} ms  steps median {np.median(it):.0f}  rows median {np.median(T):.0f}")
-    return ok.mean(), float(np.median(t)), float(np.percentile(t, 95))
+    c = np.array([r[4] for r in res]) * 1e3
+    print(f"  {label:<26} success {ok.mean() * 100:5.1f}% ({ok.sum():3d}/{len(ok)})  "
+          f"CPU median {np.median(c):7.2f} ms  p95 {np.percentile(c, 95):8.2f} ms | "
+          f"wall median {np.median(t):7.2f} ms  p95 {np.percentile(t, 95):8.2f} ms  "
+          f"max {t.max():7.1f} ms | steps {np.median(it):.0f}, rows {np.median(T):.0f}")
+    return ok.mean(), float(np.median(c)), float(np.percentile(c, 95))
 
 
 def _compare(a: tuple, b: tuple) -> None:
     sr = a[0] / b[0] if b[0] > 0 else float("inf")
-    print(f"  ratio Gspi/baseline: success {sr:.2f}x, median time {a[1] / b[1]:.2f}x, "
-          f"p95 time {a[2] / b[2]:.2f}x")
+    print(f"  ratio Gspi/baseline: success {sr:.2f}x, median CPU time {a[1] / b[1]:.2f}x, "
+          f"p95 CPU time {a[2] / b[2]:.2f}x")
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="fewer instances")
     ap.add_argument("--families", default=",".join(FAMILIES))
-    ap.add_argument("--n", type=int, default=100, help="instances per family in (a)")
+    ap.add_argument("--n", type=int, default=50,
+                    help="instances per family and start kind in (a)")
     ap.add_argument("--many", default="10,30,100", help="robot counts for (b)")
     ap.add_argument("--many-n", type=int, default=20, help="instances per count in (b)")
     ap.add_argument("--time-limit", type=float, default=5.0)
@@ -267,9 +335,10 @@ def main() -> None:
     n_a = 20 if args.quick else args.n
     n_b = 5 if args.quick else args.many_n
     warmup()
-    print(f"Gspi benchmark (numpy {np.__version__}; times per plan_paths call, one core)")
+    print(f"Gspi benchmark: times per plan_paths call (CPU = process time, robust to a busy "
+          f"machine; wall = elapsed); load average at start {os.getloadavg()[0]:.1f}")
 
-    print("\n(a) 3 robots -> 3 contact points around the object (own map families)")
+    print("\n(a) 3 robots -> 3 contact points around the object")
     all_g: list = []
     all_w: list = []
     all_b: list = []
@@ -277,15 +346,20 @@ def main() -> None:
         for kind in ("contact", "spread"):
             insts = []
             seed = 0
-            while len(insts) < n_a:
-                inst = contact_instance(fam, 1000 * seed + 7, kind)
+            scenes = _suite_scenes(fam)
+            source = f"suite {fam} ({len(scenes)} scenes)" if scenes else f"own {fam} maps"
+            while len(insts) < n_a and seed < 20 * n_a:
+                if scenes:
+                    inst = suite_instance(scenes[seed % len(scenes)], seed, kind)
+                else:
+                    inst = contact_instance(fam, 1000 * seed + 7, kind)
                 seed += 1
                 if inst is not None:
                     insts.append(inst)
             rg = [_run(x, True, args.time_limit) for x in insts]
             rw = [_run(x, True, args.time_limit, warm=True) for x in insts]
             rb = [_run(x, False, args.time_limit) for x in insts]
-            print(f" {fam} / starts {kind}:")
+            print(f" {source} / starts {kind}: {len(insts)} instances")
             a = _summ("Gspi (cold space)", rg)
             _summ("Gspi (space prebuilt)", rw)
             b = _summ("baseline PIBT (no swaps)", rb)

@@ -324,14 +324,23 @@ def _pibt_step(
     gr: tuple, V: int, gv0: int, hs: tuple, cur: np.ndarray, goal: np.ndarray,
     prio: np.ndarray, two_r: float, seed: int, t: int, nxt: np.ndarray,
     cand: np.ndarray, ncand: np.ndarray, ci: np.ndarray, status: np.ndarray,
-    stack: np.ndarray,
+    stack: np.ndarray, mode: np.ndarray,
 ) -> None:
-    """One PIBT step (priority inheritance with backtracking), iterative."""
+    """One PIBT step (priority inheritance with backtracking), iterative.
+
+    Continuous-space addition (*yield*): a robot that inherited priority and found no
+    move compatible with its ancestors' intended motions scans its candidates again
+    checking only the ancestors' current positions. A move found that way clears the way
+    for the next step while the ancestor, which re-checks against it, waits or detours.
+    Without it two robots 10 cm apart whose simultaneous moves would graze each other
+    could block each other forever (the parent's wait always beating its detours).
+    """
     coords = gr[0]
     N = cur.shape[0]
     for k in range(N):
         status[k] = _UNDECIDED
         nxt[k] = cur[k]
+        mode[k] = 0
     order = np.argsort(-prio)
     for oi in range(N):
         r0 = order[oi]
@@ -345,11 +354,18 @@ def _pibt_step(
         while sp > 0:
             i = stack[sp - 1]
             if ci[i] >= ncand[i]:
+                if mode[i] == 0 and sp > 1:
+                    mode[i] = 1  # yield pass (see docstring)
+                    ci[i] = 0
+                    continue
                 nxt[i] = cur[i]  # every candidate failed: wait (always valid, see module doc)
                 status[i] = _DECIDED
                 sp -= 1
                 continue
             c = cand[i, ci[i]]
+            if mode[i] == 1 and c == cur[i]:
+                ci[i] += 1
+                continue
             nxt[i] = c
             ax = coords[cur[i], 0]
             ay = coords[cur[i], 1]
@@ -379,8 +395,10 @@ def _pibt_step(
                 else:  # tentative ancestor: its position now and its intended motion
                     qx = coords[nxt[k], 0]
                     qy = coords[nxt[k], 1]
-                    if _conflict(ax, ay, bx, by, px, py, px, py, two_r, stay_goal) or _conflict(
-                        ax, ay, bx, by, px, py, qx, qy, two_r, c_goal and nxt[k] >= gv0
+                    if _conflict(ax, ay, bx, by, px, py, px, py, two_r, stay_goal) or (
+                        mode[i] == 0
+                        and _conflict(ax, ay, bx, by, px, py, qx, qy, two_r,
+                                      c_goal and nxt[k] >= gv0)
                     ):
                         bad = True
                         break
@@ -392,6 +410,7 @@ def _pibt_step(
                 status[blocker] = _TENTATIVE
                 _build_cands(blocker, cur[blocker], gr, V, gv0, hs, goal, seed, t, cand, ncand)
                 ci[blocker] = 0
+                mode[blocker] = 0
                 stack[sp] = blocker
                 sp += 1
                 continue
@@ -444,6 +463,7 @@ def _run_steps(
     ci = np.zeros(N, dtype=np.int64)
     status = np.zeros(N, dtype=np.int64)
     stack = np.empty(N, dtype=np.int64)
+    mode = np.zeros(N, dtype=np.int64)
     for t in range(t0, t1):
         done = True
         for i in range(N):
@@ -455,7 +475,7 @@ def _run_steps(
         if swap:
             _swap_goals(gr, V, gv0, hs, cur, goal, prio)
         _pibt_step(gr, V, gv0, hs, cur, goal, prio, two_r, seed, t, nxt, cand, ncand, ci,
-                   status, stack)
+                   status, stack, mode)
         s = 0.0
         for i in range(N):
             cur[i] = nxt[i]
@@ -572,7 +592,7 @@ def plan_paths(
     *,
     space: RobotSpace | None = None,
     seed: int = 0,
-    lattice_step: float | tuple[float, ...] = (0.05, 0.03),
+    lattice_step: float | tuple[float, ...] = (0.05, 0.03, 0.02),
     link_radius: float | None = None,
     goal_swapping: bool = True,
     max_spacing: float = 0.02,
@@ -599,7 +619,9 @@ def plan_paths(
     lattice_step: lattice spacing L (multiple of the space's 1 cm grid), or a sequence
         of them tried in turn while time is left: after a failure that a finer lattice can
         fix (a goal or start that cannot be linked, a passage narrower than the lattice, a
-        stall), the next step is tried. Default (0.05, 0.03): GCo's 5 cm, then 3 cm.
+        stall), the next step is tried. Default (0.05, 0.03, 0.02): GCo's 5 cm first,
+        then 3 and 2 cm for passages and pockets the coarser lattices miss (bands of
+        free centres narrower than the step); pass a single step for fast failures.
     link_radius: how far a start or goal may be from the lattice nodes it connects to by a
         straight move (default 1.5 L).
     goal_swapping: False gives plain PIBT with a fixed optimal assignment (baseline).
