@@ -49,6 +49,7 @@ import numpy as np
 import shapely
 import yaml
 
+from lamp.geometry.se2 import transform_points
 from lamp.scene.model import Circle, Obstacle, Polygon, Rectangle, Scene, SceneObject, Shape
 
 FORMAT = "lamp-scene/1"
@@ -378,12 +379,9 @@ class _Footprint:
                 local = np.array([[-hx, -hy], [hx, -hy], [hx, hy], [-hx, hy]])
             else:
                 local = np.asarray(shape.points, dtype=float)
-            c, s = math.cos(th), math.sin(th)
             self.center = None
             self.radius = 0.0
-            self.vertices = np.column_stack(
-                [x + c * local[:, 0] - s * local[:, 1], y + s * local[:, 0] + c * local[:, 1]]
-            )
+            self.vertices = transform_points((x, y, th), local)
             self.lo = self.vertices.min(axis=0)
             self.hi = self.vertices.max(axis=0)
         self._geom: shapely.Geometry | None = None

@@ -212,7 +212,7 @@ def write_animation(
     return AnimationStats(path, len(frames), len(chosen), render_s, write_s)
 
 
-def _palette_image(renderer: FrameRenderer, first: np.ndarray) -> Any:
+def _palette_image(first: np.ndarray) -> Any:
     """One 256-colour palette for the whole GIF: the first frame plus swatches of every
     colour the frames may show later (objects, robots, path, edges)."""
     from matplotlib.colors import to_rgb
@@ -257,7 +257,7 @@ def _write_gif(
         t0 = time.perf_counter()
         rgb = renderer.render(frames[int(i)], int(i))
         if palette is None:
-            palette = _palette_image(renderer, rgb)
+            palette = _palette_image(rgb)
         images.append(Image.fromarray(rgb).quantize(palette=palette, dither=Image.Dither.NONE))
         render_s += time.perf_counter() - t0
     t0 = time.perf_counter()
