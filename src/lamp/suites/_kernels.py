@@ -25,7 +25,6 @@ every intermediate pose has clearance at least ``min(c_a, c_b) - delta / 2``.
 
 from __future__ import annotations
 
-import heapq
 import math
 
 import numba
@@ -34,7 +33,7 @@ import numpy as np
 BIG = 1.0e9
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True)
 def _seg_dist(px: float, py: float, ax: float, ay: float, bx: float, by: float) -> float:
     """Distance from point p to segment ab."""
     dx = bx - ax
@@ -294,40 +293,6 @@ def motion_ok(
 
 
 @numba.njit(cache=True)
-def sampled_min_clearance(
-    poses: np.ndarray,
-    step: float,
-    obj_r: float,
-    ov: np.ndarray,
-    on: np.ndarray,
-    obj_reach: float,
-    circ: np.ndarray,
-    pv: np.ndarray,
-    pn: np.ndarray,
-    pb: np.ndarray,
-    width: float,
-    height: float,
-) -> float:
-    """Minimum exact clearance over a polyline of poses sampled so that no object point
-    moves more than ``step`` between samples."""
-    best = BIG
-    for i in range(poses.shape[0] - 1):
-        a = poses[i]
-        b = poses[i + 1]
-        delta = math.hypot(b[0] - a[0], b[1] - a[1]) + obj_reach * abs(b[2] - a[2])
-        n = max(1, int(math.ceil(delta / step)))
-        for k in range(n + 1):
-            t = k / n
-            c = pose_clearance(
-                a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), a[2] + t * (b[2] - a[2]),
-                obj_r, ov, on, obj_reach, circ, pv, pn, pb, width, height, -BIG,
-            )  # fmt: skip
-            if c < best:
-                best = c
-    return best
-
-
-@numba.njit(cache=True)
 def _node_clear(
     node: int,
     cache: np.ndarray,
@@ -357,6 +322,47 @@ def _node_clear(
         )  # fmt: skip
         cache[node] = c
     return c
+
+
+@numba.njit(cache=True)
+def _heap_push(keys: np.ndarray, vals: np.ndarray, size: int, key: float, val: int) -> int:
+    """Push onto the binary min-heap stored in keys/vals[:size]; returns the new size
+    (the arrays must have room)."""
+    i = size
+    keys[i] = key
+    vals[i] = val
+    while i > 0:
+        p = (i - 1) // 2
+        if keys[p] <= keys[i]:
+            break
+        keys[p], keys[i] = keys[i], keys[p]
+        vals[p], vals[i] = vals[i], vals[p]
+        i = p
+    return size + 1
+
+
+@numba.njit(cache=True)
+def _heap_pop(keys: np.ndarray, vals: np.ndarray, size: int) -> tuple[float, int, int]:
+    """Pop the minimum; returns (key, value, new size)."""
+    key = keys[0]
+    val = vals[0]
+    size -= 1
+    keys[0] = keys[size]
+    vals[0] = vals[size]
+    i = 0
+    while True:
+        lft = 2 * i + 1
+        if lft >= size:
+            break
+        c = lft
+        if lft + 1 < size and keys[lft + 1] < keys[lft]:
+            c = lft + 1
+        if keys[i] <= keys[c]:
+            break
+        keys[c], keys[i] = keys[i], keys[c]
+        vals[c], vals[i] = vals[i], vals[c]
+        i = c
+    return key, val, size
 
 
 @numba.njit(cache=True)
@@ -401,8 +407,11 @@ def lattice_astar(
     for m in range(dst_nodes.shape[0]):
         dst_cost[dst_nodes[m]] = min(dst_cost[dst_nodes[m]], dst_costs[m])
     slack = h * 0.7072
-    heap = [(0.0, np.int64(0))]
-    heap.pop()
+    # lazy-deletion heap: every push improves g of its node, so pushes <= relaxations;
+    # the arrays grow by doubling
+    hk = np.empty(1024)
+    hv = np.empty(1024, dtype=np.int64)
+    hn = 0
     for m in range(src_nodes.shape[0]):
         s = src_nodes[m]
         if src_costs[m] < g[s]:
@@ -412,15 +421,18 @@ def lattice_astar(
             j = (s // nx) % ny
             hx = (i + 1) * h - goal_x
             hy = (j + 1) * h - goal_y
-            heapq.heappush(heap, (g[s] + max(0.0, math.hypot(hx, hy) - slack), np.int64(s)))
+            if hn == hk.shape[0]:
+                hk = np.concatenate((hk, np.empty(hn)))
+                hv = np.concatenate((hv, np.empty(hn, dtype=np.int64)))
+            hn = _heap_push(hk, hv, hn, g[s] + max(0.0, math.hypot(hx, hy) - slack), s)
     best_total = np.inf
     best_node = -1
     di = np.array([1, -1, 0, 0, 1, 1, -1, -1])
     dj = np.array([0, 0, 1, -1, 1, -1, 1, -1])
     a = np.empty(3)
     b = np.empty(3)
-    while len(heap) > 0:
-        f, u = heapq.heappop(heap)
+    while hn > 0:
+        f, u, hn = _heap_pop(hk, hv, hn)
         if closed[u]:
             continue
         if f >= best_total:
@@ -432,7 +444,9 @@ def lattice_astar(
         i = u % nx
         j = (u // nx) % ny
         k = u // (nx * ny)
-        cu = _node_clear(u, cache, nx, ny, h, dth, obj_r, ov, on, obj_reach, circ, pv, pn, pb, width, height)
+        cu = _node_clear(
+            u, cache, nx, ny, h, dth, obj_r, ov, on, obj_reach, circ, pv, pn, pb, width, height
+        )
         a[0] = (i + 1) * h
         a[1] = (j + 1) * h
         a[2] = k * dth
@@ -463,16 +477,38 @@ def lattice_astar(
             ng = g[u] + step
             if ng >= g[v]:
                 continue
-            cv = _node_clear(v, cache, nx, ny, h, dth, obj_r, ov, on, obj_reach, circ, pv, pn, pb, width, height)
+            cv = _node_clear(
+                v, cache, nx, ny, h, dth, obj_r, ov, on, obj_reach, circ, pv, pn, pb, width, height
+            )
             if cv < tau:
                 continue
-            if not motion_ok(a, b, cu, cv, tau, max_depth, obj_r, ov, on, obj_reach, circ, pv, pn, pb, width, height):
+            if not motion_ok(
+                a,
+                b,
+                cu,
+                cv,
+                tau,
+                max_depth,
+                obj_r,
+                ov,
+                on,
+                obj_reach,
+                circ,
+                pv,
+                pn,
+                pb,
+                width,
+                height,
+            ):
                 continue
             g[v] = ng
             parent[v] = u
             hx = b[0] - goal_x
             hy = b[1] - goal_y
-            heapq.heappush(heap, (ng + max(0.0, math.hypot(hx, hy) - slack), np.int64(v)))
+            if hn == hk.shape[0]:
+                hk = np.concatenate((hk, np.empty(hn)))
+                hv = np.concatenate((hv, np.empty(hn, dtype=np.int64)))
+            hn = _heap_push(hk, hv, hn, ng + max(0.0, math.hypot(hx, hy) - slack), v)
     return parent, best_node, best_total
 
 

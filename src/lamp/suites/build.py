@@ -62,9 +62,7 @@ def family_entry(gen: G.Generated, text: str) -> dict[str, Any]:
     }
 
 
-def build_suite(
-    name: str, progress: Callable[[str], None] | None = None
-) -> dict[str, str]:
+def build_suite(name: str, progress: Callable[[str], None] | None = None) -> dict[str, str]:
     """File name -> file text for every file of suite ``name``."""
     if name not in SUITES:
         raise ValueError(f"unknown suite {name!r}; valid names: {', '.join(SUITES)}")
@@ -98,11 +96,12 @@ def build_suite(
             files[f"{gen.scene_dict['name']}.yaml"] = text
             entries.append(family_entry(gen, text))
             if progress is not None:
-                rep = gen.report
+                rep = gen.report.to_dict()
                 progress(
-                    f"{gen.scene_dict['name']}: attempts {gen.attempts}, tight "
-                    f"{rep.tight_shortest_route}, L0 {rep.free_route.length:.2f} "  # type: ignore[union-attr]
-                    f"LR {rep.robot_route.length:.2f}"  # type: ignore[union-attr]
+                    f"{gen.scene_dict['name']}: attempts {gen.attempts}, too-tight shortest "
+                    f"route {rep['tight_shortest_route']}, free route "
+                    f"{rep['free_route']['length']:.2f} m, robot-room route "
+                    f"{rep['robot_route']['length']:.2f} m"
                 )
         generator = {
             "module": "lamp.suites.generators",

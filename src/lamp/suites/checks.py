@@ -127,7 +127,13 @@ def _pad(pieces: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
 def footprint_of(shape: Shape) -> Footprint:
     """Kernel footprint of an object shape (its own frame)."""
     if isinstance(shape, Circle):
-        return Footprint(float(shape.radius), np.zeros((0, 3, 2)), np.zeros(0, np.int64), float(shape.radius), 0.0)
+        return Footprint(
+            float(shape.radius),
+            np.zeros((0, 3, 2)),
+            np.zeros(0, np.int64),
+            float(shape.radius),
+            0.0,
+        )
     pts = local_outline(shape)
     pieces = _convex_pieces(pts)
     ov, on = _pad(pieces)
@@ -136,9 +142,7 @@ def footprint_of(shape: Shape) -> Footprint:
     return Footprint(0.0, ov, on, reach, period)
 
 
-def build_world(
-    workspace: tuple[float, float], obstacles: Sequence[Obstacle]
-) -> World:
+def build_world(workspace: tuple[float, float], obstacles: Sequence[Obstacle]) -> World:
     """Kernel world of static ``obstacles`` in the workspace ``[0, W] x [0, H]``."""
     circles = []
     pieces: list[np.ndarray] = []
@@ -150,7 +154,10 @@ def build_world(
             pts = local_outline(ob.shape)
             c, s = math.cos(ob.pose[2]), math.sin(ob.pose[2])
             world = np.stack(
-                [ob.pose[0] + c * pts[:, 0] - s * pts[:, 1], ob.pose[1] + s * pts[:, 0] + c * pts[:, 1]],
+                [
+                    ob.pose[0] + c * pts[:, 0] - s * pts[:, 1],
+                    ob.pose[1] + s * pts[:, 0] + c * pts[:, 1],
+                ],
                 axis=1,
             )
             pieces.append(_ccw(world))
@@ -173,7 +180,9 @@ def object_obstacles(
     (default: the objects' start poses)."""
     poses = scene.object_starts() if object_poses is None else np.asarray(object_poses, float)
     if poses.shape != (len(scene.objects), 3):
-        raise ValueError(f"object_poses must have shape ({len(scene.objects)}, 3), got {poses.shape}")
+        raise ValueError(
+            f"object_poses must have shape ({len(scene.objects)}, 3), got {poses.shape}"
+        )
     out = list(scene.obstacles)
     for i, (obj, p) in enumerate(zip(scene.objects, poses, strict=True)):
         if i != object_index:
@@ -185,9 +194,7 @@ def object_world(scene: Scene, object_index: int, object_poses: ArrayLike | None
     return build_world(scene.workspace, object_obstacles(scene, object_index, object_poses))
 
 
-def clearance(
-    shape: Shape, world: World, poses: ArrayLike
-) -> np.ndarray:
+def clearance(shape: Shape, world: World, poses: ArrayLike) -> np.ndarray:
     """Exact clearance (m) of ``shape`` at (..., 3) ``poses`` in ``world`` (negative: overlap)."""
     arr = np.asarray(poses, dtype=float)
     if arr.ndim == 0 or arr.shape[-1] != 3:
@@ -265,7 +272,11 @@ class RouteFinder:
         return np.array([(i + 1) * self.h, (j + 1) * self.h, k * self.dth])
 
     def _clear(self, pose: np.ndarray) -> float:
-        return float(K.batch_clearance(np.ascontiguousarray(pose.reshape(1, 3)), *self.fp.args, *self.world.args)[0])
+        return float(
+            K.batch_clearance(
+                np.ascontiguousarray(pose.reshape(1, 3)), *self.fp.args, *self.world.args
+            )[0]
+        )
 
     def _connectors(self, pose: np.ndarray, tau: float) -> tuple[np.ndarray, np.ndarray]:
         """Lattice nodes next to ``pose`` reachable by a certified straight motion, with the
@@ -293,10 +304,15 @@ class RouteFinder:
                     cq = self._clear(q)
                     if cq < tau:
                         continue
-                    if not K.motion_ok(pose, q, c0, cq, tau, MAX_DEPTH, *self.fp.args, *self.world.args):
+                    if not K.motion_ok(
+                        pose, q, c0, cq, tau, MAX_DEPTH, *self.fp.args, *self.world.args
+                    ):
                         continue
                     nodes.append(node)
-                    costs.append(math.hypot(q[0] - pose[0], q[1] - pose[1]) + ROT_WEIGHT * abs(q[2] - pose[2]))
+                    costs.append(
+                        math.hypot(q[0] - pose[0], q[1] - pose[1])
+                        + ROT_WEIGHT * abs(q[2] - pose[2])
+                    )
         return np.array(nodes, dtype=np.int64), np.array(costs, dtype=float)
 
     # search -------------------------------------------------------------------
@@ -343,8 +359,9 @@ class RouteFinder:
             arr, clear, float(tau), 0.5 * math.pi, MAX_DEPTH, *self.fp.args, *self.world.args
         )
         arr = np.ascontiguousarray(arr[keep])
-        min_c = K.sampled_min_clearance(arr, SAMPLE_STEP, *self.fp.args, *self.world.args)
-        return Route(arr, float(tau), _path_length(arr), float(min_c))
+        dense = np.ascontiguousarray(_densify(arr, SAMPLE_STEP, self.fp.reach))
+        min_c = float(np.min(K.batch_clearance(dense, *self.fp.args, *self.world.args)))
+        return Route(arr, float(tau), _path_length(arr), min_c)
 
 
 def find_route(
@@ -359,7 +376,9 @@ def find_route(
     goal keeping clearance >= ``tau``; the other objects stand at ``object_poses``
     (default: their starts). None when the lattice search finds no route."""
     obj = scene.objects[object_index]
-    finder = RouteFinder(obj.shape, object_world(scene, object_index, object_poses), resolution, n_headings)
+    finder = RouteFinder(
+        obj.shape, object_world(scene, object_index, object_poses), resolution, n_headings
+    )
     return finder.find(obj.start, obj.goal, tau)
 
 
@@ -442,7 +461,9 @@ def robot_reach(
     r = float(scene.robot_radius)
     h = float(resolution)
     poses = scene.object_starts() if object_poses is None else np.asarray(object_poses, float)
-    robots = scene.robot_starts_array if robot_positions is None else np.asarray(robot_positions, float)
+    robots = (
+        scene.robot_starts_array if robot_positions is None else np.asarray(robot_positions, float)
+    )
     world = build_world(scene.workspace, object_obstacles(scene, None, poses))
     obj = scene.objects[object_index]
     own = build_world(

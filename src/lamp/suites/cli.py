@@ -23,7 +23,9 @@ def list_command() -> None:
 @suite_app.command("export")
 def export_command(
     name: str = typer.Argument(..., help=f"Suite name: {', '.join(SUITES)}."),
-    directory: Path = typer.Argument(..., help="Folder to write the scene files and manifest.json to."),
+    directory: Path = typer.Argument(
+        ..., help="Folder to write the scene files and manifest.json to."
+    ),
 ) -> None:
     """Write a suite's scene files (and its manifest.json) to DIRECTORY."""
     if name not in SUITES:

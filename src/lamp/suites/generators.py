@@ -134,7 +134,9 @@ def sample_object(rng: np.random.Generator, index: int) -> ObjectSpec:
     )
 
 
-def street_width(rng: np.random.Generator, obj: ObjectSpec, lo: float = 0.30, hi: float = 0.42) -> float:
+def street_width(
+    rng: np.random.Generator, obj: ObjectSpec, lo: float = 0.30, hi: float = 0.42
+) -> float:
     """A roomy passage for this object: the object plus a robot-room margin on each side,
     and wide enough for a rectangle to get round a right-angle corner with that margin
     (ladder-around-a-corner bound 2 (a sqrt 2 - w) >= l, with l, w inflated by 0.125 m)."""
@@ -207,7 +209,11 @@ def layout_random(rng: np.random.Generator, obj: ObjectSpec) -> Layout:
     # sites: random poses where the object fits with room all around
     world = C.build_world(WORKSPACE, _obstacles_of(obstacles))
     cand = np.stack(
-        [rng.uniform(0.3, W - 0.3, 300), rng.uniform(0.3, H - 0.3, 300), rng.uniform(-math.pi, math.pi, 300)],
+        [
+            rng.uniform(0.3, W - 0.3, 300),
+            rng.uniform(0.3, H - 0.3, 300),
+            rng.uniform(-math.pi, math.pi, 300),
+        ],
         axis=1,
     )
     if obj.is_circle:
@@ -219,7 +225,9 @@ def layout_random(rng: np.random.Generator, obj: ObjectSpec) -> Layout:
 
 
 # --------------------------------------------------------------------------- maze
-def _maze_widths(rng: np.random.Generator, obj: ObjectSpec, total: float, t: float) -> tuple[np.ndarray, np.ndarray]:
+def _maze_widths(
+    rng: np.random.Generator, obj: ObjectSpec, total: float, t: float
+) -> tuple[np.ndarray, np.ndarray]:
     """Free widths of the maze's columns (or rows) and whether each is tight: roomy ones
     hold the object plus robot room, tight ones (about 30%) only the object plus 7-10 cm.
     Wall thickness ``t`` sits on each internal grid line; the roomy widths are stretched
@@ -319,8 +327,11 @@ def layout_maze(rng: np.random.Generator, obj: ObjectSpec, want_tight: bool) -> 
     # shortcuts along tight corridors, preferring walls between cells far apart
     d_open = _graph_distances(nx * ny, edges(("open",), True))
     tight_walls = [k for k in keys if walls[k] == "wall" and not roomy_move(*k)]
-    far = [k for k in tight_walls
-           if d_open[cid(k[0], k[1]), cid(k[0] + (k[2] == "v"), k[1] + (k[2] == "h"))] > 2.5]
+    far = [
+        k
+        for k in tight_walls
+        if d_open[cid(k[0], k[1]), cid(k[0] + (k[2] == "v"), k[1] + (k[2] == "h"))] > 2.5
+    ]
     pool = far if far else tight_walls
     cells = nx * ny
     if want_tight:
@@ -366,8 +377,12 @@ def layout_maze(rng: np.random.Generator, obj: ObjectSpec, want_tight: bool) -> 
                     run = []
     sites = np.array([(xc[i], yc[j], 0.0) for j in range(ny) for i in range(nx)])
     n_tight_open = sum(1 for k, v in walls.items() if v == "open" and not roomy_move(*k))
-    info = {"grid": [nx, ny], "tight_columns": int(ct.sum()), "tight_rows": int(rt.sum()),
-            "tight_openings": n_tight_open}
+    info = {
+        "grid": [nx, ny],
+        "tight_columns": int(ct.sum()),
+        "tight_rows": int(rt.sum()),
+        "tight_openings": n_tight_open,
+    }
     return Layout(obstacles, sites, d_roomy, d_all, info)
 
 
@@ -414,7 +429,9 @@ class _Lattice:
         return float(cx), float(cy), u1 - u0, v1 - v0
 
 
-def _clip_box(lat: _Lattice, u0: float, u1: float, v0: float, v1: float, min_area: float = 0.02) -> dict[str, Any] | None:
+def _clip_box(
+    lat: _Lattice, u0: float, u1: float, v0: float, v1: float, min_area: float = 0.02
+) -> dict[str, Any] | None:
     """Obstacle dict of a lattice box clipped to the workspace (rectangle when entirely
     inside, else the convex polygon of the intersection; None when too small)."""
     W, H = WORKSPACE
@@ -460,10 +477,14 @@ def _lattice_graph(
                 continue
             if j + 1 < nv and node_id[i, j + 1] >= 0:  # along column-street i past row j
                 b = node_id[i, j + 1]
-                edges.append((a, b, float(math.dist(pts[a], pts[b])), states.get(("c", i, j), "roomy")))
+                edges.append(
+                    (a, b, float(math.dist(pts[a], pts[b])), states.get(("c", i, j), "roomy"))
+                )
             if i + 1 < nu and node_id[i + 1, j] >= 0:  # along row-street j past column i
                 b = node_id[i + 1, j]
-                edges.append((a, b, float(math.dist(pts[a], pts[b])), states.get(("r", i, j), "roomy")))
+                edges.append(
+                    (a, b, float(math.dist(pts[a], pts[b])), states.get(("r", i, j), "roomy"))
+                )
     return np.array(pts).reshape(-1, 2), edges
 
 
@@ -498,7 +519,9 @@ def _lattice_layout(
     obstacles: list[dict[str, Any]] = []
     for i in range(len(lat.bu)):
         for j in range(len(lat.bv)):
-            d = _clip_box(lat, lat.uc0[i], lat.uc0[i] + lat.bu[i], lat.vr0[j], lat.vr0[j] + lat.bv[j])
+            d = _clip_box(
+                lat, lat.uc0[i], lat.uc0[i] + lat.bu[i], lat.vr0[j], lat.vr0[j] + lat.bv[j]
+            )
             if d is not None:
                 obstacles.append(d)
     pts, edges = _lattice_graph(lat, states, margin=0.25)
@@ -547,7 +570,9 @@ def _lattice_layout(
     return Layout(obstacles, sites, dr, da, kind)
 
 
-def _fill_widths(rng: np.random.Generator, total: float, block: tuple[float, float], street: Callable[[], float]) -> tuple[np.ndarray, np.ndarray]:
+def _fill_widths(
+    rng: np.random.Generator, total: float, block: tuple[float, float], street: Callable[[], float]
+) -> tuple[np.ndarray, np.ndarray]:
     """Alternate streets and blocks until ``total`` is covered (street first and last)."""
     bs, ss = [], [street()]
     pos = ss[0]
@@ -566,7 +591,9 @@ def layout_tilt(rng: np.random.Generator, obj: ObjectSpec, want_tight: bool) -> 
     the workspace; some channel segments closed, some narrowed to a tight channel as long
     as the block beside it."""
     W, H = WORKSPACE
-    angle = math.radians(float(rng.choice([22.5, 33.75, 45.0, 56.25, 67.5]))) * float(rng.choice([-1.0, 1.0]))
+    angle = math.radians(float(rng.choice([22.5, 33.75, 45.0, 56.25, 67.5]))) * float(
+        rng.choice([-1.0, 1.0])
+    )
     span = math.hypot(W, H) + 1.5
 
     def street() -> float:
@@ -578,8 +605,12 @@ def layout_tilt(rng: np.random.Generator, obj: ObjectSpec, want_tight: bool) -> 
     total_v = float(np.sum(bv) + np.sum(sv))
     shift = rng.uniform(-0.4, 0.4, size=2)
     c, s = math.cos(angle), math.sin(angle)
-    off = np.array([c * (-0.5 * total_u + shift[0]) - s * (-0.5 * total_v + shift[1]),
-                    s * (-0.5 * total_u + shift[0]) + c * (-0.5 * total_v + shift[1])])
+    off = np.array(
+        [
+            c * (-0.5 * total_u + shift[0]) - s * (-0.5 * total_v + shift[1]),
+            s * (-0.5 * total_u + shift[0]) + c * (-0.5 * total_v + shift[1]),
+        ]
+    )
     lat = _Lattice(bu, su, bv, sv, np.array([W / 2, H / 2]) + off, angle)
 
     def plug(box: tuple[float, float, float, float], kind: str) -> list[dict[str, Any]]:
@@ -587,7 +618,9 @@ def layout_tilt(rng: np.random.Generator, obj: ObjectSpec, want_tight: bool) -> 
         d = _clip_box(lat, u0, u1, v0, v1, min_area=0.005)
         return [] if d is None else [d]
 
-    def tight(box: tuple[float, float, float, float], kind: str, gap: float) -> list[dict[str, Any]]:
+    def tight(
+        box: tuple[float, float, float, float], kind: str, gap: float
+    ) -> list[dict[str, Any]]:
         u0, u1, v0, v1 = box
         side = rng.random() < 0.5
         if kind == "c":  # narrow the column street across u
@@ -600,7 +633,17 @@ def layout_tilt(rng: np.random.Generator, obj: ObjectSpec, want_tight: bool) -> 
         return [] if d is None else [d]
 
     p_plug, p_tight = (0.25, 0.25) if want_tight else (0.2, 0.15)
-    return _lattice_layout(rng, lat, obj, p_plug, p_tight, plug, tight, [], {"angle_deg": round(math.degrees(angle), 2)})
+    return _lattice_layout(
+        rng,
+        lat,
+        obj,
+        p_plug,
+        p_tight,
+        plug,
+        tight,
+        [],
+        {"angle_deg": round(math.degrees(angle), 2)},
+    )
 
 
 def layout_warehouse(rng: np.random.Generator, obj: ObjectSpec, want_tight: bool) -> Layout:
@@ -654,7 +697,9 @@ def layout_warehouse(rng: np.random.Generator, obj: ObjectSpec, want_tight: bool
             break
         su_list.append(a)
         pos += a
-    lat = _Lattice(np.array(bu_list), np.array(su_list), np.array(bv_list), np.array(sv_list), np.zeros(2), 0.0)
+    lat = _Lattice(
+        np.array(bu_list), np.array(su_list), np.array(bv_list), np.array(sv_list), np.zeros(2), 0.0
+    )
     transpose = rng.random() < 0.5
     flip_x = rng.random() < 0.5
     flip_y = rng.random() < 0.5
@@ -677,7 +722,9 @@ def layout_warehouse(rng: np.random.Generator, obj: ObjectSpec, want_tight: bool
         um = rng.uniform(u0 + ln / 2, u1 - ln / 2)
         return [rect(*lat.box(um - ln / 2, um + ln / 2, v0, v1))]
 
-    def tight(box: tuple[float, float, float, float], kind: str, gap: float) -> list[dict[str, Any]]:
+    def tight(
+        box: tuple[float, float, float, float], kind: str, gap: float
+    ) -> list[dict[str, Any]]:
         u0, u1, v0, v1 = box
         side = rng.random() < 0.5
         across = (u1 - u0) if kind == "c" else (v1 - v0)
@@ -723,7 +770,9 @@ def layout_warehouse(rng: np.random.Generator, obj: ObjectSpec, want_tight: bool
     p_plug, p_tight = (0.2, 0.3) if want_tight else (0.15, 0.15)
     layout = _lattice_layout(rng, lat, obj, p_plug, p_tight, plug, tight, extra, {})
     layout.obstacles = [_transform(d, transpose, flip_x, flip_y) for d in layout.obstacles]
-    layout.sites = np.array([_transform_pose(p, transpose, flip_x, flip_y) for p in layout.sites]).reshape(-1, 3)
+    layout.sites = np.array(
+        [_transform_pose(p, transpose, flip_x, flip_y) for p in layout.sites]
+    ).reshape(-1, 3)
     layout.kind.update({"shelf_rows": len(bv_list), "transposed": transpose})
     return layout
 
@@ -743,7 +792,9 @@ def _transform_pose(p: np.ndarray, transpose: bool, fx: bool, fy: bool) -> np.nd
 def _transform(d: dict[str, Any], transpose: bool, fx: bool, fy: bool) -> dict[str, Any]:
     """Mirror/transpose an axis-aligned layout's obstacle (rectangles stay axis-aligned)."""
     if d["type"] == "polygon":
-        pts = [_transform_pose(np.array([x, y, 0.0]), transpose, fx, fy)[:2] for x, y in d["points"]]
+        pts = [
+            _transform_pose(np.array([x, y, 0.0]), transpose, fx, fy)[:2] for x, y in d["points"]
+        ]
         return polygon(np.array(pts))
     x, y, _ = _transform_pose(np.array([*d["center"], 0.0]), transpose, fx, fy)
     if d["type"] == "circle":
@@ -803,7 +854,11 @@ def _place(
         j = jitter if t < tries - 5 else 0.0
         x = site[0] + rng.uniform(-j, j)
         y = site[1] + rng.uniform(-j, j)
-        th = _sample_heading(rng, obj, site[2]) if t < tries - 3 else _wrap(site[2] + 0.5 * math.pi * (t % 2))
+        th = (
+            _sample_heading(rng, obj, site[2])
+            if t < tries - 3
+            else _wrap(site[2] + 0.5 * math.pi * (t % 2))
+        )
         pose = np.array([_r(x), _r(y), _r(th, 4)])
         if C.clearance(shape, world, pose) >= END_CLEARANCE:
             return pose
@@ -832,7 +887,9 @@ def _place_robots(
     return None
 
 
-def _pick_pair(rng: np.random.Generator, layout: Layout, want_tight: bool) -> tuple[int, int] | None:
+def _pick_pair(
+    rng: np.random.Generator, layout: Layout, want_tight: bool
+) -> tuple[int, int] | None:
     sites = layout.sites
     eu = np.hypot(sites[:, None, 0] - sites[None, :, 0], sites[:, None, 1] - sites[None, :, 1])
     dr, da = layout.d_roomy, layout.d_all
@@ -878,7 +935,9 @@ def generate_scene(family: str, index: int, *, full_checks: bool = True) -> Gene
         rejected[why] = rejected.get(why, 0) + 1
 
     for attempt in range(1, MAX_ATTEMPTS + 1):
-        layout = layout_random(rng, obj) if family == "random" else LAYOUTS[family](rng, obj, want_tight)
+        layout = (
+            layout_random(rng, obj) if family == "random" else LAYOUTS[family](rng, obj, want_tight)
+        )
         pair = _pick_pair(rng, layout, want_tight)
         if pair is None:
             reject("no site pair")
@@ -901,7 +960,9 @@ def generate_scene(family: str, index: int, *, full_checks: bool = True) -> Gene
             "workspace": [WORKSPACE[0], WORKSPACE[1]],
             "robots": {"radius": ROBOT_RADIUS, "starts": robots},
             "obstacles": layout.obstacles,
-            "objects": [{**obj.shape, "start": [float(v) for v in start], "goal": [float(v) for v in goal]}],
+            "objects": [
+                {**obj.shape, "start": [float(v) for v in start], "goal": [float(v) for v in goal]}
+            ],
         }
         try:
             scene = scene_from_dict(d, source=name)
@@ -930,4 +991,6 @@ def generate_scene(family: str, index: int, *, full_checks: bool = True) -> Gene
         else:
             report = C.ObjectReport(0, 0.0, 0.0, free, roomy, {}, reach)
         return Generated(family, index, d, scene, report, attempt, want_tight, layout.kind)
-    raise RuntimeError(f"{name}: no valid scene after {MAX_ATTEMPTS} attempts (rejected: {rejected})")
+    raise RuntimeError(
+        f"{name}: no valid scene after {MAX_ATTEMPTS} attempts (rejected: {rejected})"
+    )

@@ -1,4 +1,6 @@
-"""The ``iros`` suite: 9 objects moved one by one to spell I R O S (LAMP paper, long-horizon case study).
+"""The ``iros`` suite: 9 objects moved one by one to spell I R O S.
+
+The LAMP paper's long-horizon case study.
 
 A warehouse-like hall (5 m x 4 m): shelves along the walls, a storage yard where the
 objects wait in two rows, traffic barriers and cargo at the sides, and an assembly floor
@@ -47,25 +49,50 @@ PIECES: list[tuple[str, dict[str, Any], tuple[float, float, float], tuple[float,
     ("I", {"type": "rectangle", "size": [0.15, 0.50]}, (_I_X + 0.075, LETTER_Y, 0.0), _UP),
     ("R-stem", {"type": "rectangle", "size": [0.15, 0.50]}, (_R_X + 0.075, LETTER_Y, 0.0), _UP),
     ("R-bowl", {"type": "circle", "radius": 0.13}, (_R_X + 0.32, LETTER_Y + 0.12, 0.0), (1.0, 0.0)),
-    ("R-leg", {"type": "rectangle", "size": [0.15, 0.22]}, (_R_X + 0.365, LETTER_Y - 0.18, 0.7854), (0.6, -0.8)),
+    (
+        "R-leg",
+        {"type": "rectangle", "size": [0.15, 0.22]},
+        (_R_X + 0.365, LETTER_Y - 0.18, 0.7854),
+        (0.6, -0.8),
+    ),
     ("O", {"type": "circle", "radius": 0.27}, (_O_X + 0.27, LETTER_Y, 0.0), _UP),
-    ("S-top", {"type": "rectangle", "size": [0.45, 0.15]}, (_S_X + 0.225, LETTER_Y + 0.225, 0.0), _UP),
-    ("S-upper", {"type": "rectangle", "size": [0.15, 0.15]}, (_S_X + 0.075, LETTER_Y + 0.035, 0.0), _UP),
-    ("S-lower", {"type": "rectangle", "size": [0.15, 0.15]}, (_S_X + 0.375, LETTER_Y - 0.035, 0.0), _UP),
-    ("S-bottom", {"type": "rectangle", "size": [0.45, 0.15]}, (_S_X + 0.225, LETTER_Y - 0.225, 0.0), _UP),
+    (
+        "S-top",
+        {"type": "rectangle", "size": [0.45, 0.15]},
+        (_S_X + 0.225, LETTER_Y + 0.225, 0.0),
+        _UP,
+    ),
+    (
+        "S-upper",
+        {"type": "rectangle", "size": [0.15, 0.15]},
+        (_S_X + 0.075, LETTER_Y + 0.035, 0.0),
+        _UP,
+    ),
+    (
+        "S-lower",
+        {"type": "rectangle", "size": [0.15, 0.15]},
+        (_S_X + 0.375, LETTER_Y - 0.035, 0.0),
+        _UP,
+    ),
+    (
+        "S-bottom",
+        {"type": "rectangle", "size": [0.45, 0.15]},
+        (_S_X + 0.225, LETTER_Y - 0.225, 0.0),
+        _UP,
+    ),
 ]
 
 # start poses in the yard: the front row (y = 1.65) is emptied first
 STARTS: list[tuple[float, float, float]] = [
-    (0.95, 1.65, 1.5708),   # I, lying across
-    (1.85, 1.65, 0.3),      # R-stem
-    (2.75, 1.65, 0.0),      # R-bowl
-    (3.65, 1.65, -0.4),     # R-leg
-    (0.95, 0.75, 0.0),      # O
-    (1.85, 0.75, 0.5),      # S-top
-    (2.75, 0.75, 1.2),      # S-upper
-    (3.65, 0.75, -0.9),     # S-lower
-    (4.35, 1.2, 1.5708),    # S-bottom
+    (0.95, 1.65, 1.5708),  # I, lying across
+    (1.85, 1.65, 0.3),  # R-stem
+    (2.75, 1.65, 0.0),  # R-bowl
+    (3.65, 1.65, -0.4),  # R-leg
+    (0.95, 0.75, 0.0),  # O
+    (1.85, 0.75, 0.5),  # S-top
+    (2.75, 0.75, 1.2),  # S-upper
+    (3.65, 0.75, -0.9),  # S-lower
+    (4.35, 1.2, 1.5708),  # S-bottom
 ]
 
 ROBOT_STARTS = [[0.3, 2.45], [0.3, 2.25], [0.5, 2.35]]
@@ -149,7 +176,9 @@ class StepReport:
             "index": self.index,
             "piece": self.piece,
             "free_route": None if self.free_route is None else self.free_route.to_dict(),
-            "approach_route": None if self.approach_route is None else self.approach_route.to_dict(),
+            "approach_route": None
+            if self.approach_route is None
+            else self.approach_route.to_dict(),
             "approach_pose": [round(float(v), 4) for v in approach_pose(self.index)],
             "final_push_ok": self.final_push_ok,
             "robots": self.reach.to_dict(),
@@ -179,7 +208,9 @@ def check_sequence(scene: Scene) -> list[StepReport]:
         ends = np.ascontiguousarray(np.array([app, obj.goal], dtype=float))
         ca, cg = K.batch_clearance(ends, *fp.args, *world.args)
         push_ok = bool(
-            K.motion_ok(ends[0], ends[1], ca, cg, C.FREE_CLEARANCE, C.MAX_DEPTH, *fp.args, *world.args)
+            K.motion_ok(
+                ends[0], ends[1], ca, cg, C.FREE_CLEARANCE, C.MAX_DEPTH, *fp.args, *world.args
+            )
         )
         reach = C.robot_reach(scene, k, poses)
         # after the push the robots stand on the approach side of the placed piece; they
@@ -187,7 +218,9 @@ def check_sequence(scene: Scene) -> list[StepReport]:
         after = state_poses(scene, k + 1)
         ux, uy = PIECES[k][3]
         ext = _extent_along(obj.shape, obj.goal[2], (ux, uy))
-        behind = np.array([obj.goal[0] + (ext + r + 0.03) * ux, obj.goal[1] + (ext + r + 0.03) * uy])
+        behind = np.array(
+            [obj.goal[0] + (ext + r + 0.03) * ux, obj.goal[1] + (ext + r + 0.03) * uy]
+        )
         robots_leave = _same_component(scene, after, behind)
         out.append(StepReport(k, PIECES[k][0], free, roomy, push_ok, reach, robots_leave))
     return out
@@ -215,7 +248,7 @@ def _same_component(scene: Scene, poses: np.ndarray, point: np.ndarray, h: float
     xs = (np.arange(nx) + 0.5) * h
     ys = (np.arange(ny) + 0.5) * h
     gx, gy = np.meshgrid(xs, ys)
-    free = (C.point_clearance(world, np.stack([gx, gy], axis=-1)) >= r + 0.5 * h)
+    free = C.point_clearance(world, np.stack([gx, gy], axis=-1)) >= r + 0.5 * h
     labels, _ = ndimage.label(free)
 
     def label_of(p: np.ndarray) -> int:
@@ -236,10 +269,11 @@ def build() -> tuple[dict[str, Any], Scene, list[StepReport]]:
 def goal_footprints_disjoint(scene: Scene, min_gap: float = 0.03) -> bool:
     """Every two goal footprints are at least ``min_gap`` apart (exact distances)."""
     for i, a in enumerate(scene.objects):
-        others = [
-            Obstacle(b.shape, b.goal) for j, b in enumerate(scene.objects) if j != i
-        ]
-        world = C.build_world((1e3, 1e3), [Obstacle(o.shape, (o.pose[0] + 500, o.pose[1] + 500, o.pose[2])) for o in others])
+        others = [Obstacle(b.shape, b.goal) for j, b in enumerate(scene.objects) if j != i]
+        world = C.build_world(
+            (1e3, 1e3),
+            [Obstacle(o.shape, (o.pose[0] + 500, o.pose[1] + 500, o.pose[2])) for o in others],
+        )
         g = np.array([a.goal[0] + 500, a.goal[1] + 500, a.goal[2]])
         if C.clearance(a.shape, world, g) < min_gap:
             return False

@@ -40,14 +40,22 @@ SUITES: dict[str, SuiteInfo] = {
     s.name: s
     for s in (
         SuiteInfo("random", "sparse scattered circles and boxes (LAMP paper: Random)", 25),
-        SuiteInfo("maze", "corridor maze with roomy and object-tight corridors (LAMP paper: Maze)", 25),
-        SuiteInfo("tilt", "blocks at oblique angles forming diagonal channels (LAMP paper: Tilt)", 25),
+        SuiteInfo(
+            "maze", "corridor maze with roomy and object-tight corridors (LAMP paper: Maze)", 25
+        ),
+        SuiteInfo(
+            "tilt", "blocks at oblique angles forming diagonal channels (LAMP paper: Tilt)", 25
+        ),
         SuiteInfo(
             "warehouse",
             "shelf rows, pallets, cargo and traffic barriers (LAMP paper: Warehouse)",
             25,
         ),
-        SuiteInfo("iros", "9 objects moved one by one to spell I R O S (LAMP paper: long-horizon case study)", 1),
+        SuiteInfo(
+            "iros",
+            "9 objects moved one by one to spell I R O S (LAMP paper: long-horizon case study)",
+            1,
+        ),
     )
 }
 
@@ -62,9 +70,7 @@ def suite_info(name: str) -> SuiteInfo:
     try:
         return SUITES[name]
     except KeyError:
-        raise ValueError(
-            f"unknown suite {name!r}; valid names: {', '.join(SUITES)}"
-        ) from None
+        raise ValueError(f"unknown suite {name!r}; valid names: {', '.join(SUITES)}") from None
 
 
 def suite_dir(name: str) -> Path:

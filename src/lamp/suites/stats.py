@@ -47,6 +47,7 @@ def stats_markdown(manifests: dict[str, dict[str, Any]] | None = None) -> str:
     """The text of ``data/STATS.md`` (from the committed manifests unless given)."""
     if manifests is None:
         manifests = {name: suite_manifest(name) for name in SUITES}
+    chk = manifests["random"]["checks"]
     lines = [
         "# Benchmark suite statistics",
         "",
@@ -54,17 +55,17 @@ def stats_markdown(manifests: dict[str, dict[str, Any]] | None = None) -> str:
         "Triples are min / median / max. Lengths are paths of the object's centre (m).",
         "",
         "- *free route*: shortest route keeping clearance >= "
-        f"{manifests['random']['checks']['free_clearance']} m from obstacles and border;",
+        f"{chk['free_clearance']} m from obstacles and border;",
         "- *robot-room route*: shortest route keeping clearance >= "
-        f"{manifests['random']['checks']['robot_room']} m (a robot fits beside the object everywhere);",
+        f"{chk['robot_room']} m (a robot fits beside the object everywhere);",
         "- *too-tight shortest route*: the robot-room route is longer than the free route by >= "
-        f"{manifests['random']['checks']['tight_min_extra']} m and by a factor >= "
-        f"{manifests['random']['checks']['tight_min_ratio']} (the LAMP paper's Fig. 1 situation);",
+        f"{chk['tight_min_extra']} m and by a factor >= "
+        f"{chk['tight_min_ratio']} (the LAMP paper's Fig. 1 situation);",
         "- *min clearance*: exact minimum along the route, sampled every 5 mm of motion.",
         "",
-        "| family | scenes | circles (radius) | rectangles (sides) | obstacles | free route length | "
-        "free route min clearance | robot-room route length | robot-room min clearance | "
-        "length ratio | too-tight shortest route |",
+        "| family | scenes | circles (radius) | rectangles (sides) | obstacles "
+        "| free route length | free route min clearance | robot-room route length "
+        "| robot-room min clearance | length ratio | too-tight shortest route |",
         "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for name in SUITES:
@@ -92,7 +93,8 @@ def stats_markdown(manifests: dict[str, dict[str, Any]] | None = None) -> str:
         s = family_stats(manifests[name])
         med = [float(np.median(s[k])) for k in ("free_length", "l05", "l08", "robot_length")]
         lines.append(
-            f"| {name} | " + " | ".join(f"{v:.2f}" for v in med)
+            f"| {name} | "
+            + " | ".join(f"{v:.2f}" for v in med)
             + f" | {_mmm(s['start_clearance'], '{:.3f}')} | {_mmm(s['ring'])} |"
         )
     if "iros" in manifests:
@@ -106,10 +108,14 @@ def stats_markdown(manifests: dict[str, dict[str, Any]] | None = None) -> str:
             "|---|---|---|---|---|---|---|",
         ]
         for o in sc["objects"]:
-            shape = f"circle r={o['radius']}" if o["type"] == "circle" else f"rectangle {o['size'][0]} x {o['size'][1]}"
+            shape = (
+                f"circle r={o['radius']}"
+                if o["type"] == "circle"
+                else f"rectangle {o['size'][0]} x {o['size'][1]}"
+            )
+            app = o["approach_route"]
             lines.append(
                 f"| {o['index']} | {o['piece']} | {shape} | {o['free_route']['length']:.2f} | "
-                f"{o['approach_route']['length']:.2f} | {o['approach_route']['min_clearance']:.3f} | "
-                f"{o['final_push_ok']} |"
+                f"{app['length']:.2f} | {app['min_clearance']:.3f} | {o['final_push_ok']} |"
             )
     return "\n".join(lines) + "\n"
