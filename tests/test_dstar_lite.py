@@ -254,6 +254,16 @@ def test_bad_calls():
         DStarLite(graph, max_expansions=0)
     assert dstar.plan_shortest_path(2) == [2]
     assert dstar.plan_shortest_path(0) == [0, 1, 2]
+    # a virtual start; its edges can be penalised while it is the start, not afterwards
+    vs = ("v", 0.5, 0.0)
+    assert dstar.plan_shortest_path(vs, [(0, 0.5), (1, 0.6)]) == [vs, 1, 2]
+    dstar.penalize(vs, 1, 1.0)
+    assert dstar.cost(vs, 1) == pytest.approx(1.6)
+    assert dstar.plan_shortest_path(vs, [(0, 0.5), (1, 0.6)]) == [vs, 0, 1, 2]
+    assert dstar.path_cost() == pytest.approx(2.5)
+    assert dstar.plan_shortest_path(1) == [1, 2]
+    with pytest.raises(ValueError, match="not an edge"):
+        dstar.update_change(vs, 1, 5.0)
 
 
 class CurrentCosts:

@@ -92,7 +92,7 @@ class GCoLattice(ObjectLattice):
         if u != self.anchor_node or self.node_valid(u):
             return super().successors(u)
         cached = self._succ.get(u)
-        if cached:
+        if cached is not None:
             return cached
         # the start is invalid for the inflated footprint: leave it without inflation
         idx, nbrs = self._neighbours(u)

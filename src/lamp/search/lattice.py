@@ -388,7 +388,10 @@ class ObjectLattice:
         return self.successors(v)
 
     def cost(self, u: Node, v: Node) -> float:
-        """Cost of the lattice edge u -> v; ``inf`` when it is not a valid edge."""
+        """Cost of the lattice edge u -> v; ``inf`` when it is not a valid edge (or when
+        ``u`` is not a lattice node, e.g. a virtual start)."""
+        if not self.is_node(u):
+            return math.inf
         for w, c in self.successors(u):
             if w == v:
                 return c
