@@ -322,6 +322,37 @@ def _compare(a: tuple, b: tuple) -> None:
           f"p95 CPU time {a[2] / b[2]:.2f}x")
 
 
+def bench_space(families: list[str]) -> None:
+    """Cost of RobotSpace construction on the 4 m maps: the static layer (first call per
+    scene), a new object pose laid over it, a cache hit, and the 5 cm planning lattice."""
+    rows: dict[str, list[float]] = {"static layer + object": [], "new object pose": [],
+                                    "cache hit": [], "lattice 5 cm": [], "lattice 2 cm": []}
+    for fam in families:
+        scenes = _suite_scenes(fam) or [contact_instance(fam, 7 + 1000 * k, "spread")[0]
+                                        for k in range(10)]
+        for sc in scenes:
+            pose = np.array(sc.object_starts())
+            for key, fn in (
+                ("static layer + object", lambda sc=sc: (clear_caches(),
+                                                          RobotSpace.from_scene(sc))),
+                ("new object pose", lambda sc=sc, pose=pose: RobotSpace.from_scene(
+                    sc, object_poses=pose + [0.01, 0.0, 0.0])),
+                ("cache hit", lambda sc=sc, pose=pose: RobotSpace.from_scene(
+                    sc, object_poses=pose + [0.01, 0.0, 0.0])),
+                ("lattice 5 cm", lambda sc=sc, pose=pose: get_lattice(RobotSpace.from_scene(
+                    sc, object_poses=pose + [0.01, 0.0, 0.0]), 0.05)),
+                ("lattice 2 cm", lambda sc=sc, pose=pose: get_lattice(RobotSpace.from_scene(
+                    sc, object_poses=pose + [0.01, 0.0, 0.0]), 0.02)),
+            ):
+                c0 = time.process_time()
+                fn()
+                rows[key].append(time.process_time() - c0)
+    print("\n(0) RobotSpace on the 4 m maps (CPU ms per call, median / p95 over scenes)")
+    for key, v in rows.items():
+        a = np.array(v) * 1e3
+        print(f"  {key:<24} {np.median(a):7.2f} / {np.percentile(a, 95):7.2f} ms")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="fewer instances")
@@ -337,6 +368,8 @@ def main() -> None:
     warmup()
     print(f"Gspi benchmark: times per plan_paths call (CPU = process time, robust to a busy "
           f"machine; wall = elapsed); load average at start {os.getloadavg()[0]:.1f}")
+
+    bench_space(args.families.split(","))
 
     print("\n(a) 3 robots -> 3 contact points around the object")
     all_g: list = []

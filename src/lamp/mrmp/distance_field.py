@@ -10,9 +10,9 @@ grid; between two such nodes the clearance is at least ``(c_a + c_b - |ab|) / 2`
 (1-Lipschitz cone bound). Edges failing that bound by less than ``0.75 h`` (motions that
 graze an obstacle) are decided by the exact analytic segment clearance instead.
 
-A distance field is Dijkstra over the lattice from seed nodes with initial costs (the
-straight links from a continuous goal to nearby nodes); it is cached per
-(space key, lattice step, seeds).
+:meth:`Lattice.field` is a full multi-source Dijkstra over the lattice (used as the
+reference in tests; the planner resumes its own Dijkstra lazily, see
+:mod:`lamp.mrmp.gspi`). Lattices are cached on their space (:func:`get_lattice`).
 """
 
 from __future__ import annotations
@@ -33,7 +33,7 @@ __all__ = ["Lattice", "get_lattice", "DIRS"]
 DIRS = np.array(
     [[1, 0], [1, 1], [0, 1], [-1, 1], [1, -1], [0, -1], [-1, -1], [-1, 0]], dtype=np.int64
 )
-_FIELD_CACHE_SIZE = 512
+_FIELD_CACHE_SIZE = 16
 
 
 @nb.njit(cache=True)

@@ -19,9 +19,24 @@ Each time step (GCo's Gspi, with the fixes listed in the issue):
    (backtracking). Continuous-space changes: a move is checked against every decided
    robot's whole linear motion (robot-robot distance >= 2r over the step, exact), and
    descendants also keep clear of their ancestors' current positions (the continuous
-   form of PIBT's no-swap rule), which keeps "stay" always valid for a failed robot;
+   form of PIBT's no-swap rule), which keeps "stay" always valid for a failed robot; a
+   child with no move compatible with its ancestors' motions may still *yield* (move
+   clear of their positions) so that the way opens for the next step;
 3. priorities: robots at their goal (or without one) reset to their fractional tie-break
    part, the others grow by 1.
+
+Heuristic: one Dijkstra per goal over the lattice (8-connected, diagonal moves cost
+``L * sqrt(2)``), seeded with the goal's links and *resumed lazily* only as far as the
+queries need (pypibt's lazy distance table, in compiled code): a 3-robot call near the
+object settles a few hundred nodes. Initial assignment: ``linear_sum_assignment`` on
+these distances (unreachable pairs excluded; a goal no robot can reach is reported at
+once). Lattices: 5 cm first; when that fails in a way a finer lattice can fix (a goal or
+start that cannot be linked, a passage narrower than the lattice, a stall) 3 cm and then
+2 cm are tried while time is left.
+
+Output: the vertex sequence, all-wait steps dropped, each step cut into the fewest equal
+sub-steps that keep every robot's consecutive rows <= ``max_spacing`` apart (linear
+motion within a step is exactly what was checked, so the rows are a faithful sampling).
 
 Obstacle safety: lattice edges are checked conservatively over the whole motion
 (:mod:`lamp.mrmp.distance_field`); links are checked with the exact segment clearance.
