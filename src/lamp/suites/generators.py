@@ -162,7 +162,8 @@ class Layout:
     d_roomy: np.ndarray
     #: the same, also using tight passages
     d_all: np.ndarray
-    kind: dict[str, Any] = field(default_factory=dict)
+    #: summary of the layout for the manifest (grid size, tight/closed passages, ...)
+    info: dict[str, Any] = field(default_factory=dict)
 
 
 def _graph_distances(n: int, edges: list[tuple[int, int, float]]) -> np.ndarray:
@@ -505,7 +506,7 @@ def _lattice_layout(
     render_plug: Callable[[tuple[float, float, float, float], str], list[dict[str, Any]]],
     render_tight: Callable[[tuple[float, float, float, float], str, float], list[dict[str, Any]]],
     extra: list[dict[str, Any]],
-    kind: dict[str, Any],
+    info: dict[str, Any],
 ) -> Layout:
     """Blocks + segment states -> Layout (obstacles, sites at intersections and segment
     midpoints, passage-graph distances)."""
@@ -564,10 +565,10 @@ def _lattice_layout(
     np.fill_diagonal(da, 0.0)
     heading = np.full((m, 1), lat.angle)
     sites = np.concatenate([np.array(site_xy).reshape(-1, 2), heading], axis=1)
-    kind = dict(kind)
-    kind["tight_passages"] = sum(1 for v in states.values() if v == "tight")
-    kind["closed_passages"] = sum(1 for v in states.values() if v == "plug")
-    return Layout(obstacles, sites, dr, da, kind)
+    info = dict(info)
+    info["tight_passages"] = sum(1 for v in states.values() if v == "tight")
+    info["closed_passages"] = sum(1 for v in states.values() if v == "plug")
+    return Layout(obstacles, sites, dr, da, info)
 
 
 def _fill_widths(
@@ -773,7 +774,7 @@ def layout_warehouse(rng: np.random.Generator, obj: ObjectSpec, want_tight: bool
     layout.sites = np.array(
         [_transform_pose(p, transpose, flip_x, flip_y) for p in layout.sites]
     ).reshape(-1, 3)
-    layout.kind.update({"shelf_rows": len(bv_list), "transposed": transpose})
+    layout.info.update({"shelf_rows": len(bv_list), "transposed": transpose})
     return layout
 
 
@@ -847,9 +848,7 @@ def _place(
     tries: int = 30,
 ) -> np.ndarray | None:
     """A pose near ``site`` with clearance >= END_CLEARANCE (None when none found)."""
-    from lamp.scene.model import shape_from_dict as _sfd
-
-    shape = _sfd(obj.shape)
+    shape = shape_from_dict(obj.shape)
     for t in range(tries):
         j = jitter if t < tries - 5 else 0.0
         x = site[0] + rng.uniform(-j, j)
@@ -990,7 +989,7 @@ def generate_scene(family: str, index: int, *, full_checks: bool = True) -> Gene
             report = C.check_object(scene, 0, finder=finder, known=known)
         else:
             report = C.ObjectReport(0, 0.0, 0.0, free, roomy, {}, reach)
-        return Generated(family, index, d, scene, report, attempt, want_tight, layout.kind)
+        return Generated(family, index, d, scene, report, attempt, want_tight, layout.info)
     raise RuntimeError(
         f"{name}: no valid scene after {MAX_ATTEMPTS} attempts (rejected: {rejected})"
     )
