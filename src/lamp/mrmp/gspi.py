@@ -511,12 +511,11 @@ def _run_steps(
 
 
 @nb.njit(cache=True)
-def _start_costs(gr: tuple, V: int, gv0: int, hs: tuple, N: int, M: int) -> np.ndarray:
-    """(N, M) heuristic distance from each start vertex to each goal."""
-    C = np.empty((N, M))
+def _start_costs(gr: tuple, V: int, gv0: int, hs: tuple, N: int, m: int) -> np.ndarray:
+    """(N,) heuristic distance from each start vertex to goal m."""
+    C = np.empty(N)
     for i in range(N):
-        for m in range(M):
-            C[i, m] = _hval(m, V + i, gr, V, gv0, hs)
+        C[i] = _hval(m, V + i, gr, V, gv0, hs)
     return C
 
 
@@ -704,17 +703,21 @@ def plan_paths(
     out: _Attempt | None = None
     for L in steps:
         if out is not None and time.perf_counter() >= deadline:
+            reasons.append(f"time limit of {time_limit:g} s reached before trying the "
+                           f"{L:g} m lattice")
             break
         out = _attempt(space, S, G, c_start, c_goal, float(L), link_radius, goal_swapping,
                        max_spacing, max_steps, stall_steps, goal0, seed, deadline,
                        float(time_limit))
         stats["attempts"].append({"lattice_step": float(L), **out.stats})
         stats.update(out.stats)
-        if out.success or not out.retry:
+        if out.success:
             break
         reasons.append(f"lattice {L:g} m: {out.reason}")
+        if not out.retry:
+            break
     assert out is not None
-    reason = out.reason if out.success or len(reasons) <= 1 else "; ".join(reasons)
+    reason = "" if out.success else "; ".join(reasons)
     return MRMPPlan(out.success, out.paths, out.goal_of, reason, out.iterations,
                     time.perf_counter() - t_begin, stats)
 
@@ -741,6 +744,10 @@ def _attempt(
     r = space.radius
     thr = space.threshold
     lat: Lattice = get_lattice(space, lattice_step)
+    if time.perf_counter() > deadline:
+        return _Attempt(False, f"time limit of {time_limit:g} s reached while building the "
+                        f"{lattice_step:g} m lattice", S[:, None, :].copy(),
+                        np.full(N, -1, np.int64), 0, False, {})
     L = lat.step
     R = 1.5 * L if link_radius is None else float(link_radius)
     V = lat.V
@@ -803,7 +810,13 @@ def _attempt(
     gr = (coords, lat.nbr, lat.dlen, xptr, xidx)
 
     # ---- initial assignment (optimal, on heuristic distances) ---------------------
-    C = _start_costs(gr, V, gv0, hs, N, M)  # (N, M)
+    C = np.empty((N, M))
+    for m in range(M):  # one goal at a time, so that the time limit is kept
+        C[:, m] = _start_costs(gr, V, gv0, hs, N, m)
+        if time.perf_counter() > deadline:
+            return result(False, f"time limit of {time_limit:g} s reached while computing "
+                          "heuristic distances", S[:, None, :].copy(),
+                          np.full(N, -1, np.int64), 0)
     reach_goal = np.isfinite(C).any(axis=0)
     if not reach_goal.all():
         bad = np.nonzero(~reach_goal)[0].tolist()
