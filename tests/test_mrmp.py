@@ -370,3 +370,41 @@ def test_two_robot_standoff_resolved_by_yielding() -> None:
         plan = _plan_and_check(scene, S, G, initial_goal_of=[0, 1], goal_swapping=swap,
                                lattice_step=0.05, time_limit=2.0)
         assert plan.success, plan.reason
+
+
+def test_checker_catches_violations() -> None:
+    """The oracle itself can fail: corrupt a valid plan in each checked way."""
+    obj = SceneObject(Circle(0.2), (1.0, 0.75, 0.0), (1.0, 0.75, 0.0))
+    scene = _scene(2.0, 1.5, (), (obj,))
+    S = np.array([[0.3, 0.3], [0.3, 1.2]])
+    G = np.array([[1.7, 0.3], [1.7, 1.2]])
+    good = _plan_and_check(scene, S, G)
+    assert good.success
+
+    def corrupted(**kw) -> MRMPPlan:
+        return MRMPPlan(kw.get("success", True), kw.get("paths", good.paths.copy()),
+                        kw.get("goal_of", good.goal_of.copy()), kw.get("reason", ""))
+
+    P = good.paths.copy()
+    P[0, 5] += [0.0, 0.03]  # a jump > 2 cm
+    with pytest.raises(AssertionError, match="step"):
+        check_plan(scene, S, G, corrupted(paths=P))
+    # straight through the object, finely sampled
+    line = np.linspace([0.3, 0.75], [1.7, 0.75], 100)
+    P = np.stack([np.linspace(S[0], line[0], 30)[:-1].tolist() + line.tolist(),
+                  np.repeat(S[1:2], 129, axis=0).tolist()])
+    P[1, -1] = G[1]
+    with pytest.raises(AssertionError):
+        check_plan(scene, S, np.array([[1.7, 0.75], [0.3, 1.2]]), corrupted(paths=P))
+    # robots crossing between two rows (both rows fine, the motion between them not)
+    S2 = np.array([[0.5, 0.3], [0.52, 0.3985]])  # 10.05 cm apart
+    P = np.array([[[0.5, 0.3], [0.52, 0.3]], [[0.52, 0.3985], [0.5, 0.3985]]])  # 10.05 cm
+    assert np.hypot(*(P[0, 1] - P[1, 1])) > 2 * R and np.hypot(*(P[0, 0] - P[1, 0])) > 2 * R
+    with pytest.raises(AssertionError, match="robots 0 and 1 come 0.0985"):
+        check_plan(scene, S2, G, corrupted(paths=P, goal_of=np.array([-1, -1]), success=False,
+                                           reason="x"))
+    # goal bookkeeping
+    with pytest.raises(AssertionError, match="goal_of"):
+        check_plan(scene, S, G, corrupted(goal_of=np.array([0, 0])))
+    with pytest.raises(AssertionError, match="reason"):
+        check_plan(scene, S, G, corrupted(success=False))
