@@ -60,7 +60,10 @@ def train_cmd(
     seed: int = typer.Option(0, help="Seed (initialisation, split, batches)."),
     threads: int = typer.Option(1, help="Torch threads."),
     max_minutes: float = typer.Option(None, help="Stop after the epoch crossing this budget."),
-    export_to: Path = typer.Option(None, "--export", help="Also write the model here."),
+    export_to: Path = typer.Option(None, "--export", help="Also write the model here "
+                                   "(plus a .json with its metadata next to it)."),
+    guidance: float = typer.Option(None, help="Smoothness guidance stored in the export."),
+    temperature: float = typer.Option(None, help="Token temperature stored in the export."),
 ) -> None:
     """Train (or resume training) the flow-matching proposer; logs losses per epoch."""
     _threads(threads)
@@ -74,12 +77,19 @@ def train_cmd(
     summary = train(ds, run_dir, TrainConfig(epochs=epochs, seed=seed, threads=threads),
                     max_minutes=max_minutes)
     if export_to is not None:
-        import shutil
+        from lamp.manip.network import load_model
+        from lamp.manip.train import export
 
-        export_to.parent.mkdir(parents=True, exist_ok=True)
-        shutil.copyfile(run_dir / "model.pt", export_to)
-        meta = {"checkpoint": export_to.name, "data_file": str(data),
-                "data_meta": ds.meta, **summary}
+        model = load_model(run_dir / "model.pt")
+        if guidance is not None:
+            model.sampler.guidance = guidance
+        if temperature is not None:
+            model.sampler.temperature = temperature
+        summary.pop("wall_time_s_this_run", None)
+        meta = {"checkpoint": export_to.name, "data_file": str(data), "data_meta": ds.meta,
+                "sampler": vars(model.sampler), "parameters": sum(
+                    p.numel() for p in model.net.parameters()), **summary}
+        export(model.net, model.traj_scale, export_to, meta, model.sampler)
         export_to.with_suffix(".json").write_text(json.dumps(meta, indent=1) + "\n")
         typer.echo(f"exported {export_to} and {export_to.with_suffix('.json').name}")
     typer.echo(json.dumps(summary, indent=1))
@@ -95,6 +105,8 @@ def eval_cmd(
     out: Path = typer.Option(None, "--out", help="Write the report as JSON here."),
     geometric: bool = typer.Option(True, help="Run the geometric proposer side by side."),
     record: bool = typer.Option(False, help="Add the figures to the checkpoint's .json."),
+    polygons: bool = typer.Option(False, help="Also evaluate on random convex polygons "
+                                  "(out of the training distribution)."),
 ) -> None:
     """Execute proposals for held-out shapes and motions in the simulator; report accuracy."""
     _threads(threads)
@@ -106,6 +118,10 @@ def eval_cmd(
         proposers["geometric"] = GeometricProposer()
     report = evaluate(proposers, cases_per_budget=cases, k=k, seed=seed)
     typer.echo(format_report(report))
+    if polygons:
+        report_poly = evaluate(proposers, cases_per_budget=cases, k=k, seed=seed, polygons=True)
+        typer.echo(format_report(report_poly))
+        report = {**report, "polygons_report": report_poly}
     if out is not None:
         out.parent.mkdir(parents=True, exist_ok=True)
         out.write_text(json.dumps(report, indent=1))

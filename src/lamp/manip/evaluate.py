@@ -22,7 +22,7 @@ from lamp.geometry.se2 import relative, transform_points, wrap_angle
 from lamp.manip.contacts import closest_boundary, contacts_valid
 from lamp.manip.dataset import WORKSPACE, densify, object_scene, sample_motion, sample_shape
 from lamp.manip.proposals import Proposal, ProposalModel
-from lamp.scene.model import Shape
+from lamp.scene.model import Polygon, Shape
 
 APPROACH = 0.1
 """How far out along the contact normal the robots start before the approach (m)."""
@@ -51,10 +51,23 @@ def execute_proposal(shape: Shape, proposal: Proposal, motion: np.ndarray) -> di
     }
 
 
-def held_out_cases(n: int, seed: int) -> list[tuple[Shape, np.ndarray]]:
-    """``n`` (shape, motion) cases drawn like the training data but from a separate seed."""
+def random_polygon(rng: np.random.Generator) -> Polygon:
+    """A convex polygon with 3-6 vertices within 0.15-0.30 m of its origin (out of the
+    training distribution, which only has circles and rectangles)."""
+    n = int(rng.integers(3, 7))
+    ang = np.sort(rng.uniform(0.0, 2 * np.pi, n))
+    ang = ang[0] + np.linspace(0.0, 2 * np.pi, n, endpoint=False) + rng.uniform(-0.25, 0.25, n)
+    r = rng.uniform(0.15, 0.30)
+    pts = np.stack([r * np.cos(ang), r * np.sin(ang)], axis=1)
+    return Polygon(tuple((float(x), float(y)) for x, y in pts))
+
+
+def held_out_cases(n: int, seed: int, polygons: bool = False) -> list[tuple[Shape, np.ndarray]]:
+    """``n`` (shape, motion) cases drawn like the training data but from a separate seed
+    (``polygons``: random convex polygons instead of circles and rectangles)."""
     rng = np.random.default_rng([seed, 7919])
-    return [(sample_shape(rng), sample_motion(rng)) for _ in range(n)]
+    make = random_polygon if polygons else sample_shape
+    return [(make(rng), sample_motion(rng)) for _ in range(n)]
 
 
 def _stats(rows: list[dict[str, float]], motions: list[np.ndarray]) -> dict[str, float]:
@@ -82,18 +95,22 @@ def evaluate(
     seed: int = 12345,
     budgets: tuple[int, ...] = (1, 2, 3),
     progress: bool = True,
+    polygons: bool = False,
 ) -> dict[str, Any]:
-    """Run every proposer on the same held-out cases; returns a JSON-ready report."""
+    """Run every proposer on the same held-out cases; returns a JSON-ready report.
+
+    ``polygons``: evaluate on random convex polygons (out of distribution) instead.
+    """
     from tqdm import tqdm
 
     report: dict[str, Any] = {"seed": seed, "cases_per_budget": cases_per_budget, "k": k,
-                              "approach_m": APPROACH, "results": {}}
+                              "approach_m": APPROACH, "polygons": polygons, "results": {}}
     total = len(proposers) * len(budgets) * cases_per_budget
     bar = tqdm(total=total, unit="case", disable=not progress)
     for name, prop in proposers.items():
         per_budget: dict[str, Any] = {}
         for b in budgets:
-            cases = held_out_cases(cases_per_budget, seed + b)
+            cases = held_out_cases(cases_per_budget, seed + b, polygons)
             rows, motions, times = [], [], []
             for i, (shape, motion) in enumerate(cases):
                 t0 = time.perf_counter()
@@ -118,8 +135,9 @@ def format_report(report: dict[str, Any]) -> str:
             ("mean_err_r", "mean_r", "{:.3f}"), ("median_err_r", "med_r", "{:.3f}"),
             ("contact_validity", "valid", "{:.0%}"), ("mean_robots", "robots", "{:.2f}"),
             ("median_propose_ms", "ms", "{:.1f}")]
-    lines = [f"held-out cases per budget: {report['cases_per_budget']}, proposals per case: "
-             f"{report['k']}, seed {report['seed']}",
+    kind = "random convex polygons" if report.get("polygons") else "circles and rectangles"
+    lines = [f"held-out {kind}, cases per budget: {report['cases_per_budget']}, proposals per "
+             f"case: {report['k']}, seed {report['seed']}",
              f"{'proposer':<10} {'b':>2} " + " ".join(f"{h:>9}" for _, h, _ in cols)]
     for name, per in report["results"].items():
         for b, st in per.items():

@@ -9,8 +9,8 @@ and trajectory velocity. See ``lamp.manip.flow`` for the paths and losses.
 ``FlowProposer.propose`` draws K candidates in one batched pass per step (10 Euler steps),
 caching the image embedding per shape, under ``torch.inference_mode``. Contacts come out as
 grid cells; they are snapped onto the contact ring (robot radius + 5 mm outside the object)
-and a slot is dropped when its robot would overlap an earlier one (so b may be < budget,
-never 0).
+a robot that would overlap an earlier one slides along the ring to the nearest free spot
+within ``REPAIR_SHIFT`` or, failing that, is dropped (so b may be < budget, never 0).
 """
 
 from __future__ import annotations
@@ -57,6 +57,10 @@ from lamp.scene.model import Shape
 MOTION_SCALE = (0.2, 0.2, 0.5)
 """Requested motions are divided by these before entering the network (training range)."""
 DEFAULT_CHECKPOINT = Path(__file__).parent / "checkpoints" / "flow_dc.pt"
+REPAIR_SHIFT = 0.15
+"""How far (m) a contact that overlaps another robot may slide along the ring to a free spot."""
+REPAIR_MARGIN = 0.005
+"""Clearance (m) beyond 2r kept between a repaired robot and the others."""
 TRAJECTORY_PARAMS = ("residual", "displacement")
 """How the continuous part encodes a push (both are displacements from the contact,
 divided by a data scale): ``displacement`` is the raw displacement of each waypoint;
@@ -312,12 +316,24 @@ class FlowProposer:
                 ring = contact_ring(shape).points
                 d2 = ((snapped[bad][:, None, :] - ring[None]) ** 2).sum(-1)
                 snapped[bad] = ring[np.argmin(d2, axis=1)]
-        # a robot overlapping an earlier robot of the same candidate is dropped
+        # a robot overlapping an earlier robot of the same candidate slides along the ring
+        # to the nearest free spot (at most REPAIR_SHIFT away), else it is dropped
+        ring: np.ndarray | None = None
         for j in range(1, s):
-            for i in range(j):
-                d = np.hypot(*(snapped[:, j] - snapped[:, i]).T)
-                clash = used[:, j] & used[:, i] & (d < 2.0 * ROBOT_RADIUS)
-                used[clash, j] = False
+            d = np.stack([np.hypot(*(snapped[:, j] - snapped[:, i]).T) for i in range(j)], 1)
+            clash = used[:, j] & np.any(used[:, :j] & (d < 2.0 * ROBOT_RADIUS), axis=1)
+            for r in np.flatnonzero(clash):
+                if ring is None:
+                    ring = contact_ring(shape).points
+                others = snapped[r, :j][used[r, :j]]
+                free = np.all(np.hypot(*(ring[:, None, :] - others[None]).transpose(2, 0, 1))
+                              >= 2.0 * ROBOT_RADIUS + REPAIR_MARGIN, axis=1)
+                dist = np.where(free, np.hypot(*(ring - snapped[r, j]).T), np.inf)
+                best = int(np.argmin(dist))
+                if dist[best] <= REPAIR_SHIFT:
+                    snapped[r, j] = ring[best]
+                else:
+                    used[r, j] = False
         snapped[~used] = np.nan
         pushes = np.concatenate([np.zeros((n, s, 1, 2)), disp], axis=2) + snapped[:, :, None, :]
         if self.net.cfg.residual:

@@ -296,7 +296,9 @@ def train(
                      max_minutes)
             break
     if not history:
-        raise RuntimeError(f"nothing trained: {run} already holds {start_epoch} epochs")
+        raise RuntimeError(f"nothing trained in {run} (epochs={cfg.epochs})")
+    if start_epoch >= cfg.epochs:
+        log.info("%s already holds %d epochs: nothing to train", run, start_epoch)
     summary = _summary(ds, cfg, history)
     summary["wall_time_s_this_run"] = time.perf_counter() - t_start
     return summary
