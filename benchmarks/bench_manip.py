@@ -1,6 +1,6 @@
 """Speed of the manipulation proposers: median / p95 ``propose`` time for k = 16 and 64.
 
-Run: ``python benchmarks/bench_manip.py [--threads 2] [--repeats 60]``.
+Run: ``python benchmarks/bench_manip.py [--threads 1] [--repeats 60]``.
 Targets (issue #4): learned model, median k=16 <= 50 ms and k=64 <= 150 ms on 2 cores.
 Calls cycle over a few shapes (so the per-shape image cache is warm, as in a planner that
 asks about the same object many times) and random motions; the first call per shape (cold
@@ -24,7 +24,7 @@ def _stats(ts: list[float]) -> str:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
-    ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--repeats", type=int, default=60)
     ap.add_argument("--model", default=None, help="checkpoint (default: the shipped one)")
     args = ap.parse_args()

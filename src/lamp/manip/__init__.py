@@ -20,10 +20,11 @@ if TYPE_CHECKING:
     from lamp.manip.network import FlowProposer
 
 
-def load_model(path: str | Path | None = None, threads: int | None = None) -> FlowProposer:
+def load_model(path: str | Path | None = None, threads: int | None = 1) -> FlowProposer:
     """Load a trained flow-matching proposer (default: the checkpoint shipped in the package).
 
-    ``threads``: if given, calls ``torch.set_num_threads(threads)``.
+    ``threads``: torch threads for this process (default 1, the fastest for the small
+    sampling batches; None leaves torch's setting alone), see ``lamp.manip.network``.
     """
     from lamp.manip.network import load_model as _load
 

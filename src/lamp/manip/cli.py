@@ -64,6 +64,8 @@ def train_cmd(
                                    "(plus a .json with its metadata next to it)."),
     guidance: float = typer.Option(None, help="Smoothness guidance stored in the export."),
     temperature: float = typer.Option(None, help="Token temperature stored in the export."),
+    oversample: float = typer.Option(None, help="Candidates drawn per proposal returned "
+                                     "(best-ranked kept), stored in the export."),
 ) -> None:
     """Train (or resume training) the flow-matching proposer; logs losses per epoch."""
     _threads(threads)
@@ -85,6 +87,8 @@ def train_cmd(
             model.sampler.guidance = guidance
         if temperature is not None:
             model.sampler.temperature = temperature
+        if oversample is not None:
+            model.sampler.oversample = oversample
         summary.pop("wall_time_s_this_run", None)
         meta = {"checkpoint": export_to.name, "data_file": str(data), "data_meta": ds.meta,
                 "sampler": vars(model.sampler), "parameters": sum(
@@ -113,7 +117,7 @@ def eval_cmd(
     from lamp.manip import GeometricProposer, load_model
     from lamp.manip.evaluate import evaluate, format_report
 
-    proposers = {"flow": load_model(model)}
+    proposers = {"flow": load_model(model, threads=threads)}
     if geometric:
         proposers["geometric"] = GeometricProposer()
     report = evaluate(proposers, cases_per_budget=cases, k=k, seed=seed)

@@ -49,7 +49,7 @@ from lamp.manip.flow import (
     smoothness_grad,
     time_embedding,
 )
-from lamp.manip.geometric import contact_ring
+from lamp.manip.geometric import contact_ring, wrench_residual
 from lamp.manip.image import IMAGE_SIZE, object_image
 from lamp.manip.proposals import Proposal, ShapeLike, check_k, make_rng
 from lamp.scene.model import Shape
@@ -185,11 +185,20 @@ class FlowNet(nn.Module):
 
 @dataclass
 class SamplerConfig:
-    """Sampling settings: Euler steps, smoothness guidance weight, token temperature."""
+    """Sampling settings.
+
+    steps: Euler steps; guidance: smoothness guidance weight; temperature: of the token
+    posteriors (< 1 sharpens them); rank: return the candidates ordered by the quasi-static
+    wrench check of ``lamp.manip.geometric.wrench_residual`` (best first; the planners try
+    candidates in order); oversample: draw ``ceil(k * oversample)`` candidates in the same
+    batch and keep the ``k`` best-ranked (1 = no extra samples, only ordering).
+    """
 
     steps: int = 10
     guidance: float = 0.05
     temperature: float = 1.0
+    rank: bool = True
+    oversample: float = 1.0
 
 
 @dataclass
@@ -341,7 +350,7 @@ class FlowProposer:
         return RawSamples(snapped, pushes)
 
     @staticmethod
-    def _to_proposals(raw: RawSamples, rows: range) -> list[Proposal]:
+    def _to_proposals(raw: RawSamples, rows: range | np.ndarray) -> list[Proposal]:
         out = []
         for r in rows:
             keep = ~np.isnan(raw.contacts[r, :, 0])
@@ -358,8 +367,7 @@ class FlowProposer:
     ) -> list[Proposal]:
         """``k`` sampled proposals for moving ``shape`` by ``motion`` (object frame)."""
         m = check_motion(motion)
-        raw = self.sample(shape, m[None], budget, k, seed)
-        return self._to_proposals(raw, range(check_k(k)))
+        return self.propose_batch(shape, m[None], budget, k, seed)[0]
 
     def propose_batch(
         self,
@@ -370,9 +378,30 @@ class FlowProposer:
         seed: int | np.random.Generator | None = None,
     ) -> list[list[Proposal]]:
         """``k`` proposals for each of several motions, all sampled in one batched pass."""
+        shp = as_shape(shape)
+        k = check_k(k)
         m = np.asarray(motions, dtype=float).reshape(-1, 3)
-        raw = self.sample(shape, m, budget, k, seed)
-        return [self._to_proposals(raw, range(i * k, (i + 1) * k)) for i in range(len(m))]
+        draw = max(k, int(np.ceil(k * self.sampler.oversample))) if self.sampler.rank else k
+        raw = self.sample(shp, m, budget, draw, seed)
+        out = []
+        for i in range(len(m)):
+            rows = np.arange(i * draw, (i + 1) * draw)
+            if self.sampler.rank:
+                rows = rows[self._rank(shp, raw.contacts[rows], m[i])[:k]]
+            out.append(self._to_proposals(raw, rows))
+        return out
+
+    @staticmethod
+    def _rank(shape: Shape, contacts: np.ndarray, motion: np.ndarray) -> np.ndarray:
+        """Order of candidates (n, S, 2) by wrench residual, best first (stable)."""
+        used = ~np.isnan(contacts[..., 0])
+        count = used.sum(axis=1)
+        res = np.empty(len(contacts))
+        for c in np.unique(count):
+            rows = np.flatnonzero(count == c)
+            cs = np.stack([contacts[r][used[r]] for r in rows])
+            res[rows] = wrench_residual(shape, cs, motion)
+        return np.argsort(res, kind="stable")
 
 
 # --------------------------------------------------------------------------- checkpoints
@@ -402,12 +431,20 @@ def save_checkpoint(ck: Checkpoint, path: str | Path, half: bool = False) -> Non
     torch.save(ck.to_payload(half), path)
 
 
-def load_model(path: str | Path | None = None, threads: int | None = None) -> FlowProposer:
-    """Load a ``FlowProposer`` from a checkpoint (default: the shipped one), weights only."""
+def load_model(path: str | Path | None = None, threads: int | None = 1) -> FlowProposer:
+    """Load a ``FlowProposer`` from a checkpoint (default: the shipped one), weights only.
+
+    ``threads``: torch intra-op threads for this process (``torch.set_num_threads``); None
+    leaves torch's setting alone. The default is 1: sampling batches are small, and on a
+    busy 2-core machine two threads made ``propose`` 20-50x slower (OpenMP threads waiting
+    on a core held by another process) while one thread met the speed targets.
+    """
     p = Path(path) if path is not None else DEFAULT_CHECKPOINT
     if not p.is_file():
         raise FileNotFoundError(f"no model checkpoint at {p}")
     if threads is not None:
+        if isinstance(threads, bool) or int(threads) != threads or threads < 1:
+            raise ValueError(f"threads must be a positive integer or None, got {threads!r}")
         torch.set_num_threads(int(threads))
     payload = torch.load(p, map_location="cpu", weights_only=True)
     if payload.get("format") != "lamp-flow-dc/1":
