@@ -44,3 +44,15 @@ def test_concat_drops_joint_row_and_hold_repeats():
     c = concat(a, b)
     assert c.shape[1] == a.shape[1] + 2
     np.testing.assert_allclose(c[:, -1], a[:, -1])
+
+
+def test_retime_keeps_endpoints_and_step_bound_with_fewer_rows():
+    from lamp.planners.trajectory import retime
+
+    t = np.linspace(0.0, 1.0, 20)
+    push = np.stack([np.stack([0.1 * t, 0.0 * t], axis=1), np.stack([0.1 * t, 0.2 + 0 * t], axis=1)])
+    out = retime(push)
+    assert out.shape[1] == 6  # 0.1 m in 0.02 m rows
+    np.testing.assert_allclose(out[:, 0], push[:, 0])
+    np.testing.assert_allclose(out[:, -1], push[:, -1])
+    assert np.linalg.norm(np.diff(out, axis=1), axis=2).max() <= MAX_STEP + 1e-9

@@ -112,7 +112,8 @@ def run_object(task: ManipulationTask, planner: ObjectPlanner, policy: LoopPolic
             planned_once = True
             if plan_obj is None or not plan_obj.transitions:
                 if policy.failure_is_final:
-                    reason = "no plan found"
+                    timed_out = time.perf_counter() >= t0 + remaining
+                    reason = "planning time limit" if timed_out else "no plan found"
                     break
                 iterations += 1
                 continue

@@ -33,6 +33,11 @@ class PlannerConfig:
     edge_penalty: float = 10.0
     #: Penalty added to a re-inserted LAMP-A* state (Alg. 1 line 17): the paper's 1e4.
     astar_reinsert_penalty: float = 1e4
+    #: Weight on LAMP-A*'s heuristic (weighted A*). Edge costs are robot travel, which is
+    #: about twice the object's travel (pushes plus repositioning), so the object-only
+    #: bound (weight 1, the paper's plain A*) leaves long f-plateaus over robot states;
+    #: a weight of 2 keeps the search directed (solutions within 2x of optimal).
+    astar_heuristic_weight: float = 2.0
     #: Cumulative planning limit per object (s): the paper's 500 s for LAMP-A*.
     planning_time_limit: float = 500.0
     #: Robot configurations closer than this (m, per robot) count as the same (D_T keys).

@@ -68,7 +68,9 @@ class LampAStar:
         return [(v, self.lattice.pose(v)) for v, _ in edges]
 
     def _h(self, q_O: np.ndarray) -> float:
-        return float(self.lattice.distance(q_O, self.task.goal))
+        """The lattice's object-only lower bound, times ``astar_heuristic_weight``."""
+        w = self.task.config.astar_heuristic_weight
+        return w * float(self.lattice.distance(q_O, self.task.goal))
 
     def plan(self, q_O: np.ndarray, q_R: np.ndarray, deadline: float | None = None) -> Plan | None:
         cfg = self.task.config
@@ -78,13 +80,15 @@ class LampAStar:
             return None
         start = SearchState(start_node, np.asarray(q_O, float), np.asarray(q_R, float), None, 0.0)
         tie = itertools.count()
-        open_list: list = [(self._h(start.q_O), next(tie), start)]  # line 2
+        # Open-list entries: (f, -g, insertion order, state). Among equal f the deeper state
+        # goes first (a standard A* tie-break that avoids breadth-first plateaus).
+        open_list: list = [(self._h(start.q_O), 0.0, next(tie), start)]  # line 2
         penalty: dict[int, float] = {}
         explored: dict[tuple, SearchState] = {(start_node, self._robot_key(start.q_R)): start}
         while open_list:  # line 3
             if deadline is not None and time.perf_counter() > deadline:
                 return None
-            f, _, s = heapq.heappop(open_list)  # line 4
+            f, _, _, s = heapq.heappop(open_list)  # line 4
             if f < s.cost + self._h(s.q_O) + penalty.get(id(s), 0.0) - 1e-9:
                 continue  # stale entry: the state's cost or penalty changed since
             if s.node == goal:  # line 6
@@ -103,10 +107,10 @@ class LampAStar:
                 else:  # line 15
                     s.children.append((child, trans))
                     explored[key] = child
-                    heapq.heappush(open_list, (child.cost + self._h(q_next), next(tie), child))
+                    heapq.heappush(open_list, (child.cost + self._h(q_next), -child.cost, next(tie), child))
             s.expansions += 1  # line 17: re-add with penalty
             penalty[id(s)] = cfg.astar_reinsert_penalty * s.expansions
-            heapq.heappush(open_list, (s.cost + self._h(s.q_O) + penalty[id(s)], next(tie), s))
+            heapq.heappush(open_list, (s.cost + self._h(s.q_O) + penalty[id(s)], -s.cost, next(tie), s))
         return None
 
     def _update_cost(self, s: SearchState, s_curr: SearchState, s_prev: SearchState,
@@ -120,7 +124,7 @@ class LampAStar:
         while frontier:  # lines 32-37, best-first by ascending cost
             _, _, top = heapq.heappop(frontier)
             heapq.heappush(open_list, (top.cost + self._h(top.q_O) + penalty.get(id(top), 0.0),
-                                       next(tie), top))
+                                       -top.cost, next(tie), top))
             for child, edge in top.children:
                 new_cost = top.cost + edge_cost(edge)
                 if child.cost > new_cost + 1e-12:

@@ -53,3 +53,27 @@ def concat(*parts: np.ndarray) -> np.ndarray:
 def hold(positions: np.ndarray, steps: int) -> np.ndarray:
     """Robots standing still at ``positions`` (N, 2) for ``steps`` rows."""
     return np.repeat(np.asarray(positions, float)[:, None, :], max(1, steps), axis=1)
+
+
+def retime(paths: np.ndarray, max_step: float = MAX_STEP) -> np.ndarray:
+    """Resample synchronised paths uniformly in time with as few rows as ``max_step`` allows.
+
+    The input rows are taken as equally spaced instants (as the H waypoints of a model
+    push are); the output samples the same piecewise-linear motion at
+    ``ceil(longest robot path / max_step) + 1`` equally spaced instants. Pushes of a few
+    centimetres then take a few rows instead of H, so row counts (the makespan) measure
+    time at the robot speed. No robot moves more than ``max_step`` between output rows
+    when its speed is uniform; ``densify`` afterwards guarantees the bound in any case.
+    """
+    paths = np.asarray(paths, dtype=float)
+    t_in = paths.shape[1]
+    if t_in < 2:
+        return paths.copy()
+    length = np.max(np.sum(np.linalg.norm(np.diff(paths, axis=1), axis=2), axis=1))
+    rows = max(2, int(np.ceil(length / max_step - 1e-9)) + 1)
+    s = np.linspace(0.0, t_in - 1, rows)
+    i0 = np.minimum(np.floor(s).astype(int), t_in - 2)
+    frac = (s - i0)[None, :, None]
+    out = (1.0 - frac) * paths[:, i0] + frac * paths[:, i0 + 1]
+    out[:, -1] = paths[:, -1]
+    return densify(out, max_step)

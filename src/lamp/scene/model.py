@@ -65,7 +65,7 @@ class Polygon:
         return float(np.max(np.hypot(pts[:, 0], pts[:, 1])))
 
 
-Shape = Union[Circle, Rectangle, Polygon]
+Shape = Union[Circle, Rectangle, Polygon]  # noqa: UP007 (a runtime alias, 3.10-safe)
 
 
 def shape_from_dict(d: dict[str, Any]) -> Shape:
