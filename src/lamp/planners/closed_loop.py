@@ -67,8 +67,19 @@ def _adapt_to_robots(task: ManipulationTask, trans: Transition, q_R: np.ndarray)
         return trans
     if np.all(gap <= ROBOT_SNAP):
         move = concat(straight_moves(q_R, trans.robot_start), trans.move)
-        return Transition(trans.q_from, trans.q_to, trans.contacts, trans.pushes_local, move, trans.manip)
+        return Transition(trans.q_from, trans.q_to, trans.contacts, trans.pushes_local, move,
+                          trans.manip, trans.edge)
     return reroute(task, trans, q_R)
+
+
+#: A push achieving less than this share of its requested motion has stalled.
+STALL_FRACTION = 0.25
+
+
+def _stalled(q_before: np.ndarray, q_after: np.ndarray, trans: Transition) -> bool:
+    want_t, want_r = pose_distance(trans.q_from, trans.q_to)
+    got_t, got_r = pose_distance(q_before, q_after)
+    return bool(got_t < STALL_FRACTION * want_t + 1e-3 and got_r < STALL_FRACTION * want_r + 2e-3)
 
 
 def run_object(task: ManipulationTask, planner: ObjectPlanner, policy: LoopPolicy, sim,
@@ -131,6 +142,7 @@ def run_object(task: ManipulationTask, planner: ObjectPlanner, policy: LoopPolic
                 break
             continue
         paths = adapted.robot_paths
+        q_before = q_O
         out = sim.execute(paths, record_every=RENDER_EVERY if render else None)
         iterations += 1
         segments += 1
@@ -146,7 +158,12 @@ def run_object(task: ManipulationTask, planner: ObjectPlanner, policy: LoopPolic
             reason = "object left the workspace"
             break
         dpos, drot = pose_distance(q_O, adapted.q_to)
-        if policy.replan_on_drift and (dpos > cfg.drift_position or drot > cfg.drift_orientation):
+        if _stalled(q_before, q_O, adapted) and hasattr(planner, "report_failure"):
+            # The push executed but barely moved the object: the verified transition does
+            # not work in practice, so it is treated like a failed verification.
+            planner.report_failure(adapted)
+            pending = []
+        elif policy.replan_on_drift and (dpos > cfg.drift_position or drot > cfg.drift_orientation):
             pending = []  # line 6: drift -> replan from the observed state
     record.unexecuted_planning_s += pending_time
     pos_err, rot_err = goal_errors(q_O, goal)

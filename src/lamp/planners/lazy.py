@@ -97,6 +97,21 @@ class LazyPlanner:
         self.dstar.penalize(u, v, self.task.config.edge_penalty)
         self.penalised.append((self.lattice.pose(u)[:2].copy(), self.lattice.pose(v)[:2].copy()))
 
+    def report_failure(self, trans: Transition) -> None:
+        """Execution showed that ``trans`` does not move the object (it stalled): forget
+        it in Tree_eval and penalise its edge, so that the next Plan verifies the motion
+        again with fresh model samples or takes another route."""
+        if trans.edge is None:
+            return
+        u, v = trans.edge
+        entry = self.tree_eval.get(u) if self.lattice.is_node(u) else None
+        if entry is not None and entry.next_node == v:
+            del self.tree_eval[u]
+        try:
+            self._penalise(u, v)
+        except ValueError:  # an edge of an earlier virtual start: the failure is counted
+            pass
+
     def plan(self, q_O_now: np.ndarray, q_R_now: np.ndarray, deadline: float | None = None) -> Plan | None:
         """``Plan`` (Alg. 2 lines 9-41): a full-horizon plan from the current state, or None."""
         import time
@@ -127,6 +142,7 @@ class LazyPlanner:
                     self._penalise(curr, nxt)
                     failed = True
                     break
+                trans.edge = (curr, nxt)
                 transitions.append(trans)  # line 23
                 entry = TreeEntry(nxt, trans, [(q_R.copy(), trans)])
                 if self.lattice.is_node(curr):  # virtual starts are never reused

@@ -36,6 +36,8 @@ class Transition:
     pushes_local: np.ndarray  # (B, H, 2) push paths in the object frame at q_from
     move: np.ndarray  # (N, Tm, 2) approach: robots to contacts / waiting spots
     manip: np.ndarray  # (N, Tp, 2) push: contact robots follow pushes, others hold
+    #: The search edge (u, v) this transition realises, when a planner tracks it.
+    edge: tuple | None = None
 
     @property
     def robot_paths(self) -> np.ndarray:
@@ -243,5 +245,5 @@ def reroute(task: ManipulationTask, cached: Transition, q_R: np.ndarray) -> Tran
     return Transition(
         q_from=cached.q_from, q_to=cached.q_to, contacts=cached.contacts,
         pushes_local=cached.pushes_local, move=move,
-        manip=push_paths(move[:, -1], goal_of, pushes_world),
+        manip=push_paths(move[:, -1], goal_of, pushes_world), edge=cached.edge,
     )
