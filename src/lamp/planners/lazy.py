@@ -11,6 +11,7 @@ the robots (lines 26-33).
 
 from __future__ import annotations
 
+import contextlib
 from collections.abc import Hashable
 from dataclasses import dataclass, field
 
@@ -107,10 +108,8 @@ class LazyPlanner:
         entry = self.tree_eval.get(u) if self.lattice.is_node(u) else None
         if entry is not None and entry.next_node == v:
             del self.tree_eval[u]
-        try:
+        with contextlib.suppress(ValueError):  # an earlier virtual start's edge: counted only
             self._penalise(u, v)
-        except ValueError:  # an edge of an earlier virtual start: the failure is counted
-            pass
 
     def plan(self, q_O_now: np.ndarray, q_R_now: np.ndarray, deadline: float | None = None) -> Plan | None:
         """``Plan`` (Alg. 2 lines 9-41): a full-horizon plan from the current state, or None."""
