@@ -36,8 +36,15 @@ class GCoPlanner:
 
     def _next_pose(self, q_O: np.ndarray, deadline: float | None) -> np.ndarray | None:
         remaining = None if deadline is None else max(1e-3, deadline - time.perf_counter())
-        path = gco_object_path(self.task.scene, self.task.index, q_O, self.task.object_poses,
-                               self.inflation, time_limit=remaining)
+        path = None
+        # After a drift the object may sit inside the collision checker's conservative
+        # band (about 1 cm) next to an obstacle; like LAMP's lattice join, a footprint
+        # shrunk by up to 2 cm lets the search start from there.
+        for shrink in (0.0, 0.02):
+            path = gco_object_path(self.task.scene, self.task.index, q_O, self.task.object_poses,
+                                   self.inflation - shrink, time_limit=remaining)
+            if path is not None and len(path) > 0:
+                break
         if path is None or len(path) == 0:
             return None
         path = np.asarray(path, float)
