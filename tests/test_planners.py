@@ -129,3 +129,15 @@ def test_cli_run_writes_result_json(tmp_path):
                 "total_planning_time_s", "makespan", "replans", "wall_time_s"):
         assert key in data
     assert data["planner"] == "lazy" and data["scene"] == "small"
+
+
+@pytest.mark.parametrize("starts", [
+    [[0.2, 0.3]],  # one robot: budget 1 only
+    [[0.2, 0.3], [0.2, 0.6], [0.2, 0.9], [0.2, 1.2], [0.2, 1.5]],  # five: two must wait
+])
+def test_lazy_handles_other_team_sizes(proposer, starts):
+    d = small_scene(goal=(1.25, 1.0, 0.0))
+    d["robots"]["starts"] = starts
+    scene = scene_from_dict(d)
+    result = solve(scene, "lazy", seed=0, model=proposer).to_dict()
+    assert result["success"], result
