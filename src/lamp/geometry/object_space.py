@@ -154,6 +154,15 @@ def _footprint_disks(
     )
 
 
+def _grid_shape(workspace: tuple[float, float], resolution: float) -> tuple[int, int]:
+    """(rows, columns) of the obstacle grid: cells of side ``resolution`` covering the
+    workspace (at least one each way). One definition, so that every obstacle's cells and
+    the grid they are written into agree."""
+    nx = max(1, math.ceil(workspace[0] / resolution - 1e-9))
+    ny = max(1, math.ceil(workspace[1] / resolution - 1e-9))
+    return ny, nx
+
+
 @lru_cache(maxsize=4096)
 def _obstacle_cells(
     obstacle: Obstacle, workspace: tuple[float, float], resolution: float
@@ -163,8 +172,7 @@ def _obstacle_cells(
     A cell is occupied when its centre is within half a cell diagonal of the obstacle.
     Cached per obstacle: scenes share static obstacles across many ObjectSpaces.
     """
-    nx = max(1, math.ceil(workspace[0] / resolution - 1e-9))
-    ny = max(1, math.ceil(workspace[1] / resolution - 1e-9))
+    ny, nx = _grid_shape(workspace, resolution)
     h = resolution / math.sqrt(2.0)
     geom = obstacle_geometry(obstacle).buffer(h, quad_segs=8)
     x0, y0, x1, y1 = geom.bounds
@@ -489,8 +497,7 @@ class ObjectSpace:
     # ------------------------------------------------------------------ grid
     def _distance_grid(self) -> np.ndarray:
         res = self.resolution
-        nx = max(1, math.ceil(self.workspace[0] / res - 1e-9))
-        ny = max(1, math.ceil(self.workspace[1] / res - 1e-9))
+        ny, nx = _grid_shape(self.workspace, res)
         occ = np.zeros((ny, nx), dtype=bool)
         for ob in self.obstacles:
             cells = _obstacle_cells(ob, self.workspace, res)
