@@ -208,6 +208,16 @@ def _point_in_polygon(px: float, py: float, poly: np.ndarray) -> bool:
     return inside
 
 
+@numba.njit(cache=True, inline="always")
+def _grid_bound(sd: np.ndarray, res: float, px: float, py: float) -> float:
+    """The distance grid's clearance lower bound at world point p: the value of the cell
+    containing p (points outside the workspace take the nearest border cell)."""
+    ny, nx = sd.shape
+    ci = min(max(int(math.floor(px / res)), 0), nx - 1)
+    ri = min(max(int(math.floor(py / res)), 0), ny - 1)
+    return sd[ri, ci]
+
+
 @numba.njit(cache=True)
 def _pose_clearance(
     x: float,
@@ -231,7 +241,6 @@ def _pose_clearance(
     dpts, drad, bpts, brad, poly, reps, cpts, crad = fp
     c = math.cos(th)
     s = math.sin(th)
-    ny, nx = sd.shape
     best = np.inf
     # border (exact: polygon vertices or circle centre)
     for j in range(bpts.shape[0]):
@@ -248,9 +257,7 @@ def _pose_clearance(
         for j in range(cpts.shape[0]):
             px = x + c * cpts[j, 0] - s * cpts[j, 1]
             py = y + s * cpts[j, 0] + c * cpts[j, 1]
-            ci = min(max(int(math.floor(px / res)), 0), nx - 1)
-            ri = min(max(int(math.floor(py / res)), 0), ny - 1)
-            d = sd[ri, ci] - crad[j]
+            d = _grid_bound(sd, res, px, py) - crad[j]
             if d < coarse:
                 coarse = d
                 if coarse <= stop_below:
@@ -261,9 +268,7 @@ def _pose_clearance(
     for j in range(dpts.shape[0]):
         px = x + c * dpts[j, 0] - s * dpts[j, 1]
         py = y + s * dpts[j, 0] + c * dpts[j, 1]
-        ci = min(max(int(math.floor(px / res)), 0), nx - 1)
-        ri = min(max(int(math.floor(py / res)), 0), ny - 1)
-        d = sd[ri, ci] - drad[j]
+        d = _grid_bound(sd, res, px, py) - drad[j]
         if d < best:
             best = d
             if best <= stop_below:
