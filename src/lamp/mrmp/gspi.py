@@ -60,6 +60,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.optimize import linear_sum_assignment
 
+from lamp.geometry.kernels import point_segment_distance
 from lamp.geometry.robot_space import RobotSpace
 from lamp.mrmp.distance_field import Lattice, get_lattice
 from lamp.scene.model import Scene
@@ -141,19 +142,8 @@ def _conflict(
         d1 = math.sqrt(d1x * d1x + d1y * d1y)
         if d1 < thr:
             thr = d1
-    ex = d1x - d0x
-    ey = d1y - d0y
-    e2 = ex * ex + ey * ey
-    t = 0.0
-    if e2 > 0.0:
-        t = -(d0x * ex + d0y * ey) / e2
-        if t < 0.0:
-            t = 0.0
-        elif t > 1.0:
-            t = 1.0
-    mx = d0x + t * ex
-    my = d0y + t * ey
-    return math.sqrt(mx * mx + my * my) < thr - 1e-9
+    # closest approach: distance of the origin to the relative-offset segment d0 -> d1
+    return point_segment_distance(0.0, 0.0, d0x, d0y, d1x, d1y) < thr - 1e-9
 
 
 # ---- lazy heuristic: one resumable Dijkstra per goal ---------------------------------
