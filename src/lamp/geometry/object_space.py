@@ -499,6 +499,20 @@ class ObjectSpace:
             **kwargs,
         )
 
+    def with_inflation(self, inflation: float) -> ObjectSpace:
+        """The same object, obstacles and query settings with another ``inflation`` (a new
+        space: its grid is rebuilt, the per-obstacle cells come from the cache)."""
+        return ObjectSpace(
+            self.shape,
+            self.workspace,
+            self.obstacles,
+            inflation,
+            resolution=self.resolution,
+            sample_spacing=self.sample_spacing,
+            motion_margin=self.motion_margin,
+            cover_cell=self.cover_cell,
+        )
+
     # ------------------------------------------------------------------ grid
     def _distance_grid(self) -> np.ndarray:
         res = self.resolution

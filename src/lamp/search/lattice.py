@@ -525,17 +525,7 @@ class ObjectLattice:
             return self.space
         sp = self._tolerant.get(tolerance)
         if sp is None:
-            base = self.space
-            sp = ObjectSpace(
-                base.shape,
-                base.workspace,
-                base.obstacles,
-                base.inflation - tolerance,
-                resolution=base.resolution,
-                sample_spacing=base.sample_spacing,
-                motion_margin=base.motion_margin,
-                cover_cell=base.cover_cell,
-            )
+            sp = self.space.with_inflation(self.space.inflation - tolerance)
             self._tolerant[tolerance] = sp
         return sp
 
