@@ -200,6 +200,26 @@ def test_from_scene_uses_other_objects():
         ObjectSpace.from_scene(scene, 0, np.zeros((3, 3)))
 
 
+def test_with_inflation_keeps_everything_but_the_inflation():
+    obs = (Obstacle(Circle(0.1), (1.0, 1.0, 0.0)), Obstacle(Rectangle((0.3, 0.1)), (0.4, 1.5, 0.3)))
+    base = ObjectSpace(
+        L_SHAPE, (W, H), obs, 0.05, resolution=0.005, sample_spacing=0.003,
+        motion_margin=0.004, cover_cell=0.05,
+    )  # fmt: skip
+    other = base.with_inflation(-0.01)
+    direct = ObjectSpace(
+        L_SHAPE, (W, H), obs, -0.01, resolution=0.005, sample_spacing=0.003,
+        motion_margin=0.004, cover_cell=0.05,
+    )  # fmt: skip
+    assert other.inflation == -0.01 and base.inflation == 0.05
+    for name in ("shape", "workspace", "obstacles", "resolution", "sample_spacing",
+                 "motion_margin", "cover_cell", "band", "reach"):  # fmt: skip
+        assert getattr(other, name) == getattr(direct, name), name
+    poses = np.random.default_rng(3).uniform([0, 0, -3], [W, H, 3], (300, 3))
+    assert np.array_equal(other.clearance(poses), direct.clearance(poses))
+    assert not np.array_equal(other.clearance(poses), base.clearance(poses))
+
+
 def test_bad_arguments():
     with pytest.raises(ValueError, match="inflation"):
         ObjectSpace(Circle(0.1), (W, H), [], inflation=-1.0)

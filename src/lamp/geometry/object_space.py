@@ -154,6 +154,15 @@ def _footprint_disks(
     )
 
 
+def _grid_shape(workspace: tuple[float, float], resolution: float) -> tuple[int, int]:
+    """(rows, columns) of the obstacle grid: cells of side ``resolution`` covering the
+    workspace (at least one each way). One definition, so that every obstacle's cells and
+    the grid they are written into agree."""
+    nx = max(1, math.ceil(workspace[0] / resolution - 1e-9))
+    ny = max(1, math.ceil(workspace[1] / resolution - 1e-9))
+    return ny, nx
+
+
 @lru_cache(maxsize=4096)
 def _obstacle_cells(
     obstacle: Obstacle, workspace: tuple[float, float], resolution: float
@@ -163,8 +172,7 @@ def _obstacle_cells(
     A cell is occupied when its centre is within half a cell diagonal of the obstacle.
     Cached per obstacle: scenes share static obstacles across many ObjectSpaces.
     """
-    nx = max(1, math.ceil(workspace[0] / resolution - 1e-9))
-    ny = max(1, math.ceil(workspace[1] / resolution - 1e-9))
+    ny, nx = _grid_shape(workspace, resolution)
     h = resolution / math.sqrt(2.0)
     geom = obstacle_geometry(obstacle).buffer(h, quad_segs=8)
     x0, y0, x1, y1 = geom.bounds
@@ -200,6 +208,16 @@ def _point_in_polygon(px: float, py: float, poly: np.ndarray) -> bool:
     return inside
 
 
+@numba.njit(cache=True, inline="always")
+def _grid_bound(sd: np.ndarray, res: float, px: float, py: float) -> float:
+    """The distance grid's clearance lower bound at world point p: the value of the cell
+    containing p (points outside the workspace take the nearest border cell)."""
+    ny, nx = sd.shape
+    ci = min(max(int(math.floor(px / res)), 0), nx - 1)
+    ri = min(max(int(math.floor(py / res)), 0), ny - 1)
+    return sd[ri, ci]
+
+
 @numba.njit(cache=True)
 def _pose_clearance(
     x: float,
@@ -223,7 +241,6 @@ def _pose_clearance(
     dpts, drad, bpts, brad, poly, reps, cpts, crad = fp
     c = math.cos(th)
     s = math.sin(th)
-    ny, nx = sd.shape
     best = np.inf
     # border (exact: polygon vertices or circle centre)
     for j in range(bpts.shape[0]):
@@ -240,9 +257,7 @@ def _pose_clearance(
         for j in range(cpts.shape[0]):
             px = x + c * cpts[j, 0] - s * cpts[j, 1]
             py = y + s * cpts[j, 0] + c * cpts[j, 1]
-            ci = min(max(int(math.floor(px / res)), 0), nx - 1)
-            ri = min(max(int(math.floor(py / res)), 0), ny - 1)
-            d = sd[ri, ci] - crad[j]
+            d = _grid_bound(sd, res, px, py) - crad[j]
             if d < coarse:
                 coarse = d
                 if coarse <= stop_below:
@@ -253,9 +268,7 @@ def _pose_clearance(
     for j in range(dpts.shape[0]):
         px = x + c * dpts[j, 0] - s * dpts[j, 1]
         py = y + s * dpts[j, 0] + c * dpts[j, 1]
-        ci = min(max(int(math.floor(px / res)), 0), nx - 1)
-        ri = min(max(int(math.floor(py / res)), 0), ny - 1)
-        d = sd[ri, ci] - drad[j]
+        d = _grid_bound(sd, res, px, py) - drad[j]
         if d < best:
             best = d
             if best <= stop_below:
@@ -486,11 +499,24 @@ class ObjectSpace:
             **kwargs,
         )
 
+    def with_inflation(self, inflation: float) -> ObjectSpace:
+        """The same object, obstacles and query settings with another ``inflation`` (a new
+        space: its grid is rebuilt, the per-obstacle cells come from the cache)."""
+        return ObjectSpace(
+            self.shape,
+            self.workspace,
+            self.obstacles,
+            inflation,
+            resolution=self.resolution,
+            sample_spacing=self.sample_spacing,
+            motion_margin=self.motion_margin,
+            cover_cell=self.cover_cell,
+        )
+
     # ------------------------------------------------------------------ grid
     def _distance_grid(self) -> np.ndarray:
         res = self.resolution
-        nx = max(1, math.ceil(self.workspace[0] / res - 1e-9))
-        ny = max(1, math.ceil(self.workspace[1] / res - 1e-9))
+        ny, nx = _grid_shape(self.workspace, res)
         occ = np.zeros((ny, nx), dtype=bool)
         for ob in self.obstacles:
             cells = _obstacle_cells(ob, self.workspace, res)

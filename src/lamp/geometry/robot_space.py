@@ -36,6 +36,7 @@ import numba as nb
 import numpy as np
 from numpy.typing import ArrayLike
 
+from lamp.geometry.kernels import point_segment_distance
 from lamp.geometry.se2 import transform_points
 from lamp.geometry.shapes import local_outline
 from lamp.scene.model import Circle, Obstacle, Polygon, Rectangle, Scene
@@ -139,23 +140,6 @@ class GeometrySet:
 # --------------------------------------------------------------------------------------
 
 
-@nb.njit(cache=True, inline="always")
-def _pt_seg_dist(px: float, py: float, ax: float, ay: float, bx: float, by: float) -> float:
-    dx = bx - ax
-    dy = by - ay
-    L2 = dx * dx + dy * dy
-    t = 0.0
-    if L2 > 0.0:
-        t = ((px - ax) * dx + (py - ay) * dy) / L2
-        if t < 0.0:
-            t = 0.0
-        elif t > 1.0:
-            t = 1.0
-    qx = ax + t * dx - px
-    qy = ay + t * dy - py
-    return math.sqrt(qx * qx + qy * qy)
-
-
 @nb.njit(cache=True)
 def _poly_signed_dist(px: float, py: float, verts: np.ndarray, s: int, e: int) -> float:
     """Signed distance from a point to the polygon verts[s:e] (negative inside)."""
@@ -168,7 +152,7 @@ def _poly_signed_dist(px: float, py: float, verts: np.ndarray, s: int, e: int) -
         b = s + (k + 1) % n
         bx = verts[b, 0]
         by = verts[b, 1]
-        d = _pt_seg_dist(px, py, ax, ay, bx, by)
+        d = point_segment_distance(px, py, ax, ay, bx, by)
         if d < best:
             best = d
         if (ay > py) != (by > py):
@@ -241,7 +225,7 @@ def _segment_clearance(
     # border: min(x, W-x, y, H-y) is concave along a segment -> minimum at an end point
     best = min(ax, W - ax, ay, H - ay, bx, W - bx, by, H - by)
     for c in range(circles.shape[0]):
-        d = _pt_seg_dist(circles[c, 0], circles[c, 1], ax, ay, bx, by) - circles[c, 2]
+        d = point_segment_distance(circles[c, 0], circles[c, 1], ax, ay, bx, by) - circles[c, 2]
         if d < best:
             best = d
     for q in range(ptr.shape[0] - 1):
@@ -263,7 +247,7 @@ def _segment_clearance(
             dy = verts[m, 1]
             if _segs_intersect(ax, ay, bx, by, cx, cy, dx, dy):
                 return min(best, 0.0)
-            d = _pt_seg_dist(cx, cy, ax, ay, bx, by)
+            d = point_segment_distance(cx, cy, ax, ay, bx, by)
             if d < dmin:
                 dmin = d
         if dmin < best:

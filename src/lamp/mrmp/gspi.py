@@ -60,6 +60,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.optimize import linear_sum_assignment
 
+from lamp.geometry.kernels import point_segment_distance
 from lamp.geometry.robot_space import RobotSpace
 from lamp.mrmp.distance_field import Lattice, get_lattice
 from lamp.scene.model import Scene
@@ -141,19 +142,8 @@ def _conflict(
         d1 = math.sqrt(d1x * d1x + d1y * d1y)
         if d1 < thr:
             thr = d1
-    ex = d1x - d0x
-    ey = d1y - d0y
-    e2 = ex * ex + ey * ey
-    t = 0.0
-    if e2 > 0.0:
-        t = -(d0x * ex + d0y * ey) / e2
-        if t < 0.0:
-            t = 0.0
-        elif t > 1.0:
-            t = 1.0
-    mx = d0x + t * ex
-    my = d0y + t * ey
-    return math.sqrt(mx * mx + my * my) < thr - 1e-9
+    # closest approach: distance of the origin to the relative-offset segment d0 -> d1
+    return point_segment_distance(0.0, 0.0, d0x, d0y, d1x, d1y) < thr - 1e-9
 
 
 # ---- lazy heuristic: one resumable Dijkstra per goal ---------------------------------
@@ -209,18 +199,26 @@ def _heap_pop(m: int, dist: np.ndarray, pos: np.ndarray, heap: np.ndarray,
     return top
 
 
+@nb.njit(cache=True, inline="always")
+def _heap_lower(m: int, v: int, d: float, dist: np.ndarray, pos: np.ndarray, heap: np.ndarray,
+                hsize: np.ndarray) -> None:
+    """Set goal m's distance of vertex v to the smaller value d and restore the heap
+    (v is pushed first when it has never been queued, ``pos == -1``)."""
+    dist[m, v] = d
+    if pos[m, v] == -1:
+        heap[m, hsize[m]] = v
+        pos[m, v] = hsize[m]
+        hsize[m] += 1
+    _heap_up(m, pos[m, v], dist, pos, heap)
+
+
 @nb.njit(cache=True)
 def _seed_goal(m: int, nodes: np.ndarray, cost: np.ndarray, hs: tuple) -> None:
     dist, pos, heap, hsize, _, _ = hs
     for k in range(nodes.shape[0]):
         v = nodes[k]
         if cost[k] < dist[m, v]:
-            dist[m, v] = cost[k]
-            if pos[m, v] == -1:
-                heap[m, hsize[m]] = v
-                pos[m, v] = hsize[m]
-                hsize[m] += 1
-            _heap_up(m, pos[m, v], dist, pos, heap)
+            _heap_lower(m, v, cost[k], dist, pos, heap, hsize)
 
 
 @nb.njit(cache=True)
@@ -236,12 +234,7 @@ def _lattice_h(m: int, v: int, nbr: np.ndarray, dlen: np.ndarray, hs: tuple) -> 
                 continue
             nd = du + dlen[e]
             if nd < dist[m, w]:
-                dist[m, w] = nd
-                if pos[m, w] == -1:
-                    heap[m, hsize[m]] = w
-                    pos[m, w] = hsize[m]
-                    hsize[m] += 1
-                _heap_up(m, pos[m, w], dist, pos, heap)
+                _heap_lower(m, w, nd, dist, pos, heap, hsize)
     if pos[m, v] == -2:
         return dist[m, v]
     return np.inf

@@ -18,7 +18,7 @@ import numpy as np
 from lamp.geometry import se2
 from lamp.planners.lazy import Plan
 from lamp.planners.task import ManipulationTask
-from lamp.planners.verify import Transition, approach, push_paths, reassign
+from lamp.planners.verify import route_push
 from lamp.search.gco_lattice import gco_object_path
 
 LOOKAHEAD = 0.3  # m: the waypoint GCo steers towards
@@ -71,15 +71,7 @@ class GCoPlanner:
         prop = task.model.propose(task.shape, motion=tuple(map(float, motion)), budget=budget,
                                   k=1, seed=seed)[0]
         pushes_local = np.asarray(prop.pushes, float)
-        pushes_world = se2.transform_points(q_O, pushes_local)
-        contacts = pushes_world[:, 0]
-        goals = reassign(task, q_O, q_to, q_R, contacts, pushes_world)
-        if deadline is not None and time.perf_counter() > deadline:
+        trans = route_push(task, q_O, q_to, q_R, pushes_local, deadline=deadline)
+        if trans is None:
             return None
-        routed = approach(task, q_O, q_R, goals)
-        if routed is None:
-            return None
-        move, goal_of = routed
-        trans = Transition(q_O, q_to, contacts, pushes_local, move,
-                           push_paths(move[:, -1], goal_of, pushes_world))
         return Plan([trans], [(q_O[:2].copy(), q_to[:2].copy())], [])

@@ -20,11 +20,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from lamp.planners.lazy import Plan, join_lattice
+from lamp.planners.lazy import Plan, goal_lattice, join_lattice
 from lamp.planners.task import ManipulationTask
 from lamp.planners.trajectory import MAX_STEP
 from lamp.planners.verify import Transition, verify
-from lamp.search.lattice import ObjectLattice
 
 
 @dataclass(eq=False)
@@ -50,9 +49,7 @@ class LampAStar:
 
     def __init__(self, task: ManipulationTask) -> None:
         self.task = task
-        cfg = task.config
-        self.lattice = ObjectLattice(task.object_space, task.goal, step=cfg.lattice_step,
-                                     n_headings=cfg.n_headings)
+        self.lattice = goal_lattice(task)
 
     def _robot_key(self, q_R: np.ndarray) -> tuple:
         """Explored-state key for robots: positions on a ``robot_match_tolerance`` grid, sorted

@@ -63,6 +63,15 @@ SNAP_DISTANCE = 1e-3
 JOIN_TOLERANCES = (0.0, 0.01, 0.02)
 
 
+def goal_lattice(task: ManipulationTask) -> ObjectLattice:
+    """The object lattice both LAMP planners search: anchored at the object's goal, with
+    the task's object space and the configured step and heading count."""
+    cfg = task.config
+    return ObjectLattice(
+        task.object_space, task.goal, step=cfg.lattice_step, n_headings=cfg.n_headings
+    )
+
+
 def join_lattice(lattice: ObjectLattice, q_O: np.ndarray) -> tuple[Node, list | None]:
     """The search vertex for the object at ``q_O``: a lattice node when ``q_O`` is on one,
     otherwise a virtual node (the pose tuple) with its connecting edges."""
@@ -81,10 +90,7 @@ class LazyPlanner:
 
     def __init__(self, task: ManipulationTask) -> None:
         self.task = task
-        cfg = task.config
-        self.lattice = ObjectLattice(
-            task.object_space, task.goal, step=cfg.lattice_step, n_headings=cfg.n_headings
-        )
+        self.lattice = goal_lattice(task)
         self.dstar = DStarLite(self.lattice)
         self.dstar.initialize(self.lattice.goal_node)  # line 1
         self.tree_eval: dict[Node, TreeEntry] = {}

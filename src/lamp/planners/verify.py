@@ -11,6 +11,7 @@ returns the transition T_R = T_move (+) T_manip (line 24); otherwise failure (li
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -186,6 +187,32 @@ def push_paths(end_of_move: np.ndarray, goal_of: np.ndarray, pushes_world: np.nd
     return retime(manip)
 
 
+def route_push(task: ManipulationTask, q_from: np.ndarray, q_to: np.ndarray, q_R: np.ndarray,
+               pushes_local: np.ndarray, *, edge: tuple | None = None,
+               deadline: float | None = None) -> Transition | None:
+    """Robot trajectories for one chosen push (Alg. 1 lines 22-23), or None.
+
+    The push paths ``pushes_local`` (object frame at ``q_from``) are placed in the world,
+    the robots are paired with their contacts or sent to waiting spots (``Reassign``) and
+    Gspi routes them there (``approach``); the push itself follows. Shared by ``verify``,
+    ``reroute`` and the GCo baselines. With a ``deadline`` (``time.perf_counter`` seconds)
+    that has passed after ``Reassign``, Gspi is not called and the answer is None.
+    """
+    pushes_world = se2.transform_points(q_from, pushes_local)
+    contacts = pushes_world[:, 0]
+    goals = reassign(task, q_from, q_to, q_R, contacts, pushes_world)
+    if deadline is not None and time.perf_counter() > deadline:
+        return None
+    routed = approach(task, q_from, q_R, goals)
+    if routed is None:
+        return None
+    move, goal_of = routed
+    return Transition(
+        q_from=q_from, q_to=q_to, contacts=contacts, pushes_local=pushes_local,
+        move=move, manip=push_paths(move[:, -1], goal_of, pushes_world), edge=edge,
+    )
+
+
 def _usable_proposals(task: ManipulationTask, q_from: np.ndarray, q_R: np.ndarray,
                       motion: np.ndarray, budget: int, attempt: int) -> list[np.ndarray]:
     """Lines 20-21: the K proposals that pass ``Collide``, nearest to the robots first.
@@ -219,31 +246,14 @@ def verify(task: ManipulationTask, q_from: np.ndarray, q_to: np.ndarray, q_R: np
     for budget in range(top, 0, -1):  # line 19: budgets N down to 1
         candidates = _usable_proposals(task, q_from, q_R, motion, budget, attempt)
         for pushes_local in candidates[: task.config.gspi_attempts_per_budget]:
-            pushes_world = se2.transform_points(q_from, pushes_local)
-            contacts = pushes_world[:, 0]
-            goals = reassign(task, q_from, q_to, q_R, contacts, pushes_world)  # line 22
-            routed = approach(task, q_from, q_R, goals)  # line 23
-            if routed is not None:  # line 24
-                move, goal_of = routed
+            trans = route_push(task, q_from, q_to, q_R, pushes_local)  # lines 22-23
+            if trans is not None:  # line 24
                 task.stats.verify_success += 1
-                return Transition(
-                    q_from=q_from, q_to=q_to, contacts=contacts, pushes_local=pushes_local,
-                    move=move, manip=push_paths(move[:, -1], goal_of, pushes_world),
-                )
+                return trans
     return None  # line 26
 
 
 def reroute(task: ManipulationTask, cached: Transition, q_R: np.ndarray) -> Transition | None:
     """Alg. 2 lines 27-33: reuse a verified push from new robot positions (new T_move only)."""
     q_R = np.asarray(q_R, float)
-    pushes_world = se2.transform_points(cached.q_from, cached.pushes_local)
-    goals = reassign(task, cached.q_from, cached.q_to, q_R, cached.contacts, pushes_world)
-    routed = approach(task, cached.q_from, q_R, goals)
-    if routed is None:
-        return None
-    move, goal_of = routed
-    return Transition(
-        q_from=cached.q_from, q_to=cached.q_to, contacts=cached.contacts,
-        pushes_local=cached.pushes_local, move=move,
-        manip=push_paths(move[:, -1], goal_of, pushes_world), edge=cached.edge,
-    )
+    return route_push(task, cached.q_from, cached.q_to, q_R, cached.pushes_local, edge=cached.edge)

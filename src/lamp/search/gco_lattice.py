@@ -75,17 +75,7 @@ class GCoLattice(ObjectLattice):
             if self.space.inflation == 0.0:
                 self._exact = self.space
             else:
-                sp = self.space
-                self._exact = ObjectSpace(
-                    sp.shape,
-                    sp.workspace,
-                    sp.obstacles,
-                    0.0,
-                    resolution=sp.resolution,
-                    sample_spacing=sp.sample_spacing,
-                    motion_margin=sp.motion_margin,
-                    cover_cell=sp.cover_cell,
-                )
+                self._exact = self.space.with_inflation(0.0)
         return self._exact
 
     def successors(self, u: Node) -> list[tuple[Node, float]]:

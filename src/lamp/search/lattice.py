@@ -298,25 +298,25 @@ class ObjectLattice:
 
     def poses(self, nodes: Sequence[Node] | np.ndarray) -> np.ndarray:
         """(N, 3) poses of node ids (vectorised)."""
-        u = np.asarray(nodes, dtype=np.int64)
+        x, y, th = self._decode(np.asarray(nodes, dtype=np.int64))
+        th = se2.wrap_angle(th)
+        return np.stack([x, y, np.asarray(th, dtype=float).reshape(x.shape)], axis=-1)
+
+    def _decode(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """x, y and the *unwrapped* heading of int64 node ids (vectorised)."""
         rest, k = np.divmod(u, self.n_headings)
         ii, jj = np.divmod(rest, self.n_j)
-        x = self.anchor[0] + (ii + self.i_min) * self.step
-        y = self.anchor[1] + (jj + self.j_min) * self.step
-        th = se2.wrap_angle(self.anchor[2] + k * self.dtheta)
-        return np.stack([x, y, np.asarray(th, dtype=float).reshape(x.shape)], axis=-1)
+        return (
+            self.anchor[0] + (ii + self.i_min) * self.step,
+            self.anchor[1] + (jj + self.j_min) * self.step,
+            self.anchor[2] + k * self.dtheta,
+        )
 
     def _node_table(self) -> tuple[list[float], list[float], list[float]]:
         """Per-node x, y, theta (unwrapped) as Python lists: fast scalar lookups."""
         if self._table is None:
-            ids = np.arange(self.n_nodes, dtype=np.int64)
-            rest, k = np.divmod(ids, self.n_headings)
-            ii, jj = np.divmod(rest, self.n_j)
-            self._table = (
-                (self.anchor[0] + (ii + self.i_min) * self.step).tolist(),
-                (self.anchor[1] + (jj + self.j_min) * self.step).tolist(),
-                (self.anchor[2] + k * self.dtheta).tolist(),
-            )
+            x, y, th = self._decode(np.arange(self.n_nodes, dtype=np.int64))
+            self._table = (x.tolist(), y.tolist(), th.tolist())
         return self._table
 
     def _xyt(self, u: Node | VirtualNode) -> tuple[float, float, float]:
@@ -525,17 +525,7 @@ class ObjectLattice:
             return self.space
         sp = self._tolerant.get(tolerance)
         if sp is None:
-            base = self.space
-            sp = ObjectSpace(
-                base.shape,
-                base.workspace,
-                base.obstacles,
-                base.inflation - tolerance,
-                resolution=base.resolution,
-                sample_spacing=base.sample_spacing,
-                motion_margin=base.motion_margin,
-                cover_cell=base.cover_cell,
-            )
+            sp = self.space.with_inflation(self.space.inflation - tolerance)
             self._tolerant[tolerance] = sp
         return sp
 

@@ -30,22 +30,9 @@ import math
 import numba
 import numpy as np
 
+from lamp.geometry.kernels import point_segment_distance
+
 BIG = 1.0e9
-
-
-@numba.njit(cache=True)
-def _seg_dist(px: float, py: float, ax: float, ay: float, bx: float, by: float) -> float:
-    """Distance from point p to segment ab."""
-    dx = bx - ax
-    dy = by - ay
-    l2 = dx * dx + dy * dy
-    t = 0.0
-    if l2 > 0.0:
-        t = ((px - ax) * dx + (py - ay) * dy) / l2
-        t = min(1.0, max(0.0, t))
-    qx = ax + t * dx - px
-    qy = ay + t * dy - py
-    return math.sqrt(qx * qx + qy * qy)
 
 
 @numba.njit(cache=True)
@@ -59,7 +46,7 @@ def _point_poly_dist(px: float, py: float, v: np.ndarray, n: int) -> float:
         bx, by = v[j, 0], v[j, 1]
         if (bx - ax) * (py - ay) - (by - ay) * (px - ax) < 0.0:
             inside = False
-        d = _seg_dist(px, py, ax, ay, bx, by)
+        d = point_segment_distance(px, py, ax, ay, bx, by)
         if d < best:
             best = d
     return -best if inside else best
@@ -92,13 +79,13 @@ def _poly_poly_dist(a: np.ndarray, na: int, b: np.ndarray, nb: int) -> float:
     for i in range(na):
         for j in range(nb):
             k = j + 1 if j + 1 < nb else 0
-            d = _seg_dist(a[i, 0], a[i, 1], b[j, 0], b[j, 1], b[k, 0], b[k, 1])
+            d = point_segment_distance(a[i, 0], a[i, 1], b[j, 0], b[j, 1], b[k, 0], b[k, 1])
             if d < best:
                 best = d
     for i in range(nb):
         for j in range(na):
             k = j + 1 if j + 1 < na else 0
-            d = _seg_dist(b[i, 0], b[i, 1], a[j, 0], a[j, 1], a[k, 0], a[k, 1])
+            d = point_segment_distance(b[i, 0], b[i, 1], a[j, 0], a[j, 1], a[k, 0], a[k, 1])
             if d < best:
                 best = d
     return best

@@ -438,6 +438,27 @@ class RobotReach:
         }
 
 
+def robot_free_cells(
+    scene: Scene, poses: np.ndarray, h: float
+) -> tuple[World, np.ndarray, np.ndarray, np.ndarray]:
+    """The grid on which robot reachability is judged (``robot_reach`` and the IROS
+    scene's checks): cells of side ``h`` covering the workspace, free when the exact
+    clearance of their centre from the obstacles, every object (at ``poses``) and the
+    border is >= robot radius + h / 2.
+
+    Returns (world, xs (nx,), ys (ny,) cell-centre coordinates, free (ny, nx) bool).
+    """
+    world = build_world(scene.workspace, object_obstacles(scene, None, poses))
+    nx = int(math.floor(scene.workspace[0] / h))
+    ny = int(math.floor(scene.workspace[1] / h))
+    xs = (np.arange(nx) + 0.5) * h
+    ys = (np.arange(ny) + 0.5) * h
+    gx, gy = np.meshgrid(xs, ys)
+    r = float(scene.robot_radius)
+    free = point_clearance(world, np.stack([gx, gy], axis=-1)) >= r + 0.5 * h
+    return world, xs, ys, free
+
+
 def robot_reach(
     scene: Scene,
     object_index: int = 0,
@@ -464,18 +485,14 @@ def robot_reach(
     robots = (
         scene.robot_starts_array if robot_positions is None else np.asarray(robot_positions, float)
     )
-    world = build_world(scene.workspace, object_obstacles(scene, None, poses))
+    world, xs, ys, free = robot_free_cells(scene, poses, h)
+    ny, nx = free.shape
     obj = scene.objects[object_index]
     own = build_world(
         scene.workspace, [Obstacle(obj.shape, tuple(float(v) for v in poses[object_index]))]
     )
-    nx = int(math.floor(scene.workspace[0] / h))
-    ny = int(math.floor(scene.workspace[1] / h))
-    xs = (np.arange(nx) + 0.5) * h
-    ys = (np.arange(ny) + 0.5) * h
     gx, gy = np.meshgrid(xs, ys)
     pts = np.stack([gx.ravel(), gy.ravel()], axis=1)
-    free = (point_clearance(world, pts) >= r + 0.5 * h).reshape(ny, nx)
     # distance to the object itself only
     d_obj = K.point_clearance(
         np.ascontiguousarray(pts), own.circ, own.pv, own.pn, own.pb, own.width, own.height, False

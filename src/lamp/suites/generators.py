@@ -388,6 +388,20 @@ def layout_maze(rng: np.random.Generator, obj: ObjectSpec, want_tight: bool) -> 
 
 
 # --------------------------------------------------------------------------- block lattice
+def _street_offsets(streets: np.ndarray, blocks: np.ndarray) -> tuple[list[float], list[float]]:
+    """Along one lattice axis, alternating streets and blocks from 0: the start of every
+    street (``len(blocks) + 1`` of them) and of every block."""
+    pos = 0.0
+    street0, block0 = [], []
+    for i in range(len(blocks)):
+        street0.append(pos)
+        pos += streets[i]
+        block0.append(pos)
+        pos += blocks[i]
+    street0.append(pos)
+    return street0, block0
+
+
 @dataclass
 class _Lattice:
     """Blocks on a (possibly rotated) lattice: columns of widths ``bu`` separated by
@@ -402,23 +416,9 @@ class _Lattice:
     angle: float
 
     def __post_init__(self) -> None:
-        # street i spans [ustreet0[i], ustreet0[i] + su[i]] in u; column i follows street i
-        pos = 0.0
-        self.us0, self.uc0 = [], []
-        for i in range(len(self.bu)):
-            self.us0.append(pos)
-            pos += self.su[i]
-            self.uc0.append(pos)
-            pos += self.bu[i]
-        self.us0.append(pos)
-        pos = 0.0
-        self.vs0, self.vr0 = [], []
-        for j in range(len(self.bv)):
-            self.vs0.append(pos)
-            pos += self.sv[j]
-            self.vr0.append(pos)
-            pos += self.bv[j]
-        self.vs0.append(pos)
+        # street i spans [us0[i], us0[i] + su[i]] in u; column i follows street i (v alike)
+        self.us0, self.uc0 = _street_offsets(self.su, self.bu)
+        self.vs0, self.vr0 = _street_offsets(self.sv, self.bv)
 
     def world(self, u: float, v: float) -> np.ndarray:
         c, s = math.cos(self.angle), math.sin(self.angle)

@@ -238,17 +238,11 @@ def _extent_along(shape: Any, theta: float, u: tuple[float, float]) -> float:
 
 def _same_component(scene: Scene, poses: np.ndarray, point: np.ndarray, h: float = 0.02) -> bool:
     """Is ``point`` in the robots' free-space component of the robot starts (objects at
-    ``poses``)? Same grid construction as ``checks.robot_reach``."""
+    ``poses``)? On the grid of ``checks.robot_free_cells``, as ``checks.robot_reach``."""
     from scipy import ndimage
 
-    r = scene.robot_radius
-    world = C.build_world(scene.workspace, C.object_obstacles(scene, None, poses))
-    nx = int(math.floor(scene.workspace[0] / h))
-    ny = int(math.floor(scene.workspace[1] / h))
-    xs = (np.arange(nx) + 0.5) * h
-    ys = (np.arange(ny) + 0.5) * h
-    gx, gy = np.meshgrid(xs, ys)
-    free = C.point_clearance(world, np.stack([gx, gy], axis=-1)) >= r + 0.5 * h
+    _, _, _, free = C.robot_free_cells(scene, poses, h)
+    ny, nx = free.shape
     labels, _ = ndimage.label(free)
 
     def label_of(p: np.ndarray) -> int:

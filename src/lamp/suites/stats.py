@@ -55,6 +55,8 @@ def stats_markdown(manifests: dict[str, dict[str, Any]] | None = None) -> str:
     if manifests is None:
         manifests = {name: suite_manifest(name) for name in SUITES}
     chk = manifests["random"]["checks"]
+    # the single-object families, in suite order (the IROS scene has its own table)
+    families = {name: family_stats(manifests[name]) for name in SUITES if name != "iros"}
     lines = [
         "# Benchmark suite statistics",
         "",
@@ -75,10 +77,7 @@ def stats_markdown(manifests: dict[str, dict[str, Any]] | None = None) -> str:
         "| robot-room min clearance | length ratio | too-tight shortest route |",
         "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
-    for name in SUITES:
-        if name == "iros":
-            continue
-        s = family_stats(manifests[name])
+    for name, s in families.items():
         lines.append(
             f"| {name} | {s['scenes']} | {s['circles']} ({_mmm(s['circle_radius'])}) | "
             f"{s['rectangles']} ({_mmm(s['rect_sides'])}) | {_mmm(s['obstacles'], '{:.0f}')} | "
@@ -94,10 +93,7 @@ def stats_markdown(manifests: dict[str, dict[str, Any]] | None = None) -> str:
         "< 5 cm per side | object start/goal clearance | contact ring reachable by robots |",
         "|---|---|---|---|---|---|---|---|",
     ]
-    for name in SUITES:
-        if name == "iros":
-            continue
-        s = family_stats(manifests[name])
+    for name, s in families.items():
         med = [float(np.median(s[k])) for k in ("free_length", "l05", "l08", "robot_length")]
         lines.append(
             f"| {name} | "

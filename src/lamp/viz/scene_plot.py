@@ -15,10 +15,8 @@ from an object's centre along its own +x axis (a "heading tick") shows its orien
 
 from __future__ import annotations
 
-import os
-import tempfile
-from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Sequence
+from contextlib import AbstractContextManager
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -26,6 +24,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from lamp.geometry.shapes import half_extents, world_outline
+from lamp.io import atomic_output as _atomic_output
 from lamp.scene.model import Circle, Scene, Shape
 
 if TYPE_CHECKING:
@@ -238,26 +237,12 @@ def new_figure(scene: Scene, size_in: float, dpi: float) -> tuple[Figure, Axes]:
     return fig, fig.add_subplot()
 
 
-@contextmanager
-def atomic_output(path: str | Path) -> Iterator[Path]:
+def atomic_output(path: str | Path) -> AbstractContextManager[Path]:
     """Yield a temporary path beside ``path`` (same suffix); on success it replaces ``path``
-    atomically (``os.replace``), on error it is removed. Creates missing parent folders."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(
-        prefix=f".{path.stem}.", suffix=f".tmp{path.suffix}", dir=path.parent
-    )
-    os.close(fd)
-    try:
-        umask = os.umask(0)  # mkstemp makes 0600 files; give the usual 0666 & ~umask instead
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)
-        yield Path(tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    atomically (``os.replace``), on error it is removed. Creates missing parent folders.
+    (``lamp.io.atomic_output`` with the suffix kept, so Matplotlib and imageio see the
+    format.)"""
+    return _atomic_output(path, keep_suffix=True)
 
 
 def _legend(fig: Figure) -> None:
