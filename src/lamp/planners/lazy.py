@@ -12,6 +12,7 @@ the robots (lines 26-33).
 from __future__ import annotations
 
 import contextlib
+import time
 from collections.abc import Hashable
 from dataclasses import dataclass, field
 
@@ -119,8 +120,6 @@ class LazyPlanner:
 
     def plan(self, q_O_now: np.ndarray, q_R_now: np.ndarray, deadline: float | None = None) -> Plan | None:
         """``Plan`` (Alg. 2 lines 9-41): a full-horizon plan from the current state, or None."""
-        import time
-
         cfg = self.task.config
         tol = cfg.robot_match_tolerance
         goal = self.lattice.goal_node

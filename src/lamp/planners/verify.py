@@ -74,8 +74,7 @@ def _pairwise_min_distance(paths: np.ndarray) -> float:
     return float(dist[iu].min())
 
 
-def collide(task: ManipulationTask, q_from: np.ndarray, contacts: np.ndarray,
-            pushes_local: np.ndarray) -> bool:
+def collide(task: ManipulationTask, q_from: np.ndarray, pushes_local: np.ndarray) -> bool:
     """``Collide`` (Alg. 1 line 21): is this proposal unusable at ``q_from``?
 
     A proposal is rejected when a contact or any point of a push path leaves the robots'
@@ -93,6 +92,13 @@ def collide(task: ManipulationTask, q_from: np.ndarray, contacts: np.ndarray,
     return _pairwise_min_distance(dense) < 2 * r - 1e-9
 
 
+def assign_to_contacts(q_R: np.ndarray, contacts: np.ndarray) -> tuple[np.ndarray, float]:
+    """Optimal robot-to-contact pairing by Euclidean distance: (paired robot rows, total)."""
+    cost = np.linalg.norm(q_R[:, None, :] - contacts[None, :, :], axis=2)
+    rows, cols = linear_sum_assignment(cost)
+    return rows, float(cost[rows, cols].sum())
+
+
 def reassign(task: ManipulationTask, q_from: np.ndarray, q_to: np.ndarray, q_R: np.ndarray,
              contacts: np.ndarray, pushes_world: np.ndarray) -> np.ndarray:
     """``Reassign`` (Alg. 1 line 22): goals for all N robots.
@@ -107,8 +113,7 @@ def reassign(task: ManipulationTask, q_from: np.ndarray, q_to: np.ndarray, q_R: 
     goals[:b] = contacts
     if b == n:
         return goals
-    cost = np.linalg.norm(q_R[:, None, :] - contacts[None, :, :], axis=2)
-    rows, _ = linear_sum_assignment(cost)
+    rows, _ = assign_to_contacts(q_R, contacts)
     unpaired = [i for i in range(n) if i not in set(rows.tolist())]
     space = task.robot_space_at(q_from)
     r = task.robot_radius
@@ -224,12 +229,10 @@ def _usable_proposals(task: ManipulationTask, q_from: np.ndarray, q_R: np.ndarra
     kept: list[tuple[float, int, np.ndarray]] = []
     for idx, prop in enumerate(task.proposals(motion, budget, attempt)):
         pushes_local = np.asarray(prop.pushes, float)
-        if collide(task, q_from, np.asarray(prop.contacts, float), pushes_local):
+        if collide(task, q_from, pushes_local):  # contacts are pushes_local[:, 0]
             continue
         contacts = se2.transform_points(q_from, pushes_local[:, 0])
-        cost = np.linalg.norm(q_R[:, None, :] - contacts[None, :, :], axis=2)
-        rows, cols = linear_sum_assignment(cost)
-        kept.append((float(cost[rows, cols].sum()), idx, pushes_local))
+        kept.append((assign_to_contacts(q_R, contacts)[1], idx, pushes_local))
     kept.sort(key=lambda item: (item[0], item[1]))
     return [p for _, _, p in kept]
 
