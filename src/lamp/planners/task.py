@@ -14,8 +14,38 @@ import numpy as np
 
 from lamp.geometry.object_space import ObjectSpace
 from lamp.geometry.robot_space import RobotSpace
+from lamp.geometry.shapes import signed_distance
 from lamp.planners.config import PlannerConfig
+from lamp.planners.trajectory import MAX_STEP, densify
 from lamp.scene.model import Scene, Shape
+
+
+@dataclass(frozen=True)
+class PushCandidates:
+    """The K proposals for one (motion, budget, attempt), prepared for fast ``Collide`` checks.
+
+    A proposal lives in the object frame, and rigid motions preserve distances and linear
+    interpolation, so two of ``Collide``'s three tests do not depend on where the object
+    is: a contact inside the object and two pushing robots closer than 2r. They are done
+    once here (``intrinsic_ok``). The third, push paths in the robots' free space, is
+    done per pose on ``dense_points``: every push path densified to ``MAX_STEP / 2`` in
+    the object frame and stacked, proposal ``i`` owning rows ``starts[i]:starts[i + 1]``.
+    """
+
+    pushes_local: list[np.ndarray]  # K arrays (B, H, 2), object frame
+    intrinsic_ok: np.ndarray  # (K,) bool
+    dense_points: np.ndarray  # (P, 2) stacked densified push points, object frame
+    starts: np.ndarray  # (K + 1,) row offsets into dense_points
+
+
+def pairwise_min_distance(paths: np.ndarray) -> float:
+    """Smallest distance between any two of the (B, T, 2) synchronised paths."""
+    b = paths.shape[0]
+    if b < 2:
+        return np.inf
+    i, j = np.triu_indices(b, 1)
+    d = paths[i] - paths[j]
+    return float(np.sqrt(np.min(d[..., 0] ** 2 + d[..., 1] ** 2)))
 
 
 @dataclass
@@ -54,6 +84,7 @@ class ManipulationTask:
         )
         self._spaces: dict[tuple, RobotSpace] = {}
         self._proposals: dict[tuple, list] = {}
+        self._candidates: dict[tuple, PushCandidates] = {}
 
     @property
     def shape(self) -> Shape:
@@ -108,6 +139,31 @@ class ManipulationTask:
         else:
             self.stats.cache_hits += 1
         return props
+
+
+    def push_candidates(self, motion: np.ndarray, budget: int, attempt: int) -> PushCandidates:
+        """``proposals`` prepared for ``Collide`` (see ``PushCandidates``), cached alike."""
+        key = (tuple(np.round(np.asarray(motion, float), 4)), int(budget), int(attempt))
+        cands = self._candidates.get(key)
+        if cands is None:
+            cands = self._prepare(self.proposals(motion, budget, attempt))
+            self._candidates[key] = cands
+        else:
+            self.stats.cache_hits += 1
+        return cands
+
+    def _prepare(self, props: list) -> PushCandidates:
+        r = self.robot_radius
+        pushes = [np.asarray(p.pushes, float) for p in props]
+        dense = [densify(p, MAX_STEP / 2) for p in pushes]
+        ok = np.array([
+            bool(np.all(signed_distance(self.shape, p[:, 0]) >= r - self.config.contact_tolerance))
+            and pairwise_min_distance(d) >= 2 * r - 1e-9
+            for p, d in zip(pushes, dense, strict=True)
+        ], dtype=bool)
+        sizes = [d.shape[0] * d.shape[1] for d in dense]
+        points = np.concatenate([d.reshape(-1, 2) for d in dense]) if dense else np.zeros((0, 2))
+        return PushCandidates(pushes, ok, points, np.concatenate([[0], np.cumsum(sizes)]).astype(int))
 
 
 def _stable_seed(seed: int, key: tuple) -> int:

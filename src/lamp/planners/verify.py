@@ -20,7 +20,7 @@ from scipy.optimize import linear_sum_assignment
 from lamp.geometry import se2
 from lamp.geometry.shapes import signed_distance
 from lamp.mrmp import plan_paths
-from lamp.planners.task import ManipulationTask
+from lamp.planners.task import ManipulationTask, PushCandidates, pairwise_min_distance
 from lamp.planners.trajectory import MAX_STEP, concat, densify, hold, retime, straight_moves
 
 #: How far (m) the breadth-first search for a robot's waiting spot may go.
@@ -63,23 +63,13 @@ class Transition:
         return int(self.contacts.shape[0])
 
 
-def _pairwise_min_distance(paths: np.ndarray) -> float:
-    """Smallest distance between any two of the (B, T, 2) synchronised paths."""
-    b = paths.shape[0]
-    if b < 2:
-        return np.inf
-    d = paths[:, None] - paths[None, :]
-    dist = np.hypot(d[..., 0], d[..., 1])
-    iu = np.triu_indices(b, 1)
-    return float(dist[iu].min())
-
-
 def collide(task: ManipulationTask, q_from: np.ndarray, pushes_local: np.ndarray) -> bool:
-    """``Collide`` (Alg. 1 line 21): is this proposal unusable at ``q_from``?
+    """``Collide`` (Alg. 1 line 21) for one proposal: is it unusable at ``q_from``?
 
     A proposal is rejected when a contact or any point of a push path leaves the robots'
     free space (obstacles, other objects, border), when a contact lies inside the object
     (deeper than ``contact_tolerance``), or when two pushing robots come closer than 2r.
+    The planners use the batched ``usable_mask``; this direct form is its reference.
     """
     r = task.robot_radius
     local_contacts = pushes_local[:, 0]
@@ -89,7 +79,17 @@ def collide(task: ManipulationTask, q_from: np.ndarray, pushes_local: np.ndarray
     dense = densify(np.asarray(pushes_world), MAX_STEP / 2)
     if not np.all(task.static_space.is_free(dense.reshape(-1, 2))):
         return True
-    return _pairwise_min_distance(dense) < 2 * r - 1e-9
+    return pairwise_min_distance(dense) < 2 * r - 1e-9
+
+
+def usable_mask(task: ManipulationTask, q_from: np.ndarray, cands: PushCandidates) -> np.ndarray:
+    """``not collide`` for all K candidates at once: one free-space query for all their points."""
+    ok = cands.intrinsic_ok.copy()
+    if not ok.any():
+        return ok
+    free = task.static_space.is_free(se2.transform_points(q_from, cands.dense_points))
+    ok &= np.logical_and.reduceat(free, cands.starts[:-1])
+    return ok
 
 
 def assign_to_contacts(q_R: np.ndarray, contacts: np.ndarray) -> tuple[np.ndarray, float]:
@@ -226,13 +226,12 @@ def _usable_proposals(task: ManipulationTask, q_from: np.ndarray, q_R: np.ndarra
     the candidates that need the shortest approach first, which shortens the makespan and
     keeps consecutive pushes in the same direction from reshuffling the robots.
     """
+    cands = task.push_candidates(motion, budget, attempt)
     kept: list[tuple[float, int, np.ndarray]] = []
-    for idx, prop in enumerate(task.proposals(motion, budget, attempt)):
-        pushes_local = np.asarray(prop.pushes, float)
-        if collide(task, q_from, pushes_local):  # contacts are pushes_local[:, 0]
-            continue
+    for idx in np.flatnonzero(usable_mask(task, q_from, cands)):
+        pushes_local = cands.pushes_local[idx]
         contacts = se2.transform_points(q_from, pushes_local[:, 0])
-        kept.append((assign_to_contacts(q_R, contacts)[1], idx, pushes_local))
+        kept.append((assign_to_contacts(q_R, contacts)[1], int(idx), pushes_local))
     kept.sort(key=lambda item: (item[0], item[1]))
     return [p for _, _, p in kept]
 
