@@ -8,13 +8,17 @@ through ``UpdateCost`` (lines 27-37); the expanded state goes back into the open
 a penalty (line 17) so that a later expansion can draw fresh model samples.
 
 Edge costs are robot time: the steps of T_R times ``MAX_STEP`` (metres at the robot
-speed); the heuristic is the lattice's object-only lower bound, in metres.
+speed). The heuristic is the object-only shortest-path cost to the goal over the same
+lattice (``ReverseDistance``), in metres, times ``astar_heuristic_weight``: it sees the
+obstacles, where the plain SE(2) metric would lead the search into dead ends, and states
+from which the object cannot reach its goal at all are dropped.
 """
 
 from __future__ import annotations
 
 import heapq
 import itertools
+import math
 import time
 from dataclasses import dataclass, field
 
@@ -24,6 +28,7 @@ from lamp.planners.lazy import Plan, goal_lattice, join_lattice
 from lamp.planners.task import ManipulationTask
 from lamp.planners.trajectory import MAX_STEP
 from lamp.planners.verify import Transition, verify
+from lamp.search.reverse_distance import ReverseDistance
 
 
 @dataclass(eq=False)
@@ -50,6 +55,7 @@ class LampAStar:
     def __init__(self, task: ManipulationTask) -> None:
         self.task = task
         self.lattice = goal_lattice(task)
+        self.to_goal = ReverseDistance(self.lattice, self.lattice.goal_node)
 
     def _robot_key(self, q_R: np.ndarray) -> tuple:
         """Explored-state key for robots: positions on a ``robot_match_tolerance`` grid, sorted
@@ -64,10 +70,12 @@ class LampAStar:
             edges = self.lattice.successors(state.node)
         return [(v, self.lattice.pose(v)) for v, _ in edges]
 
-    def _h(self, q_O: np.ndarray) -> float:
-        """The lattice's object-only lower bound, times ``astar_heuristic_weight``."""
+    def _h(self, state: SearchState) -> float:
+        """Weighted object-only cost to the goal from the state's node (``inf``: no way)."""
         w = self.task.config.astar_heuristic_weight
-        return w * float(self.lattice.distance(q_O, self.task.goal))
+        if self.lattice.is_node(state.node):
+            return w * self.to_goal.distance(state.node)
+        return w * min((c + self.to_goal.distance(v) for v, c in self._start_edges), default=math.inf)
 
     def plan(self, q_O: np.ndarray, q_R: np.ndarray, deadline: float | None = None) -> Plan | None:
         cfg = self.task.config
@@ -79,14 +87,18 @@ class LampAStar:
         tie = itertools.count()
         # Open-list entries: (f, -g, insertion order, state). Among equal f the deeper state
         # goes first (a standard A* tie-break that avoids breadth-first plateaus).
-        open_list: list = [(self._h(start.q_O), 0.0, next(tie), start)]  # line 2
+        if self._h(start) == math.inf:
+            return None  # no object-only route: no manipulation plan either
+        open_list: list = [(self._h(start), 0.0, next(tie), start)]  # line 2
         penalty: dict[int, float] = {}
         explored: dict[tuple, SearchState] = {(start_node, self._robot_key(start.q_R)): start}
+        per_node: dict[object, int] = {}
+        cap = cfg.astar_states_per_node
         while open_list:  # line 3
             if deadline is not None and time.perf_counter() > deadline:
                 return None
             f, _, _, s = heapq.heappop(open_list)  # line 4
-            if f < s.cost + self._h(s.q_O) + penalty.get(id(s), 0.0) - 1e-9:
+            if f < s.cost + self._h(s) + penalty.get(id(s), 0.0) - 1e-9:
                 continue  # stale entry: the state's cost or penalty changed since
             if s.node == goal:  # line 6
                 return self._backtrack(s)
@@ -101,13 +113,17 @@ class LampAStar:
                 prev = explored.get(key)
                 if prev is not None:  # line 14
                     self._update_cost(child, s, prev, trans, open_list, tie, penalty)
-                else:  # line 15
+                elif cap is None or per_node.get(v, 0) < cap:  # line 15
+                    h = self._h(child)
+                    if h == math.inf:
+                        continue  # the object cannot reach its goal from v
+                    per_node[v] = per_node.get(v, 0) + 1
                     s.children.append((child, trans))
                     explored[key] = child
-                    heapq.heappush(open_list, (child.cost + self._h(q_next), -child.cost, next(tie), child))
+                    heapq.heappush(open_list, (child.cost + h, -child.cost, next(tie), child))
             s.expansions += 1  # line 17: re-add with penalty
             penalty[id(s)] = cfg.astar_reinsert_penalty * s.expansions
-            heapq.heappush(open_list, (s.cost + self._h(s.q_O) + penalty[id(s)], -s.cost, next(tie), s))
+            heapq.heappush(open_list, (s.cost + self._h(s) + penalty[id(s)], -s.cost, next(tie), s))
         return None
 
     def _update_cost(self, s: SearchState, s_curr: SearchState, s_prev: SearchState,
@@ -120,7 +136,7 @@ class LampAStar:
         frontier = [(s_prev.cost, next(tie), s_prev)]  # line 31
         while frontier:  # lines 32-37, best-first by ascending cost
             _, _, top = heapq.heappop(frontier)
-            heapq.heappush(open_list, (top.cost + self._h(top.q_O) + penalty.get(id(top), 0.0),
+            heapq.heappush(open_list, (top.cost + self._h(top) + penalty.get(id(top), 0.0),
                                        -top.cost, next(tie), top))
             for child, edge in top.children:
                 new_cost = top.cost + edge_cost(edge)
