@@ -10,6 +10,7 @@ from typer.testing import CliRunner
 
 from lamp.cli import app
 from lamp.planners.config import PlannerConfig
+from lamp.planners.lamp_astar import LampAStar
 from lamp.planners.lazy import LazyPlanner
 from lamp.planners.run import solve
 from lamp.planners.task import ManipulationTask
@@ -92,6 +93,29 @@ def test_astar_solves_short_move(proposer):
     result = solve(scene, "astar-replan", seed=0, model=proposer, time_limit=120).to_dict()
     assert result["success"], result
     assert result["objects"][0]["full_horizon_plan"]
+
+
+def test_astar_plans_around_a_wall(proposer):
+    """The lattice cost-to-go leads LAMP-A* around the wall instead of into it."""
+    wall = {"type": "rectangle", "center": [1.2, 0.55], "size": [0.1, 1.1], "angle": 0.0}
+    scene = scene_from_dict(small_scene(goal=(1.7, 0.6, 0.0), obstacles=[wall]))
+    poses = np.array([o.start for o in scene.objects], float)
+    task = ManipulationTask(scene, 0, poses, proposer, PlannerConfig(), seed=0)
+    plan = LampAStar(task).plan(poses[0], scene.robot_starts_array)
+    assert plan is not None
+    path = plan.object_path
+    assert np.allclose(path[-1], scene.objects[0].goal, atol=1e-6)
+    assert path[:, 1].max() > 1.1  # over the top of the wall (it ends at y = 1.1)
+    assert all(np.allclose(a.q_to, b.q_from) for a, b in zip(plan.transitions[:-1], plan.transitions[1:], strict=True))
+
+
+def test_astar_gives_up_at_once_without_an_object_route(proposer):
+    wall = {"type": "rectangle", "center": [1.2, 1.0], "size": [0.1, 2.0], "angle": 0.0}
+    scene = scene_from_dict(small_scene(goal=(1.7, 1.0, 0.0), obstacles=[wall]))
+    poses = np.array([o.start for o in scene.objects], float)
+    task = ManipulationTask(scene, 0, poses, proposer, PlannerConfig(), seed=0)
+    assert LampAStar(task).plan(poses[0], scene.robot_starts_array) is None
+    assert task.stats.verify_calls == 0
 
 
 @pytest.mark.parametrize("planner", ["gco-var", "gco-ori"])

@@ -36,7 +36,7 @@ class PlannerConfig:
     #: Weight on LAMP-A*'s heuristic (weighted A*; the paper's plain A* is 1). Edge costs
     #: are robot travel, pushes plus repositioning, about 3-7x the object's travel that
     #: the heuristic measures, so at weight 1 the search fills long f-plateaus of robot
-    #: states; 4 keeps it directed (within 4x of optimal, were states not capped). On 24 suite
+    #: states; 4 keeps it directed (within 4x of optimal, were states not capped). On 18 suite
     #: scenes (first 6 Random, 4 each of the others), 20 s limit, capped: weight 4 planned
     #: 17 of 18; weight 2 (uncapped) 3 of the 6 Random.
     astar_heuristic_weight: float = 4.0
