@@ -450,3 +450,17 @@ def test_solve_job_wiring_and_render_failure(monkeypatch, tmp_path):
     solve_job(jobs[1])
     assert calls == [("iros-00", "lazy", 2, "geometric", True, None),
                      ("iros-00", "astar", 2, "geometric", False, 12.0)]
+
+
+@pytest.mark.parametrize(("changed", "dirty"), [
+    (" M docs/results/full/results.jsonl\n M docs/results/full/config.json", False),
+    (" M docs/results/full/results.jsonl\n M src/lamp/planners/lazy.py", True),
+    ("", False),
+])
+def test_session_ignores_changes_inside_the_output_folder(tmp_path, monkeypatch, changed, dirty):
+    from lamp.bench import cli as bench_cli
+
+    answers = {"status": changed, "rev-parse": str(tmp_path)}
+    monkeypatch.setattr(bench_cli, "_git", lambda *args: answers[args[0]])
+    session = bench_cli._session("lamp bench", tmp_path / "docs" / "results" / "full")
+    assert session["git_dirty"] is dirty

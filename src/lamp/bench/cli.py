@@ -131,13 +131,20 @@ def planner_limits(planners: list[str], planning_limit: float) -> dict[str, floa
     return out
 
 
-def _session(command: str) -> dict[str, Any]:
+def _session(command: str, out: Path) -> dict[str, Any]:
     status = _git("status", "--porcelain", "--untracked-files=no")
+    top = _git("rev-parse", "--show-toplevel")
+    dirty = None
+    if status is not None:
+        # changes inside the output folder (earlier results of this run) do not count
+        changed = [Path(top or ".", line[3:].split(" -> ")[-1]).resolve()
+                   for line in status.splitlines() if line.strip()]
+        dirty = any(not p.is_relative_to(out.resolve()) for p in changed)
     return {
         "command": command, "argv": shlex.join(sys.argv),
         "date": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
-        "git_commit": _git("rev-parse", "HEAD"), "git_dirty": bool(status) if status is not None
-        else None, "packages": _package_versions(),
+        "git_commit": _git("rev-parse", "HEAD"), "git_dirty": dirty,
+        "packages": _package_versions(),
     }
 
 
@@ -165,7 +172,7 @@ def write_config(out: Path, previous: dict[str, Any], *, suites: list[str], plan
         "astar-replan); the paper uses 500 s",
         "planner_planning_limits_s": planner_limits(all_planners, planning_limit),
         "job_fn": job_fn, "machine": machine_info(),
-        "sessions": [*(previous.get("sessions") or []), _session(command)],
+        "sessions": [*(previous.get("sessions") or []), _session(command, out)],
     }
     write_json_atomic(out / CONFIG_FILE, config)
     return config
