@@ -24,10 +24,9 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
 
-from lamp.planners.lamp_astar import LampAStar  # noqa: E402
+from lamp.planners.lamp_astar import LampAStar, edge_cost  # noqa: E402
 from lamp.planners.run import default_config, load_proposer  # noqa: E402
 from lamp.planners.task import ManipulationTask  # noqa: E402
-from lamp.planners.trajectory import MAX_STEP  # noqa: E402
 from lamp.suites.registry import suite_scenes  # noqa: E402
 
 FAMILIES = ("random", "maze", "tilt", "warehouse")
@@ -56,14 +55,14 @@ def main() -> None:
     for family in FAMILIES:
         found, times = 0, []
         for scene in suite_scenes(family)[: args.scenes]:
-            poses = np.array([o.start for o in scene.objects], float)
+            poses = scene.object_starts()
             t0 = time.perf_counter()
             task = ManipulationTask(scene, 0, poses, model, cfg, seed=0)
             plan = LampAStar(task).plan(poses[0], scene.robot_starts_array, deadline=t0 + args.limit)
             dt = time.perf_counter() - t0
             times.append(dt)
             found += plan is not None
-            what = (f"{len(plan.transitions):3d} pushes, cost {sum(t.steps for t in plan.transitions) * MAX_STEP:6.2f} m"
+            what = (f"{len(plan.transitions):3d} pushes, cost {sum(map(edge_cost, plan.transitions)):6.2f} m"
                     if plan is not None else "no plan")
             print(f"{scene.name:14s} {dt:6.1f} s  {task.stats.verify_calls:6d} verify  {what}", flush=True)
         summary.append(f"{family:10s} planned {found}/{len(times)}   median time {np.median(times):5.1f} s")

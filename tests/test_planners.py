@@ -99,7 +99,7 @@ def test_astar_plans_around_a_wall(proposer):
     """The lattice cost-to-go leads LAMP-A* around the wall instead of into it."""
     wall = {"type": "rectangle", "center": [1.2, 0.55], "size": [0.1, 1.1], "angle": 0.0}
     scene = scene_from_dict(small_scene(goal=(1.7, 0.6, 0.0), obstacles=[wall]))
-    poses = np.array([o.start for o in scene.objects], float)
+    poses = scene.object_starts()
     task = ManipulationTask(scene, 0, poses, proposer, PlannerConfig(), seed=0)
     plan = LampAStar(task).plan(poses[0], scene.robot_starts_array)
     assert plan is not None
@@ -112,7 +112,7 @@ def test_astar_plans_around_a_wall(proposer):
 def test_astar_gives_up_at_once_without_an_object_route(proposer):
     wall = {"type": "rectangle", "center": [1.2, 1.0], "size": [0.1, 2.0], "angle": 0.0}
     scene = scene_from_dict(small_scene(goal=(1.7, 1.0, 0.0), obstacles=[wall]))
-    poses = np.array([o.start for o in scene.objects], float)
+    poses = scene.object_starts()
     task = ManipulationTask(scene, 0, poses, proposer, PlannerConfig(), seed=0)
     assert LampAStar(task).plan(poses[0], scene.robot_starts_array) is None
     assert task.stats.verify_calls == 0

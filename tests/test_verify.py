@@ -1,4 +1,4 @@
-"""Verify's batched proposal check against the direct, one-proposal-at-a-time ``collide``."""
+"""Verify's batched proposal check against a direct, one-proposal-at-a-time reference."""
 
 from __future__ import annotations
 
@@ -6,16 +6,30 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from lamp.geometry import se2
+from lamp.geometry.shapes import signed_distance
 from lamp.manip import GeometricProposer
 from lamp.planners.config import PlannerConfig
 from lamp.planners.task import ManipulationTask, pairwise_min_distance
-from lamp.planners.verify import collide, usable_mask
+from lamp.planners.trajectory import MAX_STEP, densify
+from lamp.planners.verify import usable_mask
 from lamp.suites.registry import suite_scenes
 
 SCENE = suite_scenes("maze")[3]  # cluttered: many proposals collide somewhere
-TASK = ManipulationTask(SCENE, 0, np.array([o.start for o in SCENE.objects], float),
+TASK = ManipulationTask(SCENE, 0, SCENE.object_starts(),
                         GeometricProposer(), PlannerConfig(), seed=0)
 W, H = SCENE.workspace
+
+def collide(task: ManipulationTask, q_from: np.ndarray, pushes_local: np.ndarray) -> bool:
+    """Alg. 1's ``Collide`` for one proposal, checked in the world frame at ``q_from``."""
+    r = task.robot_radius
+    if np.any(signed_distance(task.shape, pushes_local[:, 0]) < r - task.config.contact_tolerance):
+        return True
+    dense = densify(se2.transform_points(q_from, pushes_local), MAX_STEP / 2)
+    if not np.all(task.static_space.is_free(dense.reshape(-1, 2))):
+        return True
+    return pairwise_min_distance(dense) < 2 * r - 1e-9
+
 
 motions = st.tuples(st.floats(-0.2, 0.2), st.floats(-0.2, 0.2), st.floats(-0.5, 0.5))
 

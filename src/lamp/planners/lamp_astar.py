@@ -87,9 +87,10 @@ class LampAStar:
         tie = itertools.count()
         # Open-list entries: (f, -g, insertion order, state). Among equal f the deeper state
         # goes first (a standard A* tie-break that avoids breadth-first plateaus).
-        if self._h(start) == math.inf:
+        h_start = self._h(start)
+        if h_start == math.inf:
             return None  # no object-only route: no manipulation plan either
-        open_list: list = [(self._h(start), 0.0, next(tie), start)]  # line 2
+        open_list: list = [(h_start, 0.0, next(tie), start)]  # line 2
         penalty: dict[int, float] = {}
         explored: dict[tuple, SearchState] = {(start_node, self._robot_key(start.q_R)): start}
         per_node: dict[object, int] = {}

@@ -128,7 +128,7 @@ class ManipulationTask:
         relies on (Sec. III-A-1: "a different sampling in a future call may yield valid
         manipulation trajectories").
         """
-        key = (tuple(np.round(np.asarray(motion, float), 4)), int(budget), int(attempt))
+        key = _proposal_key(motion, budget, attempt)
         props = self._proposals.get(key)
         if props is None:
             seed = _stable_seed(self.seed, key)
@@ -143,7 +143,7 @@ class ManipulationTask:
 
     def push_candidates(self, motion: np.ndarray, budget: int, attempt: int) -> PushCandidates:
         """``proposals`` prepared for ``Collide`` (see ``PushCandidates``), cached alike."""
-        key = (tuple(np.round(np.asarray(motion, float), 4)), int(budget), int(attempt))
+        key = _proposal_key(motion, budget, attempt)
         cands = self._candidates.get(key)
         if cands is None:
             cands = self._prepare(self.proposals(motion, budget, attempt))
@@ -164,6 +164,11 @@ class ManipulationTask:
         sizes = [d.shape[0] * d.shape[1] for d in dense]
         points = np.concatenate([d.reshape(-1, 2) for d in dense]) if dense else np.zeros((0, 2))
         return PushCandidates(pushes, ok, points, np.concatenate([[0], np.cumsum(sizes)]).astype(int))
+
+
+def _proposal_key(motion: np.ndarray, budget: int, attempt: int) -> tuple:
+    """Cache key of a proposal request: the motion rounded to 0.1 mm / 0.1 mrad."""
+    return tuple(np.round(np.asarray(motion, float), 4)), int(budget), int(attempt)
 
 
 def _stable_seed(seed: int, key: tuple) -> int:

@@ -20,8 +20,8 @@ from scipy.optimize import linear_sum_assignment
 from lamp.geometry import se2
 from lamp.geometry.shapes import signed_distance
 from lamp.mrmp import plan_paths
-from lamp.planners.task import ManipulationTask, PushCandidates, pairwise_min_distance
-from lamp.planners.trajectory import MAX_STEP, concat, densify, hold, retime, straight_moves
+from lamp.planners.task import ManipulationTask, PushCandidates
+from lamp.planners.trajectory import concat, hold, retime, straight_moves
 
 #: How far (m) the breadth-first search for a robot's waiting spot may go.
 WAIT_SEARCH_RADIUS = 1.0
@@ -63,27 +63,15 @@ class Transition:
         return int(self.contacts.shape[0])
 
 
-def collide(task: ManipulationTask, q_from: np.ndarray, pushes_local: np.ndarray) -> bool:
-    """``Collide`` (Alg. 1 line 21) for one proposal: is it unusable at ``q_from``?
+def usable_mask(task: ManipulationTask, q_from: np.ndarray, cands: PushCandidates) -> np.ndarray:
+    """``Collide`` (Alg. 1 line 21) for all K candidates at once: which are usable at ``q_from``?
 
     A proposal is rejected when a contact or any point of a push path leaves the robots'
     free space (obstacles, other objects, border), when a contact lies inside the object
     (deeper than ``contact_tolerance``), or when two pushing robots come closer than 2r.
-    The planners use the batched ``usable_mask``; this direct form is its reference.
+    The pose-independent tests come precomputed (``PushCandidates.intrinsic_ok``); the
+    free-space test is one query for all the candidates' points.
     """
-    r = task.robot_radius
-    local_contacts = pushes_local[:, 0]
-    if np.any(signed_distance(task.shape, local_contacts) < r - task.config.contact_tolerance):
-        return True
-    pushes_world = se2.transform_points(q_from, pushes_local)
-    dense = densify(np.asarray(pushes_world), MAX_STEP / 2)
-    if not np.all(task.static_space.is_free(dense.reshape(-1, 2))):
-        return True
-    return pairwise_min_distance(dense) < 2 * r - 1e-9
-
-
-def usable_mask(task: ManipulationTask, q_from: np.ndarray, cands: PushCandidates) -> np.ndarray:
-    """``not collide`` for all K candidates at once: one free-space query for all their points."""
     ok = cands.intrinsic_ok.copy()
     if not ok.any():
         return ok
