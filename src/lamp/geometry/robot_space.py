@@ -702,7 +702,7 @@ class RobotSpace:
         max_distance: float | None = None,
     ) -> np.ndarray | None:
         """A collision-free centre close to ``point``, found by breadth-first search over
-        the grid from ``point`` (LAMP paper, footnote to Alg. 1 line 22: waiting locations
+        the grid from ``point`` (LAMP paper, footnote to ``Reassign`` in Alg. 1 line 22: waiting locations
         by BFS from the robot's current position until a collision-free configuration is
         found).
 

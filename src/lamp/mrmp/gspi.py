@@ -12,7 +12,7 @@ Each time step (GCo's Gspi, with the fixes listed in the issue):
    with goals) when that lowers the sum of their heuristic distances; a robot without a
    goal counts 0, so an idle robot closer to a goal takes it over;
 2. one PIBT step (Okumura et al., "Priority inheritance with backtracking", AIJ 2022,
-   Alg. 1 ``funcPIBT``), iterative with an explicit stack: robots in priority order pick
+   Algorithm 1, ``funcPIBT``), iterative with an explicit stack: robots in priority order pick
    the candidate (neighbours and *wait*) that most lowers their heuristic; when a chosen
    move would hit a robot that has not decided yet, that robot decides first (priority
    inheritance) and the parent re-checks, taking its next candidate on failure

@@ -1,4 +1,4 @@
-"""Closed-loop execution (paper Alg. 2 lines 3-8): plan, execute a segment in MuJoCo, observe, replan.
+"""Closed-loop execution (paper Alg. 2 lines 3-7): until the goal, plan, execute in MuJoCo, observe, replan.
 
 Every planner implements ``ObjectPlanner.plan(q_O, q_R, deadline) -> Plan | None`` for one
 object; ``run_object`` drives it with a policy that says when to replan:
@@ -84,7 +84,7 @@ def _stalled(q_before: np.ndarray, q_after: np.ndarray, trans: Transition) -> bo
 
 def run_object(task: ManipulationTask, planner: ObjectPlanner, policy: LoopPolicy, sim,
                record: LoopRecord, render: bool = False, time_limit: float | None = None) -> ObjectResult:
-    """Move ``task``'s object to its goal in ``sim`` with ``planner`` (Alg. 2 lines 2-8)."""
+    """Move ``task``'s object to its goal in ``sim`` with ``planner`` (Alg. 2 lines 2-7)."""
     cfg = task.config
     limit = cfg.planning_time_limit if time_limit is None else time_limit
     goal = task.goal
