@@ -208,7 +208,7 @@ def route_push(task: ManipulationTask, q_from: np.ndarray, q_to: np.ndarray, q_R
 
 def _usable_proposals(task: ManipulationTask, q_from: np.ndarray, q_R: np.ndarray,
                       motion: np.ndarray, budget: int, attempt: int) -> list[np.ndarray]:
-    """Lines 20-21: the K proposals of GCo_DC that pass ``Collide``, nearest to the robots first.
+    """Lines 20-21: the K proposals (C_R, T_manip) that pass ``Collide``, nearest to the robots first.
 
     Ordering by the optimal robot-to-contact distance is our addition: Gspi is tried on
     the candidates that need the shortest approach first, which shortens the makespan and
