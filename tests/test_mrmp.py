@@ -299,7 +299,7 @@ def test_finer_lattice_fallback_reaches_narrow_channel() -> None:
 def test_lazy_heuristic_equals_full_dijkstra(seed: int) -> None:
     """The resumable per-goal Dijkstra gives, in any query order, the full Dijkstra field,
     which is never below the straight-line distance (a true shortest-path metric)."""
-    from lamp.mrmp.gspi import _lattice_h, _seed_goal
+    from lamp.mrmp.gspi_kernels import GoalDistances, _lattice_h, seed_goal
 
     scene, _, G = _random_instance(seed, 1, 1, 8, 2.0)
     lat = get_lattice(RobotSpace.from_scene(scene))
@@ -308,10 +308,8 @@ def test_lazy_heuristic_equals_full_dijkstra(seed: int) -> None:
     cost = rng.uniform(0, 0.05, 3)
     full = lat.field(seeds, cost)
     V = lat.V
-    hs = (np.full((1, V), np.inf), np.full((1, V), -1, dtype=np.int64),
-          np.empty((1, V), dtype=np.int64), np.zeros(1, dtype=np.int64),
-          np.zeros((1, 1), dtype=np.bool_), np.zeros((1, 1)))
-    _seed_goal(0, seeds.astype(np.int64), cost, hs)
+    hs = GoalDistances.empty(1, V, 1)
+    seed_goal(0, seeds.astype(np.int64), cost, hs)
     order = rng.permutation(V)
     lazy = np.array([_lattice_h(0, int(v), lat.nbr, lat.dlen, hs) for v in order])
     assert np.allclose(lazy, full[order], rtol=0, atol=1e-12)  # inf == inf counts as close

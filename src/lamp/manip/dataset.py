@@ -1,6 +1,6 @@
 """The MuJoCo push dataset: simulated pushes by the contact strategies, kept when they work.
 
-One sample (issue #4, gco-facts.md "Training data"): draw an object (circle r 0.10-0.30 m
+One sample (as GCo's training data): draw an object (circle r 0.10-0.30 m
 or rectangle with sides 0.15-0.50 m), a budget b in {1, 2, 3}, a requested motion (dx, dy
 in [-0.2, 0.2] m, dtheta in [-0.5, 0.5] rad, object frame) and a contact strategy; place b
 robots touching the object (``lamp.manip.geometric``), command each robot to follow its
