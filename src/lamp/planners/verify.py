@@ -153,14 +153,13 @@ def approach(task: ManipulationTask, q_from: np.ndarray, q_R: np.ndarray,
     backoff = leave_contact(task, q_from, q_R)
     starts = backoff[:, -1]
     task.stats.gspi_calls += 1
-    try:
-        plan = plan_paths(
-            task.scene, starts, goals, object_poses=task.poses_with(q_from),
-            time_limit=task.config.gspi_time_limit, space=task.robot_space_at(q_from),
-            seed=task.seed, goal_tolerance=task.config.contact_tolerance,
-        )
-    except ValueError:
-        return None
+    # Contacts deeper than the tolerance or robots left overlapping come back as a failed
+    # plan (status INVALID_GOAL / INVALID_START), like any other infeasible approach.
+    plan = plan_paths(
+        task.scene, starts, goals, object_poses=task.poses_with(q_from),
+        time_limit=task.config.gspi_time_limit, space=task.robot_space_at(q_from),
+        seed=task.seed, goal_tolerance=task.config.contact_tolerance,
+    )
     if not plan.success:
         return None
     task.stats.gspi_success += 1
