@@ -12,6 +12,7 @@ from lamp.scene.model import (
     Shape,
     shape_from_dict,
 )
+from lamp.scene.save import save_scene
 
 __all__ = [
     "Circle",
@@ -24,6 +25,7 @@ __all__ = [
     "SceneObject",
     "Shape",
     "load_scene",
+    "save_scene",
     "scene_from_dict",
     "shape_from_dict",
 ]
