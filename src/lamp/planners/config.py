@@ -4,6 +4,19 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+#: The planner names (``lamp run --planner``, ``lamp.solve``) and what each stands for.
+PLANNER_DESCRIPTIONS = {
+    "lazy": "LAMP-Lazy (default)",
+    "astar": "LAMP-A*, open loop",
+    "astar-replan": "LAMP-A*, replanning on drift",
+    "gco-ori": "GCo with its 0.2 m buffer",
+    "gco-var": "GCo with zero buffer",
+}
+#: Default cumulative planning limit per object (s): the paper's 500 s for LAMP-A*,
+#: 300 s for the others.
+DEFAULT_PLANNING_LIMITS = {"lazy": 300.0, "astar": 500.0, "astar-replan": 500.0,
+                           "gco-ori": 300.0, "gco-var": 300.0}
+
 
 @dataclass(frozen=True)
 class PlannerConfig:

@@ -10,7 +10,7 @@ from typing import Any, Literal
 import numpy as np
 
 from lamp.planners.closed_loop import LoopPolicy, LoopRecord, run_object
-from lamp.planners.config import PlannerConfig
+from lamp.planners.config import DEFAULT_PLANNING_LIMITS, PLANNER_DESCRIPTIONS, PlannerConfig
 from lamp.planners.models import load_proposer as _load_proposer
 from lamp.planners.result import RunResult
 from lamp.planners.task import ManipulationTask, TaskStats
@@ -19,16 +19,8 @@ from lamp.scene.model import Scene
 from lamp.warmup import ensure_warm
 
 #: Planner names accepted by ``lamp run --planner`` (interfaces spec).
-PLANNERS = ("lazy", "astar", "astar-replan", "gco-ori", "gco-var")
+PLANNERS = tuple(PLANNER_DESCRIPTIONS)
 PlannerName = Literal["lazy", "astar", "astar-replan", "gco-ori", "gco-var"]
-#: What each planner name stands for (``--help`` and ``lamp.solve``'s docstring).
-PLANNER_DESCRIPTIONS = {
-    "lazy": "LAMP-Lazy (default)",
-    "astar": "LAMP-A*, open loop",
-    "astar-replan": "LAMP-A*, replanning on drift",
-    "gco-ori": "GCo with its 0.2 m buffer",
-    "gco-var": "GCo with zero buffer",
-}
 
 POLICIES = {
     "lazy": LoopPolicy(replan_on_drift=True, replan_when_done=True),
@@ -54,9 +46,7 @@ def check_planner(name: str) -> str:
 
 def default_config(planner: str) -> PlannerConfig:
     """Per-planner defaults: LAMP-A* keeps the paper's 500 s cumulative limit."""
-    if planner in ("astar", "astar-replan"):
-        return PlannerConfig(planning_time_limit=500.0)
-    return PlannerConfig(planning_time_limit=300.0)
+    return PlannerConfig(planning_time_limit=DEFAULT_PLANNING_LIMITS[check_planner(planner)])
 
 
 def make_planner(name: str, task: ManipulationTask):
