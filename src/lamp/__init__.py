@@ -9,16 +9,13 @@ from __future__ import annotations
 
 from importlib import metadata as _metadata
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
+from lamp.planners.config import PlannerConfig, PlannerName
+from lamp.planners.result import RunResult
+from lamp.progress import ProgressCallback
 from lamp.scene import Scene, SceneError, load_scene, scene_from_dict
 from lamp.scene.save import save_scene
-
-if TYPE_CHECKING:
-    from lamp.planners.config import PlannerConfig
-    from lamp.planners.result import RunResult
-    from lamp.planners.run import PlannerName
-    from lamp.progress import ProgressCallback
 
 try:
     __version__ = _metadata.version("lamp")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal
 
 #: The planner names (``lamp run --planner``, ``lamp.solve``) and what each stands for.
 PLANNER_DESCRIPTIONS = {
@@ -12,6 +13,7 @@ PLANNER_DESCRIPTIONS = {
     "gco-ori": "GCo with its 0.2 m buffer",
     "gco-var": "GCo with zero buffer",
 }
+PlannerName = Literal["lazy", "astar", "astar-replan", "gco-ori", "gco-var"]
 #: Default cumulative planning limit per object (s): the paper's 500 s for LAMP-A*,
 #: 300 s for the others.
 DEFAULT_PLANNING_LIMITS = {"lazy": 300.0, "astar": 500.0, "astar-replan": 500.0,

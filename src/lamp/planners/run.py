@@ -5,12 +5,17 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 
 from lamp.planners.closed_loop import LoopPolicy, LoopRecord, run_object
-from lamp.planners.config import DEFAULT_PLANNING_LIMITS, PLANNER_DESCRIPTIONS, PlannerConfig
+from lamp.planners.config import (
+    DEFAULT_PLANNING_LIMITS,
+    PLANNER_DESCRIPTIONS,
+    PlannerConfig,
+    PlannerName,
+)
 from lamp.planners.models import load_proposer as _load_proposer
 from lamp.planners.result import RunResult
 from lamp.planners.task import ManipulationTask, TaskStats
@@ -20,7 +25,6 @@ from lamp.warmup import ensure_warm
 
 #: Planner names accepted by ``lamp run --planner`` (interfaces spec).
 PLANNERS = tuple(PLANNER_DESCRIPTIONS)
-PlannerName = Literal["lazy", "astar", "astar-replan", "gco-ori", "gco-var"]
 
 POLICIES = {
     "lazy": LoopPolicy(replan_on_drift=True, replan_when_done=True),
