@@ -83,6 +83,14 @@ def test_spec_example_verbatim_loads() -> None:
     assert scene_from_dict(scene.to_dict()) == scene
 
 
+def test_docs_example_is_the_tested_copy() -> None:
+    """docs/scene-format.md's example is the file loaded above (so the docs' example loads)."""
+    doc = (Path(__file__).parents[1] / "docs" / "scene-format.md").read_text()
+    block = doc.split("```yaml\n", 1)[1].split("```", 1)[0]
+    copy_text = (DATA / "spec_example.yaml").read_text().split("\n", 1)[1]
+    assert block == copy_text
+
+
 def test_wall_at_angle_1_5708_touching_the_border_loads() -> None:
     """``angle: 1.5708`` is not exactly pi/2: a wall touching the border pokes out by ~2e-7 m,
     within the spec's 1e-6 m rounding; 2e-6 m beyond the border is still refused."""
