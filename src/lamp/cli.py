@@ -24,7 +24,7 @@ from lamp.cli_support import (
     print_summary,
     version_callback,
 )
-from lamp.planners.config import DEFAULT_PLANNING_LIMITS, PLANNER_DESCRIPTIONS
+from lamp.planners.config import PLANNER_DESCRIPTIONS, planning_limit_help
 from lamp.scene import SceneError, load_scene
 
 app = typer.Typer(
@@ -38,10 +38,6 @@ app = typer.Typer(
 PLANNER_HELP = "Planner: " + "; ".join(f"{k}: {v}" for k, v in PLANNER_DESCRIPTIONS.items())
 MODEL_HELP = ("Manipulation model: learned (the shipped checkpoint), geometric, or a checkpoint "
               "file written by `lamp model train`.")
-_limits = sorted(set(DEFAULT_PLANNING_LIMITS.values()))
-LIMIT_DEFAULT = ", ".join(
-    f"{v:g} s for " + "/".join(p for p, x in DEFAULT_PLANNING_LIMITS.items() if x == v)
-    for v in _limits)
 
 
 @app.callback()
@@ -135,7 +131,7 @@ def run(
     model: str = typer.Option("learned", "--model", "-m", help=MODEL_HELP),
     planning_limit: float = typer.Option(None, "--planning-limit",
                                          help="Cumulative planning limit per object, seconds.",
-                                         show_default=LIMIT_DEFAULT),
+                                         show_default=planning_limit_help()),
     time_limit: float = typer.Option(None, "--time-limit", hidden=True,
                                      help="Old spelling of --planning-limit."),
     check: bool = typer.Option(False, "--check", help="Exit with status 1 when the task "

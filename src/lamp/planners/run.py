@@ -11,10 +11,10 @@ import numpy as np
 
 from lamp.planners.closed_loop import LoopPolicy, LoopRecord, run_object
 from lamp.planners.config import (
-    DEFAULT_PLANNING_LIMITS,
     PLANNER_DESCRIPTIONS,
     PlannerConfig,
     PlannerName,
+    default_planning_limit,
 )
 from lamp.planners.models import load_proposer as _load_proposer
 from lamp.planners.result import RunResult
@@ -50,7 +50,7 @@ def check_planner(name: str) -> str:
 
 def default_config(planner: str) -> PlannerConfig:
     """Per-planner defaults: LAMP-A* keeps the paper's 500 s cumulative limit."""
-    return PlannerConfig(planning_time_limit=DEFAULT_PLANNING_LIMITS[check_planner(planner)])
+    return PlannerConfig(planning_time_limit=default_planning_limit(check_planner(planner)))
 
 
 def make_planner(name: str, task: ManipulationTask):
