@@ -119,6 +119,12 @@ def test_old_spellings_still_work(small: Path, no_planning) -> None:
     assert res.exit_code == 2 and "--planning-limit: must be positive" in res.stderr
     res = runner.invoke(app, ["model", "eval", "--k", "0"])
     assert res.exit_code == 2 and "--proposals" in res.stderr
+    res = runner.invoke(app, ["bench", "--suite", "iros", "--time-limit", "-1", "--out",
+                              str(small.parent / "b"), "--dry-run"])
+    assert res.exit_code == 2 and "--planning-limit must be positive" in res.stderr
+    res = runner.invoke(app, ["bench", "--suite", "iros", "--seeds", "3", "--out",
+                              str(small.parent / "b"), "--dry-run"])
+    assert res.exit_code == 0 and "x 3 seeds" in res.output
 
 
 def test_units_in_help_survive_rich_markup() -> None:
