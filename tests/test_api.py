@@ -150,3 +150,8 @@ def test_warm_up_runs_once_per_process() -> None:
     ensure_warm()
     again = ensure_warm()
     assert (again.seconds, again.compiled) == (0.0, 0)
+    from lamp.warmup import warm_up
+
+    events: list = []
+    report = warm_up(events.append)  # everything is compiled now: nothing to announce
+    assert events == [] and report.compiled == 0 and report.compile_s == 0.0
