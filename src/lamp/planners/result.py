@@ -63,6 +63,8 @@ class RunResult:
     replans: int = 0
     wall_time_s: float = 0.0
     stats: dict[str, Any] = field(default_factory=dict)
+    #: The run's ``lamp.record.Recording`` (set by ``lamp.solve``); not part of result.json.
+    recording: Any = field(default=None, repr=False, compare=False)
 
     @property
     def success(self) -> bool:

@@ -70,16 +70,18 @@ def load_proposer(model: str | Any = "learned"):
 
 @dataclass
 class Solution:
-    """``RunResult`` plus what only a renderer needs (animation frames)."""
+    """``RunResult`` plus what only a renderer needs (animation frames, the recording)."""
 
     result: RunResult
     frames: list[Any] = field(default_factory=list)
+    recording: Any = None
 
 
 def solve(scene: Scene, planner: str = "lazy", seed: int = 0, *, model: str | Any = "learned",
           config: PlannerConfig | None = None, render: bool = False,
           time_limit: float | None = None) -> RunResult:
-    """Plan and execute ``scene`` with ``planner``; ``result.to_dict()`` is result.json."""
+    """Plan and execute ``scene`` with ``planner``; ``result.to_dict()`` is result.json and
+    ``result.recording`` the run's :class:`lamp.record.Recording`."""
     return solve_with_frames(scene, planner, seed, model=model, config=config, render=render,
                              time_limit=time_limit).result
 
@@ -88,8 +90,15 @@ def solve_with_frames(scene: Scene, planner: str = "lazy", seed: int = 0, *,
                       model: str | Any = "learned", config: PlannerConfig | None = None,
                       render: bool = False, time_limit: float | None = None,
                       progress=None) -> Solution:
-    """As ``solve``, also returning the animation frames when ``render`` is set."""
+    """As ``solve``, also returning the animation frames when ``render`` is set.
+
+    Every run is recorded (``Solution.recording``, also ``result.recording``): the
+    recording only observes, it does not change the run.
+    """
+    from lamp.planners.closed_loop import RENDER_EVERY
+    from lamp.record import Recorder
     from lamp.sim import Simulator
+    from lamp.sim.mjcf import TIMESTEP
 
     check_planner(planner)
     cfg = config or default_config(planner)
@@ -100,12 +109,13 @@ def solve_with_frames(scene: Scene, planner: str = "lazy", seed: int = 0, *,
     totals = TaskStats()
     frames: list[Any] = []
     unexecuted = 0.0
+    recorder = Recorder(scene, RENDER_EVERY * TIMESTEP)
     for index in range(len(scene.objects)):
         task = ManipulationTask(scene, index, np.asarray(sim.object_poses, float), proposer, cfg,
                                 seed=int(seed) * 1000 + index)
         record = LoopRecord()
         obj = run_object(task, make_planner(planner, task), POLICIES[planner], sim, record,
-                         render=render, time_limit=time_limit)
+                         render=render, time_limit=time_limit, observer=recorder)
         result.objects.append(obj)
         result.planning_time_s.extend(record.planning_time_s)
         result.makespan += record.makespan
@@ -118,4 +128,5 @@ def solve_with_frames(scene: Scene, planner: str = "lazy", seed: int = 0, *,
     result.wall_time_s = time.perf_counter() - t_start
     result.stats = {**vars(totals), "unexecuted_planning_time_s": round(unexecuted, 6),
                     "failure_reasons": [o.failure_reason for o in result.objects]}
-    return Solution(result, frames)
+    result.recording = recorder.finish(planner, int(seed), result.to_dict())
+    return Solution(result, frames, result.recording)
