@@ -131,12 +131,13 @@ class Recording:
         offsets = self.arrays[RAGGED[name][0]]
         return self.arrays[name][offsets[i] : offsets[i + 1]]
 
-    def segment_at_row(self, row: int) -> int:
-        """The segment that row ``row`` belongs to (a boundary row: the segment it starts;
-        the last row: the last segment); -1 when nothing was executed."""
+    def segment_of_row(self, row: int) -> int:
+        """The segment drawn with row ``row``: the one whose rows (start, end] hold it (row
+        0: segment 0), so a segment's last row shows that segment; -1 with no segments."""
+        rows = self.arrays["segment_rows"]
         if self.n_segments == 0:
             return -1
-        g = int(np.searchsorted(self.arrays["segment_rows"], row, side="right")) - 1
+        g = int(np.searchsorted(rows, row, side="left")) - 1
         return min(max(g, 0), self.n_segments - 1)
 
     def contacts_of(self, segment: int) -> np.ndarray:
