@@ -72,25 +72,39 @@ def _print_summary(result) -> None:
 
 
 def _run_and_write(scene, planner: str, seed: int, out: Path, render: bool, model: str,
-                   time_limit: float | None) -> None:
+                   time_limit: float | None, html: bool = False) -> None:
     from lamp.io import write_json_atomic
     from lamp.planners.run import solve_with_frames
+    from lamp.record import save_recording
+    from lamp.record.run_dir import GIF_NAME, HTML_NAME, RESULT_NAME, clear_stale
 
+    if out.exists() and not out.is_dir():
+        fail_input(f"--out: {out} exists and is not a folder")
     try:
-        solution = solve_with_frames(scene, planner, seed, model=model, render=render,
-                                     time_limit=time_limit)
+        solution = solve_with_frames(scene, planner, seed, model=model, time_limit=time_limit)
     except Exception as exc:  # an internal error: exit status 1 with a short message
         typer.echo(f"internal error: {type(exc).__name__}: {exc}", err=True)
         raise typer.Exit(code=1) from exc
     out.mkdir(parents=True, exist_ok=True)
-    write_json_atomic(out / "result.json", solution.result.to_dict())
+    writes = [GIF_NAME] * render + [HTML_NAME] * html
+    for path in clear_stale(out, keep=writes):
+        typer.echo(f"removed {path} (left by an earlier run)")
+    npz, index = save_recording(solution.recording, out)
     _print_summary(solution.result)
-    typer.echo(f"wrote {out / 'result.json'}")
-    if render:
-        from lamp.viz.animation import write_animation
+    typer.echo(f"wrote {index} and {npz.name}")
+    if render or html:
+        from lamp.viz.replay import render as render_recording
 
-        write_animation(scene, solution.frames, out / "run.gif")
-        typer.echo(f"wrote {out / 'run.gif'}")
+        for name in writes:
+            render_recording(solution.recording, out / name)
+            typer.echo(f"wrote {out / name}")
+    write_json_atomic(out / RESULT_NAME, solution.result.to_dict())
+    typer.echo(f"wrote {out / RESULT_NAME}")
+
+
+OUT_HELP = ("Output folder: result.json, recording.npz + recording.json (lamp-recording/1) "
+            "and what was asked for. Outputs an earlier run left there (result.json, the "
+            "recording, run.gif, replay.html) are removed or replaced; other files stay.")
 
 
 def _check_run_options(planner: str, model: str) -> None:
@@ -108,31 +122,76 @@ def run(
     planner: str = typer.Option("lazy", "--planner", "-p",
                                 help="lazy | astar | astar-replan | gco-ori | gco-var"),
     seed: int = typer.Option(0, "--seed", "-s", help="Random seed (same seed, same result)."),
-    out: Path = typer.Option(Path("lamp-run"), "--out", "-o", help="Output folder."),
+    out: Path = typer.Option(Path("lamp-run"), "--out", "-o", help=OUT_HELP),
     render: bool = typer.Option(False, "--render", help="Also write DIR/run.gif."),
+    html: bool = typer.Option(False, "--html", help="Also write the replay viewer "
+                              "DIR/replay.html."),
     model: str = typer.Option("learned", "--model",
                               help="Manipulation model: learned (shipped checkpoint) or geometric."),
     time_limit: float = typer.Option(None, "--time-limit",
                                      help="Cumulative planning limit per object in seconds."),
 ) -> None:
-    """Plan and execute one scene file in MuJoCo; write DIR/result.json."""
+    """Plan and execute one scene file in MuJoCo; write DIR/result.json and the recording."""
     scene = load_scene_or_exit(scene_file)
     _check_run_options(planner, model)
-    _run_and_write(scene, planner, seed, out, render, model, time_limit)
+    _run_and_write(scene, planner, seed, out, render, model, time_limit, html)
 
 
 @app.command()
 def demo(
-    out: Path = typer.Option(Path("lamp-demo"), "--out", "-o", help="Output folder."),
+    out: Path = typer.Option(Path("lamp-demo"), "--out", "-o", help=OUT_HELP),
     seed: int = typer.Option(0, "--seed", "-s", help="Random seed."),
     planner: str = typer.Option("lazy", "--planner", "-p", help="Planner (default LAMP-Lazy)."),
     model: str = typer.Option("learned", "--model", help="learned or geometric."),
 ) -> None:
-    """The main job: LAMP-Lazy on the built-in default scene; writes result.json and run.gif."""
+    """The main job: LAMP-Lazy on the built-in default scene; writes result.json, the
+    recording, run.gif and replay.html."""
     from lamp.demo import demo_scene
 
     _check_run_options(planner, model)
-    _run_and_write(demo_scene(), planner, seed, out, True, model, None)
+    _run_and_write(demo_scene(), planner, seed, out, True, model, None, html=True)
+
+
+@app.command("render")
+def render_command(
+    run_dir: Path = typer.Argument(..., help="A run folder holding recording.json + .npz."),
+    out: Path = typer.Option(..., "--out", "-o", help="File to write: .gif, .mp4 (needs "
+                             "imageio-ffmpeg), .png (one still) or .html (replay viewer)."),
+    at: int = typer.Option(None, "--at", help="PNG: draw the end of this segment (0-based; "
+                           "default: the final state)."),
+    size: int = typer.Option(640, "--size", help="Pixels on the picture's longer side."),
+    fps: float = typer.Option(15.0, "--fps", help="Frames per second of video."),
+    speed: float = typer.Option(None, "--speed", help="Simulated seconds per video second "
+                                "(default: the video lasts at most 20 s)."),
+    follow: float = typer.Option(None, "--follow", help="Camera window in metres that "
+                                 "follows the moved object (default: whole workspace)."),
+    min_robot_px: float = typer.Option(3.0, "--min-robot-px", help="Smallest robot radius "
+                                       "drawn, in pixels."),
+    trail: float = typer.Option(4.0, "--trail", help="Robot trail length in simulated s."),
+) -> None:
+    """Draw a recorded run again, without replanning: GIF, MP4, PNG still or HTML viewer."""
+    from lamp.record import RecordingError, load_recording
+    from lamp.viz.replay import RenderOptions, render
+
+    try:
+        recording = load_recording(run_dir)
+    except RecordingError as exc:
+        fail_input(str(exc))
+    try:
+        options = RenderOptions(size=size, fps=fps, speed=speed, trail_s=trail,
+                                min_robot_px=min_robot_px, follow=follow, at=at)
+        if at is not None and out.suffix.lower() != ".png":
+            raise ValueError("at: only a .png still takes --at")
+        stats = render(recording, out, options)
+    except ValueError as exc:  # "field: problem" -> "--option: problem"
+        field, _, problem = str(exc).partition(": ")
+        flags = {"trail_s": "--trail", "min_robot_px": "--min-robot-px"}
+        flag = flags.get(field, f"--{field}")
+        fail_input(f"{flag}: {problem}" if problem else str(exc))
+    except RuntimeError as exc:
+        fail_input(str(exc))
+    frames = f" ({stats.frames} frames)" if stats.frames > 1 else ""
+    typer.echo(f"wrote {out}{frames} in {stats.seconds:.1f} s")
 
 
 def _register_groups() -> None:
