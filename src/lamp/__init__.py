@@ -1,6 +1,7 @@
 """lamp: long-horizon adaptive manipulation planning for multi-robot collaborative pushing.
 
-Public entry points (see ``docs``/README): ``load_scene``, ``SceneError``, ``solve``.
+Public entry points (see ``docs``/README): ``load_scene``, ``SceneError``, ``solve``,
+``load_recording`` and ``render`` (recorded runs, ``docs/recording-format.md``).
 Heavy dependencies (MuJoCo, PyTorch) are imported only by the modules that use them.
 """
 
@@ -16,4 +17,19 @@ def solve(scene: Scene, planner: str = "lazy", seed: int = 0, **kwargs):
     return _solve(scene, planner=planner, seed=seed, **kwargs)
 
 
-__all__ = ["Scene", "SceneError", "load_scene", "solve", "__version__"]
+def load_recording(run_dir):
+    """The ``lamp.record.Recording`` of a run folder (``recording.json`` + ``.npz``)."""
+    from lamp.record import load_recording as _load
+
+    return _load(run_dir)
+
+
+def render(recording, path, **options):
+    """Draw a recording to ``path`` (.gif, .mp4, .png or .html); see ``lamp.viz.replay``."""
+    from lamp.viz.replay import render as _render
+
+    return _render(recording, path, **options)
+
+
+__all__ = ["Scene", "SceneError", "load_recording", "load_scene", "render", "solve",
+           "__version__"]
