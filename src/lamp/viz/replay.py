@@ -174,6 +174,7 @@ class ReplayRenderer:
         g = self.rec.segment_of_row(row)
         k = int(self.rec.arrays["segment_object"][g]) if g >= 0 else 0
         x, y = (float(v) for v in self.rec.arrays["objects"][row, k, :2])
+        self.ax.apply_aspect()
         bbox = self.ax.get_window_extent()
         h = w * bbox.height / bbox.width
         x = min(max(x, w / 2), max(W - w / 2, w / 2))
@@ -184,6 +185,7 @@ class ReplayRenderer:
     def _set_robot_radius(self) -> None:
         if self.opt.follow is not None:
             self._window(0)
+        self.ax.apply_aspect()  # the drawn box (equal aspect), not the layout's
         bbox = self.ax.get_window_extent()
         x0, x1 = self.ax.get_xlim()
         px_per_m = bbox.width / (x1 - x0)
