@@ -9,6 +9,7 @@ profile and no network services, opens one page and offers ``open``, ``evaluate`
 from __future__ import annotations
 
 import base64
+import contextlib
 import itertools
 import json
 import os
@@ -48,6 +49,7 @@ class Browser:
         from websockets.sync.client import connect
 
         self.timeout = timeout
+        self._stack = contextlib.ExitStack()
         self._profile = tempfile.mkdtemp(prefix="lamp-chromium-")
         self._proc = subprocess.Popen(
             [binary, *FLAGS, f"--user-data-dir={self._profile}", "--remote-debugging-port=0",
@@ -56,8 +58,8 @@ class Browser:
         try:
             port = self._port()
             page = self._page_target(port)
-            self._ws = connect(page["webSocketDebuggerUrl"], max_size=None,
-                               open_timeout=timeout)
+            self._ws = self._stack.enter_context(
+                connect(page["webSocketDebuggerUrl"], max_size=None, open_timeout=timeout))
         except BaseException:
             self.close()
             raise
@@ -109,7 +111,8 @@ class Browser:
                 return msg.get("result", {})
 
     def open(self, url: str) -> None:
-        """Navigate to ``url`` and wait for its load event."""
+        """Navigate to ``url`` and wait for its load event (a new document: a change of the
+        fragment alone loads nothing, so open another page in between)."""
         self._loaded = False
         self.call("Page.navigate", url=url)
         end = time.monotonic() + self.timeout
@@ -128,14 +131,17 @@ class Browser:
             raise RuntimeError(f"{expression}: {res['exceptionDetails']}")
         return res["result"].get("value")
 
+    def mouse(self, kind: str, x: float, y: float, **params: Any) -> None:
+        """A real mouse event at page coordinates (``mousePressed``, ``mouseMoved``,
+        ``mouseReleased``, ``mouseWheel``), as the user's input would arrive."""
+        self.call("Input.dispatchMouseEvent", type=kind, x=x, y=y, **params)
+
     def screenshot(self) -> bytes:
         """The page as PNG bytes."""
         return base64.b64decode(self.call("Page.captureScreenshot", format="png")["data"])
 
     def close(self) -> None:
-        ws = getattr(self, "_ws", None)
-        if ws is not None:
-            ws.close()
+        self._stack.close()
         if self._proc.poll() is None:
             self._proc.terminate()
             try:

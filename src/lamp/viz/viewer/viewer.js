@@ -246,7 +246,11 @@
       const g = segmentOfRow(st.row);
       seekSegment(st.row < segRows[g + 1] ? g : g + 1);
     });
-    $("scrub").addEventListener("input", (e) => { setPlaying(false); seekRow(Number(e.target.value)); });
+    $("scrub").addEventListener("input", (e) => {
+      const row = Number(e.target.value); // read before pausing redraws the slider
+      setPlaying(false);
+      seekRow(row);
+    });
     $("speed").addEventListener("change", (e) => { st.speed = Number(e.target.value); });
     $("zoom-in").addEventListener("click", () => zoom(1.5));
     $("zoom-out").addEventListener("click", () => zoom(1 / 1.5));
@@ -274,6 +278,7 @@
       else if (e.key === "ArrowLeft") seekRow(st.row - 1);
     });
     window.addEventListener("resize", () => { resize(); fit(); draw(); });
+    window.addEventListener("hashchange", () => { setPlaying(false); fromHash(); });
   }
 
   function fromHash() { // #segment=K or #row=R opens the viewer there
