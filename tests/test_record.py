@@ -247,3 +247,23 @@ def test_same_seed_same_recording(scene, proposer, solved):
     for name in ARRAYS:
         if name != "planning_time_s":  # wall-clock measurements
             np.testing.assert_array_equal(again.arrays[name], solved.recording.arrays[name])
+
+
+def test_bench_job_saves_its_recording(scene, tmp_path):
+    """``lamp bench --record``: a job with ``recording_to`` leaves a loadable recording of
+    exactly the run its result line describes."""
+    from lamp.bench.cli import canonical_command
+    from lamp.bench.jobs import Job
+    from lamp.bench.runner import solve_job
+
+    job = Job(suite="t", scene_name="tiny", scene_file="tiny.json", scene=scene,
+              planner="lazy", seed=0, model="geometric", recording_to=str(tmp_path / "r"))
+    result = solve_job(job)
+    rec = load_recording(tmp_path / "r")
+    assert "recording_error" not in result
+    assert rec.result == result and rec.n_segments == result["segments"]
+    cmd = canonical_command(["t"], ["lazy"], seeds=1, workers=1, out=tmp_path, time_cap=9,
+                            planning_limit=9, model="geometric", backend="local", scenes=None,
+                            render_iros=False, job_fn="lamp.bench.runner:solve_job",
+                            record=True)
+    assert cmd.endswith("--record")
