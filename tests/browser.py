@@ -156,3 +156,26 @@ class Browser:
 
     def __exit__(self, *exc: Any) -> None:
         self.close()
+
+
+def main(argv: list[str]) -> int:
+    """``python tests/browser.py PAGE.html OUT.png [FRAGMENT]``: a screenshot of a page
+    (how the README's picture of the replay viewer is made)."""
+    if len(argv) not in (2, 3):
+        print(main.__doc__)
+        return 2
+    binary = find_chromium()
+    if binary is None:
+        print(INSTALL_HINT)
+        return 2
+    page = Path(argv[0]).resolve().as_uri() + (argv[2] if len(argv) == 3 else "")
+    with Browser(binary, width=1280, height=760) as b:
+        b.open(page)
+        Path(argv[1]).write_bytes(b.screenshot())
+    return 0
+
+
+if __name__ == "__main__":
+    import sys
+
+    raise SystemExit(main(sys.argv[1:]))

@@ -214,7 +214,9 @@
     segs.forEach((s, i) => {
       const tr = document.createElement("tr");
       const cells = [i + 1, s.object + 1, s.planning_s.toFixed(3), s.sim_s.toFixed(2),
-        s.drift[0].toFixed(3), s.outcome + (s.replanned ? " (replanned)" : "")];
+        s.drift[0].toFixed(3),
+        [s.replanned ? "new plan" : "", s.outcome !== "continue" ? s.outcome : ""]
+          .filter(Boolean).join(", ") || "-"];
       cells.forEach((c, j) => {
         const td = document.createElement("td"); td.textContent = String(c);
         if (j === 5) td.className = "event-" + s.outcome;
