@@ -177,3 +177,14 @@ def test_rerun_clears_stale_outputs(run_dir, tmp_path):
     assert "removed" in res.output and "run.gif" in res.output
     assert load_recording(out).n_segments == json.loads((out / "result.json").read_text())[
         "segments"]
+
+
+def test_run_html_writes_the_viewer_of_its_recording(run_dir, tmp_path):
+    from lamp.viz.replay_html import viewer_html
+
+    out = tmp_path / "run"
+    res = runner.invoke(app, ["run", str(run_dir.parent / "tiny.json"), "--model",
+                              "geometric", "--out", str(out), "--html"])
+    assert res.exit_code == 0, res.output
+    assert (out / "replay.html").read_text() == viewer_html(load_recording(out))
+    assert not (out / "run.gif").exists()
