@@ -188,3 +188,12 @@ def test_run_html_writes_the_viewer_of_its_recording(run_dir, tmp_path):
     assert res.exit_code == 0, res.output
     assert (out / "replay.html").read_text() == viewer_html(load_recording(out))
     assert not (out / "run.gif").exists()
+
+
+def test_mp4_without_ffmpeg_exits_2_saying_what_to_install(run_dir, tmp_path, monkeypatch):
+    import lamp.viz.replay as replay
+
+    monkeypatch.setattr(replay, "mp4_available", lambda: False)  # as without imageio-ffmpeg
+    res = runner.invoke(app, ["render", str(run_dir), "--out", str(tmp_path / "r.mp4")])
+    assert res.exit_code == 2 and "pip install 'lamp[video]'" in res.output, res.output
+    assert list(tmp_path.iterdir()) == []
