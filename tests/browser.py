@@ -42,10 +42,11 @@ def find_chromium() -> str | None:
 
 
 class Browser:
-    """One headless Chromium with one page of ``width`` x ``height`` CSS pixels."""
+    """One headless Chromium with one page of ``width`` x ``height`` CSS pixels, ``scale``
+    device pixels per CSS pixel (a HiDPI screen for ``scale`` 2)."""
 
     def __init__(self, binary: str, width: int = 1280, height: int = 800,
-                 timeout: float = 30.0) -> None:
+                 timeout: float = 30.0, scale: float = 1.0) -> None:
         from websockets.sync.client import connect
 
         self.timeout = timeout
@@ -67,7 +68,7 @@ class Browser:
         self.call("Page.enable")
         self.call("Runtime.enable")
         self.call("Emulation.setDeviceMetricsOverride", width=width, height=height,
-                  deviceScaleFactor=1, mobile=False)
+                  deviceScaleFactor=scale, mobile=False)
 
     def _port(self) -> int:
         marker = Path(self._profile) / "DevToolsActivePort"

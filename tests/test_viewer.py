@@ -131,6 +131,27 @@ def test_screenshot_has_robots_at_their_screen_positions(browser, recording):
     assert np.abs(img[int(top + Y), int(left + X)] - obstacle).max() <= 10
 
 
+def test_hidpi_screens_draw_at_device_resolution(page, recording):
+    """At 2 device pixels per CSS pixel the canvas has twice the pixels and the robots
+    are still drawn where the recording has them."""
+    if CHROMIUM is None:
+        pytest.skip(INSTALL_HINT)
+    with Browser(CHROMIUM, width=900, height=600, scale=2.0) as b:
+        b.open(page.as_uri() + "#segment=1")
+        s = state(b)
+        row = int(recording.arrays["segment_rows"][2])
+        assert s["robots"] == recording.arrays["robots"][row].astype(float).tolist()
+        size = b.evaluate("[document.getElementById('view').width, "
+                          "document.getElementById('view').clientWidth]")
+        assert abs(size[0] - 2 * size[1]) <= 1
+        img = screenshot(b)
+        left, top = canvas_offset(b)
+        robot = np.array(to_rgb(ROBOT_COLOR)) * 255
+        for x, y in s["robots"]:
+            X, Y = b.evaluate(f"window.lampViewer.toScreen({x}, {y})")
+            assert np.abs(img[int(2 * (top + Y)), int(2 * (left + X))] - robot).max() <= 10
+
+
 def test_layers_toggle_what_is_drawn(browser):
     browser.evaluate("window.lampViewer.seekSegment(0)")
     before = screenshot(browser)

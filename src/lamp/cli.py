@@ -89,16 +89,20 @@ def _run_and_write(scene, planner: str, seed: int, out: Path, render: bool, mode
     writes = [GIF_NAME] * render + [HTML_NAME] * html
     for path in clear_stale(out, keep=writes):
         typer.echo(f"removed {path} (left by an earlier run)")
-    npz, index = save_recording(solution.recording, out)
     _print_summary(solution.result)
-    typer.echo(f"wrote {index} and {npz.name}")
-    if render or html:
-        from lamp.viz.replay import render as render_recording
+    try:  # each file atomically, result.json last: it marks the folder complete
+        npz, index = save_recording(solution.recording, out)
+        typer.echo(f"wrote {index} and {npz.name}")
+        if writes:
+            from lamp.viz.replay import render as render_recording
 
-        for name in writes:
-            render_recording(solution.recording, out / name)
-            typer.echo(f"wrote {out / name}")
-    write_json_atomic(out / RESULT_NAME, solution.result.to_dict())
+            for name in writes:
+                render_recording(solution.recording, out / name)
+                typer.echo(f"wrote {out / name}")
+        write_json_atomic(out / RESULT_NAME, solution.result.to_dict())
+    except Exception as exc:
+        typer.echo(f"internal error while writing {out}: {type(exc).__name__}: {exc}", err=True)
+        raise typer.Exit(code=1) from exc
     typer.echo(f"wrote {out / RESULT_NAME}")
 
 

@@ -82,7 +82,7 @@ class Recording:
 
     Construction checks every array's dtype and shape against :data:`ARRAYS` and that the
     offsets arrays cut their flat arrays exactly (RecordingError otherwise), so accessors
-    never index out of range.
+    never index out of range; ``arrays`` is then a read-only mapping of read-only copies.
     """
 
     scene: dict[str, Any]
@@ -100,12 +100,6 @@ class Recording:
             arr.flags.writeable = False
             frozen[name] = arr
         object.__setattr__(self, "arrays", MappingProxyType(frozen))
-
-    def __getattr__(self, name: str) -> np.ndarray:
-        arrays = self.__dict__.get("arrays")
-        if arrays is not None and name in ARRAYS:
-            return arrays[name]
-        raise AttributeError(name)
 
     # ---------------------------------------------------------------- sizes
     @property

@@ -66,19 +66,23 @@
   }
 
   // ------------------------------------------------------------------- view
+  // Coordinates are CSS pixels; the canvas has devicePixelRatio device pixels per CSS pixel.
+  const view = { w: 1, h: 1, dpr: 1 };
   function resize() {
     const r = canvas.getBoundingClientRect();
-    canvas.width = Math.max(1, Math.round(r.width));
-    canvas.height = Math.max(1, Math.round(r.height));
+    view.dpr = window.devicePixelRatio || 1;
+    view.w = Math.max(1, r.width); view.h = Math.max(1, r.height);
+    canvas.width = Math.max(1, Math.round(view.w * view.dpr));
+    canvas.height = Math.max(1, Math.round(view.h * view.dpr));
   }
   function fit() {
     const [W, H] = D.workspace, m = 0.03 * Math.max(W, H);
-    st.scale = Math.min(canvas.width / (W + 2 * m), canvas.height / (H + 2 * m));
-    st.ox = (canvas.width - st.scale * W) / 2;
-    st.oy = (canvas.height + st.scale * H) / 2;
+    st.scale = Math.min(view.w / (W + 2 * m), view.h / (H + 2 * m));
+    st.ox = (view.w - st.scale * W) / 2;
+    st.oy = (view.h + st.scale * H) / 2;
   }
   function zoom(f, cx, cy) {
-    if (cx === undefined) { cx = canvas.width / 2; cy = canvas.height / 2; }
+    if (cx === undefined) { cx = view.w / 2; cy = view.h / 2; }
     st.ox = cx - (cx - st.ox) * f;
     st.oy = cy - (cy - st.oy) * f;
     st.scale *= f;
@@ -128,8 +132,8 @@
     const C = D.colors, row = st.row, g = segmentOfRow(row);
     const seg = g >= 0 ? segs[g] : null, plan = seg && seg.plan >= 0 ? plans[seg.plan] : null;
     const [W, H] = D.workspace, R = D.robot_radius;
-    ctx.setTransform(1, 0, 0, 1, 0, 0);
-    ctx.fillStyle = "#eef0f3"; ctx.fillRect(0, 0, canvas.width, canvas.height);
+    ctx.setTransform(view.dpr, 0, 0, view.dpr, 0, 0);
+    ctx.fillStyle = "#eef0f3"; ctx.fillRect(0, 0, view.w, view.h);
     ctx.fillStyle = "#ffffff"; ctx.fillRect(sx(0), sy(H), W * st.scale, H * st.scale);
     ctx.lineJoin = "round"; ctx.lineCap = "round";
     if (on("inflated")) { // Minkowski sum with the robot disk: a stroke 2R wide, round joins
