@@ -197,3 +197,12 @@ def test_mp4_without_ffmpeg_exits_2_saying_what_to_install(run_dir, tmp_path, mo
     res = runner.invoke(app, ["render", str(run_dir), "--out", str(tmp_path / "r.mp4")])
     assert res.exit_code == 2 and "pip install 'lamp[video]'" in res.output, res.output
     assert list(tmp_path.iterdir()) == []
+
+
+def test_run_into_a_file_exits_2_before_planning(run_dir, tmp_path):
+    blocker = tmp_path / "taken"
+    blocker.write_text("not a folder")
+    res = runner.invoke(app, ["run", str(run_dir.parent / "tiny.json"), "--model",
+                              "geometric", "--out", str(blocker)])
+    assert res.exit_code == 2 and "exists and is not a folder" in res.output, res.output
+    assert blocker.read_text() == "not a folder"
