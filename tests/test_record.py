@@ -267,3 +267,17 @@ def test_bench_job_saves_its_recording(scene, tmp_path):
                             render_iros=False, job_fn="lamp.bench.runner:solve_job",
                             record=True)
     assert cmd.endswith("--record")
+
+
+def test_bench_record_option_gives_every_job_its_folder(tmp_path):
+    from typer.testing import CliRunner
+
+    from lamp.cli import app
+
+    out = tmp_path / "bench"
+    res = CliRunner().invoke(app, ["bench", "--suite", "random", "--planners", "lazy,gco-var",
+                                   "--scenes", "1", "--out", str(out), "--record",
+                                   "--dry-run"])
+    assert res.exit_code == 0, res.output
+    for planner in ("lazy", "gco-var"):
+        assert f"records into {out / 'recordings' / 'random'}/random-01-{planner}-s0" in res.output

@@ -358,6 +358,8 @@ def bench_command(
         for j in pending:
             if j.render_to:
                 typer.echo(f"  renders {j.render_to} ({j.label})")
+            if j.recording_to:
+                typer.echo(f"  records into {j.recording_to} ({j.label})")
         return
 
     command = canonical_command(
