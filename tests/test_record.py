@@ -174,6 +174,9 @@ def test_bad_recordings_are_refused_naming_file_and_field(scene, tmp_path):
     (tmp_path / "recording.json").write_text(json.dumps({**index, "seed": "x"}))
     with pytest.raises(RecordingError, match="seed"):
         load_recording(tmp_path)
+    (tmp_path / "recording.json").write_text(json.dumps({**index, "scene": {"format": 1}}))
+    with pytest.raises(RecordingError, match=r"recording.json: scene: "):
+        load_recording(tmp_path)
     (tmp_path / "recording.json").write_text(json.dumps(index))
     arrays = dict(r.arrays)
     arrays["contact_offsets"] = np.array([0, 3], np.int64)  # segments: 0, so length 1

@@ -248,6 +248,12 @@ def load_recording(run_dir: str | Path) -> Recording:
         if not isinstance(index.get(key), kind):
             raise RecordingError(f"{index_path}: {key}: missing or of the wrong type "
                                  f"({index.get(key)!r})")
+    from lamp.scene import SceneError, scene_from_dict
+
+    try:
+        scene_from_dict(index["scene"], source=str(index_path))
+    except SceneError as exc:
+        raise RecordingError(f"{index_path}: scene: {exc}") from None
     if not npz_path.is_file():
         raise RecordingError(f"{npz_path}: missing (the index {index_path} refers to it)")
     try:
