@@ -27,7 +27,8 @@ INSTALL_HINT = ("no Chromium found: install it (Debian/Ubuntu: `apt-get install 
 FLAGS = ("--headless", "--no-sandbox", "--disable-gpu", "--no-first-run",
          "--disable-background-networking", "--disable-component-update", "--disable-sync",
          "--disable-extensions", "--disable-default-apps", "--mute-audio",
-         "--hide-scrollbars", "--force-device-scale-factor=1", "--remote-allow-origins=*")
+         "--hide-scrollbars", "--force-device-scale-factor=1", "--remote-allow-origins=*",
+         "--disable-dev-shm-usage")  # containers often have a tiny /dev/shm
 
 
 def find_chromium() -> str | None:
