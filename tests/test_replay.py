@@ -145,8 +145,9 @@ def test_follow_camera_frames_the_moved_object(rec):
 
 @pytest.mark.parametrize("args, message", [
     (["--out", "x.bmp"], "--out: expected a file name ending in .gif"),
-    (["--out", "x.gif", "--at", "0"], "--at: only a .png still takes --at"),
+    (["--out", "x.gif", "--at", "1"], "--at: only a .png still takes --at"),
     (["--out", "x.png", "--at", "999"], "--at: segment 999 does not exist"),
+    (["--out", "x.png", "--at", "0"], "--at: segment 0 does not exist"),
     (["--out", "x.gif", "--size", "10"], "--size: must be an integer in [120, 4096]"),
     (["--out", "x.gif", "--fps", "0"], "--fps: must be in (0, 60]"),
 ])
@@ -160,6 +161,19 @@ def test_render_bad_input_exits_2_and_writes_nothing(run_dir, tmp_path, args, me
 def test_render_without_recording_exits_2(tmp_path):
     res = runner.invoke(app, ["render", str(tmp_path), "--out", str(tmp_path / "a.gif")])
     assert res.exit_code == 2 and "recording.json: no recording here" in res.output
+
+
+def test_png_at_counts_segments_as_the_pictures_do(run_dir, rec, tmp_path):
+    """``--at N`` draws the end of the segment the caption calls N/G."""
+    res = runner.invoke(app, ["render", str(run_dir), "--out", str(tmp_path / "a.png"),
+                              "--at", "2", "--size", "300"])
+    assert res.exit_code == 0, res.output
+    want = render(rec, tmp_path / "b.png", at=1, size=300)
+    assert np.array_equal(np.asarray(Image.open(tmp_path / "a.png")),
+                          np.asarray(Image.open(want.path)))
+    rend = ReplayRenderer(rec, RenderOptions(size=300))
+    rend.render(still_row(rec, 1), 1)
+    assert f"segment 2/{rec.n_segments}" in rend.clock.get_text()
 
 
 def test_rerun_clears_stale_outputs(run_dir, tmp_path):

@@ -137,7 +137,7 @@ def test_hidpi_screens_draw_at_device_resolution(page, recording):
     if CHROMIUM is None:
         pytest.skip(INSTALL_HINT)
     with Browser(CHROMIUM, width=900, height=600, scale=2.0) as b:
-        b.open(page.as_uri() + "#segment=1")
+        b.open(page.as_uri() + "#segment=2")
         s = state(b)
         row = int(recording.arrays["segment_rows"][2])
         assert s["robots"] == recording.arrays["robots"][row].astype(float).tolist()
@@ -212,7 +212,7 @@ def test_scrub_zoom_pan_and_play(browser, recording):
 
 def test_hash_opens_at_a_segment(browser, page, recording):
     browser.open("about:blank")
-    browser.open(page.as_uri() + "#segment=1")
+    browser.open(page.as_uri() + "#segment=2")  # counted from 1, as the page shows it
     s = state(browser)
     assert (s["row"], s["segment"]) == (int(recording.arrays["segment_rows"][2]), 1)
     browser.evaluate("location.hash = '#row=3'")

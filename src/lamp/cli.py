@@ -108,7 +108,8 @@ def _run_and_write(scene, planner: str, seed: int, out: Path, render: bool, mode
 
 OUT_HELP = ("Output folder: result.json, recording.npz + recording.json (lamp-recording/1) "
             "and what was asked for. Outputs an earlier run left there (result.json, the "
-            "recording, run.gif, replay.html) are removed or replaced; other files stay.")
+            "recording, run.gif, replay.html) are replaced, or removed when this run does not "
+            "write them; other files stay.")
 
 
 def _check_run_options(planner: str, model: str) -> None:
@@ -161,8 +162,8 @@ def render_command(
     run_dir: Path = typer.Argument(..., help="A run folder holding recording.json + .npz."),
     out: Path = typer.Option(..., "--out", "-o", help="File to write: .gif, .mp4 (needs "
                              "imageio-ffmpeg), .png (one still) or .html (replay viewer)."),
-    at: int = typer.Option(None, "--at", help="PNG: draw the end of this segment (0-based; "
-                           "default: the final state)."),
+    at: int = typer.Option(None, "--at", help="PNG: draw the end of segment N, counted as in "
+                           "the pictures (1 = the first; default: the final state)."),
     size: int = typer.Option(640, "--size", help="Pixels on the picture's longer side."),
     fps: float = typer.Option(15.0, "--fps", help="Frames per second of video."),
     speed: float = typer.Option(None, "--speed", help="Simulated seconds per video second "
@@ -182,10 +183,14 @@ def render_command(
     except RecordingError as exc:
         fail_input(str(exc))
     try:
-        options = RenderOptions(size=size, fps=fps, speed=speed, trail_s=trail,
-                                min_robot_px=min_robot_px, follow=follow, at=at)
         if at is not None and out.suffix.lower() != ".png":
             raise ValueError("at: only a .png still takes --at")
+        if at is not None and not 1 <= at <= recording.n_segments:
+            raise ValueError(f"at: segment {at} does not exist (the run has "
+                             f"{recording.n_segments} segments: 1..{recording.n_segments})")
+        options = RenderOptions(size=size, fps=fps, speed=speed, trail_s=trail,
+                                min_robot_px=min_robot_px, follow=follow,
+                                at=None if at is None else at - 1)
         stats = render(recording, out, options)
     except ValueError as exc:  # "field: problem" -> "--option: problem"
         field, _, problem = str(exc).partition(": ")

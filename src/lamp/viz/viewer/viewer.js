@@ -287,10 +287,10 @@
     window.addEventListener("hashchange", () => { setPlaying(false); fromHash(); });
   }
 
-  function fromHash() { // #segment=K or #row=R opens the viewer there
+  function fromHash() { // #segment=K (counted from 1, as shown) or #row=R (from 0)
     const m = /(segment|row)=(\d+)/.exec(location.hash);
     if (!m) return seekRow(0);
-    return m[1] === "segment" ? seekSegment(Number(m[2])) : seekRow(Number(m[2]));
+    return m[1] === "segment" ? seekSegment(Number(m[2]) - 1) : seekRow(Number(m[2]));
   }
 
   buildPanel();
