@@ -55,7 +55,8 @@ class RenderOptions:
     at most :data:`AUTO_SECONDS`, never slower than real time); ``trail_s``: robot trail length
     in simulated seconds; ``min_robot_px``: smallest robot radius drawn, in pixels;
     ``follow``: width in metres of a camera window centred on the moved object (None: the
-    whole workspace); ``at``: for a PNG, the segment whose end is drawn (None: the last).
+    whole workspace); ``at``: for a PNG, the segment whose end is drawn, 0-based as in the
+    arrays (``lamp render --at`` counts from 1; None: the final state).
     """
 
     size: int = 640
