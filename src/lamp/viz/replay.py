@@ -259,7 +259,7 @@ def render(recording: Recording, path: str | Path, options: RenderOptions | None
     if suffix == ".html":
         from lamp.viz.replay_html import write_html
 
-        write_html(recording, path)
+        write_html(recording, path, opt)
         return RenderStats(path, 0, time.perf_counter() - t0)
     renderer = ReplayRenderer(recording, opt)
     if suffix == ".png":
