@@ -220,3 +220,46 @@ def test_run_into_a_file_exits_2_before_planning(run_dir, tmp_path):
                               "geometric", "--out", str(blocker)])
     assert res.exit_code == 2 and "exists and is not a folder" in res.output, res.output
     assert blocker.read_text() == "not a folder"
+
+
+def test_mcap_export_holds_the_recorded_run(run_dir, rec, tmp_path):
+    """Every row's robots and objects, every segment and the static scene, in time order."""
+    from mcap.reader import make_reader
+
+    res = runner.invoke(app, ["render", str(run_dir), "--out", str(tmp_path / "run.mcap")])
+    assert res.exit_code == 0, res.output
+    by_topic: dict[str, list] = {}
+    last = -1
+    with open(tmp_path / "run.mcap", "rb") as f:
+        reader = make_reader(f)
+        for schema, channel, message in reader.iter_messages(log_time_order=False):
+            assert channel.message_encoding == "json" and schema.encoding == "jsonschema"
+            assert message.log_time >= last
+            last = message.log_time
+            by_topic.setdefault(channel.topic, []).append(
+                (message.log_time, schema.name, json.loads(message.data)))
+    a = rec.arrays
+    robots = by_topic["/robots"]
+    assert len(robots) == rec.n_rows == len(by_topic["/objects"])
+    for row, (t, name, msg) in enumerate(robots):
+        assert name == "lamp.RobotPositions"
+        assert msg["positions"] == a["robots"][row].astype(float).tolist()
+        assert t == round(a["times"][row] * 1e9)
+    assert [m["index"] for _, _, m in by_topic["/segments"]] == list(range(rec.n_segments))
+    static = by_topic["/scene"][0][2]["entities"]
+    assert {e["id"] for e in static} == {"workspace", "obstacle-0", "goal-0"}
+    last_scene = by_topic["/scene"][-1][2]["entities"]
+    spheres = next(e for e in last_scene if e["id"] == "robots")["spheres"]
+    assert [[s["pose"]["position"]["x"], s["pose"]["position"]["y"]] for s in spheres] == (
+        a["robots"][-1].astype(float).tolist())
+    assert len(by_topic["/plan"]) == len({int(p) for p in a["segment_plan"]})
+
+
+def test_mcap_without_the_package_exits_2_saying_what_to_install(run_dir, tmp_path,
+                                                                 monkeypatch):
+    import lamp.viz.replay_mcap as replay_mcap
+
+    monkeypatch.setattr(replay_mcap, "mcap_available", lambda: False)
+    res = runner.invoke(app, ["render", str(run_dir), "--out", str(tmp_path / "r.mcap")])
+    assert res.exit_code == 2 and "pip install 'lamp[foxglove]'" in res.output, res.output
+    assert list(tmp_path.iterdir()) == []

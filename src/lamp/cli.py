@@ -161,7 +161,8 @@ def demo(
 def render_command(
     run_dir: Path = typer.Argument(..., help="A run folder holding recording.json + .npz."),
     out: Path = typer.Option(..., "--out", "-o", help="File to write: .gif, .mp4 (needs "
-                             "imageio-ffmpeg), .png (one still) or .html (replay viewer)."),
+                             "imageio-ffmpeg), .png (one still), .html (replay viewer) or "
+                             ".mcap (Foxglove; needs mcap)."),
     at: int = typer.Option(None, "--at", help="PNG: draw the end of segment N, counted as in "
                            "the pictures (1 = the first; default: the final state)."),
     size: int = typer.Option(640, "--size", help="Pixels on the picture's longer side."),
@@ -174,7 +175,8 @@ def render_command(
                                        "drawn, in pixels."),
     trail: float = typer.Option(4.0, "--trail", help="Robot trail length in simulated s."),
 ) -> None:
-    """Draw a recorded run again, without replanning: GIF, MP4, PNG still or HTML viewer."""
+    """Draw a recorded run again, without replanning: GIF, MP4, PNG still, HTML viewer, or
+    export it to MCAP for Foxglove."""
     from lamp.record import RecordingError, load_recording
     from lamp.viz.replay import RenderOptions, render
 

@@ -41,7 +41,7 @@ TRAIL_COLOR = "#6f9be8"
 #: Dots per inch of the raster figures; ``size`` pixels = ``size / DPI`` inches.
 DPI = 100
 #: Suffixes ``render`` writes.
-SUFFIXES = (".gif", ".mp4", ".png", ".html")
+SUFFIXES = (".gif", ".mp4", ".png", ".html", ".mcap")
 #: With no ``speed`` given, videos last at most this many seconds (before the final hold).
 AUTO_SECONDS = 20.0
 
@@ -244,7 +244,8 @@ class RenderStats:
 def render(recording: Recording, path: str | Path, options: RenderOptions | None = None,
            **kwargs: Any) -> RenderStats:
     """Draw ``recording`` into ``path``: ``.gif``, ``.mp4`` (needs ``imageio-ffmpeg``),
-    ``.png`` (one still, ``at``) or ``.html`` (the interactive viewer). Options are a
+    ``.png`` (one still, ``at``), ``.html`` (the interactive viewer) or ``.mcap`` (for
+    Foxglove, needs ``mcap``; ``lamp.viz.replay_mcap``). Options are a
     :class:`RenderOptions` or its fields as keywords. The file is written atomically."""
     opt = options or RenderOptions(**kwargs)
     path = Path(path)
@@ -260,6 +261,11 @@ def render(recording: Recording, path: str | Path, options: RenderOptions | None
         from lamp.viz.replay_html import write_html
 
         write_html(recording, path, opt)
+        return RenderStats(path, 0, time.perf_counter() - t0)
+    if suffix == ".mcap":
+        from lamp.viz.replay_mcap import write_mcap
+
+        write_mcap(recording, path)
         return RenderStats(path, 0, time.perf_counter() - t0)
     renderer = ReplayRenderer(recording, opt)
     if suffix == ".png":
