@@ -2,7 +2,7 @@
 
 Run: ``python benchmarks/bench_record.py [--model learned|geometric] [--reps 3]``. Each
 scene is planned and executed once (LAMP-Lazy, seed 0) and recorded; then the recording is
-saved (npz + json sizes) and rendered to GIF, MP4, PNG and HTML ``--reps`` times each at the
+saved (npz + json sizes) and rendered to GIF, MP4, PNG, HTML and MCAP ``--reps`` times each at the
 defaults of ``lamp render`` (640 px, 15 fps, auto speed). Prints medians.
 
 Runs: the 4 m run is the first scene of the ``random`` suite; the 50 m planner run is a
@@ -29,6 +29,7 @@ from lamp.scene import scene_from_dict
 from lamp.suites import suite_scenes
 from lamp.viz.animation import mp4_available
 from lamp.viz.replay import render
+from lamp.viz.replay_mcap import mcap_available
 
 LARGE = {
     "format": "lamp-scene/1",
@@ -105,7 +106,8 @@ def measure(name: str, scene, model: str, reps: int, time_limit: float) -> None:
         save_s = time.perf_counter() - t0
         print(f"  recording: {npz.stat().st_size / 1e3:.1f} kB npz + "
               f"{index.stat().st_size / 1e3:.1f} kB json, saved in {save_s * 1e3:.0f} ms")
-        kinds = ["gif", "png", "html"] + (["mp4"] if mp4_available() else [])
+        kinds = (["gif", "png", "html"] + (["mp4"] if mp4_available() else [])
+                 + (["mcap"] if mcap_available() else []))
         for kind in kinds:
             times, size, frames = [], 0, 0
             for _ in range(reps):
