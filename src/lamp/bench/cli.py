@@ -180,7 +180,8 @@ def write_config(out: Path, previous: dict[str, Any], *, suites: list[str], plan
 
 def canonical_command(suites: list[str], planners: list[str], *, seeds: int, workers: int,
                       out: Path, time_cap: float, planning_limit: float, model: str,
-                      backend: str, scenes: int | None, render_iros: bool, job_fn: str) -> str:
+                      backend: str, scenes: int | None, render_iros: bool, job_fn: str,
+                      record: bool = False) -> str:
     """The ``lamp bench`` command line that reproduces this run, every setting explicit."""
     args = ["lamp", "bench", "--suites", ",".join(suites), "--planners", ",".join(planners),
             "--num-seeds", str(seeds), "--workers", str(workers), "--out", str(out),
@@ -190,6 +191,8 @@ def canonical_command(suites: list[str], planners: list[str], *, seeds: int, wor
         args += ["--scenes", str(scenes)]
     if render_iros:
         args.append("--render-iros")
+    if record:
+        args.append("--record")
     if job_fn != DEFAULT_JOB_FN:
         args += ["--job-fn", job_fn]
     return shlex.join(args)
@@ -264,6 +267,9 @@ def bench_command(
                                     "auto).", show_default="start a local Ray instance"),
     scenes: int = typer.Option(None, "--scenes", help="Only the first N scenes of each suite "
                                "(quick runs).", show_default="all"),
+    record: bool = typer.Option(False, "--record", help="Also save each job's recording "
+                                "(lamp-recording/1) in DIR/recordings/SUITE/SCENE-PLANNER-sSEED/; "
+                                "view it with `lamp render`."),
     render_iros: bool = typer.Option(False, "--render-iros", help="Also render the LAMP-Lazy "
                                      "IROS run to DIR/iros.gif (needs --suites iros)."),
     retry_errors: bool = typer.Option(True, "--retry-errors/--keep-errors", help="On --resume, "
@@ -355,6 +361,12 @@ def bench_command(
     pending = pending_jobs(jobs, records, retry_errors=retry_errors)
     if render_iros:
         pending = _render_jobs(jobs, pending, out, time_cap)
+    if record:
+        from dataclasses import replace
+
+        pending = [replace(j, recording_to=str(out / "recordings" / j.suite /
+                                               f"{j.scene_name}-{j.planner}-s{j.seed}"))
+                   if j.record else j for j in pending]
 
     per = Counter((j.suite, j.planner) for j in pending if j.record)
     typer.echo(f"{len(jobs)} jobs ({len({(j.suite, j.scene_name) for j in jobs})} scenes x "
@@ -366,12 +378,14 @@ def bench_command(
         for j in pending:
             if j.render_to:
                 typer.echo(f"  renders {j.render_to} ({j.label})")
+            if j.recording_to:
+                typer.echo(f"  records into {j.recording_to} ({j.label})")
         return
 
     command = canonical_command(
         suite_list, planner_list, seeds=seeds, workers=workers, out=out, time_cap=time_cap,
         planning_limit=planning_limit, model=model, backend=backend, scenes=scenes,
-        render_iros=render_iros, job_fn=job_fn)
+        render_iros=render_iros, job_fn=job_fn, record=record)
     out.mkdir(parents=True, exist_ok=True)
     write_config(out, previous, command=command, suites=list(dict.fromkeys(j.suite for j in jobs)),
                  planners=planner_list,
