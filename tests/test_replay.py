@@ -25,7 +25,7 @@ SCENE = {
     "robots": {"radius": 0.05, "starts": [[0.2, 0.3], [0.2, 0.6], [0.2, 0.9]]},
     "obstacles": [{"type": "circle", "center": [1.9, 0.4], "radius": 0.15}],
     "objects": [{"type": "rectangle", "size": [0.3, 0.2], "start": [0.85, 1.0, 0.0],
-                 "goal": [1.45, 1.0, 0.0]}],
+                 "goal": [1.6, 1.5, 0.8]}],
 }
 runner = CliRunner()
 

@@ -19,6 +19,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from lamp.geometry.se2 import pose_distance
+from lamp.planners.long_push import merge, take_long_push
 from lamp.planners.result import (
     SUCCESS_ORIENTATION_TOL,
     SUCCESS_POSITION_TOL,
@@ -182,6 +183,9 @@ def run_object(task: ManipulationTask, planner: ObjectPlanner, policy: LoopPolic
                 reason = "robots cannot reach the next push (open loop)"
                 break
             continue
+        if cfg.long_push_length > 0:  # one approach, then every push that continues it
+            adapted = merge(take_long_push(adapted, pending, cfg.continuous_push_gap,
+                                           cfg.long_push_length))
         paths = adapted.robot_paths
         q_before = q_O
         traced = render or observer is not None

@@ -55,6 +55,11 @@ class PlannerConfig:
     stop_orientation: float = 0.07
     #: At most this many executed segments per object (the paper's 100 iterations).
     max_segments: int = 100
+    #: Long pushes (``lamp.planners.long_push``): consecutive transitions whose approach
+    #: moves no robot more than ``continuous_push_gap`` (m) execute as one segment, up to
+    #: ``long_push_length`` m of planned object motion; 0 executes every transition alone.
+    long_push_length: float = 1.0
+    continuous_push_gap: float = 0.02
     #: Object lattice: translation step (m) and heading bins.
     lattice_step: float = 0.1
     n_headings: int = 16
