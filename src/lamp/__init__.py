@@ -4,9 +4,8 @@ Public entry points (see ``docs``/README): ``load_scene``, ``SceneError``, ``sol
 Heavy dependencies (MuJoCo, PyTorch) are imported only by the modules that use them.
 """
 
+from lamp._version import __version__
 from lamp.scene import Scene, SceneError, load_scene
-
-__version__ = "0.1.0"
 
 
 def solve(scene: Scene, planner: str = "lazy", seed: int = 0, **kwargs):
