@@ -127,6 +127,7 @@ def test_real_jobs_give_the_same_result_in_a_reused_worker():
     assert warm[0].result["segments"] > 0
     first, again, alone = (_comparable(o.result) for o in (warm[0], warm[3], fresh[0]))
     assert first == again == alone
+    assert _comparable(warm[2].result) != first  # another seed: the comparison can tell
 
 
 def _bench_process(tmp_path: Path, n_scenes: int = 2) -> tuple[subprocess.Popen, Path]:
@@ -232,3 +233,22 @@ def test_jobs_per_worker_option(tmp_path):
     res = runner.invoke(app, ["bench", "--suite", str(folder), "--out", str(tmp_path / "x"),
                               "--jobs-per-worker", "-1"])
     assert res.exit_code == 2
+
+
+def test_a_worker_that_cannot_start_stops_the_run_with_a_message(tmp_path, monkeypatch):
+    folder = write_suite(tmp_path, "random", 1)
+    # the job function imports in this process but not in the workers (a broken install)
+    monkeypatch.setattr(sys, "path", [str(tmp_path / "missing"), *sys.path])
+    (tmp_path / "missing").mkdir()
+    (tmp_path / "missing" / "vanishing_jobs.py").write_text(
+        "import os\nif os.environ.get('LAMP_BENCH_TEST_WORKER'):\n    raise ImportError('gone')\n"
+        "from lamp.bench.fake import synthetic_job as job\n")
+    monkeypatch.setenv("LAMP_BENCH_TEST_WORKER", "")
+    import vanishing_jobs  # noqa: F401 - imported here, before the workers exist
+
+    monkeypatch.setenv("LAMP_BENCH_TEST_WORKER", "1")
+    res = runner.invoke(app, ["bench", "--suite", str(folder), "--planners", "lazy",
+                              "--out", str(tmp_path / "run"), "--job-fn", "vanishing_jobs:job",
+                              "--no-progress"])
+    assert res.exit_code == 1, res.output
+    assert "before its first job" in res.output and "gone" in res.output

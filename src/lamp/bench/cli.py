@@ -427,6 +427,7 @@ def _run_pending(pending: list[Job], jobs: list[Job], out: Path, previous: dict[
                  planners=planner_list,
                  seeds=list(range(seeds)), workers=workers, backend=backend, model=model,
                  time_cap=time_cap, planning_limit=planning_limit, scenes=scenes, job_fn=job_fn)
+    from lamp.bench.pool import WorkerStartError
     from lamp.bench.runner import execute
 
     stopped, code = "", 0
@@ -439,6 +440,9 @@ def _run_pending(pending: list[Job], jobs: list[Job], out: Path, previous: dict[
         stopped, code = "interrupted", 130
     except Terminated:
         stopped, code = "terminated", 143
+    except WorkerStartError as exc:  # nothing can run here; finished jobs are kept
+        typer.echo(f"error: {exc}", err=True)
+        raise typer.Exit(code=1) from None
     if stopped:
         typer.echo(f"\n{stopped}: finished jobs are in {out / RESULTS_FILE}; continue with "
                    "the same command plus --resume", err=True)
