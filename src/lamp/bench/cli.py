@@ -4,9 +4,9 @@ Registered by ``lamp.cli`` as ``app.command("bench")(bench_command)`` and
 ``app.command("report")(report_command)``. Exit status: 0 when the run finished (whatever
 the planners' outcomes), 2 for bad input (unknown suite or planner, bad numbers, a non-empty
 output folder without ``--resume``, caps differing from the run being resumed, Ray missing,
-an unusable ``--db`` path), 130 when interrupted and 143 when terminated (``SIGTERM``); after
-either, no worker process is left running, the scratch folder is removed, and the run
-continues with ``--resume``.
+an unusable ``--db`` path), 1 when no worker process can start, 130 when interrupted and 143
+when terminated (``SIGTERM``); after either, no worker process is left running, the scratch
+folder is removed, and the run continues with ``--resume``.
 """
 
 from __future__ import annotations
