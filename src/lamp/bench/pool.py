@@ -21,6 +21,7 @@ once per worker rather than once per job. What a job may rely on (and the tests 
 from __future__ import annotations
 
 import contextlib
+import itertools
 import multiprocessing as mp
 import os
 import shutil
@@ -142,15 +143,15 @@ def run_local(jobs: Sequence[Job], job_fn: str | Callable, workers: int,
     pool: list[_Worker] = []
     with tempfile.TemporaryDirectory(prefix="lamp-bench-") as tmp:
         scratch = Path(tmp)
-        counter = {"job": 0, "worker": 0}
+        job_numbers, worker_numbers = itertools.count(1), itertools.count(1)
 
         def spawn() -> None:
-            counter["worker"] += 1
-            idle_log = scratch / f"worker-{counter['worker']}.log"
-            parent_end, child_end = ctx.Pipe(duplex=True)
             from lamp.bench.worker import serve
 
-            proc = ctx.Process(target=serve, name=f"lamp-bench-worker-{counter['worker']}",
+            k = next(worker_numbers)
+            idle_log = scratch / f"worker-{k}.log"
+            parent_end, child_end = ctx.Pipe(duplex=True)
+            proc = ctx.Process(target=serve, name=f"lamp-bench-worker-{k}",
                                args=(child_end, spec, os.getpid(), str(idle_log)))
             proc.start()
             child_end.close()
@@ -173,8 +174,7 @@ def run_local(jobs: Sequence[Job], job_fn: str | Callable, workers: int,
                 for w in pool:
                     if queue and w.ready and w.job is None:
                         job = queue.popleft()
-                        counter["job"] += 1
-                        w.job, w.log_path = job, scratch / f"{counter['job']}.log"
+                        w.job, w.log_path = job, scratch / f"{next(job_numbers)}.log"
                         w.started = time.monotonic()
                         w.conn.send(("job", job, str(w.log_path)))
                         if on_start is not None:
