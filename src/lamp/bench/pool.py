@@ -173,10 +173,13 @@ def run_local(jobs: Sequence[Job], job_fn: str | Callable, workers: int,
                     spawn()
                 for w in pool:
                     if queue and w.ready and w.job is None:
-                        job = queue.popleft()
-                        w.job, w.log_path = job, scratch / f"{next(job_numbers)}.log"
-                        w.started = time.monotonic()
-                        w.conn.send(("job", job, str(w.log_path)))
+                        job, log_path = queue.popleft(), scratch / f"{next(job_numbers)}.log"
+                        try:
+                            w.conn.send(("job", job, str(log_path)))
+                        except OSError:  # it died while idle; the job goes to another
+                            queue.appendleft(job)
+                            continue
+                        w.job, w.log_path, w.started = job, log_path, time.monotonic()
                         if on_start is not None:
                             on_start(job)
                 timeout = max(0.0, min(w.deadline for w in pool) - time.monotonic())
