@@ -11,6 +11,7 @@ from pathlib import Path
 
 import typer
 
+from lamp.errors import InputError
 from lamp.scene import SceneError, load_scene
 
 app = typer.Typer(
@@ -79,6 +80,8 @@ def _run_and_write(scene, planner: str, seed: int, out: Path, render: bool, mode
     try:
         solution = solve_with_frames(scene, planner, seed, model=model, render=render,
                                      time_limit=time_limit)
+    except InputError as exc:  # e.g. robots the model was not trained for
+        fail_input(str(exc))
     except Exception as exc:  # an internal error: exit status 1 with a short message
         typer.echo(f"internal error: {type(exc).__name__}: {exc}", err=True)
         raise typer.Exit(code=1) from exc

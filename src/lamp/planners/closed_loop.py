@@ -1,4 +1,4 @@
-"""Closed-loop execution (paper Alg. 2 lines 3-8): plan, execute a segment in MuJoCo, observe, replan.
+"""Closed-loop execution (paper Alg. 2 lines 3-7): until the goal, plan, execute in MuJoCo, observe, replan.
 
 Every planner implements ``ObjectPlanner.plan(q_O, q_R, deadline) -> Plan | None`` for one
 object; ``run_object`` drives it with a policy that says when to replan:
@@ -18,7 +18,14 @@ from typing import Any, Protocol
 import numpy as np
 
 from lamp.geometry.se2 import pose_distance
-from lamp.planners.result import ObjectResult, goal_errors, within_goal
+from lamp.planners.result import (
+    SUCCESS_ORIENTATION_TOL,
+    SUCCESS_POSITION_TOL,
+    ObjectResult,
+    goal_errors,
+    within_goal,
+)
+from lamp.planners.robots import robots_match
 from lamp.planners.task import ManipulationTask
 from lamp.planners.trajectory import concat, straight_moves
 from lamp.planners.verify import Transition, reroute
@@ -62,10 +69,9 @@ RENDER_EVERY = 40
 
 
 def _adapt_to_robots(task: ManipulationTask, trans: Transition, q_R: np.ndarray) -> Transition | None:
-    gap = np.linalg.norm(trans.robot_start - q_R, axis=1)
-    if np.all(gap < 1e-9):
+    if robots_match(trans.robot_start, q_R, 1e-9):
         return trans
-    if np.all(gap <= ROBOT_SNAP):
+    if robots_match(trans.robot_start, q_R, ROBOT_SNAP):
         move = concat(straight_moves(q_R, trans.robot_start), trans.move)
         return Transition(trans.q_from, trans.q_to, trans.contacts, trans.pushes_local, move,
                           trans.manip, trans.edge)
@@ -84,7 +90,7 @@ def _stalled(q_before: np.ndarray, q_after: np.ndarray, trans: Transition) -> bo
 
 def run_object(task: ManipulationTask, planner: ObjectPlanner, policy: LoopPolicy, sim,
                record: LoopRecord, render: bool = False, time_limit: float | None = None) -> ObjectResult:
-    """Move ``task``'s object to its goal in ``sim`` with ``planner`` (Alg. 2 lines 2-8)."""
+    """Move ``task``'s object to its goal in ``sim`` with ``planner`` (Alg. 2 lines 2-7)."""
     cfg = task.config
     limit = cfg.planning_time_limit if time_limit is None else time_limit
     goal = task.goal
@@ -167,7 +173,8 @@ def run_object(task: ManipulationTask, planner: ObjectPlanner, policy: LoopPolic
             pending = []  # line 6: drift -> replan from the observed state
     record.unexecuted_planning_s += pending_time
     pos_err, rot_err = goal_errors(q_O, goal)
-    success = (not left) and within_goal(q_O, goal, 0.1, 0.1)
+    success = (not left) and within_goal(q_O, goal, SUCCESS_POSITION_TOL,
+                                         SUCCESS_ORIENTATION_TOL)
     if not success and not reason:
         reason = "segment limit reached" if iterations >= cfg.max_segments else "stopped away from goal"
     return ObjectResult(

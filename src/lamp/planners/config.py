@@ -29,9 +29,9 @@ class PlannerConfig:
     #: Object lattice: translation step (m) and heading bins.
     lattice_step: float = 0.1
     n_headings: int = 16
-    #: Cost added to an edge whose verification failed (Alg. 2 line 21, UpdateChange).
+    #: Cost added to an edge whose verification failed (Alg. 2 lines 18 and 31, UpdateChange).
     edge_penalty: float = 10.0
-    #: Penalty added to a re-inserted LAMP-A* state (Alg. 1 line 17): the paper's 1e4.
+    #: Penalty added to a re-inserted LAMP-A* state (Alg. 1 line 16, Open.re-add): the paper's 1e4.
     astar_reinsert_penalty: float = 1e4
     #: Weight on LAMP-A*'s heuristic (weighted A*; the paper's plain A* is 1). Edge costs
     #: are robot travel, pushes plus repositioning, about 3-7x the object's travel that

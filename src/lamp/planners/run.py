@@ -12,6 +12,7 @@ from lamp.planners.closed_loop import LoopPolicy, LoopRecord, run_object
 from lamp.planners.config import PlannerConfig
 from lamp.planners.result import RunResult
 from lamp.planners.task import ManipulationTask, TaskStats
+from lamp.scene.loader import SceneError
 from lamp.scene.model import Scene
 
 #: Planner names accepted by ``lamp run --planner`` (interfaces spec).
@@ -68,6 +69,23 @@ def load_proposer(model: str | Any = "learned"):
     raise ValueError(f"unknown model {model!r}; expected 'learned' or 'geometric'")
 
 
+def check_robot_radius(scene: Scene, proposer: Any) -> None:
+    """Refuse a scene whose robots the manipulation model does not make contacts for.
+
+    The model's contacts sit ``robot_radius`` (plus a gap) off the object, so robots of
+    another size would fail every ``Collide`` check or touch the object before the push:
+    a :class:`~lamp.scene.SceneError` naming ``robots.radius`` instead of a run that
+    silently finds nothing.
+    """
+    want = getattr(proposer, "robot_radius", None)
+    if want is not None and abs(float(scene.robot_radius) - float(want)) > 1e-9:
+        where = scene.source or scene.name
+        raise SceneError(
+            f"{where}: robots.radius: the manipulation model makes contacts for robots of "
+            f"radius {float(want):g} m, got {float(scene.robot_radius):g}; use robots of "
+            f"radius {float(want):g} m (or train a model for yours: lamp model data/train)")
+
+
 @dataclass
 class Solution:
     """``RunResult`` plus what only a renderer needs (animation frames)."""
@@ -94,6 +112,7 @@ def solve_with_frames(scene: Scene, planner: str = "lazy", seed: int = 0, *,
     check_planner(planner)
     cfg = config or default_config(planner)
     proposer = load_proposer(model)
+    check_robot_radius(scene, proposer)
     t_start = time.perf_counter()
     sim = Simulator(scene)
     result = RunResult(scene=scene.name, planner=planner, seed=int(seed))

@@ -49,6 +49,7 @@ import numpy as np
 import shapely
 import yaml
 
+from lamp.errors import InputError
 from lamp.geometry.se2 import transform_points
 from lamp.scene.model import Circle, Obstacle, Polygon, Rectangle, Scene, SceneObject, Shape
 
@@ -72,7 +73,7 @@ _OBJECT_KEYS = {
 }
 
 
-class SceneError(ValueError):
+class SceneError(InputError):
     """A scene file or dict is invalid; the message names the file, the field and the value."""
 
 
