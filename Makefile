@@ -21,6 +21,7 @@ $(BIN)/activate: pyproject.toml $(CONSTRAINTS)
 setup: $(BIN)/activate
 
 demo: setup
+	$(BIN)/lamp warmup   # compile the Numba kernels once (cached), outside the planning time
 	$(BIN)/lamp demo
 
 test: setup

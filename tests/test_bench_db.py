@@ -197,8 +197,8 @@ def write_suite(root: Path, name: str, n: int) -> Path:
 def test_bench_and_report_write_the_database(tmp_path):
     folder = write_suite(tmp_path, "random", 2)
     out, db = tmp_path / "run", tmp_path / "dbs" / "results.sqlite"
-    res = runner.invoke(app, ["bench", "--suite", str(folder), "--planners", "lazy,gco-var",
-                              "--seeds", "2", "--out", str(out), "--db", str(db),
+    res = runner.invoke(app, ["bench", "--suites", str(folder), "--planners", "lazy,gco-var",
+                              "--num-seeds", "2", "--out", str(out), "--db", str(db),
                               "--job-fn", "lamp.bench.fake:synthetic_job", "--no-progress",
                               "--no-report"])
     assert res.exit_code == 0, res.output
@@ -233,7 +233,7 @@ def test_a_bad_db_path_is_refused_before_running(tmp_path, kind):
         blocker.write_text("x")
         target = blocker / "results.sqlite"
         message = "cannot write in"
-    res = runner.invoke(app, ["bench", "--suite", str(folder), "--out", str(tmp_path / "run"),
+    res = runner.invoke(app, ["bench", "--suites", str(folder), "--out", str(tmp_path / "run"),
                               "--db", str(target), "--job-fn", "lamp.bench.fake:synthetic_job",
                               "--no-progress"])
     assert res.exit_code == 2, res.output

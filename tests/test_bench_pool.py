@@ -139,7 +139,7 @@ def _bench_process(tmp_path: Path, n_scenes: int = 2) -> tuple[subprocess.Popen,
     scratch.mkdir()
     env = {**os.environ, "TMPDIR": str(scratch)}
     proc = subprocess.Popen(
-        [sys.executable, "-c", "from lamp.cli import app; app()", "bench", "--suite",
+        [sys.executable, "-c", "from lamp.cli import app; app()", "bench", "--suites",
          str(folder), "--planners", "lazy", "--workers", "2", "--out", str(tmp_path / "run"),
          "--job-fn", "lamp.bench.fake:announce_and_sleep_job", "--no-progress"],
         env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
@@ -203,7 +203,7 @@ def test_workers_exit_when_lamp_bench_is_killed(tmp_path):
 def test_resume_with_nothing_to_do_adds_no_run(tmp_path):
     folder = write_suite(tmp_path, "warehouse", 2)
     out = tmp_path / "run"
-    args = ["bench", "--suite", str(folder), "--planners", "lazy,gco-var", "--out", str(out),
+    args = ["bench", "--suites", str(folder), "--planners", "lazy,gco-var", "--out", str(out),
             "--job-fn", "lamp.bench.fake:synthetic_job", "--no-progress", "--workers", "2"]
     res = runner.invoke(app, args)
     assert res.exit_code == 0, res.output
@@ -224,7 +224,7 @@ def test_resume_with_nothing_to_do_adds_no_run(tmp_path):
 def test_jobs_per_worker_option(tmp_path):
     folder = write_suite(tmp_path, "maze", 3)
     out = tmp_path / "run"
-    res = runner.invoke(app, ["bench", "--suite", str(folder), "--planners", "gco-var",
+    res = runner.invoke(app, ["bench", "--suites", str(folder), "--planners", "gco-var",
                               "--out", str(out), "--job-fn", "lamp.bench.fake:pid_job",
                               "--no-progress", "--workers", "1", "--jobs-per-worker", "1",
                               "--no-report"])
@@ -233,7 +233,7 @@ def test_jobs_per_worker_option(tmp_path):
     assert len({r["stats"]["pid"] for r in recs}) == 3
     config = json.loads((out / "config.json").read_text())
     assert "--jobs-per-worker 1" in config["sessions"][0]["command"]
-    res = runner.invoke(app, ["bench", "--suite", str(folder), "--out", str(tmp_path / "x"),
+    res = runner.invoke(app, ["bench", "--suites", str(folder), "--out", str(tmp_path / "x"),
                               "--jobs-per-worker", "-1"])
     assert res.exit_code == 2
 
@@ -250,7 +250,7 @@ def test_a_worker_that_cannot_start_stops_the_run_with_a_message(tmp_path, monke
     import vanishing_jobs  # noqa: F401 - imported here, before the workers exist
 
     monkeypatch.setenv("LAMP_BENCH_TEST_WORKER", "1")
-    res = runner.invoke(app, ["bench", "--suite", str(folder), "--planners", "lazy",
+    res = runner.invoke(app, ["bench", "--suites", str(folder), "--planners", "lazy",
                               "--out", str(tmp_path / "run"), "--job-fn", "vanishing_jobs:job",
                               "--no-progress"])
     assert res.exit_code == 1, res.output

@@ -1,8 +1,10 @@
 """The ``lamp`` command line: parses arguments, loads inputs, calls the library, writes outputs.
 
 Sub-command groups live beside the code they drive (``lamp.suites.cli``, ``lamp.manip.cli``,
-``lamp.bench.cli``); this module only wires them together. Exit status: 0 when a run
-finished (whatever its outcome), 2 for bad input, 1 for an internal error.
+``lamp.bench.cli``, ``lamp.scene.cli``); this module only wires them together; shared checks
+and the progress display are in ``lamp.cli_support``. Exit status: 0 when a run finished
+(whatever its outcome; ``lamp run --check`` exits 1 when the task failed), 2 for bad input
+(checked before any planning), 1 for an internal error.
 """
 
 from __future__ import annotations
@@ -11,21 +13,40 @@ from pathlib import Path
 
 import typer
 
+from lamp.cli_support import (
+    RunProgress,
+    check_choice,
+    check_model_option,
+    check_writable_dir,
+    check_writable_file,
+    fail_input,
+    image_format,
+    print_summary,
+    version_callback,
+)
 from lamp.errors import InputError
+from lamp.planners.config import PLANNER_DESCRIPTIONS, planning_limit_help
 from lamp.scene import SceneError, load_scene
 
 app = typer.Typer(
     help="LAMP: long-horizon multi-robot collaborative manipulation planning.",
     no_args_is_help=True,
-    add_completion=False,
+    add_completion=True,
     pretty_exceptions_enable=False,
+    context_settings={"help_option_names": ["-h", "--help"]},
 )
 
+PLANNER_HELP = "Planner: " + "; ".join(f"{k}: {v}" for k, v in PLANNER_DESCRIPTIONS.items())
+MODEL_HELP = ("Manipulation model: learned (the shipped checkpoint), geometric, or a checkpoint "
+              "file written by `lamp model train`.")
 
-def fail_input(message: str) -> None:
-    """Report bad input on stderr and exit with status 2."""
-    typer.echo(f"error: {message}", err=True)
-    raise typer.Exit(code=2)
+
+@app.callback()
+def main(
+    version: bool = typer.Option(False, "--version", "-V", callback=version_callback,
+                                 is_eager=True, help="Print the installed version and exit."),
+) -> None:
+    """LAMP: long-horizon multi-robot collaborative manipulation planning."""
 
 
 def load_scene_or_exit(path: Path):
@@ -37,110 +58,139 @@ def load_scene_or_exit(path: Path):
 
 @app.command()
 def show(
-    scene_file: Path = typer.Argument(..., help="Scene file (YAML or JSON)."),
-    out: Path = typer.Option(Path("scene.png"), "--out", "-o", help="PNG file to write."),
+    scene_file: Path = typer.Argument(..., help="Scene file (YAML or JSON).", show_default=False),
+    out: Path = typer.Option(Path("scene.png"), "--out", "-o",
+                             help="Image to write: .png, .svg or .pdf (by its extension)."),
 ) -> None:
     """Draw a scene: workspace, obstacles, robots, object start and goal outlines."""
+    fmt = image_format(out)
+    check_writable_file(out)
     scene = load_scene_or_exit(scene_file)
-    from lamp.viz.scene_plot import save_scene_png
+    from lamp.viz.scene_plot import save_scene_image
 
-    save_scene_png(scene, out)
+    save_scene_image(scene, out, fmt=fmt)
     typer.echo(f"wrote {out}")
 
 
-def _print_summary(result) -> None:
-    from rich.console import Console
-    from rich.table import Table
-
-    d = result.to_dict()
-    table = Table(title=f"{d['scene']} - {d['planner']} (seed {d['seed']})")
-    for col in ("object", "success", "position err (m)", "orientation err (rad)", "segments",
-                "full-horizon plan", "note"):
-        table.add_column(col)
-    for i, o in enumerate(d["objects"]):
-        table.add_row(str(i), "yes" if o["success"] else "no", f"{o['position_error']:.3f}",
-                      f"{o['orientation_error']:.3f}", str(o["segments"]),
-                      "yes" if o["full_horizon_plan"] else "no", o.get("failure_reason", ""))
-    console = Console()
-    console.print(table)
-    med = d["median_planning_time_s"]
-    console.print(
-        f"success: {d['success']}  segments: {d['segments']}  replans: {d['replans']}  "
-        f"planning time: {d['total_planning_time_s']:.2f} s total"
-        + (f", {med:.3f} s median per segment" if med is not None else "")
-        + f"  makespan: {d['makespan']} steps  wall time: {d['wall_time_s']:.1f} s"
-    )
-
-
 def _run_and_write(scene, planner: str, seed: int, out: Path, render: bool, model: str,
-                   time_limit: float | None) -> None:
+                   planning_limit: float | None, progress: RunProgress) -> dict:
     from lamp.io import write_json_atomic
     from lamp.planners.run import solve_with_frames
 
     try:
-        solution = solve_with_frames(scene, planner, seed, model=model, render=render,
-                                     time_limit=time_limit)
+        with progress:
+            solution = solve_with_frames(scene, planner, seed, model=model, render=render,
+                                         time_limit=planning_limit, progress=progress)
     except InputError as exc:  # e.g. robots the model was not trained for
         fail_input(str(exc))
     except Exception as exc:  # an internal error: exit status 1 with a short message
         typer.echo(f"internal error: {type(exc).__name__}: {exc}", err=True)
         raise typer.Exit(code=1) from exc
-    out.mkdir(parents=True, exist_ok=True)
-    write_json_atomic(out / "result.json", solution.result.to_dict())
-    _print_summary(solution.result)
-    typer.echo(f"wrote {out / 'result.json'}")
+    result = solution.result.to_dict()
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        write_json_atomic(out / "result.json", result)
+    except OSError as exc:  # checked before planning; the disk may still fill up
+        fail_input(f"--out: cannot write {out / 'result.json'}: {exc.strerror or exc}")
+    if not progress.quiet:
+        print_summary(result)
+        typer.echo(f"wrote {out / 'result.json'}")
     if render:
         from lamp.viz.animation import write_animation
 
         write_animation(scene, solution.frames, out / "run.gif")
-        typer.echo(f"wrote {out / 'run.gif'}")
+        if not progress.quiet:
+            typer.echo(f"wrote {out / 'run.gif'}")
+    return result
 
 
-def _check_run_options(planner: str, model: str) -> None:
-    from lamp.planners.run import PLANNERS
+def _check_run_options(planner: str, model: str, out: Path,
+                       planning_limit: float | None = None) -> str:
+    """Exit 2 for a bad planner, model, output folder or limit; returns the model value."""
+    check_choice("--planner", planner, tuple(PLANNER_DESCRIPTIONS), "planner")
+    if planning_limit is not None and not planning_limit > 0:
+        fail_input(f"--planning-limit: must be positive, got {planning_limit:g}")
+    check_writable_dir(out)
+    return check_model_option(model)
 
-    if planner not in PLANNERS:
-        fail_input(f"--planner: unknown planner {planner!r}; expected one of: {', '.join(PLANNERS)}")
-    if model not in ("learned", "geometric"):
-        fail_input(f"--model: unknown model {model!r}; expected 'learned' or 'geometric'")
+
+def _quiet_verbose(quiet: bool, verbose: bool) -> RunProgress:
+    if quiet and verbose:
+        fail_input("--quiet and --verbose: choose one")
+    return RunProgress(quiet=quiet, verbose=verbose)
+
+
+QUIET_HELP = "Print nothing but errors (result.json is still written)."
+VERBOSE_HELP = "Print a line per object and segment, even when the output is not a terminal."
 
 
 @app.command()
 def run(
-    scene_file: Path = typer.Argument(..., help="Scene file (YAML or JSON)."),
-    planner: str = typer.Option("lazy", "--planner", "-p",
-                                help="lazy | astar | astar-replan | gco-ori | gco-var"),
+    scene_file: Path = typer.Argument(..., help="Scene file (YAML or JSON).", show_default=False),
+    planner: str = typer.Option("lazy", "--planner", "-p", help=PLANNER_HELP),
     seed: int = typer.Option(0, "--seed", "-s", help="Random seed (same seed, same result)."),
     out: Path = typer.Option(Path("lamp-run"), "--out", "-o", help="Output folder."),
     render: bool = typer.Option(False, "--render", help="Also write DIR/run.gif."),
-    model: str = typer.Option("learned", "--model",
-                              help="Manipulation model: learned (shipped checkpoint) or geometric."),
-    time_limit: float = typer.Option(None, "--time-limit",
-                                     help="Cumulative planning limit per object in seconds."),
+    model: str = typer.Option("learned", "--model", "-m", help=MODEL_HELP),
+    planning_limit: float = typer.Option(None, "--planning-limit",
+                                         help="Cumulative planning limit per object, seconds.",
+                                         show_default=planning_limit_help()),
+    time_limit: float = typer.Option(None, "--time-limit", hidden=True,
+                                     help="Old spelling of --planning-limit."),
+    check: bool = typer.Option(False, "--check", help="Exit with status 1 when the task "
+                               "failed (for scripts and CI); default: 0 whenever the run "
+                               "finished."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help=QUIET_HELP),
+    verbose: bool = typer.Option(False, "--verbose", "-v", help=VERBOSE_HELP),
 ) -> None:
     """Plan and execute one scene file in MuJoCo; write DIR/result.json."""
+    progress = _quiet_verbose(quiet, verbose)
+    limit = time_limit if time_limit is not None else planning_limit
+    model = _check_run_options(planner, model, out, limit)
     scene = load_scene_or_exit(scene_file)
-    _check_run_options(planner, model)
-    _run_and_write(scene, planner, seed, out, render, model, time_limit)
+    result = _run_and_write(scene, planner, seed, out, render, model, limit, progress)
+    if check and not result["success"]:
+        raise typer.Exit(code=1)
 
 
 @app.command()
 def demo(
     out: Path = typer.Option(Path("lamp-demo"), "--out", "-o", help="Output folder."),
     seed: int = typer.Option(0, "--seed", "-s", help="Random seed."),
-    planner: str = typer.Option("lazy", "--planner", "-p", help="Planner (default LAMP-Lazy)."),
-    model: str = typer.Option("learned", "--model", help="learned or geometric."),
+    planner: str = typer.Option("lazy", "--planner", "-p", help=PLANNER_HELP),
+    model: str = typer.Option("learned", "--model", "-m", help=MODEL_HELP),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help=QUIET_HELP),
+    verbose: bool = typer.Option(False, "--verbose", "-v", help=VERBOSE_HELP),
 ) -> None:
     """The main job: LAMP-Lazy on the built-in default scene; writes result.json and run.gif."""
     from lamp.demo import demo_scene
 
-    _check_run_options(planner, model)
-    _run_and_write(demo_scene(), planner, seed, out, True, model, None)
+    progress = _quiet_verbose(quiet, verbose)
+    model = _check_run_options(planner, model, out)
+    _run_and_write(demo_scene(), planner, seed, out, True, model, None, progress)
+
+
+@app.command()
+def warmup() -> None:
+    """Compile the Numba kernels now (cached on disk), so that no run pays for it later."""
+    from lamp.warmup import warm_up
+
+    progress = RunProgress(verbose=True)
+    report = warm_up(progress)
+    if report.compiled:
+        typer.echo(f"compiled {report.compiled} kernels in {report.compile_s:.1f} s "
+                   f"(cached on disk; warm-up {report.seconds:.1f} s)")
+    else:
+        typer.echo(f"kernels already compiled (loaded from the disk cache; warm-up "
+                   f"{report.seconds:.1f} s)")
 
 
 def _register_groups() -> None:
+    from lamp.scene.cli import schema_command, validate_command
     from lamp.suites.cli import suite_app
 
+    app.command("validate")(validate_command)
+    app.command("schema")(schema_command)
     app.add_typer(suite_app, name="suite")
     try:
         from lamp.manip.cli import model_app

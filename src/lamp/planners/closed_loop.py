@@ -12,6 +12,7 @@ Multi-object scenes run object by object; the other objects stay physical bodies
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
@@ -89,8 +90,12 @@ def _stalled(q_before: np.ndarray, q_after: np.ndarray, trans: Transition) -> bo
 
 
 def run_object(task: ManipulationTask, planner: ObjectPlanner, policy: LoopPolicy, sim,
-               record: LoopRecord, render: bool = False, time_limit: float | None = None) -> ObjectResult:
-    """Move ``task``'s object to its goal in ``sim`` with ``planner`` (Alg. 2 lines 2-7)."""
+               record: LoopRecord, render: bool = False, time_limit: float | None = None,
+               on_segment: Callable[[int, int], None] | None = None) -> ObjectResult:
+    """Move ``task``'s object to its goal in ``sim`` with ``planner`` (Alg. 2 lines 2-7).
+
+    ``on_segment(segments, replans)`` is called after each executed segment (progress).
+    """
     cfg = task.config
     limit = cfg.planning_time_limit if time_limit is None else time_limit
     goal = task.goal
@@ -154,6 +159,8 @@ def run_object(task: ManipulationTask, planner: ObjectPlanner, policy: LoopPolic
         segments += 1
         record.planning_time_s.append(pending_time)
         pending_time = 0.0
+        if on_segment is not None:
+            on_segment(segments, record.replans)
         record.makespan += paths.shape[1] - 1
         q_O = np.asarray(out.object_poses[task.index], float)
         q_R = np.asarray(out.robot_positions, float)
