@@ -76,27 +76,20 @@ def solve_job(job: Job) -> dict[str, Any]:
     return result
 
 
-#: The scene :func:`warm_up_solver` solves: one disk pushed 0.45 m across an empty 2 m map.
-WARM_UP_SCENE = {
-    "format": "lamp-scene/1", "name": "warm-up", "workspace": [2.0, 2.0],
-    "robots": {"starts": [[0.2, 0.2], [0.4, 0.2], [1.8, 1.8]]},
-    "objects": [{"type": "circle", "radius": 0.1, "start": [0.8, 0.8, 0.0],
-                 "goal": [1.2, 1.0, 0.0]}],
-}
-
-
 def warm_up_solver() -> None:
-    """Import the planners, load the shipped model and run every kernel once (a tiny solve).
+    """Load every planning kernel and the shipped model once, before a worker's first job.
 
-    Called by each local worker process before its first job, so neither a job's cap nor
-    its reported planning time includes imports, cached-kernel loading or (on a fresh
-    installation) Numba compilation. Plans are deterministic per scene, planner and seed,
-    so a job's result does not depend on whether, or how often, this ran before it.
+    Called by each local worker process (see :mod:`lamp.bench.worker`), so neither a job's
+    cap nor its wall time includes imports, cached-kernel loading or (on a fresh
+    installation) Numba compilation (:func:`lamp.warmup.ensure_warm`). Plans are
+    deterministic per scene, planner and seed, so a job's result does not depend on
+    whether this ran before it.
     """
-    from lamp.planners.run import solve
-    from lamp.scene import scene_from_dict
+    from lamp.planners.run import load_proposer
+    from lamp.warmup import ensure_warm
 
-    solve(scene_from_dict(WARM_UP_SCENE), "lazy", 0, model="learned")
+    ensure_warm()
+    load_proposer("learned")
 
 
 solve_job.warm_up = warm_up_solver  # type: ignore[attr-defined]  # see lamp.bench.worker
