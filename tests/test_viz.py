@@ -222,7 +222,7 @@ def test_mp4_without_ffmpeg_is_a_clear_error(
 ) -> None:
     import lamp.viz.animation as animation
 
-    monkeypatch.setattr(animation, "mp4_available", lambda: False)  # as without the extra
+    monkeypatch.setattr(animation, "mp4_available", lambda: False)  # as without imageio-ffmpeg
     with pytest.raises(RuntimeError, match="pip install imageio-ffmpeg"):
         write_animation(scene, moving_frames(scene, 2), tmp_path / "run.mp4")
     assert list(tmp_path.iterdir()) == []

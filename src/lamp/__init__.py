@@ -1,7 +1,8 @@
 """lamp: long-horizon adaptive manipulation planning for multi-robot collaborative pushing.
 
 Public entry points (see the README's "Using it"): ``load_scene``, ``scene_from_dict``,
-``save_scene``, ``SceneError``, ``solve``. They are imported on first use (PEP 562), so
+``save_scene``, ``SceneError``, ``solve``, and for recorded runs ``load_recording`` and
+``render`` (``docs/recording-format.md``). They are imported on first use (PEP 562), so
 that importing a leaf module such as ``lamp.geometry.se2`` does not load the scene
 format's YAML parser or Shapely, and heavy dependencies (MuJoCo, PyTorch) are imported
 only by the modules that use them.
@@ -79,5 +80,20 @@ def solve(scene: Scene | str | Path, planner: PlannerName = "lazy", seed: int = 
                   time_limit=time_limit, progress=progress)
 
 
-__all__ = ["Scene", "SceneError", "load_scene", "save_scene", "scene_from_dict", "solve",
+def load_recording(run_dir):
+    """The ``lamp.record.Recording`` of a run folder (``recording.json`` + ``.npz``)."""
+    from lamp.record import load_recording as _load
+
+    return _load(run_dir)
+
+
+def render(recording, path, **options):
+    """Draw a recording to ``path`` (.gif, .mp4, .png or .html); see ``lamp.viz.replay``."""
+    from lamp.viz.replay import render as _render
+
+    return _render(recording, path, **options)
+
+
+__all__ = ["Scene", "SceneError", "load_recording", "load_scene", "render", "save_scene",
+           "scene_from_dict", "solve",
            "__version__"]

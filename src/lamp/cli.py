@@ -73,13 +73,18 @@ def show(
 
 
 def _run_and_write(scene, planner: str, seed: int, out: Path, render: bool, model: str,
-                   planning_limit: float | None, progress: RunProgress) -> dict:
+                   planning_limit: float | None, progress: RunProgress,
+                   html: bool = False) -> dict:
     from lamp.io import write_json_atomic
     from lamp.planners.run import solve_with_frames
+    from lamp.record import save_recording
+    from lamp.record.run_dir import GIF_NAME, HTML_NAME, RESULT_NAME, clear_stale
 
+    if out.exists() and not out.is_dir():
+        fail_input(f"--out: {out} exists and is not a folder")
     try:
         with progress:
-            solution = solve_with_frames(scene, planner, seed, model=model, render=render,
+            solution = solve_with_frames(scene, planner, seed, model=model,
                                          time_limit=planning_limit, progress=progress)
     except InputError as exc:  # e.g. robots the model was not trained for
         fail_input(str(exc))
@@ -87,21 +92,41 @@ def _run_and_write(scene, planner: str, seed: int, out: Path, render: bool, mode
         typer.echo(f"internal error: {type(exc).__name__}: {exc}", err=True)
         raise typer.Exit(code=1) from exc
     result = solution.result.to_dict()
+
+    def say(message: str) -> None:
+        if not progress.quiet:
+            typer.echo(message)
+
     try:
         out.mkdir(parents=True, exist_ok=True)
-        write_json_atomic(out / "result.json", result)
-    except OSError as exc:  # checked before planning; the disk may still fill up
-        fail_input(f"--out: cannot write {out / 'result.json'}: {exc.strerror or exc}")
-    if not progress.quiet:
-        print_summary(result)
-        typer.echo(f"wrote {out / 'result.json'}")
-    if render:
-        from lamp.viz.animation import write_animation
-
-        write_animation(scene, solution.frames, out / "run.gif")
+        writes = [GIF_NAME] * render + [HTML_NAME] * html
+        for path in clear_stale(out, keep=writes):
+            say(f"removed {path} (left by an earlier run)")
         if not progress.quiet:
-            typer.echo(f"wrote {out / 'run.gif'}")
+            print_summary(result)
+        # each file atomically, result.json last: it marks the folder complete
+        npz, index = save_recording(solution.recording, out)
+        say(f"wrote {index} and {npz.name}")
+        if writes:
+            from lamp.viz.replay import render as render_recording
+
+            for name in writes:
+                render_recording(solution.recording, out / name)
+                say(f"wrote {out / name}")
+        write_json_atomic(out / RESULT_NAME, result)
+    except OSError as exc:  # checked before planning; the disk may still fill up
+        fail_input(f"--out: cannot write into {out}: {exc.strerror or exc}")
+    except Exception as exc:
+        typer.echo(f"internal error while writing {out}: {type(exc).__name__}: {exc}", err=True)
+        raise typer.Exit(code=1) from exc
+    say(f"wrote {out / RESULT_NAME}")
     return result
+
+
+OUT_HELP = ("Output folder: result.json, recording.npz + recording.json (lamp-recording/1) "
+            "and what was asked for. Outputs an earlier run left there (result.json, the "
+            "recording, run.gif, replay.html) are replaced, or removed when this run does not "
+            "write them; other files stay.")
 
 
 def _check_run_options(planner: str, model: str, out: Path,
@@ -129,8 +154,10 @@ def run(
     scene_file: Path = typer.Argument(..., help="Scene file (YAML or JSON).", show_default=False),
     planner: str = typer.Option("lazy", "--planner", "-p", help=PLANNER_HELP),
     seed: int = typer.Option(0, "--seed", "-s", help="Random seed (same seed, same result)."),
-    out: Path = typer.Option(Path("lamp-run"), "--out", "-o", help="Output folder."),
+    out: Path = typer.Option(Path("lamp-run"), "--out", "-o", help=OUT_HELP),
     render: bool = typer.Option(False, "--render", help="Also write DIR/run.gif."),
+    html: bool = typer.Option(False, "--html", help="Also write the replay viewer "
+                              "DIR/replay.html."),
     model: str = typer.Option("learned", "--model", "-m", help=MODEL_HELP),
     planning_limit: float = typer.Option(None, "--planning-limit",
                                          help="Cumulative planning limit per object, seconds.",
@@ -143,31 +170,32 @@ def run(
     quiet: bool = typer.Option(False, "--quiet", "-q", help=QUIET_HELP),
     verbose: bool = typer.Option(False, "--verbose", "-v", help=VERBOSE_HELP),
 ) -> None:
-    """Plan and execute one scene file in MuJoCo; write DIR/result.json."""
+    """Plan and execute one scene file in MuJoCo; write DIR/result.json and the recording."""
     progress = _quiet_verbose(quiet, verbose)
     limit = time_limit if time_limit is not None else planning_limit
     model = _check_run_options(planner, model, out, limit)
     scene = load_scene_or_exit(scene_file)
-    result = _run_and_write(scene, planner, seed, out, render, model, limit, progress)
+    result = _run_and_write(scene, planner, seed, out, render, model, limit, progress, html)
     if check and not result["success"]:
         raise typer.Exit(code=1)
 
 
 @app.command()
 def demo(
-    out: Path = typer.Option(Path("lamp-demo"), "--out", "-o", help="Output folder."),
+    out: Path = typer.Option(Path("lamp-demo"), "--out", "-o", help=OUT_HELP),
     seed: int = typer.Option(0, "--seed", "-s", help="Random seed."),
     planner: str = typer.Option("lazy", "--planner", "-p", help=PLANNER_HELP),
     model: str = typer.Option("learned", "--model", "-m", help=MODEL_HELP),
     quiet: bool = typer.Option(False, "--quiet", "-q", help=QUIET_HELP),
     verbose: bool = typer.Option(False, "--verbose", "-v", help=VERBOSE_HELP),
 ) -> None:
-    """The main job: LAMP-Lazy on the built-in default scene; writes result.json and run.gif."""
+    """The main job: LAMP-Lazy on the built-in default scene; writes result.json, the
+    recording, run.gif and replay.html."""
     from lamp.demo import demo_scene
 
     progress = _quiet_verbose(quiet, verbose)
     model = _check_run_options(planner, model, out)
-    _run_and_write(demo_scene(), planner, seed, out, True, model, None, progress)
+    _run_and_write(demo_scene(), planner, seed, out, True, model, None, progress, html=True)
 
 
 @app.command()
@@ -183,6 +211,54 @@ def warmup() -> None:
     else:
         typer.echo(f"kernels already compiled (loaded from the disk cache; warm-up "
                    f"{report.seconds:.1f} s)")
+
+
+@app.command("render")
+def render_command(
+    run_dir: Path = typer.Argument(..., help="A run folder holding recording.json + .npz."),
+    out: Path = typer.Option(..., "--out", "-o", help="File to write: .gif, .mp4 (needs "
+                             "imageio-ffmpeg), .png (one still), .html (replay viewer) or "
+                             ".mcap (Foxglove; needs mcap)."),
+    at: int = typer.Option(None, "--at", help="PNG: draw the end of segment N, counted as in "
+                           "the pictures (1 = the first; default: the final state)."),
+    size: int = typer.Option(640, "--size", help="Pixels on the picture's longer side."),
+    fps: float = typer.Option(15.0, "--fps", help="Frames per second of video."),
+    speed: float = typer.Option(None, "--speed", help="Simulated seconds per video second "
+                                "(default: the video lasts at most 20 s)."),
+    follow: float = typer.Option(None, "--follow", help="Camera window in metres that "
+                                 "follows the moved object (default: whole workspace)."),
+    min_robot_px: float = typer.Option(3.0, "--min-robot-px", help="Smallest robot radius "
+                                       "drawn, in pixels."),
+    trail: float = typer.Option(4.0, "--trail", help="Robot trail length in simulated s."),
+) -> None:
+    """Draw a recorded run again, without replanning: GIF, MP4, PNG still, HTML viewer, or
+    export it to MCAP for Foxglove."""
+    from lamp.record import RecordingError, load_recording
+    from lamp.viz.replay import RenderOptions, render
+
+    try:
+        recording = load_recording(run_dir)
+    except RecordingError as exc:
+        fail_input(str(exc))
+    try:
+        if at is not None and out.suffix.lower() != ".png":
+            raise ValueError("at: only a .png still takes --at")
+        if at is not None and not 1 <= at <= recording.n_segments:
+            raise ValueError(f"at: segment {at} does not exist (the run has "
+                             f"{recording.n_segments} segments: 1..{recording.n_segments})")
+        options = RenderOptions(size=size, fps=fps, speed=speed, trail_s=trail,
+                                min_robot_px=min_robot_px, follow=follow,
+                                at=None if at is None else at - 1)
+        stats = render(recording, out, options)
+    except ValueError as exc:  # "field: problem" -> "--option: problem"
+        field, _, problem = str(exc).partition(": ")
+        flags = {"trail_s": "--trail", "min_robot_px": "--min-robot-px"}
+        flag = flags.get(field, f"--{field}")
+        fail_input(f"{flag}: {problem}" if problem else str(exc))
+    except RuntimeError as exc:
+        fail_input(str(exc))
+    frames = f" ({stats.frames} frames)" if stats.frames > 1 else ""
+    typer.echo(f"wrote {out}{frames} in {stats.seconds:.1f} s")
 
 
 def _register_groups() -> None:

@@ -211,7 +211,7 @@ def write_config(out: Path, previous: dict[str, Any], *, suites: list[str], plan
 def canonical_command(suites: list[str], planners: list[str], *, seeds: int, workers: int,
                       out: Path, time_cap: float, planning_limit: float, model: str,
                       backend: str, scenes: int | None, render_iros: bool, job_fn: str,
-                      jobs_per_worker: int = 0) -> str:
+                      record: bool = False, jobs_per_worker: int = 0) -> str:
     """The ``lamp bench`` command line that reproduces this run, every setting explicit."""
     args = ["lamp", "bench", "--suites", ",".join(suites), "--planners", ",".join(planners),
             "--num-seeds", str(seeds), "--workers", str(workers), "--out", str(out),
@@ -221,6 +221,8 @@ def canonical_command(suites: list[str], planners: list[str], *, seeds: int, wor
         args += ["--scenes", str(scenes)]
     if render_iros:
         args.append("--render-iros")
+    if record:
+        args.append("--record")
     if jobs_per_worker:
         args += ["--jobs-per-worker", str(jobs_per_worker)]
     if job_fn != DEFAULT_JOB_FN:
@@ -297,6 +299,9 @@ def bench_command(
                                     "auto).", show_default="start a local Ray instance"),
     scenes: int = typer.Option(None, "--scenes", help="Only the first N scenes of each suite "
                                "(quick runs).", show_default="all"),
+    record: bool = typer.Option(False, "--record", help="Also save each job's recording "
+                                "(lamp-recording/1) in DIR/recordings/SUITE/SCENE-PLANNER-sSEED/; "
+                                "view it with `lamp render`."),
     render_iros: bool = typer.Option(False, "--render-iros", help="Also render the LAMP-Lazy "
                                      "IROS run to DIR/iros.gif (needs --suites iros)."),
     retry_errors: bool = typer.Option(True, "--retry-errors/--keep-errors", help="On --resume, "
@@ -402,6 +407,12 @@ def bench_command(
     pending = pending_jobs(jobs, records, retry_errors=retry_errors)
     if render_iros:
         pending = _render_jobs(jobs, pending, out, time_cap)
+    if record:
+        from dataclasses import replace
+
+        pending = [replace(j, recording_to=str(out / "recordings" / j.suite /
+                                               f"{j.scene_name}-{j.planner}-s{j.seed}"))
+                   if j.record else j for j in pending]
 
     per = Counter((j.suite, j.planner) for j in pending if j.record)
     typer.echo(f"{len(jobs)} jobs ({len({(j.suite, j.scene_name) for j in jobs})} scenes x "
@@ -413,6 +424,8 @@ def bench_command(
         for j in pending:
             if j.render_to:
                 typer.echo(f"  renders {j.render_to} ({j.label})")
+            if j.recording_to:
+                typer.echo(f"  records into {j.recording_to} ({j.label})")
         return
 
     if pending:  # a resume with nothing to do records no new run
@@ -420,8 +433,8 @@ def bench_command(
                      planner_list=planner_list, seeds=seeds, workers=workers,
                      time_cap=time_cap, planning_limit=planning_limit, model=model,
                      backend=backend, ray_address=ray_address, scenes=scenes,
-                     render_iros=render_iros, job_fn=job_fn, jobs_per_worker=jobs_per_worker,
-                     progress=progress)
+                     render_iros=render_iros, job_fn=job_fn, record=record,
+                     jobs_per_worker=jobs_per_worker, progress=progress)
     has_results = (out / RESULTS_FILE).exists()
     if report and has_results:
         _write_report(out)
@@ -435,12 +448,13 @@ def _run_pending(pending: list[Job], jobs: list[Job], out: Path, previous: dict[
                  suite_list: list[str], planner_list: list[str], seeds: int, workers: int,
                  time_cap: float, planning_limit: float, model: str, backend: str,
                  ray_address: str | None, scenes: int | None, render_iros: bool, job_fn: str,
-                 jobs_per_worker: int, progress: bool) -> None:
+                 record: bool, jobs_per_worker: int, progress: bool) -> None:
     """Record this invocation in config.json and run ``pending``; exit 130/143 if stopped."""
     command = canonical_command(
         suite_list, planner_list, seeds=seeds, workers=workers, out=out, time_cap=time_cap,
         planning_limit=planning_limit, model=model, backend=backend, scenes=scenes,
-        render_iros=render_iros, job_fn=job_fn, jobs_per_worker=jobs_per_worker)
+        render_iros=render_iros, job_fn=job_fn, record=record,
+        jobs_per_worker=jobs_per_worker)
     out.mkdir(parents=True, exist_ok=True)
     run_id = len(previous.get("sessions") or [])
     write_config(out, previous, command=command, suites=list(dict.fromkeys(j.suite for j in jobs)),

@@ -72,6 +72,8 @@ class RunResult:
     wall_time_s: float = 0.0
     stats: dict[str, Any] = field(default_factory=dict)
     unexecuted_planning_time_s: float = 0.0
+    #: The run's ``lamp.record.Recording`` (set by ``lamp.solve``); not part of result.json.
+    recording: Any = field(default=None, repr=False, compare=False)
 
     @property
     def success(self) -> bool:

@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from lamp.planners.closed_loop import LoopPolicy, LoopRecord, run_object
+from lamp.planners.closed_loop import LoopPolicy, LoopRecord, SegmentEvent, run_object
 from lamp.planners.config import (
     PLANNER_DESCRIPTIONS,
     PlannerConfig,
@@ -94,17 +94,19 @@ def check_robot_radius(scene: Scene, proposer: Any) -> None:
 
 @dataclass
 class Solution:
-    """``RunResult`` plus what only a renderer needs (animation frames)."""
+    """``RunResult`` plus what only a renderer needs (animation frames, the recording)."""
 
     result: RunResult
     frames: list[Any] = field(default_factory=list)
+    recording: Any = None
 
 
 def solve(scene: Scene | str | Path, planner: PlannerName = "lazy", seed: int = 0, *,
           model: str | Path | Any = "learned", config: PlannerConfig | None = None,
           render: bool = False, time_limit: float | None = None,
           progress: ProgressCallback | None = None) -> RunResult:
-    """Plan and execute ``scene`` with ``planner``; ``result.to_dict()`` is result.json.
+    """Plan and execute ``scene`` with ``planner``; ``result.to_dict()`` is result.json and
+    ``result.recording`` the run's :class:`lamp.record.Recording`.
 
     See :func:`solve_with_frames` for the arguments.
     """
@@ -138,8 +140,15 @@ def run_scene(scene: Scene, planner: str, seed: int, model: str | Path | Any, *,
               config: PlannerConfig | None = None, render: bool = False,
               time_limit: float | None = None,
               progress: ProgressCallback | None = None) -> Solution:
-    """Plan and execute every object of ``scene`` in order (no warm-up; see ``solve``)."""
+    """Plan and execute every object of ``scene`` in order (no warm-up; see ``solve``).
+
+    Every run is recorded (``Solution.recording``, also ``result.recording``): the
+    recording only observes, it does not change the run.
+    """
+    from lamp.planners.closed_loop import RENDER_EVERY
+    from lamp.record import Recorder
     from lamp.sim import Simulator
+    from lamp.sim.mjcf import TIMESTEP
 
     check_planner(planner)
     cfg = config or default_config(planner)
@@ -152,10 +161,16 @@ def run_scene(scene: Scene, planner: str, seed: int, model: str | Path | Any, *,
     frames: list[Any] = []
     unexecuted = 0.0
     n = len(scene.objects)
+    recorder = Recorder(scene, RENDER_EVERY * TIMESTEP)
 
     def emit(kind: EventKind, index: int, **kw: Any) -> None:
         if progress is not None:
             progress(ProgressEvent(kind, object_index=index, n_objects=n, **kw))
+
+    def observe(event: SegmentEvent) -> None:
+        recorder(event)
+        emit("segment", event.object_index, segments=event.segment + 1,
+             replans=event.replans)
 
     for index in range(n):
         task = ManipulationTask(scene, index, np.asarray(sim.object_poses, float), proposer, cfg,
@@ -163,9 +178,7 @@ def run_scene(scene: Scene, planner: str, seed: int, model: str | Path | Any, *,
         record = LoopRecord()
         emit("object", index)
         obj = run_object(task, make_planner(planner, task), POLICIES[planner], sim, record,
-                         render=render, time_limit=time_limit,
-                         on_segment=lambda k, r, i=index: emit("segment", i, segments=k,
-                                                               replans=r))
+                         render=render, time_limit=time_limit, observer=observe)
         emit("object-done", index, segments=obj.segments, replans=obj.replans,
              success=obj.success)
         result.objects.append(obj)
@@ -179,4 +192,5 @@ def run_scene(scene: Scene, planner: str, seed: int, model: str | Path | Any, *,
     result.unexecuted_planning_time_s = unexecuted
     result.stats = {**vars(totals), "unexecuted_planning_time_s": round(unexecuted, 6),
                     "failure_reasons": [o.failure_reason for o in result.objects]}
-    return Solution(result, frames)
+    result.recording = recorder.finish(planner, int(seed), result.to_dict())
+    return Solution(result, frames, result.recording)
