@@ -3,15 +3,20 @@
 PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
+# The versions the suite was tested with (scripts/write_constraints.py); CONSTRAINTS= to
+# install the newest versions pyproject.toml allows instead.
+CONSTRAINTS ?= constraints.txt
+PIP_CONSTRAINTS := $(if $(CONSTRAINTS),-c $(CONSTRAINTS))
 
 .PHONY: demo test setup lint bench clean
 
-$(BIN)/activate:
+$(BIN)/activate: pyproject.toml $(CONSTRAINTS)
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
 	# The CPU build of PyTorch first (a plain `torch` may pull a multi-GB CUDA build).
 	$(BIN)/pip install --quiet torch==2.13.0 || $(BIN)/pip install --quiet torch --index-url https://download.pytorch.org/whl/cpu
-	$(BIN)/pip install --quiet -e '.[test]'
+	$(BIN)/pip install --quiet $(PIP_CONSTRAINTS) -e '.[test]'
+	touch $(BIN)/activate
 
 setup: $(BIN)/activate
 

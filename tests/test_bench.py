@@ -209,7 +209,8 @@ def test_job_function_must_be_importable():
 
 @pytest.mark.slow  # starting a Ray instance takes about 10 s
 def test_ray_backend_runs_the_same_jobs():
-    ray = pytest.importorskip("ray")
+    import ray  # the `test` extra installs it (it is also the `ray` extra)
+
     from lamp.bench.runner import run_ray
 
     jobs = enumerate_jobs([suite("random", 1)], ["lazy", "astar", "astar-replan", "gco-var"],

@@ -228,8 +228,8 @@ def test_mp4_without_ffmpeg_is_a_clear_error(
     assert list(tmp_path.iterdir()) == []
 
 
-@pytest.mark.skipif(not mp4_available(), reason="needs imageio-ffmpeg")
 def test_mp4(scene: Scene, tmp_path: Path) -> None:
+    assert mp4_available(), "imageio-ffmpeg is part of the test extra: pip install -e '.[test]'"
     stats = write_animation(
         scene, moving_frames(scene, 10), tmp_path / "run.mp4", size_in=2.0, dpi=45
     )

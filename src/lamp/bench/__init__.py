@@ -1,8 +1,10 @@
 """Benchmarks: run planners over suites (``lamp bench``) and report (``lamp report``).
 
 - :mod:`lamp.bench.jobs`: the job list, the append-only ``results.jsonl`` and resume;
-- :mod:`lamp.bench.runner`: one process per job under a wall-clock cap, locally or on Ray;
+- :mod:`lamp.bench.runner`: jobs in isolated processes under a wall-clock cap each, locally
+  (:mod:`lamp.bench.pool`, warm worker processes) or on Ray;
 - :mod:`lamp.bench.report`: the paper's Tables I-II, figures and ``report.md``;
+- :mod:`lamp.bench.db`: the results as an SQLite database (``--db``, docs/bench-db.md);
 - :mod:`lamp.bench.cli`: the two commands; :mod:`lamp.bench.fake`: stand-in job functions.
 
 Matplotlib, Ray and the planners are imported only where they are used (the planners

@@ -3,8 +3,10 @@
 Registered by ``lamp.cli`` as ``app.command("bench")(bench_command)`` and
 ``app.command("report")(report_command)``. Exit status: 0 when the run finished (whatever
 the planners' outcomes), 2 for bad input (unknown suite or planner, bad numbers, a non-empty
-output folder without ``--resume``, caps differing from the run being resumed, Ray missing),
-130 when interrupted (resume with ``--resume``).
+output folder without ``--resume``, caps differing from the run being resumed, Ray missing,
+an unusable ``--db`` path), 1 when no worker process can start, 130 when interrupted and 143
+when terminated (``SIGTERM``); after either, no worker process is left running, the scratch
+folder is removed, and the run continues with ``--resume``.
 """
 
 from __future__ import annotations
@@ -14,9 +16,12 @@ import json
 import os
 import platform
 import shlex
+import signal
 import subprocess
 import sys
 from collections import Counter
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -48,6 +53,31 @@ DEFAULT_TIME_CAP = 600.0
 RENDER_CAP_FACTOR = 2.0
 CONFIG_FILE = "config.json"
 IROS_GIF = "iros.gif"
+
+
+class Terminated(BaseException):
+    """Raised in the main thread by ``SIGTERM`` while a benchmark runs (see :func:`on_sigterm`).
+
+    A ``BaseException``, like ``KeyboardInterrupt``, so that only the clean-up code that
+    must run (killing workers, removing the scratch folder) sees it on its way out.
+    """
+
+
+@contextmanager
+def on_sigterm() -> Iterator[None]:
+    """Turn ``SIGTERM`` into :class:`Terminated` inside the block (main thread only)."""
+    def handler(signum, _frame):
+        raise Terminated(signum)
+
+    try:
+        previous = signal.signal(signal.SIGTERM, handler)
+    except ValueError:  # not the main thread: leave the default (terminate)
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 def _fail(message: str) -> None:
@@ -181,7 +211,7 @@ def write_config(out: Path, previous: dict[str, Any], *, suites: list[str], plan
 def canonical_command(suites: list[str], planners: list[str], *, seeds: int, workers: int,
                       out: Path, time_cap: float, planning_limit: float, model: str,
                       backend: str, scenes: int | None, render_iros: bool, job_fn: str,
-                      record: bool = False) -> str:
+                      record: bool = False, jobs_per_worker: int = 0) -> str:
     """The ``lamp bench`` command line that reproduces this run, every setting explicit."""
     args = ["lamp", "bench", "--suites", ",".join(suites), "--planners", ",".join(planners),
             "--num-seeds", str(seeds), "--workers", str(workers), "--out", str(out),
@@ -193,6 +223,8 @@ def canonical_command(suites: list[str], planners: list[str], *, seeds: int, wor
         args.append("--render-iros")
     if record:
         args.append("--record")
+    if jobs_per_worker:
+        args += ["--jobs-per-worker", str(jobs_per_worker)]
     if job_fn != DEFAULT_JOB_FN:
         args += ["--job-fn", job_fn]
     return shlex.join(args)
@@ -262,7 +294,7 @@ def bench_command(
                                                help="Alias of --planning-limit (as in lamp run)."),
     model: str = typer.Option("learned", "--model", "-m", help="Manipulation model: learned, "
                               "geometric, or a checkpoint file from `lamp model train`."),
-    backend: str = typer.Option("local", "--backend", help="local (process pool) or ray."),
+    backend: str = typer.Option("local", "--backend", help="local (warm worker processes) or ray."),
     ray_address: str = typer.Option(None, "--ray-address", help="Ray cluster address (e.g. "
                                     "auto).", show_default="start a local Ray instance"),
     scenes: int = typer.Option(None, "--scenes", help="Only the first N scenes of each suite "
@@ -280,6 +312,13 @@ def bench_command(
     dry_run: bool = typer.Option(False, "--dry-run", help="List the jobs and exit."),
     job_fn: str = typer.Option(DEFAULT_JOB_FN, "--job-fn", hidden=True,
                                help="module:function that runs one job (testing)."),
+    jobs_per_worker: int = typer.Option(0, "--jobs-per-worker", min=0, show_default=True,
+                                        help="Local backend: retire a worker process after "
+                                             "this many jobs (0: never; 1: a fresh process "
+                                             "per job)."),
+    db: Path = typer.Option(None, "--db", help="Also write the results as an SQLite "
+                            "database at this path (schema: docs/bench-db.md); rebuilt "
+                            "from DIR/results.jsonl.", show_default="no database"),
 ) -> None:
     """Run planners over benchmark suites; write results.jsonl, config.json and report.md."""
     from lamp.cli_support import check_model_option, did_you_mean
@@ -323,6 +362,13 @@ def bench_command(
         job_fn_spec(job_fn)
     except ValueError as exc:
         _fail(f"--job-fn: {exc}")
+    if db is not None:
+        from lamp.bench.db import check_db_path
+
+        try:
+            check_db_path(db)
+        except ValueError as exc:
+            _fail(f"--db: {exc}")
     if backend == "ray" and not dry_run:
         try:
             from lamp.bench.runner import import_ray
@@ -382,31 +428,64 @@ def bench_command(
                 typer.echo(f"  records into {j.recording_to} ({j.label})")
         return
 
+    if pending:  # a resume with nothing to do records no new run
+        _run_pending(pending, jobs, out, previous, suite_list=suite_list,
+                     planner_list=planner_list, seeds=seeds, workers=workers,
+                     time_cap=time_cap, planning_limit=planning_limit, model=model,
+                     backend=backend, ray_address=ray_address, scenes=scenes,
+                     render_iros=render_iros, job_fn=job_fn, record=record,
+                     jobs_per_worker=jobs_per_worker, progress=progress)
+    has_results = (out / RESULTS_FILE).exists()
+    if report and has_results:
+        _write_report(out)
+    if db is not None and has_results:
+        from lamp.bench.db import write_db
+
+        typer.echo(f"wrote {write_db(out, db)}")
+
+
+def _run_pending(pending: list[Job], jobs: list[Job], out: Path, previous: dict[str, Any], *,
+                 suite_list: list[str], planner_list: list[str], seeds: int, workers: int,
+                 time_cap: float, planning_limit: float, model: str, backend: str,
+                 ray_address: str | None, scenes: int | None, render_iros: bool, job_fn: str,
+                 record: bool, jobs_per_worker: int, progress: bool) -> None:
+    """Record this invocation in config.json and run ``pending``; exit 130/143 if stopped."""
     command = canonical_command(
         suite_list, planner_list, seeds=seeds, workers=workers, out=out, time_cap=time_cap,
         planning_limit=planning_limit, model=model, backend=backend, scenes=scenes,
-        render_iros=render_iros, job_fn=job_fn, record=record)
+        render_iros=render_iros, job_fn=job_fn, record=record,
+        jobs_per_worker=jobs_per_worker)
     out.mkdir(parents=True, exist_ok=True)
+    run_id = len(previous.get("sessions") or [])
     write_config(out, previous, command=command, suites=list(dict.fromkeys(j.suite for j in jobs)),
                  planners=planner_list,
-                 seeds=seed_list, workers=workers, backend=backend, model=model,
+                 seeds=list(range(seeds)), workers=workers, backend=backend, model=model,
                  time_cap=time_cap, planning_limit=planning_limit, scenes=scenes, job_fn=job_fn)
+    from lamp.bench.pool import WorkerStartError
     from lamp.bench.runner import execute
 
+    stopped, code = "", 0
     try:
-        summary = execute(pending, out, job_fn=job_fn, backend=backend, workers=workers,
-                          ray_address=ray_address, progress=progress, log_dir=out / "logs")
+        with on_sigterm():
+            summary = execute(pending, out, job_fn=job_fn, backend=backend, workers=workers,
+                              ray_address=ray_address, progress=progress, log_dir=out / "logs",
+                              jobs_per_worker=jobs_per_worker or None, run_id=run_id)
     except KeyboardInterrupt:
-        typer.echo(f"\ninterrupted: finished jobs are in {out / RESULTS_FILE}; continue with "
+        stopped, code = "interrupted", 130
+    except Terminated:
+        stopped, code = "terminated", 143
+    except WorkerStartError as exc:  # nothing can run here; finished jobs are kept
+        typer.echo(f"error: {exc}", err=True)
+        raise typer.Exit(code=1) from None
+    if stopped:
+        typer.echo(f"\n{stopped}: finished jobs are in {out / RESULTS_FILE}; continue with "
                    "the same command plus --resume", err=True)
-        raise typer.Exit(code=130) from None
+        raise typer.Exit(code=code)
     done = sum(summary.statuses.values())
     typer.echo(f"ran {done} jobs in {summary.wall_time_s:.0f} s: {summary.successes} solved; "
                + ", ".join(f"{k} {v}" for k, v in sorted(summary.statuses.items())))
     for path in summary.rendered:
         typer.echo(f"wrote {path}")
-    if report:
-        _write_report(out)
 
 
 def _write_report(run_dir: Path) -> None:
@@ -424,8 +503,20 @@ def _write_report(run_dir: Path) -> None:
 
 def report_command(
     run_dir: Path = typer.Argument(..., help="A folder written by lamp bench."),
+    db: Path = typer.Option(None, "--db", help="Also (re)write the results as an SQLite "
+                            "database at this path (schema: docs/bench-db.md).",
+                            show_default="no database"),
 ) -> None:
     """Rebuild DIR/report.md and its figures from DIR/results.jsonl (no rerun)."""
     if not (run_dir / RESULTS_FILE).exists():
         _fail(f"{run_dir}: no {RESULTS_FILE} here (is it a lamp bench output folder?)")
+    if db is not None:
+        from lamp.bench.db import check_db_path, write_db
+
+        try:
+            check_db_path(db)
+        except ValueError as exc:
+            _fail(f"--db: {exc}")
     _write_report(run_dir)
+    if db is not None:
+        typer.echo(f"wrote {write_db(run_dir, db)}")

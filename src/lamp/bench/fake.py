@@ -90,11 +90,24 @@ def crash_job(job: Job) -> dict[str, Any]:
 
 def mixed_job(job: Job) -> dict[str, Any]:
     """One way to end per planner: ``lazy`` never finishes, ``astar`` raises,
-    ``astar-replan`` crashes, every other planner returns :func:`synthetic_job`."""
+    ``astar-replan`` crashes, every other planner returns :func:`pid_job`."""
     if job.planner == "lazy":
         return slow_job(job)
     if job.planner == "astar":
         return error_job(job)
     if job.planner == "astar-replan":
         return crash_job(job)
-    return synthetic_job(job)
+    return pid_job(job)
+
+
+def pid_job(job: Job) -> dict[str, Any]:
+    """:func:`synthetic_job` with the id of the process that ran it in ``stats["pid"]``."""
+    result = synthetic_job(job)
+    result["stats"] = {**result["stats"], "pid": os.getpid()}
+    return result
+
+
+def announce_and_sleep_job(job: Job) -> dict[str, Any]:
+    """Prints ``pid <id>`` (to the job's log) and then never finishes within a test's cap."""
+    print(f"pid {os.getpid()}", flush=True)
+    return slow_job(job)

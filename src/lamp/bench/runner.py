@@ -1,14 +1,14 @@
-"""Run benchmark jobs, each in its own process under a wall-clock cap, and record the results.
+"""Run benchmark jobs under a wall-clock cap each, in isolated processes, and record the results.
 
-Two backends share one contract: every job runs in a fresh process; a job still running at
-its cap is killed and recorded as a failure with reason ``"timeout"`` (its planning time is
-the cap); an exception in the job becomes status ``"error"`` and a dead process status
-``"crashed"``. The parent process alone writes ``results.jsonl`` (through
+Two backends share one contract: a job still running at its cap is killed and recorded as
+a failure with reason ``"timeout"`` (its planning time is the cap); an exception in the job
+becomes status ``"error"`` and a dead process status ``"crashed"``; neither affects any
+other job. The parent process alone writes ``results.jsonl`` (through
 :class:`lamp.bench.jobs.ResultsFile`, which is also safe for several writers).
 
-- ``local``: a pool of ``workers`` slots on this machine; each job is a fresh
-  ``python -m lamp.bench.worker`` process in its own session (no inherited threads, locks or
-  state; a kill takes its whole process group).
+- ``local``: a pool of ``workers`` warm worker processes on this machine
+  (:mod:`lamp.bench.pool`): each imports and warms up the planners once and then runs one
+  job at a time; a worker past a job's cap or dead is replaced by a fresh one.
 - ``ray``: the same jobs as Ray tasks with ``max_calls=1`` (a fresh worker process per job)
   on a local or remote Ray cluster; Ray is an optional extra (``pip install lamp[ray]``).
 
@@ -23,12 +23,6 @@ from __future__ import annotations
 import importlib
 import logging
 import os
-import pickle
-import shutil
-import signal
-import subprocess
-import sys
-import tempfile
 import time
 import traceback
 from collections import Counter, deque
@@ -38,6 +32,7 @@ from pathlib import Path
 from typing import Any
 
 from lamp.bench.jobs import Job, ResultsFile, failure_result, make_record
+from lamp.bench.pool import JobOutcome, run_local
 
 log = logging.getLogger(__name__)
 
@@ -93,6 +88,25 @@ def solve_job(job: Job) -> dict[str, Any]:
     return result
 
 
+def warm_up_solver() -> None:
+    """Load every planning kernel and the shipped model once, before a worker's first job.
+
+    Called by each local worker process (see :mod:`lamp.bench.worker`), so neither a job's
+    cap nor its wall time includes imports, cached-kernel loading or (on a fresh
+    installation) Numba compilation (:func:`lamp.warmup.ensure_warm`). Plans are
+    deterministic per scene, planner and seed, so a job's result does not depend on
+    whether this ran before it.
+    """
+    from lamp.planners.run import load_proposer
+    from lamp.warmup import ensure_warm
+
+    ensure_warm()
+    load_proposer("learned")
+
+
+solve_job.warm_up = warm_up_solver  # type: ignore[attr-defined]  # see lamp.bench.worker
+
+
 def resolve_job_fn(spec: str | JobFn) -> JobFn:
     """A job function from ``"package.module:function"`` (or the callable itself)."""
     if callable(spec):
@@ -137,17 +151,6 @@ def call_job(spec: str | JobFn, job: Job) -> tuple[str, Any, str]:
         return ("error", f"{type(exc).__name__}: {exc}", traceback.format_exc()[-MAX_TRACEBACK:])
 
 
-@dataclass
-class JobOutcome:
-    """How one job ended, as observed by the parent."""
-
-    job: Job
-    status: str  # ok | timeout | error | crashed
-    result: dict[str, Any] | None
-    wall_time_s: float
-    detail: str = ""  # error message / traceback / tail of the job's output
-
-
 def outcome_record(outcome: JobOutcome) -> dict[str, Any]:
     """The results line for an outcome (see :mod:`lamp.bench.jobs`)."""
     job, wall = outcome.job, outcome.wall_time_s
@@ -169,130 +172,6 @@ def limit_threads(threads: int = 1) -> None:
     """Set the thread-count variables job processes inherit, where the user has not."""
     for var in THREAD_ENV:
         os.environ.setdefault(var, str(threads))
-
-
-# --------------------------------------------------------------------------- local backend
-#: How often the local backend looks at its job processes (seconds).
-POLL_INTERVAL = 0.05
-
-
-@dataclass
-class _Running:
-    job: Job
-    proc: subprocess.Popen
-    out_path: Path
-    log_path: Path
-    log_file: Any
-    start: float
-
-    @property
-    def deadline(self) -> float:
-        return self.start + self.job.time_cap_s
-
-
-def _kill(proc: subprocess.Popen) -> None:
-    """Kill a job process we started and its process group (it runs in its own session)."""
-    try:
-        os.killpg(proc.pid, signal.SIGKILL)
-    except (ProcessLookupError, PermissionError):
-        proc.kill()
-    proc.wait()
-
-
-def _log_name(job: Job) -> str:
-    safe = "".join(c if c.isalnum() or c in "-_." else "_" for c in job.label.replace(" ", "-"))
-    return f"{job.suite}-{safe}.log"
-
-
-def run_local(jobs: Sequence[Job], job_fn: str | JobFn, workers: int,
-              on_done: Callable[[JobOutcome], None], *, log_dir: str | Path | None = None,
-              on_start: Callable[[Job], None] | None = None) -> None:
-    """Run ``jobs`` with at most ``workers`` concurrent job processes; ``on_done`` per job.
-
-    Each job is ``python -m lamp.bench.worker`` in a new session; its cap is
-    ``job.time_cap_s`` seconds of wall clock from its start, after which its process group
-    is killed. A job's stdout/stderr go to a log file, kept in ``log_dir`` (when given) if
-    the job wrote anything. On ``KeyboardInterrupt`` every running job is killed first.
-    """
-    if workers < 1:
-        raise ValueError(f"workers must be >= 1, got {workers!r}")
-    spec = job_fn_spec(job_fn)
-    queue = deque(jobs)
-    running: list[_Running] = []
-    with tempfile.TemporaryDirectory(prefix="lamp-bench-") as scratch:
-        try:
-            n = 0
-            while queue or running:
-                while queue and len(running) < workers:
-                    job = queue.popleft()
-                    n += 1
-                    job_path = Path(scratch) / f"{n}.job"
-                    with open(job_path, "wb") as f:
-                        pickle.dump((spec, job), f)
-                    out_path = Path(scratch) / f"{n}.out"
-                    log_path = Path(scratch) / f"{n}.log"
-                    log_file = open(log_path, "wb")  # noqa: SIM115 - closed in _finish
-                    proc = subprocess.Popen(
-                        [sys.executable, "-m", "lamp.bench.worker", str(job_path), str(out_path)],
-                        stdin=subprocess.DEVNULL, stdout=log_file, stderr=subprocess.STDOUT,
-                        start_new_session=True)
-                    running.append(_Running(job, proc, out_path, log_path, log_file,
-                                            time.monotonic()))
-                    if on_start is not None:
-                        on_start(job)
-                time.sleep(POLL_INTERVAL)
-                still: list[_Running] = []
-                for r in running:
-                    outcome = _poll(r)
-                    if outcome is None:
-                        still.append(r)
-                        continue
-                    _keep_log(r, outcome, log_dir)
-                    on_done(outcome)
-                running = still
-        except BaseException:
-            for r in running:
-                _kill(r.proc)
-                r.log_file.close()
-            raise
-
-
-def _poll(r: _Running) -> JobOutcome | None:
-    """The outcome of a running job if it has one now (finished, died or reached its cap)."""
-    now = time.monotonic()
-    code = r.proc.poll()
-    if code is None:
-        if now < r.deadline:
-            return None
-        _kill(r.proc)
-        r.log_file.close()
-        return JobOutcome(r.job, "timeout", None, now - r.start)
-    r.log_file.close()
-    if code == 0 and r.out_path.exists():
-        with open(r.out_path, "rb") as f:
-            status, payload, tb = pickle.load(f)
-        if status == "ok":
-            return JobOutcome(r.job, "ok", payload, now - r.start)
-        return JobOutcome(r.job, "error", None, now - r.start, detail=f"{payload}\n{tb}")
-    tail = _tail(r.log_path)
-    return JobOutcome(r.job, "crashed", None, now - r.start,
-                      detail=f"process exited with code {code} without a result\n{tail}")
-
-
-def _tail(path: Path, n: int = 2000) -> str:
-    try:
-        data = path.read_bytes()
-    except OSError:
-        return ""
-    return data[-n:].decode(errors="replace")
-
-
-def _keep_log(r: _Running, outcome: JobOutcome, log_dir: str | Path | None) -> None:
-    if log_dir is None or not r.log_path.exists() or r.log_path.stat().st_size == 0:
-        return
-    dest = Path(log_dir)
-    dest.mkdir(parents=True, exist_ok=True)
-    shutil.copyfile(r.log_path, dest / _log_name(r.job))
 
 
 # ----------------------------------------------------------------------------- ray backend
@@ -394,11 +273,14 @@ class BenchSummary:
 def execute(jobs: Sequence[Job], out_dir: str | Path, *, job_fn: str | JobFn = DEFAULT_JOB_FN,
             backend: str = "local", workers: int = 1, ray_address: str | None = None,
             progress: bool = True, echo: Callable[[str], None] | None = None,
-            threads_per_job: int = 1, log_dir: str | Path | None = None) -> BenchSummary:
+            threads_per_job: int = 1, log_dir: str | Path | None = None,
+            jobs_per_worker: int | None = None, run_id: int | None = None) -> BenchSummary:
     """Run ``jobs`` and append one line per recorded job to ``out_dir/results.jsonl``.
 
     ``progress`` shows a rich progress bar with an ETA; ``echo`` (default: the progress
-    console) receives one line per finished job.
+    console) receives one line per finished job. ``jobs_per_worker`` retires a local worker
+    after that many jobs (``None``: never). ``run_id``, when given, is stored in every line
+    as ``"run_id"`` (the index of this invocation in ``config.json``'s ``sessions``).
     """
     if backend not in BACKENDS:
         raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
@@ -415,6 +297,8 @@ def execute(jobs: Sequence[Job], out_dir: str | Path, *, job_fn: str | JobFn = D
         job = outcome.job
         if job.record:
             rec = outcome_record(outcome)
+            if run_id is not None:
+                rec["run_id"] = int(run_id)
             results.append(rec)
             summary.statuses[outcome.status] += 1
             summary.successes += bool(rec.get("success"))
@@ -428,7 +312,8 @@ def execute(jobs: Sequence[Job], out_dir: str | Path, *, job_fn: str | JobFn = D
 
     with bar:
         if backend == "local":
-            run_local(jobs, job_fn, workers, on_done, log_dir=log_dir)
+            run_local(jobs, job_fn, workers, on_done, log_dir=log_dir,
+                      jobs_per_worker=jobs_per_worker)
         else:
             run_ray(jobs, job_fn, workers, on_done, address=ray_address)
     summary.wall_time_s = time.monotonic() - t_start
