@@ -9,6 +9,7 @@ import pytest
 from typer.testing import CliRunner
 
 from lamp.cli import app
+from lamp.planners.base import PlanStatus
 from lamp.planners.config import PlannerConfig
 from lamp.planners.lamp_astar import LampAStar
 from lamp.planners.lazy import LazyPlanner
@@ -78,15 +79,15 @@ def test_lazy_replanning_reuses_verified_transitions(proposer):
     task = ManipulationTask(scene, 0, scene.object_starts(), proposer, PlannerConfig(), seed=0)
     planner = LazyPlanner(task)
     first = planner.plan(scene.object_starts()[0], scene.robot_starts_array)
-    assert first is not None and len(first.transitions) >= 3
+    assert first.solved and len(first.transitions) >= 3
     calls_first = task.stats.verify_calls
     mid = first.transitions[1]
     again = planner.plan(mid.q_from, mid.robot_start)
-    assert again is not None
+    assert again.solved
     assert task.stats.verify_calls == calls_first  # everything came from Tree_eval / D_T
     drifted = mid.q_from + np.array([0.02, -0.03, 0.05])
     replanned = planner.plan(drifted, mid.robot_start)
-    assert replanned is not None
+    assert replanned.solved
     assert task.stats.verify_calls - calls_first < calls_first
 
 
@@ -104,7 +105,7 @@ def test_astar_plans_around_a_wall(proposer):
     poses = scene.object_starts()
     task = ManipulationTask(scene, 0, poses, proposer, PlannerConfig(), seed=0)
     plan = LampAStar(task).plan(poses[0], scene.robot_starts_array)
-    assert plan is not None
+    assert plan.solved
     path = plan.object_path
     assert np.allclose(path[-1], scene.objects[0].goal, atol=1e-6)
     assert path[:, 1].max() > 1.1  # over the top of the wall (it ends at y = 1.1)
@@ -116,7 +117,7 @@ def test_astar_gives_up_at_once_without_an_object_route(proposer):
     scene = scene_from_dict(small_scene(goal=(1.7, 1.0, 0.0), obstacles=[wall]))
     poses = scene.object_starts()
     task = ManipulationTask(scene, 0, poses, proposer, PlannerConfig(), seed=0)
-    assert LampAStar(task).plan(poses[0], scene.robot_starts_array) is None
+    assert LampAStar(task).plan(poses[0], scene.robot_starts_array).status is PlanStatus.NO_PATH
     assert task.stats.verify_calls == 0
 
 

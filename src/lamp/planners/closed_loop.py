@@ -1,6 +1,6 @@
 """Closed-loop execution (paper Alg. 2 lines 3-7): until the goal, plan, execute in MuJoCo, observe, replan.
 
-Every planner implements ``ObjectPlanner.plan(q_O, q_R, deadline) -> Plan | None`` for one
+Every planner implements ``ObjectPlanner.plan(q_O, q_R, deadline) -> Plan`` for one
 object; ``run_object`` drives it with a policy that says when to replan:
 - ``replan_on_drift``: after a segment whose object pose misses the planned one by more
   than ``drift_position`` / ``drift_orientation`` (LAMP-Lazy, LAMP-A* replan);
@@ -14,11 +14,12 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import Any
 
 import numpy as np
 
 from lamp.geometry.se2 import pose_distance
+from lamp.planners.base import ObjectPlanner
 from lamp.planners.long_push import merge, take_long_push
 from lamp.planners.result import (
     SUCCESS_ORIENTATION_TOL,
@@ -33,12 +34,6 @@ from lamp.planners.trajectory import concat, straight_moves
 from lamp.planners.verify import Transition, reroute
 
 
-class ObjectPlanner(Protocol):
-    """Plans the motion of one object; see ``lamp.planners.lazy.Plan``."""
-
-    def plan(self, q_O: np.ndarray, q_R: np.ndarray, deadline: float | None = None) -> Any: ...
-
-
 @dataclass(frozen=True)
 class LoopPolicy:
     replan_on_drift: bool
@@ -47,6 +42,9 @@ class LoopPolicy:
     full_horizon: bool = True
     #: A failed plan call ends the object (LAMP) or only wastes one iteration (GCo).
     failure_is_final: bool = True
+    #: A push that executed but barely moved the object is reported to the planner
+    #: (``report_failure``) and the rest of the plan dropped (LAMP-Lazy).
+    replan_on_stall: bool = False
 
 
 @dataclass
@@ -160,13 +158,12 @@ def run_object(task: ManipulationTask, planner: ObjectPlanner, policy: LoopPolic
             if planned_once:
                 record.replans += 1
             if not planned_once:
-                full_horizon = plan_obj is not None and policy.full_horizon
+                full_horizon = plan_obj.solved and policy.full_horizon
             planned_once = True
             replanned = True
-            if plan_obj is None or not plan_obj.transitions:
+            if not plan_obj.solved:
                 if policy.failure_is_final:
-                    timed_out = time.perf_counter() >= t0 + remaining
-                    reason = "planning time limit" if timed_out else "no plan found"
+                    reason = plan_obj.status.reason
                     break
                 iterations += 1
                 continue
@@ -204,7 +201,7 @@ def run_object(task: ManipulationTask, planner: ObjectPlanner, policy: LoopPolic
         outcome = "continue"
         if out.left_workspace:
             outcome = "left"
-        elif _stalled(q_before, q_O, adapted) and hasattr(planner, "report_failure"):
+        elif policy.replan_on_stall and _stalled(q_before, q_O, adapted):
             outcome = "stalled"
         elif policy.replan_on_drift and (dpos > cfg.drift_position or drot > cfg.drift_orientation):
             outcome = "drift"

@@ -16,9 +16,9 @@ import time
 import numpy as np
 
 from lamp.geometry import se2
-from lamp.planners.lazy import Plan
+from lamp.planners.base import Plan, PlanStatus
 from lamp.planners.task import ManipulationTask
-from lamp.planners.verify import route_push
+from lamp.planners.verify import Transition, route_push
 from lamp.search.gco_lattice import gco_object_path
 
 LOOKAHEAD = 0.3  # m: the waypoint GCo steers towards
@@ -56,14 +56,21 @@ class GCoPlanner:
         motion[2] = np.clip(motion[2], -MAX_STEP_THETA, MAX_STEP_THETA)
         return se2.compose(q_O, motion)
 
-    def plan(self, q_O: np.ndarray, q_R: np.ndarray, deadline: float | None = None) -> Plan | None:
+    def report_failure(self, trans: Transition) -> None:
+        """GCo learns nothing from a failed push (it never verifies one)."""
+
+    def clear(self) -> None:
+        self.iteration = 0
+
+    def plan(self, q_O: np.ndarray, q_R: np.ndarray, deadline: float | None = None) -> Plan:
         task = self.task
         self.iteration += 1
         q_O = np.asarray(q_O, float)
         q_R = np.asarray(q_R, float)
         q_to = self._next_pose(q_O, deadline)
         if q_to is None:
-            return None
+            timed_out = deadline is not None and time.perf_counter() > deadline
+            return Plan.failed(PlanStatus.TIME_LIMIT if timed_out else PlanStatus.NO_PATH)
         motion = se2.relative(q_O, q_to)
         budget = min(task.n_robots, task.config.max_budget)
         seed = (task.seed * 7919 + self.iteration) % (2**31 - 1)
@@ -73,5 +80,5 @@ class GCoPlanner:
         pushes_local = np.asarray(prop.pushes, float)
         trans = route_push(task, q_O, q_to, q_R, pushes_local, deadline=deadline)
         if trans is None:
-            return None
-        return Plan([trans], [(q_O[:2].copy(), q_to[:2].copy())], [])
+            return Plan.failed(PlanStatus.PUSH_UNREACHABLE)
+        return Plan(PlanStatus.SOLVED, [trans], [(q_O[:2].copy(), q_to[:2].copy())], [])

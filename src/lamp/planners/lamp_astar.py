@@ -24,7 +24,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from lamp.planners.lazy import Plan, goal_lattice, join_lattice
+from lamp.planners.base import Plan, PlanStatus
+from lamp.planners.lazy import goal_lattice, join_lattice
 from lamp.planners.robots import robot_state_key
 from lamp.planners.task import ManipulationTask
 from lamp.planners.trajectory import MAX_STEP
@@ -77,19 +78,25 @@ class LampAStar:
             return w * self.to_goal.distance(state.node)
         return w * min((c + self.to_goal.distance(v) for v, c in self._start_edges), default=math.inf)
 
-    def plan(self, q_O: np.ndarray, q_R: np.ndarray, deadline: float | None = None) -> Plan | None:
+    def report_failure(self, trans: Transition) -> None:
+        """Nothing to forget: every search starts afresh (LAMP-A* keeps no cache)."""
+
+    def clear(self) -> None:
+        """Nothing to clear (see ``report_failure``)."""
+
+    def plan(self, q_O: np.ndarray, q_R: np.ndarray, deadline: float | None = None) -> Plan:
         cfg = self.task.config
         goal = self.lattice.goal_node
         start_node, self._start_edges = join_lattice(self.lattice, np.asarray(q_O, float))
         if self._start_edges == []:
-            return None
+            return Plan.failed(PlanStatus.START_BLOCKED)
         start = SearchState(start_node, np.asarray(q_O, float), np.asarray(q_R, float), None, 0.0)
         tie = itertools.count()
         # Open-list entries: (f, -g, insertion order, state). Among equal f the deeper state
         # goes first (a standard A* tie-break that avoids breadth-first plateaus).
         h_start = self._h(start)
         if h_start == math.inf:
-            return None  # no object-only route: no manipulation plan either
+            return Plan.failed(PlanStatus.NO_PATH)  # no object-only route: no plan either
         open_list: list = [(h_start, 0.0, next(tie), start)]  # line 2: Open.add(s_init)
         penalty: dict[int, float] = {}
         explored: dict[tuple, SearchState] = {(start_node, self._robot_key(start.q_R)): start}
@@ -97,7 +104,7 @@ class LampAStar:
         cap = cfg.astar_states_per_node
         while open_list:  # line 3: until the time limit is reached
             if deadline is not None and time.perf_counter() > deadline:
-                return None
+                return Plan.failed(PlanStatus.TIME_LIMIT)
             f, _, _, s = heapq.heappop(open_list)  # line 4: Open.pop
             if f < s.cost + self._h(s) + penalty.get(id(s), 0.0) - 1e-9:
                 continue  # stale entry: the state's cost or penalty changed since
@@ -105,7 +112,7 @@ class LampAStar:
                 return self._backtrack(s)
             for v, q_next in self._successors(s):  # line 7: each motion primitive
                 if deadline is not None and time.perf_counter() > deadline:
-                    return None
+                    return Plan.failed(PlanStatus.TIME_LIMIT)
                 trans = verify(self.task, s.q_O, q_next, s.q_R, attempt=s.expansions)  # line 8: Verify
                 if trans is None:  # line 9: no C_R, continue
                     continue
@@ -125,7 +132,7 @@ class LampAStar:
             s.expansions += 1  # line 16: Open.re-add with a penalty
             penalty[id(s)] = cfg.astar_reinsert_penalty * s.expansions
             heapq.heappush(open_list, (s.cost + self._h(s) + penalty[id(s)], -s.cost, next(tie), s))
-        return None
+        return Plan.failed(PlanStatus.NO_PATH)
 
     def _update_cost(self, s: SearchState, s_curr: SearchState, s_prev: SearchState,
                      trans: Transition, open_list: list, tie, penalty: dict) -> None:
@@ -154,4 +161,6 @@ class LampAStar:
             s = s.parent
         edges.reverse()
         verified = [(t.q_from[:2].copy(), t.q_to[:2].copy()) for t in edges]
-        return Plan(edges, verified, [])
+        if not edges:  # the start already is the goal node
+            return Plan.failed(PlanStatus.NO_PATH)
+        return Plan(PlanStatus.SOLVED, edges, verified, [])

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from lamp.planners.base import Plan, PlanStatus
 from lamp.planners.robots import robots_match
 from lamp.planners.task import ManipulationTask
 from lamp.planners.verify import Transition, reroute, verify
@@ -41,21 +42,6 @@ class TreeEntry:
             if robots_match(key, q_R, tolerance):
                 return trans
         return None
-
-
-@dataclass
-class Plan:
-    """A full-horizon plan: transitions to execute in order and the object poses they reach."""
-
-    transitions: list[Transition]
-    verified_edges: list[tuple[np.ndarray, np.ndarray]]
-    penalised_edges: list[tuple[np.ndarray, np.ndarray]]
-
-    @property
-    def object_path(self) -> np.ndarray:
-        if not self.transitions:
-            return np.zeros((0, 3))
-        return np.array([self.transitions[0].q_from] + [t.q_to for t in self.transitions])
 
 
 #: A continuous pose this close to a lattice node (heuristic metric) is that node.
@@ -93,6 +79,10 @@ class LazyPlanner:
     def __init__(self, task: ManipulationTask) -> None:
         self.task = task
         self.lattice = goal_lattice(task)
+        self.clear()
+
+    def clear(self) -> None:
+        """A fresh D* Lite search, an empty Tree_eval and no penalties."""
         self.dstar = DStarLite(self.lattice)
         self.dstar.initialize(self.lattice.goal_node)  # line 1: Initialize
         self.tree_eval: dict[Node, TreeEntry] = {}
@@ -119,20 +109,24 @@ class LazyPlanner:
         with contextlib.suppress(ValueError):  # an earlier virtual start's edge: counted only
             self._penalise(u, v)
 
-    def plan(self, q_O_now: np.ndarray, q_R_now: np.ndarray, deadline: float | None = None) -> Plan | None:
-        """``Plan`` (Alg. 2 lines 8-42): a full-horizon plan from the current state, or None."""
+    def plan(self, q_O_now: np.ndarray, q_R_now: np.ndarray, deadline: float | None = None) -> Plan:
+        """``Plan`` (Alg. 2 lines 8-42): a full-horizon plan from the current state.
+
+        Departure: the paper's loop (lines 10-40) runs until a plan is found; here it runs at
+        most ``max_plan_iterations`` times (``BUDGET_EXHAUSTED``) and stops at ``deadline``.
+        """
         cfg = self.task.config
         tol = cfg.robot_match_tolerance
         goal = self.lattice.goal_node
         for _ in range(cfg.max_plan_iterations):
             if deadline is not None and time.perf_counter() > deadline:
-                return None
+                return Plan.failed(PlanStatus.TIME_LIMIT, self.penalised)
             start, edges = join_lattice(self.lattice, np.asarray(q_O_now, float))
             if edges == []:
-                return None
+                return Plan.failed(PlanStatus.START_BLOCKED, self.penalised)
             path = self.dstar.plan_shortest_path(start, edges)  # line 11: PlanShortestPath
             if not path:
-                return None
+                return Plan.failed(PlanStatus.NO_PATH, self.penalised)
             transitions: list[Transition] = []
             tree_new: dict[Node, TreeEntry] = {}
             q_R = np.asarray(q_R_now, float)
@@ -175,5 +169,7 @@ class LazyPlanner:
                     continue
             self.tree_eval.update(tree_new)  # line 41: Tree_eval = Tree_new + Tree_eval
             verified = [(t.q_from[:2].copy(), t.q_to[:2].copy()) for t in transitions]
-            return Plan(transitions, verified, list(self.penalised))
-        return None
+            if not transitions:  # already at the goal node
+                return Plan.failed(PlanStatus.NO_PATH, self.penalised)
+            return Plan(PlanStatus.SOLVED, transitions, verified, list(self.penalised))
+        return Plan.failed(PlanStatus.BUDGET_EXHAUSTED, self.penalised)

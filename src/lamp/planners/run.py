@@ -28,7 +28,7 @@ from lamp.warmup import ensure_warm
 PLANNERS = tuple(PLANNER_DESCRIPTIONS)
 
 POLICIES = {
-    "lazy": LoopPolicy(replan_on_drift=True, replan_when_done=True),
+    "lazy": LoopPolicy(replan_on_drift=True, replan_when_done=True, replan_on_stall=True),
     "astar": LoopPolicy(replan_on_drift=False, replan_when_done=False),
     "astar-replan": LoopPolicy(replan_on_drift=True, replan_when_done=True),
     "gco-ori": LoopPolicy(replan_on_drift=False, replan_when_done=True, full_horizon=False,

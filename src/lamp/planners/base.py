@@ -1,0 +1,104 @@
+"""The contract between an object planner and the closed loop that executes its plans.
+
+An :class:`ObjectPlanner` plans the motion of one object (LAMP-Lazy, LAMP-A*, the GCo
+baselines). ``plan`` always returns a :class:`Plan` whose :class:`PlanStatus` says how the
+call ended, so the loop never guesses a reason from the clock; ``report_failure`` tells
+the planner that an executed transition did not move the object (it stalled); ``clear``
+forgets everything learnt (caches, penalties) so the planner can start over.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import Enum
+from typing import TYPE_CHECKING, Protocol
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from lamp.planners.verify import Transition
+
+__all__ = ["ObjectPlanner", "Plan", "PlanStatus"]
+
+Edge = tuple[np.ndarray, np.ndarray]
+
+
+class PlanStatus(str, Enum):
+    """How one ``ObjectPlanner.plan`` call ended; ``reason`` is the result.json wording."""
+
+    SOLVED = "solved"
+    #: The object's pose cannot be joined to the planner's lattice (no free connecting move).
+    START_BLOCKED = "start_blocked"
+    #: No object route to the goal remains (every route is blocked or was exhausted).
+    NO_PATH = "no_path"
+    #: A deterministic count ran out (plan iterations, search expansions).
+    BUDGET_EXHAUSTED = "budget_exhausted"
+    #: The wall-clock deadline passed.
+    TIME_LIMIT = "time_limit"
+    #: A single-step planner's chosen push cannot be reached by the robots (GCo).
+    PUSH_UNREACHABLE = "push_unreachable"
+
+    @property
+    def reason(self) -> str:
+        return _REASONS[self]
+
+
+_REASONS = {
+    PlanStatus.SOLVED: "",
+    PlanStatus.START_BLOCKED: "no plan found: the object's pose cannot join the lattice",
+    PlanStatus.NO_PATH: "no plan found",
+    PlanStatus.BUDGET_EXHAUSTED: "no plan found: plan iterations exhausted",
+    PlanStatus.TIME_LIMIT: "planning time limit",
+    PlanStatus.PUSH_UNREACHABLE: "robots cannot reach the push",
+}
+
+
+@dataclass
+class Plan:
+    """A plan for one object: transitions to execute in order (all of them verified, for
+    the LAMP planners) and, for display, the edges verified and penalised so far.
+
+    ``status`` is ``SOLVED`` exactly when there are transitions to execute.
+    """
+
+    status: PlanStatus
+    transitions: list[Transition] = field(default_factory=list)
+    verified_edges: list[Edge] = field(default_factory=list)
+    penalised_edges: list[Edge] = field(default_factory=list)
+
+    def __post_init__(self) -> None:
+        if (self.status is PlanStatus.SOLVED) != bool(self.transitions):
+            raise ValueError(f"a {self.status.value} plan with {len(self.transitions)} "
+                             "transitions: SOLVED plans, and only they, have transitions")
+
+    @property
+    def solved(self) -> bool:
+        return self.status is PlanStatus.SOLVED
+
+    @property
+    def object_path(self) -> np.ndarray:
+        """(len(transitions) + 1, 3) object poses the plan passes through."""
+        if not self.transitions:
+            return np.zeros((0, 3))
+        return np.array([self.transitions[0].q_from] + [t.q_to for t in self.transitions])
+
+    @staticmethod
+    def failed(status: PlanStatus, penalised: list[Edge] | None = None) -> Plan:
+        return Plan(status, [], [], list(penalised or []))
+
+
+class ObjectPlanner(Protocol):
+    """Plans the motion of one object of a ``ManipulationTask``."""
+
+    def plan(self, q_O: np.ndarray, q_R: np.ndarray, deadline: float | None = None) -> Plan:
+        """A plan from object pose ``q_O`` (3,) and robots ``q_R`` (N, 2); ``deadline`` is a
+        ``time.perf_counter()`` instant after which the call gives up (``TIME_LIMIT``)."""
+        ...
+
+    def report_failure(self, transition: Transition) -> None:
+        """An executed ``transition`` barely moved the object: do not trust it again."""
+        ...
+
+    def clear(self) -> None:
+        """Forget caches and penalties: the next ``plan`` starts from scratch."""
+        ...
