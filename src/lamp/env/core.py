@@ -24,10 +24,10 @@ orientation within ``orientation_tolerance``; then object k + 1 becomes active. 
 that has succeeded is not checked again. The episode
 
 - terminates with success when the last object succeeds;
-- terminates with failure when any object's footprint leaves the workspace by more than
-  ``lamp.sim.WORKSPACE_TOLERANCE``, checked after every physics step as in
-  ``Simulator.execute`` (for objects within ``BORDER_WATCH`` of the border; the others
-  cannot reach it within one environment step);
+- terminates with failure when any object's footprint is outside the workspace by more
+  than ``lamp.sim.WORKSPACE_TOLERANCE`` at the start or the end of a step (the border walls
+  stop objects, so in practice only an object placed across the border is reported, as in
+  ``Simulator.execute``, which also checks between physics steps);
 - is truncated when ``time_limit`` simulated seconds have passed.
 
 Reward of one step (weights in ``RewardWeights``, all non-negative):
@@ -60,11 +60,6 @@ from lamp.scene.loader import SceneError, load_scene
 from lamp.scene.model import Scene
 from lamp.sim.mjcf import ROBOT_KP, ROBOT_KV, build_model
 from lamp.sim.simulator import WORKSPACE_TOLERANCE, Simulator, footprint_outside
-
-#: Objects whose bounding circle comes this close to the border [m] are checked after every
-#: physics step of an environment step (elsewhere only at its end): farther than an object
-#: can travel in one step at up to 5 m/s with the longest sensible ``frame_skip`` (20).
-BORDER_WATCH = 0.2
 
 _SUITE_SCENE = re.compile(r"^(?P<suite>[a-z]+)-(?P<index>\d+)$")
 
@@ -272,6 +267,8 @@ class PushCore:
         self.active = int(active)
         self.steps = 0
         self.left = np.zeros(self.n_objects, bool)
+        self._poses = self.object_poses()
+        self._outside_now = self._outside(self._poses)
         self._start_object()
 
     def set_goal(self, goal: ArrayLike) -> None:
@@ -337,15 +334,7 @@ class PushCore:
         v = a * (self.config.max_speed / np.maximum(norm, 1.0))
         q = self._data.qpos[self._robot_qpos]
         self._data.ctrl[:] = q + v.ravel() * self._gain
-        if self._near_border(self.object_poses(), BORDER_WATCH).any():
-            # checked after every physics step, as Simulator.execute does
-            left = np.zeros(self.n_objects, bool)
-            for _ in range(self.config.frame_skip):
-                mujoco.mj_step(self._model, self._data)
-                left |= self._outside(self.object_poses())
-        else:
-            mujoco.mj_step(self._model, self._data, nstep=self.config.frame_skip)
-            left = None
+        mujoco.mj_step(self._model, self._data, nstep=self.config.frame_skip)
         self.steps += 1
 
         poses = self.object_poses()
@@ -355,7 +344,11 @@ class PushCore:
         reward = w.progress * (d0 - dist) + w.rotation * (e0 - err) + w.approach * (g0 - gap)
         reward -= w.time
         self._prev = (dist, err, gap)
-        self.left = self._outside(poses) if left is None else left
+        # outside at the start or the end of the step (see the module docstring)
+        now = self._outside(poses)
+        self.left = self._outside_now | now
+        self._outside_now = now
+        self._poses = poses
         placed = -1
         if self.left.any():
             reward -= w.leave
@@ -426,7 +419,7 @@ class PushCore:
         g = (-(P-1)/2 .. (P-1)/2) * ``patch_spacing``.
         """
         k = min(self.active, self.n_objects - 1)
-        pose = self.object_poses()[k]
+        pose = self._poses[k]
         goal = self.goals[k]
         rob = self.robot_positions()
         pts = rob[:, None, None, :] + self._patch_offsets[None]  # (N, P, P, 2)

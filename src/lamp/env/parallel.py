@@ -57,6 +57,8 @@ class PushParallelEnv(ParallelEnv):
         self.possible_agents = [f"robot_{i}" for i in range(n)]
         self.agents: list[str] = []
         self._index = {a: i for i, a in enumerate(self.possible_agents)}
+        self._others = {a: np.array([j for j in range(n) if j != i], np.intp)
+                        for a, i in self._index.items()}
         p = self.core.config.patch_size
         b = common_bounds(self.core.scene)
         self._obs_space = spaces.Dict(
@@ -94,7 +96,7 @@ class PushParallelEnv(ParallelEnv):
         out = {}
         for a in self.agents:
             i = self._index[a]
-            out[a] = {"self": rob[i], "others": np.delete(rob, i, axis=0), **shared,
+            out[a] = {"self": rob[i], "others": rob[self._others[a]], **shared,
                       "patch": o["patch"][i]}
         return out
 
