@@ -106,7 +106,7 @@ def _check_run_options(planner: str, model: str) -> None:
 def run(
     scene_file: Path = typer.Argument(..., help="Scene file (YAML or JSON)."),
     planner: str = typer.Option("lazy", "--planner", "-p",
-                                help="lazy | astar | astar-replan | gco-ori | gco-var"),
+                                help="lazy | astar | astar-replan | gco-ori | gco-var | mapush"),
     seed: int = typer.Option(0, "--seed", "-s", help="Random seed (same seed, same result)."),
     out: Path = typer.Option(Path("lamp-run"), "--out", "-o", help="Output folder."),
     render: bool = typer.Option(False, "--render", help="Also write DIR/run.gif."),
@@ -118,6 +118,13 @@ def run(
     """Plan and execute one scene file in MuJoCo; write DIR/result.json."""
     scene = load_scene_or_exit(scene_file)
     _check_run_options(planner, model)
+    if planner == "mapush":
+        from lamp.planners.mapush import check_scene
+
+        try:
+            check_scene(scene)
+        except ValueError as exc:
+            fail_input(str(exc))
     _run_and_write(scene, planner, seed, out, render, model, time_limit)
 
 
@@ -144,6 +151,12 @@ def _register_groups() -> None:
 
         app.add_typer(model_app, name="model")
     except ImportError:  # pragma: no cover - only while the module is being written
+        pass
+    try:
+        from lamp.rl.cli import rl_app
+
+        app.add_typer(rl_app, name="rl")
+    except ImportError:  # pragma: no cover - the rl extra is not installed
         pass
     try:
         from lamp.bench.cli import bench_command, report_command

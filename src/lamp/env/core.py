@@ -185,12 +185,15 @@ def _pose3(name: str, value: ArrayLike) -> np.ndarray:
 class PushCore:
     """One scene under velocity control; see the module docstring for the task."""
 
-    def __init__(self, scene: Scene | str | Path, config: PushConfig | None = None) -> None:
+    def __init__(self, scene: Scene | str | Path, config: PushConfig | None = None,
+                 sim: Simulator | None = None) -> None:
         self.scene = resolve_scene(scene)
         self.config = config if config is not None else PushConfig()
         if not isinstance(self.config, PushConfig):
             raise ValueError(f"config = {self.config!r}: must be a PushConfig")
-        self.sim = Simulator(self.scene)
+        if sim is not None and sim.scene is not self.scene and sim.scene != self.scene:
+            raise ValueError("sim: a simulator of another scene")
+        self.sim = Simulator(self.scene) if sim is None else sim
         built = build_model(self.scene)
         self._model, self._data = self.sim.model, self.sim.data
         self._robot_qpos = built.robot_qpos.ravel()
@@ -214,7 +217,10 @@ class PushCore:
         self.active = 0
         self.steps = 0
         self.left = np.zeros(self.n_objects, bool)
-        self.reset()
+        if sim is None:
+            self.reset()
+        else:
+            self.resume()
 
     # ----------------------------------------------------------------- state
     @property
@@ -255,12 +261,23 @@ class PushCore:
             0 <= active < self.n_objects
         ):
             raise ValueError(f"object = {active!r}: must be an object index in [0, {self.n_objects})")
+        if goal is not None:
+            _pose3("goal", goal)  # validated before anything changes
         self.sim.set_state(
             object_poses=self.scene.object_starts() if object_poses is None else object_poses,
             robot_positions=self.scene.robot_starts_array
             if robot_positions is None
             else robot_positions,
         )
+        self.resume(active, goal)
+
+    def resume(self, active: int = 0, goal: ArrayLike | None = None) -> None:
+        """Start an episode from the simulator's current state (poses and velocities kept,
+        e.g. a shared simulator that earlier objects were pushed in); as ``reset`` otherwise."""
+        if isinstance(active, bool) or not isinstance(active, (int, np.integer)) or not (
+            0 <= active < self.n_objects
+        ):
+            raise ValueError(f"object = {active!r}: must be an object index in [0, {self.n_objects})")
         self.goals = self.scene.object_goals()
         if goal is not None:
             self.goals[active] = _pose3("goal", goal)

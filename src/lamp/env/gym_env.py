@@ -69,6 +69,23 @@ def common_bounds(scene: Scene) -> float:
     return float(math.hypot(*scene.workspace)) + 1.0
 
 
+def observation_space(core: PushCore) -> spaces.Dict:
+    """The centralised observation space of ``core`` (see ``PushCore.observe``)."""
+    n, p = core.n_robots, core.config.patch_size
+    b = common_bounds(core.scene)
+    return spaces.Dict(
+        {
+            "robots": spaces.Box(-b, b, (n, 2), np.float32),
+            "object": spaces.Box(-1.0, 1.0, (2,), np.float32),
+            "goal": spaces.Box(
+                np.array([-b, -b, -1, -1], np.float32), np.array([b, b, 1, 1], np.float32)
+            ),
+            "extent": spaces.Box(0.0, b, (2,), np.float32),
+            "patch": spaces.Box(0.0, 1.0, (n, p, p), np.float32),
+        }
+    )
+
+
 class PushEnv(gym.Env):
     """Push the scene's objects to their goals with all robots (see the module docstring).
 
@@ -95,20 +112,8 @@ class PushEnv(gym.Env):
         self.core = PushCore(scene, make_config(config, settings))
         self.render_mode = render_mode
         self.metadata = {**self.metadata, "render_fps": round(1.0 / self.core.period)}
-        n, p = self.core.n_robots, self.core.config.patch_size
-        b = common_bounds(self.core.scene)
-        self.action_space = spaces.Box(-1.0, 1.0, (n, 2), np.float32)
-        self.observation_space = spaces.Dict(
-            {
-                "robots": spaces.Box(-b, b, (n, 2), np.float32),
-                "object": spaces.Box(-1.0, 1.0, (2,), np.float32),
-                "goal": spaces.Box(
-                    np.array([-b, -b, -1, -1], np.float32), np.array([b, b, 1, 1], np.float32)
-                ),
-                "extent": spaces.Box(0.0, b, (2,), np.float32),
-                "patch": spaces.Box(0.0, 1.0, (n, p, p), np.float32),
-            }
-        )
+        self.action_space = spaces.Box(-1.0, 1.0, (self.core.n_robots, 2), np.float32)
+        self.observation_space = observation_space(self.core)
         self._renderer = None
 
     @property

@@ -15,7 +15,7 @@ from lamp.planners.task import ManipulationTask, TaskStats
 from lamp.scene.model import Scene
 
 #: Planner names accepted by ``lamp run --planner`` (interfaces spec).
-PLANNERS = ("lazy", "astar", "astar-replan", "gco-ori", "gco-var")
+PLANNERS = ("lazy", "astar", "astar-replan", "gco-ori", "gco-var", "mapush")
 
 POLICIES = {
     "lazy": LoopPolicy(replan_on_drift=True, replan_when_done=True),
@@ -92,6 +92,10 @@ def solve_with_frames(scene: Scene, planner: str = "lazy", seed: int = 0, *,
     from lamp.sim import Simulator
 
     check_planner(planner)
+    if planner == "mapush":
+        from lamp.planners.mapush import solve_mapush
+
+        return solve_mapush(scene, seed, render=render, progress=progress)
     cfg = config or default_config(planner)
     proposer = load_proposer(model)
     t_start = time.perf_counter()
