@@ -344,3 +344,31 @@ def test_settings_override_a_config():
     env = PushEnv("random-01", config=PushConfig(frame_skip=5), max_speed=0.3)
     assert env.core.config == PushConfig(frame_skip=5, max_speed=0.3)
     assert env.core.period == pytest.approx(0.01) and env.metadata["render_fps"] == 100
+
+
+def test_goal_frame_is_the_world_frame_turned_towards_the_goal(open_scene):
+    """frame="goal": the goal lies on +x, every vector is the world one turned by -phi, and
+    an action a moves the robots as the world-frame action R(phi) a does."""
+    world, goal = PushEnv(open_scene), PushEnv(open_scene, frame="goal")
+    ow, _ = world.reset()
+    og, _ = goal.reset()
+    d = open_scene.object_goals()[0, :2] - open_scene.object_starts()[0, :2]
+    phi = math.atan2(d[1], d[0])
+    c, s = math.cos(phi), math.sin(phi)
+    rot = np.array([[c, -s], [s, c]])
+    assert np.allclose(og["goal"][:2], [np.hypot(*d), 0.0], atol=1e-6)
+    assert np.allclose(og["robots"], ow["robots"] @ rot, atol=1e-6)
+    assert np.allclose(og["object"], [math.cos(-phi), math.sin(-phi)], atol=1e-6)
+    # the centre sample of each patch is the same point in both frames
+    assert np.array_equal(og["patch"][:, 4, 4], ow["patch"][:, 4, 4])
+    rng = np.random.default_rng(5)
+    for _ in range(30):
+        a = rng.uniform(-1, 1, (3, 2))
+        a *= 0.99 / np.maximum(np.hypot(a[:, 0], a[:, 1]), 1.0)[:, None]  # no clipping
+        angle = goal.core._axes()
+        r = np.array([[angle[0], -angle[1]], [angle[1], angle[0]]])
+        goal.step(a)
+        world.step(a @ r.T)
+        assert np.allclose(goal.core.robot_positions(), world.core.robot_positions(), atol=1e-7)
+    with pytest.raises(ValueError, match="frame = 'body'"):
+        PushEnv(open_scene, frame="body")

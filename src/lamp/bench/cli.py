@@ -34,7 +34,7 @@ from lamp.bench.jobs import (
 from lamp.bench.runner import BACKENDS, DEFAULT_JOB_FN
 
 #: Planner names of the interfaces spec (used if ``lamp.planners.run`` cannot be imported).
-SPEC_PLANNERS = ("lazy", "astar", "astar-replan", "gco-ori", "gco-var", "mapush")
+SPEC_PLANNERS = ("lazy", "astar", "astar-replan", "gco-ori", "gco-var")
 DEFAULT_SUITES = "random,maze,tilt,warehouse"
 #: Default cumulative planning limit per object for LAMP-A* (the paper: 500 s). The paper's
 #: LAMP-A* runs out of it in most cluttered scenes, so 100 scenes x 2 LAMP-A* variants at

@@ -502,7 +502,7 @@ def _paper(value: float | None) -> str:
 
 def success_markdown(table: dict[str, dict[str, Rate]], fams: Sequence[str]) -> str:
     rows = []
-    if any(f in FAMILY_ORDER for f in fams):
+    if any(f in FAMILY_ORDER for f in fams) and "mapush" not in table:
         rows.append(["MAPush (paper only, not run)"]
                     + [(f"[paper {PAPER_SUCCESS['mapush'][f]:.0f}%]" if f in FAMILY_ORDER
                         else "-") for f in fams] + ["-"])

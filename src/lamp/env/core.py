@@ -5,6 +5,11 @@ commands and computes observations, rewards and termination; ``lamp.env.gym_env`
 ``lamp.env.parallel`` only wrap it in the two APIs. See ``docs/env.md`` for the user-facing
 description; the guarantees stated here are the ones the tests check.
 
+Frame. Observations are expressed in a common frame with its origin at the active object:
+world axes (``frame="world"``, the default) or axes turned so that x points from the object
+to its goal (``frame="goal"``: the task then looks the same in every direction); actions
+are velocities in that frame's axes.
+
 Control. One environment step lasts ``PushConfig.frame_skip`` physics steps of
 ``lamp.sim.mjcf.TIMESTEP`` (default 10 x 2 ms = 20 ms). The command of robot i is a
 velocity ``a_i * max_speed`` with ``a_i`` clipped to [-1, 1] per component and then to the
@@ -62,6 +67,10 @@ from lamp.sim.mjcf import ROBOT_KP, ROBOT_KV, build_model
 from lamp.sim.simulator import WORKSPACE_TOLERANCE, Simulator, footprint_outside
 
 _SUITE_SCENE = re.compile(r"^(?P<suite>[a-z]+)-(?P<index>\d+)$")
+
+
+#: Axes of the common frame (``PushConfig.frame``).
+FRAMES = ("world", "goal")
 
 
 def resolve_scene(scene: Scene | str | Path) -> Scene:
@@ -133,6 +142,9 @@ class PushConfig:
     patch_spacing: float = 0.05  # distance between patch samples [m]
     patch_range: float = 0.2  # free clearance mapped to 1.0 in the patch [m]
     reward: RewardWeights = field(default_factory=RewardWeights)
+    #: axes of the common frame: "world", or "goal" (x towards the active goal; actions,
+    #: positions, headings and patch samples are all expressed in it)
+    frame: str = "world"
 
     def __post_init__(self) -> None:
         _check(
@@ -160,6 +172,7 @@ class PushConfig:
         )
         _check(isinstance(self.reward, RewardWeights), "reward", self.reward,
                "a RewardWeights")
+        _check(self.frame in FRAMES, "frame", self.frame, f"one of {FRAMES}")
 
 
 @dataclass(frozen=True)
@@ -349,6 +362,9 @@ class PushCore:
         a = np.clip(self.check_action(action), -1.0, 1.0)
         norm = np.sqrt((a * a).sum(axis=1, keepdims=True))
         v = a * (self.config.max_speed / np.maximum(norm, 1.0))
+        if self.config.frame == "goal":
+            c, s = self._axes()
+            v = np.stack([c * v[:, 0] - s * v[:, 1], s * v[:, 0] + c * v[:, 1]], axis=1)
         q = self._data.qpos[self._robot_qpos]
         self._data.ctrl[:] = q + v.ravel() * self._gain
         mujoco.mj_step(self._model, self._data, nstep=self.config.frame_skip)
@@ -409,6 +425,15 @@ class PushCore:
         return out
 
     # ----------------------------------------------------------- observation
+    def _axes(self) -> tuple[float, float]:
+        """(cos, sin) of the common frame's x axis in the world."""
+        if self.config.frame == "world":
+            return 1.0, 0.0
+        k = min(self.active, self.n_objects - 1)
+        dx, dy = self.goals[k, :2] - self._poses[k, :2]
+        n = math.hypot(dx, dy)
+        return (1.0, 0.0) if n < 1e-9 else (dx / n, dy / n)
+
     def info(self) -> dict[str, Any]:
         """Info of the current state (what ``reset`` returns)."""
         dist, err, gap = self._prev
@@ -424,31 +449,42 @@ class PushCore:
         }
 
     def observe(self) -> dict[str, np.ndarray]:
-        """Centralised observation (float32), in the common frame: world axes, origin at the
-        active object's position (after the last object succeeded: the last object's).
+        """Centralised observation (float32), in the common frame: origin at the active
+        object's position (after the last object succeeded: the last object's), world axes
+        or (``frame="goal"``) x pointing from the object to its goal.
 
         ``robots`` (N, 2) robot centres; ``object`` (2,) cos, sin of the object's heading;
         ``goal`` (4,) goal position, cos, sin of the goal heading; ``extent`` (2,) half
         extents of the object's bounding box in its own frame; ``patch`` (N, P, P) free
         clearance of a robot centre at the samples around each robot (0: a robot centred
         there would touch an obstacle, another object or the border; 1: at least
-        ``patch_range`` free), ``patch[i, r, s]`` at offset (g[s], g[r]) with
-        g = (-(P-1)/2 .. (P-1)/2) * ``patch_spacing``.
+        ``patch_range`` free), ``patch[i, r, s]`` at offset (g[s], g[r]) (common-frame axes)
+        with g = (-(P-1)/2 .. (P-1)/2) * ``patch_spacing``.
         """
         k = min(self.active, self.n_objects - 1)
         pose = self._poses[k]
         goal = self.goals[k]
         rob = self.robot_positions()
-        pts = rob[:, None, None, :] + self._patch_offsets[None]  # (N, P, P, 2)
+        c, s = self._axes()
+        offsets = self._patch_offsets
+        if self.config.frame == "goal":
+            ox, oy = offsets[..., 0], offsets[..., 1]
+            offsets = np.stack([c * ox - s * oy, s * ox + c * oy], axis=-1)
+        pts = rob[:, None, None, :] + offsets[None]  # (N, P, P, 2)
         idx = np.rint(pts / self._h).astype(np.intp) + self._patch_shift
         ny, nx = self._patch_field.shape
         i = np.clip(idx[..., 0], 0, nx - 1)
         j = np.clip(idx[..., 1], 0, ny - 1)
+        rel = rob - pose[:2]
+        gx, gy = goal[0] - pose[0], goal[1] - pose[1]
+        phi = math.atan2(s, c)
         return {
-            "robots": (rob - pose[:2]).astype(np.float32),
-            "object": np.array([math.cos(pose[2]), math.sin(pose[2])], np.float32),
+            "robots": np.stack([c * rel[:, 0] + s * rel[:, 1], -s * rel[:, 0] + c * rel[:, 1]],
+                               axis=1).astype(np.float32),
+            "object": np.array([math.cos(pose[2] - phi), math.sin(pose[2] - phi)], np.float32),
             "goal": np.array(
-                [goal[0] - pose[0], goal[1] - pose[1], math.cos(goal[2]), math.sin(goal[2])],
+                [c * gx + s * gy, -s * gx + c * gy, math.cos(goal[2] - phi),
+                 math.sin(goal[2] - phi)],
                 np.float32,
             ),
             "extent": self.extents[k].astype(np.float32),

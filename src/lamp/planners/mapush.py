@@ -91,7 +91,7 @@ def run_object(scene: Scene, index: int, sim, policy, record: MapushRecord,
 
     settings = {k: v for k, v in policy.info.env_settings.items()
                 if k in ("frame_skip", "max_speed", "patch_size", "patch_spacing",
-                         "patch_range")}
+                         "patch_range", "frame")}
     # the core never ends an episode by itself: success is judged here
     config = PushConfig(**settings, position_tolerance=1e-9, orientation_tolerance=None,
                         time_limit=time_limit + 1.0)

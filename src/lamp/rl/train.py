@@ -43,7 +43,7 @@ TRAIN_SUITES = ("random", "maze", "tilt", "warehouse")
 def mid_level_config() -> PushConfig:
     """The environment settings of the mid-level task."""
     return PushConfig(position_tolerance=SUBGOAL_TOLERANCE, orientation_tolerance=None,
-                      time_limit=SUBGOAL_TIME)
+                      time_limit=SUBGOAL_TIME, frame="goal")
 
 
 def along(path: np.ndarray) -> np.ndarray:
@@ -215,7 +215,8 @@ def info_kwargs(env: SubgoalEnv, settings: TrainSettings, training: dict[str, An
                          "orientation_tolerance": cfg.orientation_tolerance,
                          "time_limit": cfg.time_limit, "frame_skip": cfg.frame_skip,
                          "max_speed": cfg.max_speed, "patch_size": cfg.patch_size,
-                         "patch_spacing": cfg.patch_spacing, "patch_range": cfg.patch_range},
+                         "patch_spacing": cfg.patch_spacing, "patch_range": cfg.patch_range,
+                         "frame": cfg.frame},
         "training": training,
     }
 
