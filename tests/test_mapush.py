@@ -183,3 +183,9 @@ def test_cli_run_mapush_and_bad_robot_count(tmp_path, ppo_env, monkeypatch):
     assert res["planner"] == "mapush" and "mapush_success" in res["stats"]
     assert lamp.solve(scene_from_dict(SHORT), planner="mapush").to_dict()["objects"][0][
         "final_pose"] == res["objects"][0]["final_pose"]
+
+
+def test_rl_train_cli_rejects_bad_settings(tmp_path):
+    res = CliRunner().invoke(app, ["rl", "train", "--steps", "0", "--out", str(tmp_path / "o")])
+    assert res.exit_code == 2 and "steps = 0: must be an integer >= 1" in res.output
+    assert not (tmp_path / "o").exists()

@@ -242,6 +242,9 @@ def train(out: str | Path, settings: TrainSettings, scenes: list[str] | None = N
     curve: list[dict[str, float]] = []
     t0 = time.perf_counter()
 
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+
     def run_eval(step: int) -> None:
         actor = export_actor(model, info_kwargs(env, settings, {}))
         # the same held-out episodes every time
@@ -249,6 +252,10 @@ def train(out: str | Path, settings: TrainSettings, scenes: list[str] | None = N
         rate = evaluate(actor.act_flat, eval_env, settings.eval_episodes)
         curve.append({"steps": step, "success_rate": rate,
                       "wall_s": round(time.perf_counter() - t0, 1)})
+        # an interrupted run still leaves its latest policy and curve
+        actor.save(out / "policy.pt")
+        write_json_atomic(out / "curve.json", {"steps": step, "seed": settings.seed,
+                                               "partial": True, "curve": curve})
         if progress is not None:
             progress(step, rate)
 
@@ -276,8 +283,6 @@ def train(out: str | Path, settings: TrainSettings, scenes: list[str] | None = N
     }
     policy = export_actor(model, info_kwargs(
         env, settings, {k: v for k, v in record.items() if k != "curve"}))
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
     policy.save(out / "policy.pt")
     write_json_atomic(out / "curve.json", record)
     return record
