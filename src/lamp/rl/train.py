@@ -36,6 +36,9 @@ SUBGOAL_AHEAD = 0.5
 SUBGOAL_TOLERANCE = 0.15
 #: Simulated time the mid level gets per subgoal [s].
 SUBGOAL_TIME = 8.0
+#: Robots start at most this far from the object's bounding circle [m] (suite scenes place
+#: them up to about 0.6 m away; later subgoals find them right at the object).
+ROBOT_SCATTER = 0.8
 #: Training families (the paper's suites).
 TRAIN_SUITES = ("random", "maze", "tilt", "warehouse")
 
@@ -59,7 +62,7 @@ def pose_at(path: np.ndarray, s: float) -> np.ndarray:
 
 
 def scatter_robots(scene: Scene, poses: np.ndarray, index: int, rng: np.random.Generator,
-                   near: float = 0.35, tries: int = 400) -> np.ndarray | None:
+                   near: float = ROBOT_SCATTER, tries: int = 400) -> np.ndarray | None:
     """Robot centres in free space within ``near`` of object ``index``'s bounding circle,
     not overlapping each other; None when no placement was found."""
     space = RobotSpace.from_scene(scene, object_poses=poses, robot_radius=scene.robot_radius)
