@@ -17,7 +17,7 @@ import lamp
 from lamp.cli import app
 from lamp.env import PushEnv
 from lamp.geometry.object_space import ObjectSpace
-from lamp.planners.mapush import MAPUSH_RADIUS, check_scene, solve_mapush
+from lamp.planners.mapush import MAKESPAN_STEP, MAPUSH_RADIUS, check_scene, solve_mapush
 from lamp.rl.policy import load_policy
 from lamp.rl.train import (
     SUBGOAL_TOLERANCE,
@@ -141,7 +141,7 @@ def test_mapush_run_is_deterministic_and_reports_both_criteria(tmp_path, ppo_env
     if obj["position_error"] <= MAPUSH_RADIUS:
         assert crit["mapush_success"]
     assert crit["sim_time_s"] <= 10.0 + 1e-6
-    assert a["makespan"] == round(crit["sim_time_s"] / 0.08)
+    assert a["makespan"] == round(crit["sim_time_s"] / MAKESPAN_STEP)
 
 
 def test_scene_with_other_robot_count_is_rejected(tmp_path, ppo_env):
@@ -189,3 +189,19 @@ def test_rl_train_cli_rejects_bad_settings(tmp_path):
     res = CliRunner().invoke(app, ["rl", "train", "--steps", "0", "--out", str(tmp_path / "o")])
     assert res.exit_code == 2 and "steps = 0: must be an integer >= 1" in res.output
     assert not (tmp_path / "o").exists()
+
+
+def test_shipped_policy_is_small_and_drives_a_suite_scene():
+    from lamp.env.gym_env import observation_space
+    from lamp.rl.policy import DEFAULT_POLICY
+
+    assert DEFAULT_POLICY.stat().st_size < 5 * 2**20
+    policy = load_policy()
+    assert policy.info.env_settings["frame"] == "goal"
+    env = PushEnv("warehouse-03", **{k: v for k, v in policy.info.env_settings.items()
+                                     if k not in ("time_limit",)})
+    policy.check_env(env.core.n_robots, observation_space(env.core), "warehouse-03")
+    obs, _ = env.reset()
+    a = policy.act(env.observation_space, obs)
+    assert a.shape == (3, 2) and np.isfinite(a).all() and np.abs(a).max() <= 1.0
+    check_scene(env.scene, policy)

@@ -61,6 +61,7 @@ from numpy.typing import ArrayLike
 
 from lamp.geometry.robot_space import RobotSpace
 from lamp.geometry.shapes import half_extents
+from lamp.planners.result import SUCCESS_ORIENTATION_TOL, SUCCESS_POSITION_TOL
 from lamp.scene.loader import SceneError, load_scene
 from lamp.scene.model import Scene
 from lamp.sim.mjcf import ROBOT_KP, ROBOT_KV, build_model
@@ -136,8 +137,8 @@ class PushConfig:
     frame_skip: int = 10  # physics steps per environment step (2 ms each)
     max_speed: float = 0.5  # robot speed commanded by an action of norm 1 [m/s]
     time_limit: float = 120.0  # episode length [simulated s]
-    position_tolerance: float = 0.1  # success radius around the goal position [m]
-    orientation_tolerance: float | None = 0.1  # [rad]; None: orientation is ignored
+    position_tolerance: float = SUCCESS_POSITION_TOL  # success radius around the goal [m]
+    orientation_tolerance: float | None = SUCCESS_ORIENTATION_TOL  # [rad]; None: ignored
     patch_size: int = 9  # P: the occupancy patch is P x P samples centred on the robot
     patch_spacing: float = 0.05  # distance between patch samples [m]
     patch_range: float = 0.2  # free clearance mapped to 1.0 in the patch [m]

@@ -32,8 +32,15 @@ from typing import Any
 
 import numpy as np
 
-from lamp.planners.result import ObjectResult, goal_errors, within_goal
+from lamp.planners.result import (
+    SUCCESS_ORIENTATION_TOL,
+    SUCCESS_POSITION_TOL,
+    ObjectResult,
+    goal_errors,
+    within_goal,
+)
 from lamp.scene.model import Scene
+from lamp.sim.simulator import MAX_STEP, ROBOT_SPEED
 
 #: Simulated time limit per object [s] (MAPush's criterion: two minutes).
 OBJECT_TIME_LIMIT = 120.0
@@ -41,10 +48,10 @@ OBJECT_TIME_LIMIT = 120.0
 MAPUSH_RADIUS = 0.5
 #: Smallest lookahead of the adaptive subgoal choice [m].
 LOOKAHEAD_MIN = 0.2
-#: Simulated time of one makespan step (0.02 m at the simulator's 0.25 m/s) [s].
-MAKESPAN_STEP = 0.08
-#: Strict stop radius: the run of an object ends within this of the goal position [m].
-STOP_RADIUS = 0.1
+#: Simulated time of one makespan step (one 0.02 m waypoint at the simulator's speed) [s].
+MAKESPAN_STEP = MAX_STEP / ROBOT_SPEED
+#: The run of an object ends within this of the goal position [m] (the strict criterion).
+STOP_RADIUS = SUCCESS_POSITION_TOL
 
 
 def check_scene(scene: Scene, policy=None) -> None:
@@ -144,7 +151,7 @@ def run_object(scene: Scene, index: int, sim, policy, record: MapushRecord,
     record.sim_time_s += core.time
     record.makespan += int(round(core.time / MAKESPAN_STEP))
     pos_err, rot_err = goal_errors(q, goal)
-    success = (not left) and within_goal(q, goal, 0.1, 0.1)
+    success = (not left) and within_goal(q, goal, SUCCESS_POSITION_TOL, SUCCESS_ORIENTATION_TOL)
     if not success and not reason:
         reason = "orientation off at the goal (the policy ignores orientation)"
     return ObjectResult(
