@@ -12,12 +12,12 @@ def plot_curve(record: dict[str, Any], path: str | Path) -> None:
 
     from lamp.io import atomic_output
 
-    steps = [c["steps"] for c in record["curve"]]
+    steps = [c["steps"] / 1000.0 for c in record["curve"]]
     rate = [100.0 * c["success_rate"] for c in record["curve"]]
     fig = Figure(figsize=(5, 3.2), dpi=110)
     ax = fig.add_subplot()
     ax.plot(steps, rate, marker="o")
-    ax.set_xlabel("PPO environment steps")
+    ax.set_xlabel("PPO environment steps [thousands]")
     ax.set_ylabel("subgoal success rate [%]")
     ax.set_ylim(0, 100)
     ax.grid(alpha=0.3)
