@@ -107,8 +107,14 @@ _SAMPLER = SubgoalSampler(["maze-02", "warehouse-02"], seed=0)
 
 
 def test_training_writes_a_loadable_policy_and_curve(tmp_path):
-    rec = train(tmp_path, TrainSettings(steps=64, eval_every=64, eval_episodes=1,
-                                        hidden=(8,), rollout=64), scenes=["maze-02"])
+    settings = TrainSettings(steps=64, eval_every=64, eval_episodes=1, hidden=(8,), rollout=64)
+    rec = train(tmp_path, settings, scenes=["maze-02"])
+    again = train(tmp_path / "again", settings, scenes=["maze-02"])
+    assert (tmp_path / "policy.pt").exists()
+    a = torch.load(tmp_path / "policy.pt", weights_only=True)
+    b = torch.load(tmp_path / "again" / "policy.pt", weights_only=True)
+    assert all(torch.equal(a[k], b[k]) for k in a)  # same seed, same weights
+    assert again["curve"][-1]["success_rate"] == rec["curve"][-1]["success_rate"]
     assert [c["steps"] for c in rec["curve"]][0] == 0 and rec["steps"] >= 64
     assert all(0.0 <= c["success_rate"] <= 1.0 for c in rec["curve"])
     policy = load_policy(tmp_path / "policy.pt")
