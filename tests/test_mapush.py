@@ -134,11 +134,12 @@ def test_mapush_run_is_deterministic_and_reports_both_criteria(tmp_path, ppo_env
     policy = _tiny_policy(tmp_path, ppo_env)
     a = solve_mapush(scene, policy=policy, time_limit=10.0).result.to_dict()
     b = solve_mapush(scene, policy=policy, time_limit=10.0).result.to_dict()
-    for d in (a, b):
-        d.pop("wall_time_s")
-        d.pop("planning_time_s"), d.pop("total_planning_time_s"), d.pop("median_planning_time_s")
-        for o in d["objects"]:
-            o.pop("planning_time_s")
+    def untimed(d):  # wall-clock measurements differ between runs; nothing else may
+        if isinstance(d, dict):
+            return {k: untimed(v) for k, v in d.items() if "planning" not in k and "wall" not in k}
+        return [untimed(v) for v in d] if isinstance(d, list) else d
+
+    a, b = untimed(a), untimed(b)
     assert a == b
     obj, crit = a["objects"][0], a["stats"]["mapush_objects"][0]
     assert a["planner"] == "mapush" and a["segments"] == obj["segments"] >= 1

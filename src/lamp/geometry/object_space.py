@@ -66,6 +66,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from functools import lru_cache
+from typing import TYPE_CHECKING
 
 import numba
 import numpy as np
@@ -73,8 +74,11 @@ import shapely
 from numpy.typing import ArrayLike
 from scipy import ndimage
 
+from lamp.geometry.primitives import Circle, Obstacle, Rectangle, Shape
 from lamp.geometry.shapes import local_outline, obstacle_geometry
-from lamp.scene.model import Circle, Obstacle, Rectangle, Scene, Shape
+
+if TYPE_CHECKING:  # the scene layer builds on geometry, not the other way round
+    from lamp.scene.model import Scene
 
 DEFAULT_RESOLUTION = 0.004
 DEFAULT_MOTION_MARGIN = 0.005

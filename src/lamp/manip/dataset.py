@@ -1,6 +1,6 @@
 """The MuJoCo push dataset: simulated pushes by the contact strategies, kept when they work.
 
-One sample (issue #4, gco-facts.md "Training data"): draw an object (circle r 0.10-0.30 m
+One sample (as GCo's training data): draw an object (circle r 0.10-0.30 m
 or rectangle with sides 0.15-0.50 m), a budget b in {1, 2, 3}, a requested motion (dx, dy
 in [-0.2, 0.2] m, dtheta in [-0.5, 0.5] rad, object frame) and a contact strategy; place b
 robots touching the object (``lamp.manip.geometric``), command each robot to follow its
@@ -29,7 +29,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from lamp.geometry.se2 import relative, transform_points, wrap_angle
-from lamp.manip.contacts import HORIZON, MAX_ROBOTS, rigid_pushes
+from lamp.manip.contacts import HORIZON, MAX_ROBOTS, ROBOT_RADIUS, rigid_pushes
 from lamp.manip.geometric import STRATEGIES, strategy_contacts
 from lamp.scene.model import Circle, Rectangle, Scene, SceneObject, Shape
 
@@ -317,6 +317,7 @@ def generate(
     kept = sum(r.kept for r in results)
     meta = {
         "seed": seed,
+        "robot_radius": ROBOT_RADIUS,
         "attempts": n_attempts,
         "chunk": chunk,
         "accepted": int(kept.sum()),

@@ -4,7 +4,7 @@ Two coupled probability paths share one time t in [0, 1] (gco-facts.md "GCo_DC")
 
 * **Contacts** are discrete. Each robot slot has two tokens (the x and the y cell of an
   object-centred grid of ``N_BINS`` cells over ``GRID_EXTENT`` metres) or the pair
-  ``(NONE, NONE)`` for an unused slot (the issue's "MASK token for unused slots").
+  ``(NONE, NONE)`` for an unused slot (a MASK token for unused slots, as in GCo).
   The path is the *masked mixture*
   ``p_t(x | x1) = kappa(t) delta_{x1}(x) + (1 - kappa(t)) delta_{NOISE}(x)`` per token with
   ``kappa(t) = t^2``: a token shows its clean value with probability kappa(t) and the

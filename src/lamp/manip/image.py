@@ -2,7 +2,7 @@
 
 The image covers ``IMAGE_EXTENT`` x ``IMAGE_EXTENT`` metres centred on the object's origin
 and aligned with the object's own axes (GCo: 128 px over 1.0 m; we use 64 px, 15.6 mm/px,
-which the issue allows and which makes the CNN ~4x cheaper). Pixel ``[i, j]`` (row i,
+a coarser grid that makes the CNN ~4x cheaper). Pixel ``[i, j]`` (row i,
 column j) covers the square centred at ``x = -E/2 + (j + 0.5) E/S``,
 ``y = -E/2 + (i + 0.5) E/S``: rows grow with +y (no display flip). Each pixel holds the
 fraction of ``SUPERSAMPLE**2`` sub-pixel samples inside the shape, so edges are

@@ -25,7 +25,8 @@ from typing import Any
 import numba as nb
 import numpy as np
 
-from lamp.geometry.robot_space import RobotSpace, _segment_clearance, _segments_clearance
+from lamp.geometry.clearance_kernels import segment_clearance, segments_clearance
+from lamp.geometry.robot_space import RobotSpace
 
 __all__ = ["Lattice", "get_lattice", "DIRS"]
 
@@ -115,7 +116,7 @@ def _build_edges(
                 if not ok and lo >= thr - 0.75 * h:
                     ax = a * L
                     ay = b * L
-                    ok = _segment_clearance(ax, ay, a2 * L, b2 * L, circles, verts, ptr,
+                    ok = segment_clearance(ax, ay, a2 * L, b2 * L, circles, verts, ptr,
                                             W, H) >= thr
                 if ok:
                     nbr[u, d] = v
@@ -199,7 +200,7 @@ class Lattice:
         allc = np.concatenate(cand)
         src = np.repeat(np.asarray(points, dtype=float).reshape(-1, 2), counts, axis=0)
         dst = self.coords[allc]
-        clr = _segments_clearance(
+        clr = segments_clearance(
             np.ascontiguousarray(src), np.ascontiguousarray(dst), g.circles, g.verts, g.ptr, W, H
         )
         thr = np.repeat(np.asarray(thresholds, dtype=float), counts)

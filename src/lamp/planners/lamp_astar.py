@@ -2,10 +2,10 @@
 
 A state is (q_O, q_R, parent): the object on a lattice node (or at its continuous start)
 and the robots where the last verified push left them. Expanding a state verifies every
-motion primitive (line 8); each success yields a successor whose edge carries the robot
+motion primitive with ``Verify`` (line 8); each success yields a successor whose edge carries the robot
 trajectories T_R. States that match an explored (q_O, q_R) within a tolerance are merged
-through ``UpdateCost`` (lines 27-37); the expanded state goes back into the open list with
-a penalty (line 17) so that a later expansion can draw fresh model samples.
+through ``UpdateCost`` (lines 26-37); the expanded state goes back into the open list with
+a penalty (line 16) so that a later expansion can draw fresh model samples.
 
 Edge costs are robot time: the steps of T_R times ``MAX_STEP`` (metres at the robot
 speed). The heuristic is the object-only shortest-path cost to the goal over the same
@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from lamp.planners.lazy import Plan, goal_lattice, join_lattice
+from lamp.planners.robots import robot_state_key
 from lamp.planners.task import ManipulationTask
 from lamp.planners.trajectory import MAX_STEP
 from lamp.planners.verify import Transition, verify
@@ -60,8 +61,7 @@ class LampAStar:
     def _robot_key(self, q_R: np.ndarray) -> tuple:
         """Explored-state key for robots: positions on a ``robot_match_tolerance`` grid, sorted
         (robots are anonymous, so permutations of one configuration are the same state)."""
-        cells = np.round(q_R / self.task.config.robot_match_tolerance).astype(int)
-        return tuple(sorted(map(tuple, cells.tolist())))
+        return robot_state_key(q_R, self.task.config.robot_match_tolerance)
 
     def _successors(self, state: SearchState) -> list[tuple[object, np.ndarray]]:
         if not self.lattice.is_node(state.node):  # the continuous start joins the lattice
@@ -90,31 +90,31 @@ class LampAStar:
         h_start = self._h(start)
         if h_start == math.inf:
             return None  # no object-only route: no manipulation plan either
-        open_list: list = [(h_start, 0.0, next(tie), start)]  # line 2
+        open_list: list = [(h_start, 0.0, next(tie), start)]  # line 2: Open.add(s_init)
         penalty: dict[int, float] = {}
         explored: dict[tuple, SearchState] = {(start_node, self._robot_key(start.q_R)): start}
         per_node: dict[object, int] = {}
         cap = cfg.astar_states_per_node
-        while open_list:  # line 3
+        while open_list:  # line 3: until the time limit is reached
             if deadline is not None and time.perf_counter() > deadline:
                 return None
-            f, _, _, s = heapq.heappop(open_list)  # line 4
+            f, _, _, s = heapq.heappop(open_list)  # line 4: Open.pop
             if f < s.cost + self._h(s) + penalty.get(id(s), 0.0) - 1e-9:
                 continue  # stale entry: the state's cost or penalty changed since
-            if s.node == goal:  # line 6
+            if s.node == goal:  # line 6: ReachGoal
                 return self._backtrack(s)
-            for v, q_next in self._successors(s):  # line 7
+            for v, q_next in self._successors(s):  # line 7: each motion primitive
                 if deadline is not None and time.perf_counter() > deadline:
                     return None
-                trans = verify(self.task, s.q_O, q_next, s.q_R, attempt=s.expansions)  # line 8
-                if trans is None:  # line 9
+                trans = verify(self.task, s.q_O, q_next, s.q_R, attempt=s.expansions)  # line 8: Verify
+                if trans is None:  # line 9: no C_R, continue
                     continue
                 child = SearchState(v, q_next, trans.robot_end, s, s.cost + edge_cost(trans), trans)
-                key = (v, self._robot_key(child.q_R))  # line 13
+                key = (v, self._robot_key(child.q_R))  # line 13: Explored
                 prev = explored.get(key)
-                if prev is not None:  # line 14
+                if prev is not None:  # line 14: UpdateCost
                     self._update_cost(child, s, prev, trans, open_list, tie, penalty)
-                elif cap is None or per_node.get(v, 0) < cap:  # line 15
+                elif cap is None or per_node.get(v, 0) < cap:  # line 15: AddChild, Open.add
                     h = self._h(child)
                     if h == math.inf:
                         continue  # the object cannot reach its goal from v
@@ -122,20 +122,20 @@ class LampAStar:
                     s.children.append((child, trans))
                     explored[key] = child
                     heapq.heappush(open_list, (child.cost + h, -child.cost, next(tie), child))
-            s.expansions += 1  # line 17: re-add with penalty
+            s.expansions += 1  # line 16: Open.re-add with a penalty
             penalty[id(s)] = cfg.astar_reinsert_penalty * s.expansions
             heapq.heappush(open_list, (s.cost + self._h(s) + penalty[id(s)], -s.cost, next(tie), s))
         return None
 
     def _update_cost(self, s: SearchState, s_curr: SearchState, s_prev: SearchState,
                      trans: Transition, open_list: list, tie, penalty: dict) -> None:
-        """``UpdateCost`` (Alg. 1 lines 27-37): connect and propagate a cheaper path."""
-        s_curr.children.append((s_prev, trans))  # line 28
-        if s.cost >= s_prev.cost:  # line 29
+        """``UpdateCost`` (Alg. 1 lines 26-37): connect and propagate a cheaper path."""
+        s_curr.children.append((s_prev, trans))  # line 27: AddChild
+        if s.cost >= s_prev.cost:  # line 28: no cheaper cost
             return
-        s_prev.cost, s_prev.parent, s_prev.edge = s.cost, s_curr, trans  # line 30
-        frontier = [(s_prev.cost, next(tie), s_prev)]  # line 31
-        while frontier:  # lines 32-37, best-first by ascending cost
+        s_prev.cost, s_prev.parent, s_prev.edge = s.cost, s_curr, trans  # line 29: new cost and parent
+        frontier = [(s_prev.cost, next(tie), s_prev)]  # line 30: Open_update
+        while frontier:  # lines 31-37: Open_update, best-first by ascending cost
             _, _, top = heapq.heappop(frontier)
             heapq.heappush(open_list, (top.cost + self._h(top) + penalty.get(id(top), 0.0),
                                        -top.cost, next(tie), top))

@@ -1,12 +1,12 @@
 """LAMP-Lazy (paper Alg. 2): D* Lite over object poses, lazy verification, cached transitions.
 
 D* Lite plans object-only paths on the lattice (``lamp.search``), rooted at the goal, so a
-moving start is cheap to repair. ``Plan`` (Alg. 2 lines 9-41) verifies the returned path
+moving start is cheap to repair. ``Plan`` (Alg. 2 lines 8-42) verifies the returned path
 edge by edge until it meets a pose already in ``Tree_eval`` (transitions verified on an
 earlier full path to the goal); a failed edge is penalised in D* Lite (``UpdateChange``)
 and the search repeats. The per-node caches D_T map robot configurations to complete robot
 trajectories, so replanning after drift mostly reuses verified pushes and only re-routes
-the robots (lines 26-33).
+the robots (``Reassign`` and Gspi, lines 27-33).
 """
 
 from __future__ import annotations
@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from lamp.planners.robots import robots_match
 from lamp.planners.task import ManipulationTask
 from lamp.planners.verify import Transition, reroute, verify
 from lamp.search.dstar_lite import DStarLite
@@ -28,7 +29,7 @@ Node = Hashable
 
 @dataclass
 class TreeEntry:
-    """``Tree_eval[q_O]`` = (q_O^next, C_R, T_manip, D_T) (Alg. 2 line 24)."""
+    """``Tree_eval[q_O]`` = (q_O^next, C_R, T_manip, D_T) (Alg. 2 line 23)."""
 
     next_node: Node
     transition: Transition  # carries C_R and T_manip; its robots' start is one D_T key
@@ -37,7 +38,7 @@ class TreeEntry:
     def lookup(self, q_R: np.ndarray, tolerance: float) -> Transition | None:
         """D_T[q_R]: a cached T_R whose robots started within ``tolerance`` of ``q_R``."""
         for key, trans in self.cache:
-            if np.max(np.linalg.norm(key - q_R, axis=1)) <= tolerance:
+            if robots_match(key, q_R, tolerance):
                 return trans
         return None
 
@@ -93,13 +94,13 @@ class LazyPlanner:
         self.task = task
         self.lattice = goal_lattice(task)
         self.dstar = DStarLite(self.lattice)
-        self.dstar.initialize(self.lattice.goal_node)  # line 1
+        self.dstar.initialize(self.lattice.goal_node)  # line 1: Initialize
         self.tree_eval: dict[Node, TreeEntry] = {}
         self.failures: dict[tuple[Node, Node], int] = {}
         self.penalised: list[tuple[np.ndarray, np.ndarray]] = []
 
     def _penalise(self, u: Node, v: Node) -> None:
-        """``UpdateChange`` (line 21): raise the cost of an edge whose verification failed."""
+        """``UpdateChange`` (lines 18 and 31): raise the cost of an edge whose verification failed."""
         n = self.failures.get((u, v), 0) + 1
         self.failures[(u, v)] = n
         self.dstar.penalize(u, v, self.task.config.edge_penalty)
@@ -119,7 +120,7 @@ class LazyPlanner:
             self._penalise(u, v)
 
     def plan(self, q_O_now: np.ndarray, q_R_now: np.ndarray, deadline: float | None = None) -> Plan | None:
-        """``Plan`` (Alg. 2 lines 9-41): a full-horizon plan from the current state, or None."""
+        """``Plan`` (Alg. 2 lines 8-42): a full-horizon plan from the current state, or None."""
         cfg = self.task.config
         tol = cfg.robot_match_tolerance
         goal = self.lattice.goal_node
@@ -129,7 +130,7 @@ class LazyPlanner:
             start, edges = join_lattice(self.lattice, np.asarray(q_O_now, float))
             if edges == []:
                 return None
-            path = self.dstar.plan_shortest_path(start, edges)  # line 12
+            path = self.dstar.plan_shortest_path(start, edges)  # line 11: PlanShortestPath
             if not path:
                 return None
             transitions: list[Transition] = []
@@ -137,42 +138,42 @@ class LazyPlanner:
             q_R = np.asarray(q_R_now, float)
             curr = path[0]
             failed = False
-            for nxt in path[1:]:  # line 14
-                if self.lattice.is_node(curr) and curr in self.tree_eval:  # line 15
+            for nxt in path[1:]:  # line 13: each q_next on P_O
+                if self.lattice.is_node(curr) and curr in self.tree_eval:  # line 14: in Tree_eval, break
                     break
                 attempt = self.failures.get((curr, nxt), 0)
                 trans = verify(self.task, self.lattice.pose(curr), self.lattice.pose(nxt), q_R, attempt)
-                if trans is None:  # lines 18-22
+                if trans is None:  # lines 17-20: no C_R, UpdateChange
                     self._penalise(curr, nxt)
                     failed = True
                     break
                 trans.edge = (curr, nxt)
-                transitions.append(trans)  # line 23
+                transitions.append(trans)  # line 21: T_R = T_move + T_manip
                 entry = TreeEntry(nxt, trans, [(q_R.copy(), trans)])
                 if self.lattice.is_node(curr):  # virtual starts are never reused
-                    tree_new[curr] = entry  # line 24
-                curr, q_R = nxt, trans.robot_end  # line 25
+                    tree_new[curr] = entry  # line 23: Tree_new
+                curr, q_R = nxt, trans.robot_end  # line 24: q_curr = q_next, T_R.last()
             if failed:
                 continue
-            if curr != goal and self.lattice.is_node(curr) and curr in self.tree_eval:  # l. 26-40
+            if curr != goal and self.lattice.is_node(curr) and curr in self.tree_eval:  # lines 25-40: Tree_eval
                 ok = True
                 while curr != goal:
                     entry = self.tree_eval[curr]
-                    trans = entry.lookup(q_R, tol)  # line 37: reuse cached
-                    if trans is None:  # lines 28-34: new T_move for these robots
+                    trans = entry.lookup(q_R, tol)  # line 38: reuse cached
+                    if trans is None:  # lines 27-35: Reassign, Gspi: new T_move for these robots
                         trans = reroute(self.task, entry.transition, q_R)
                         if trans is None:
                             self._penalise(curr, entry.next_node)
                             ok = False
                             break
-                        entry.cache.append((q_R.copy(), trans))  # line 34: cache
+                        entry.cache.append((q_R.copy(), trans))  # line 35: cache
                     else:
                         self.task.stats.cache_hits += 1
                     transitions.append(trans)
                     curr, q_R = entry.next_node, trans.robot_end
                 if not ok:
                     continue
-            self.tree_eval.update(tree_new)  # line 41
+            self.tree_eval.update(tree_new)  # line 41: Tree_eval = Tree_new + Tree_eval
             verified = [(t.q_from[:2].copy(), t.q_to[:2].copy()) for t in transitions]
             return Plan(transitions, verified, list(self.penalised))
         return None

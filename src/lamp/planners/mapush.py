@@ -55,12 +55,14 @@ STOP_RADIUS = SUCCESS_POSITION_TOL
 
 
 def check_scene(scene: Scene, policy=None) -> None:
-    """ValueError when the policy cannot drive ``scene`` (another number of robots)."""
+    """``lamp.errors.InputError`` (a ValueError) when the policy cannot drive ``scene``
+    (another number of robots)."""
+    from lamp.errors import InputError
     from lamp.rl.policy import load_policy
 
     policy = policy or load_policy()
     if scene.n_robots != policy.info.n_robots:
-        raise ValueError(
+        raise InputError(
             f"planner mapush: scene {scene.name!r} has {scene.n_robots} robots, but the "
             f"mid-level policy was trained for {policy.info.n_robots}"
         )
@@ -68,7 +70,9 @@ def check_scene(scene: Scene, policy=None) -> None:
 
 @dataclass
 class MapushRecord:
-    """What one object's run measured (besides its ``ObjectResult``)."""
+    """What one object's run measured (besides its ``ObjectResult``); ``observer`` (if
+    set) is called with a ``lamp.planners.closed_loop.SegmentEvent``-like record of every
+    subgoal (what ``lamp.record.Recorder`` takes)."""
 
     planning_time_s: list[float] = field(default_factory=list)
     makespan: int = 0
@@ -76,6 +80,31 @@ class MapushRecord:
     mapush_time_s: float | None = None
     sim_time_s: float = 0.0
     frames: list[Any] = field(default_factory=list)
+    observer: Any = None
+
+
+def _segment_event(index: int, segment: int, rows: list, sub: np.ndarray, path: np.ndarray,
+                   planning_s: float, period: float, every: int, outcome: str):
+    """A subgoal as a segment record: its trace (states every ``every`` steps, row 0 the
+    state before it), the requested object motion, no contacts (the policy chooses them)."""
+    from types import SimpleNamespace
+
+    from lamp.sim.simulator import Trace
+
+    steps = np.array([r[0] for r in rows], float)
+    robots = np.array([r[1] for r in rows], float)
+    objects = np.array([r[2] for r in rows], float)
+    trace = Trace(times=(steps - steps[0]) * period, robot_positions=robots,
+                  object_poses=objects)
+    execution = SimpleNamespace(trace=trace, sim_time=float((steps[-1] - steps[0]) * period))
+    q_from = objects[0, index]
+    transition = SimpleNamespace(q_from=q_from, q_to=sub, contacts=np.zeros((0, 2)),
+                                 pushes_local=np.zeros((0, 1, 2)))
+    plan = SimpleNamespace(object_path=path, verified_edges=[], penalised_edges=[])
+    miss = goal_errors(objects[-1, index], sub)
+    return SimpleNamespace(object_index=index, segment=segment, transition=transition,
+                           execution=execution, plan=plan, planning_time_s=planning_s,
+                           replanned=True, drift=miss, outcome=outcome)
 
 
 def _object_path(scene: Scene, index: int, pose: np.ndarray, poses: np.ndarray):
@@ -108,6 +137,9 @@ def run_object(scene: Scene, index: int, sim, policy, record: MapushRecord,
     policy.check_env(core.n_robots, obs_space, f"scene {scene.name!r}")
     goal = scene.objects[index].goal
     lookahead = SUBGOAL_AHEAD
+    from lamp.planners.closed_loop import RENDER_EVERY
+
+    every = max(1, round(RENDER_EVERY / config.frame_skip))  # env steps per recorded state
     segments, reason, left = 0, "", False
     q = core.object_poses()[index]
     while True:
@@ -128,6 +160,7 @@ def run_object(scene: Scene, index: int, sim, policy, record: MapushRecord,
         record.planning_time_s.append(dt)
         segments += 1
         t_sub = core.time
+        rows = [(core.steps, core.robot_positions().copy(), core.object_poses())]
         reached = False
         while core.time - t_sub < SUBGOAL_TIME - 1e-9 and core.time < time_limit - 1e-9:
             out = core.step(policy.act(obs_space, core.observe()))
@@ -135,14 +168,22 @@ def run_object(scene: Scene, index: int, sim, policy, record: MapushRecord,
             d_goal = math.hypot(*(q[:2] - np.asarray(goal[:2])))
             if not record.mapush_success and d_goal <= MAPUSH_RADIUS:
                 record.mapush_success, record.mapush_time_s = True, core.time
-            if render and core.steps % 4 == 0:
+            if render and core.steps % every == 0:
                 record.frames.append(_frame(core, index, sub))
             if out.info["left_workspace"]:
                 left = True
-                break
-            if math.hypot(*(q[:2] - sub[:2])) <= SUBGOAL_TOLERANCE or d_goal <= STOP_RADIUS:
+            elif math.hypot(*(q[:2] - sub[:2])) <= SUBGOAL_TOLERANCE or d_goal <= STOP_RADIUS:
                 reached = True
+            if core.steps % every == 0 or left or reached:
+                rows.append((core.steps, core.robot_positions().copy(), core.object_poses()))
+            if left or reached:
                 break
+        if rows[-1][0] != core.steps:
+            rows.append((core.steps, core.robot_positions().copy(), core.object_poses()))
+        if record.observer is not None and len(rows) > 1:
+            outcome = "left" if left else ("continue" if reached else "stalled")
+            record.observer(_segment_event(index, segments - 1, rows, sub, path, dt,
+                                           core.period, every, outcome))
         if left:
             reason = "object left the workspace"
             break
@@ -174,17 +215,22 @@ def _frame(core, index: int, subgoal: np.ndarray):
 
 def solve_mapush(scene: Scene, seed: int = 0, *, policy=None, render: bool = False,
                  progress=None, time_limit: float | None = None):
-    """Plan and execute ``scene`` object by object (``lamp.solve(..., planner="mapush")``).
+    """Plan and execute ``scene`` object by object (``lamp.solve(..., planner="mapush")``);
+    returns a ``lamp.planners.run.Solution`` with the run's recording.
 
     Deterministic: nothing is random (``seed`` is recorded only). ``result.stats`` adds
     the MAPush criterion: ``mapush_success`` (every object within ``MAPUSH_RADIUS`` of its
     goal position within ``time_limit`` simulated seconds per object), per object
-    ``mapush_objects``.
+    ``mapush_objects``. ``progress`` receives ``lamp.progress.ProgressEvent``s.
     """
+    from lamp.planners.closed_loop import RENDER_EVERY
     from lamp.planners.result import RunResult
     from lamp.planners.run import Solution
+    from lamp.progress import ProgressEvent
+    from lamp.record import Recorder
     from lamp.rl.policy import load_policy
     from lamp.sim import Simulator
+    from lamp.sim.mjcf import TIMESTEP
 
     policy = policy or load_policy()
     check_scene(scene, policy)
@@ -192,12 +238,29 @@ def solve_mapush(scene: Scene, seed: int = 0, *, policy=None, render: bool = Fal
     t_start = time.perf_counter()
     sim = Simulator(scene)
     result = RunResult(scene=scene.name, planner="mapush", seed=int(seed))
+    frame_skip = int(policy.info.env_settings.get("frame_skip", 10))
+    recorder = Recorder(scene, max(1, round(RENDER_EVERY / frame_skip)) * frame_skip * TIMESTEP)
     frames: list[Any] = []
     per_object = []
-    for index in range(len(scene.objects)):
+    n = len(scene.objects)
+
+    def emit(kind: str, index: int, **kw: Any) -> None:
+        if progress is not None:
+            progress(ProgressEvent(kind, object_index=index, n_objects=n, **kw))
+
+    for index in range(n):
         record = MapushRecord()
+
+        def observe(event, index=index) -> None:
+            recorder(event)
+            emit("segment", index, segments=event.segment + 1, replans=event.segment)
+
+        record.observer = observe
+        emit("object", index)
         obj = run_object(scene, index, sim, policy, record, render=render,
                          time_limit=time_limit)
+        emit("object-done", index, segments=obj.segments, replans=obj.replans,
+             success=obj.success)
         result.objects.append(obj)
         result.planning_time_s.extend(record.planning_time_s)
         result.makespan += record.makespan
@@ -206,12 +269,11 @@ def solve_mapush(scene: Scene, seed: int = 0, *, policy=None, render: bool = Fal
         per_object.append({"mapush_success": record.mapush_success,
                            "mapush_time_s": record.mapush_time_s,
                            "sim_time_s": round(record.sim_time_s, 3)})
-        if progress is not None:
-            progress(index, obj)
     result.wall_time_s = time.perf_counter() - t_start
     result.stats = {
         "mapush_success": all(o["mapush_success"] for o in per_object),
         "mapush_objects": per_object,
         "failure_reasons": [o.failure_reason for o in result.objects],
     }
-    return Solution(result, frames)
+    result.recording = recorder.finish("mapush", int(seed), result.to_dict())
+    return Solution(result, frames, result.recording)

@@ -1,4 +1,4 @@
-"""Verify: can the robots realise one object transition? (paper Sec. III-A-1, Alg. 1 lines 18-26)
+"""Verify: can the robots realise one object transition? (paper Sec. III-A-1, Alg. 1 lines 17-25)
 
 Given the object at ``q_from``, a requested motion to ``q_to`` and the robots at ``q_R``:
 for budgets B = min(N, max_budget) down to 1 (line 19), draw K proposals from the
@@ -6,7 +6,7 @@ manipulation model (line 20), drop those whose contacts or push paths collide wi
 obstacles, the border, the object or each other (line 21, ``Collide``), pair robots with
 contacts by shortest distance and send unpaired robots to waiting spots out of the push's
 way (line 22, ``Reassign``), and ask Gspi for approach paths (line 23). The first success
-returns the transition T_R = T_move (+) T_manip (line 24); otherwise failure (line 26).
+returns the transition T_R = T_move (+) T_manip (line 24); otherwise failure (line 25).
 """
 
 from __future__ import annotations
@@ -153,14 +153,13 @@ def approach(task: ManipulationTask, q_from: np.ndarray, q_R: np.ndarray,
     backoff = leave_contact(task, q_from, q_R)
     starts = backoff[:, -1]
     task.stats.gspi_calls += 1
-    try:
-        plan = plan_paths(
-            task.scene, starts, goals, object_poses=task.poses_with(q_from),
-            time_limit=task.config.gspi_time_limit, space=task.robot_space_at(q_from),
-            seed=task.seed, goal_tolerance=task.config.contact_tolerance,
-        )
-    except ValueError:
-        return None
+    # Contacts deeper than the tolerance or robots left overlapping come back as a failed
+    # plan (status INVALID_GOAL / INVALID_START), like any other infeasible approach.
+    plan = plan_paths(
+        task.scene, starts, goals, object_poses=task.poses_with(q_from),
+        time_limit=task.config.gspi_time_limit, space=task.robot_space_at(q_from),
+        seed=task.seed, goal_tolerance=task.config.contact_tolerance,
+    )
     if not plan.success:
         return None
     task.stats.gspi_success += 1
@@ -183,7 +182,7 @@ def push_paths(end_of_move: np.ndarray, goal_of: np.ndarray, pushes_world: np.nd
 def route_push(task: ManipulationTask, q_from: np.ndarray, q_to: np.ndarray, q_R: np.ndarray,
                pushes_local: np.ndarray, *, edge: tuple | None = None,
                deadline: float | None = None) -> Transition | None:
-    """Robot trajectories for one chosen push (Alg. 1 lines 22-23), or None.
+    """Robot trajectories for one chosen push (``Reassign`` and Gspi, Alg. 1 lines 22-23), or None.
 
     The push paths ``pushes_local`` (object frame at ``q_from``) are placed in the world,
     the robots are paired with their contacts or sent to waiting spots (``Reassign``) and
@@ -208,7 +207,7 @@ def route_push(task: ManipulationTask, q_from: np.ndarray, q_to: np.ndarray, q_R
 
 def _usable_proposals(task: ManipulationTask, q_from: np.ndarray, q_R: np.ndarray,
                       motion: np.ndarray, budget: int, attempt: int) -> list[np.ndarray]:
-    """Lines 20-21: the K proposals that pass ``Collide``, nearest to the robots first.
+    """Lines 20-21: the K proposals (C_R, T_manip) that pass ``Collide``, nearest to the robots first.
 
     Ordering by the optimal robot-to-contact distance is our addition: Gspi is tried on
     the candidates that need the shortest approach first, which shortens the makespan and
@@ -226,7 +225,7 @@ def _usable_proposals(task: ManipulationTask, q_from: np.ndarray, q_R: np.ndarra
 
 def verify(task: ManipulationTask, q_from: np.ndarray, q_to: np.ndarray, q_R: np.ndarray,
            attempt: int = 0) -> Transition | None:
-    """``Verify`` (Alg. 1 lines 18-26): robot trajectories that move the object ``q_from -> q_to``."""
+    """``Verify`` (Alg. 1 lines 17-25): robot trajectories that move the object ``q_from -> q_to``."""
     task.stats.verify_calls += 1
     q_from = np.asarray(q_from, float)
     q_to = np.asarray(q_to, float)
@@ -236,11 +235,11 @@ def verify(task: ManipulationTask, q_from: np.ndarray, q_to: np.ndarray, q_R: np
     for budget in range(top, 0, -1):  # line 19: budgets N down to 1
         candidates = _usable_proposals(task, q_from, q_R, motion, budget, attempt)
         for pushes_local in candidates[: task.config.gspi_attempts_per_budget]:
-            trans = route_push(task, q_from, q_to, q_R, pushes_local)  # lines 22-23
-            if trans is not None:  # line 24
+            trans = route_push(task, q_from, q_to, q_R, pushes_local)  # lines 22-23: Reassign, Gspi
+            if trans is not None:  # line 24: T_move found, return it
                 task.stats.verify_success += 1
                 return trans
-    return None  # line 26
+    return None  # line 25: return failure
 
 
 def reroute(task: ManipulationTask, cached: Transition, q_R: np.ndarray) -> Transition | None:

@@ -6,8 +6,8 @@ The search runs backwards from the goal: ``g(s)`` and ``rhs(s)`` estimate the co
 the optimised pseudocode (Fig. 4 of S. Koenig and M. Likhachev, "D* Lite", AAAI 2002).
 
 LAMP-Lazy (the paper's Alg. 2) uses it through the paper's three procedures:
-``initialize(goal)`` (Alg. 2 line 1), ``plan_shortest_path(start)`` (line 13) and
-``update_change(u, v, cost)`` (lines 21 and 36: a failed transition is penalised).
+``initialize(goal)`` (Alg. 2 line 1), ``plan_shortest_path(start)`` (line 11) and
+``update_change(u, v, cost)`` (lines 18 and 31: a failed transition is penalised).
 
 Departures from the pseudocode, each for a reason:
 
@@ -323,7 +323,7 @@ class DStarLite:
         start: Hashable,
         start_edges: Sequence[tuple[Hashable, float]] | None = None,
     ) -> list[Hashable]:
-        """Compute or repair the shortest path from ``start`` to the goal (Alg. 2 line 13).
+        """Compute or repair the shortest path from ``start`` to the goal (Alg. 2 line 11).
 
         ``start`` is a graph vertex, or, when ``start_edges`` is given, a virtual vertex
         (hashable, not in the graph, e.g. a pose tuple) with out-edges ``[(v, cost)]``.
@@ -373,7 +373,7 @@ class DStarLite:
     def update_change(self, u: Hashable, v: Hashable, new_cost: float) -> None:
         """{40'}-{47'}: the cost of edge u -> v becomes ``new_cost`` (``inf`` marks it
         invalid). Used by LAMP-Lazy to penalise a transition that failed verification
-        (Alg. 2 lines 21 and 36). The path is repaired by the next ``plan_shortest_path``.
+        (``UpdateChange``, Alg. 2 lines 18 and 31). The path is repaired by the next ``plan_shortest_path``.
         """
         if self.goal is None:
             raise RuntimeError("call initialize(goal) before update_change")

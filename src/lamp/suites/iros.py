@@ -32,7 +32,7 @@ from lamp.scene.loader import scene_from_dict
 from lamp.scene.model import Circle, Obstacle, Scene
 from lamp.suites import _kernels as K
 from lamp.suites import checks as C
-from lamp.suites.generators import _r, circle, rect
+from lamp.suites.layout import circle, rect, rnd
 
 WORKSPACE = (5.0, 4.0)
 #: distance (m) below the goal from which each piece is pushed straight into place
@@ -129,8 +129,8 @@ def scene_dict() -> dict[str, Any]:
         objects.append(
             {
                 **shape,
-                "start": [_r(start[0]), _r(start[1]), _r(start[2], 4)],
-                "goal": [_r(goal[0]), _r(goal[1]), _r(goal[2], 4)],
+                "start": [rnd(start[0]), rnd(start[1]), rnd(start[2], 4)],
+                "goal": [rnd(goal[0]), rnd(goal[1]), rnd(goal[2], 4)],
             }
         )
     return {
