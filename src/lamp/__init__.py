@@ -60,7 +60,8 @@ def solve(scene: Scene | str | Path, planner: PlannerName = "lazy", seed: int = 
         scene: a ``Scene`` or the path of a scene file (``SceneError`` if it is invalid).
         planner: ``"lazy"`` (LAMP-Lazy, default), ``"astar"`` (LAMP-A*, open loop),
             ``"astar-replan"`` (LAMP-A*, replanning on drift), ``"gco-ori"`` (GCo with its
-            0.2 m buffer) or ``"gco-var"`` (GCo with zero buffer).
+            0.2 m buffer), ``"gco-var"`` (GCo with zero buffer) or ``"mapush"`` (the
+            MAPush-style RL baseline: lattice subgoals and a PPO pushing policy).
         seed: random seed; the same scene, planner and seed give the same result.
         model: ``"learned"`` (the shipped checkpoint), ``"geometric"``, the path of a
             checkpoint written by ``lamp model train``, or a proposer object.

@@ -175,6 +175,13 @@ def run(
     limit = time_limit if time_limit is not None else planning_limit
     model = _check_run_options(planner, model, out, limit)
     scene = load_scene_or_exit(scene_file)
+    if planner == "mapush":
+        from lamp.planners.mapush import check_scene
+
+        try:
+            check_scene(scene)
+        except ValueError as exc:
+            fail_input(str(exc))
     result = _run_and_write(scene, planner, seed, out, render, model, limit, progress, html)
     if check and not result["success"]:
         raise typer.Exit(code=1)
@@ -273,6 +280,12 @@ def _register_groups() -> None:
 
         app.add_typer(model_app, name="model")
     except ImportError:  # pragma: no cover - only while the module is being written
+        pass
+    try:
+        from lamp.rl.cli import rl_app
+
+        app.add_typer(rl_app, name="rl")
+    except ImportError:  # pragma: no cover - the rl extra is not installed
         pass
     try:
         from lamp.bench.cli import bench_command, report_command

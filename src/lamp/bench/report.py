@@ -40,10 +40,10 @@ from lamp.bench.jobs import RESULTS_FILE, JobKey, latest_by_key, read_records, r
 #: The paper's four map families, in its column order.
 FAMILY_ORDER = ("random", "maze", "tilt", "warehouse")
 #: Planners in the paper's row order (``lamp.planners.run.PLANNERS``).
-PLANNER_ORDER = ("gco-ori", "gco-var", "astar", "astar-replan", "lazy")
+PLANNER_ORDER = ("mapush", "gco-ori", "gco-var", "astar", "astar-replan", "lazy")
 PLANNER_LABELS = {
     "lazy": "LAMP-Lazy", "astar": "LAMP-A*_ori", "astar-replan": "LAMP-A*_replan",
-    "gco-ori": "GCo_ori", "gco-var": "GCo_var",
+    "gco-ori": "GCo_ori", "gco-var": "GCo_var", "mapush": "MAPush",
 }
 #: LAMP planners: the rows of Table II.
 LAMP_PLANNERS = ("astar", "astar-replan", "lazy")
@@ -51,7 +51,7 @@ LAMP_PLANNERS = ("astar", "astar-replan", "lazy")
 IROS_SUITE = "iros"
 REFERENCE_PLANNER = "lazy"
 
-#: Table I of the paper (success rate, %), per family; MAPush was not re-implemented here.
+#: Table I of the paper (success rate, %), per family.
 PAPER_SUCCESS: dict[str, dict[str, float]] = {
     "mapush": {"random": 8, "maze": 0, "tilt": 0, "warehouse": 0},
     "gco-ori": {"random": 0, "maze": 0, "tilt": 0, "warehouse": 0},
@@ -351,7 +351,7 @@ def failure_line(config: dict[str, Any], records: Sequence[dict[str, Any]]) -> f
 
 # ------------------------------------------------------------------------------ figures
 COLORS = {"gco-ori": "#8c564b", "gco-var": "#d62728", "astar": "#1f77b4",
-          "astar-replan": "#9467bd", "lazy": "#2ca02c"}
+          "astar-replan": "#9467bd", "lazy": "#2ca02c", "mapush": "#7f7f7f"}
 FAMILY_COLORS = {"random": "#1f77b4", "maze": "#ff7f0e", "tilt": "#2ca02c",
                  "warehouse": "#d62728"}
 MARKERS = {"gco-ori": "o", "gco-var": "s", "astar": "^", "astar-replan": "D"}
@@ -503,7 +503,7 @@ def _paper(value: float | None) -> str:
 
 def success_markdown(table: dict[str, dict[str, Rate]], fams: Sequence[str]) -> str:
     rows = []
-    if any(f in FAMILY_ORDER for f in fams):
+    if any(f in FAMILY_ORDER for f in fams) and "mapush" not in table:
         rows.append(["MAPush (paper only, not run)"]
                     + [(f"[paper {PAPER_SUCCESS['mapush'][f]:.0f}%]" if f in FAMILY_ORDER
                         else "-") for f in fams] + ["-"])

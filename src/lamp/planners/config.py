@@ -12,8 +12,9 @@ PLANNER_DESCRIPTIONS = {
     "astar-replan": "LAMP-A*, replanning on drift",
     "gco-ori": "GCo with its 0.2 m buffer",
     "gco-var": "GCo with zero buffer",
+    "mapush": "MAPush-style RL baseline (lattice subgoals + PPO pushing policy)",
 }
-PlannerName = Literal["lazy", "astar", "astar-replan", "gco-ori", "gco-var"]
+PlannerName = Literal["lazy", "astar", "astar-replan", "gco-ori", "gco-var", "mapush"]
 #: Default cumulative planning limit per object (s): the paper's 500 s for LAMP-A*,
 #: ``DEFAULT_PLANNING_LIMIT`` for every other planner.
 DEFAULT_PLANNING_LIMIT = 300.0

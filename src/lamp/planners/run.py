@@ -151,6 +151,10 @@ def run_scene(scene: Scene, planner: str, seed: int, model: str | Path | Any, *,
     from lamp.sim.mjcf import TIMESTEP
 
     check_planner(planner)
+    if planner == "mapush":
+        from lamp.planners.mapush import solve_mapush
+
+        return solve_mapush(scene, seed, render=render, progress=progress)
     cfg = config or default_config(planner)
     proposer = load_proposer(model)
     check_robot_radius(scene, proposer)

@@ -1,0 +1,279 @@
+"""The MAPush-style baseline (``mapush``): hierarchical, a path-following high level that
+hands object subgoals to a learned, shared mid-level pushing policy.
+
+High level (per subgoal): an obstacle-aware object path from the object's current pose to
+its goal on the object lattice (GCo's weighted A*, ``lamp.search.gco_lattice``, no
+inflation; a footprint shrunk by 2 cm as fallback next to obstacles), and the subgoal the
+*lookahead* distance along it (the goal itself once the rest of the path is shorter).
+Adaptive subgoal choice: the lookahead starts at ``lamp.rl.train.SUBGOAL_AHEAD``, halves
+(down to ``LOOKAHEAD_MIN``) after a subgoal the policy did not reach in its time and grows
+by half again (up to the start value) after one it reached.
+
+Mid level: the PPO policy (``lamp.rl.policy``) drives all robots with velocity commands in
+``lamp.env.PushCore`` on the run's own simulator, until the object is within
+``SUBGOAL_TOLERANCE`` of the subgoal or ``SUBGOAL_TIME`` has passed.
+
+An object's run ends when its position is within the strict 0.1 m of the goal, after
+``OBJECT_TIME_LIMIT`` simulated seconds (MAPush's two minutes), when no object path exists,
+or when the object leaves the workspace. Two criteria are recorded: the scene format's
+(``success``: final pose within 0.1 m and 0.1 rad) and MAPush's (``mapush_success``: within
+``MAPUSH_RADIUS`` of the goal position at some instant within the time limit, orientation
+ignored).
+
+Segments are subgoals; makespan counts ``MAKESPAN_STEP`` = 0.08 s steps of simulated time.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from lamp.planners.result import (
+    SUCCESS_ORIENTATION_TOL,
+    SUCCESS_POSITION_TOL,
+    ObjectResult,
+    goal_errors,
+    within_goal,
+)
+from lamp.scene.model import Scene
+from lamp.sim.simulator import MAX_STEP, ROBOT_SPEED
+
+#: Simulated time limit per object [s] (MAPush's criterion: two minutes).
+OBJECT_TIME_LIMIT = 120.0
+#: MAPush's success radius around the goal position [m] (orientation ignored).
+MAPUSH_RADIUS = 0.5
+#: Smallest lookahead of the adaptive subgoal choice [m].
+LOOKAHEAD_MIN = 0.2
+#: Simulated time of one makespan step (one 0.02 m waypoint at the simulator's speed) [s].
+MAKESPAN_STEP = MAX_STEP / ROBOT_SPEED
+#: The run of an object ends within this of the goal position [m] (the strict criterion).
+STOP_RADIUS = SUCCESS_POSITION_TOL
+
+
+def check_scene(scene: Scene, policy=None) -> None:
+    """``lamp.errors.InputError`` (a ValueError) when the policy cannot drive ``scene``
+    (another number of robots)."""
+    from lamp.errors import InputError
+    from lamp.rl.policy import load_policy
+
+    policy = policy or load_policy()
+    if scene.n_robots != policy.info.n_robots:
+        raise InputError(
+            f"planner mapush: scene {scene.name!r} has {scene.n_robots} robots, but the "
+            f"mid-level policy was trained for {policy.info.n_robots}"
+        )
+
+
+@dataclass
+class MapushRecord:
+    """What one object's run measured (besides its ``ObjectResult``); ``observer`` (if
+    set) is called with a ``lamp.planners.closed_loop.SegmentEvent``-like record of every
+    subgoal (what ``lamp.record.Recorder`` takes)."""
+
+    planning_time_s: list[float] = field(default_factory=list)
+    makespan: int = 0
+    mapush_success: bool = False
+    mapush_time_s: float | None = None
+    sim_time_s: float = 0.0
+    frames: list[Any] = field(default_factory=list)
+    observer: Any = None
+
+
+def _segment_event(index: int, segment: int, rows: list, sub: np.ndarray, path: np.ndarray,
+                   planning_s: float, period: float, every: int, outcome: str):
+    """A subgoal as a segment record: its trace (states every ``every`` steps, row 0 the
+    state before it), the requested object motion, no contacts (the policy chooses them)."""
+    from types import SimpleNamespace
+
+    from lamp.sim.simulator import Trace
+
+    steps = np.array([r[0] for r in rows], float)
+    robots = np.array([r[1] for r in rows], float)
+    objects = np.array([r[2] for r in rows], float)
+    trace = Trace(times=(steps - steps[0]) * period, robot_positions=robots,
+                  object_poses=objects)
+    execution = SimpleNamespace(trace=trace, sim_time=float((steps[-1] - steps[0]) * period))
+    q_from = objects[0, index]
+    transition = SimpleNamespace(q_from=q_from, q_to=sub, contacts=np.zeros((0, 2)),
+                                 pushes_local=np.zeros((0, 1, 2)))
+    plan = SimpleNamespace(object_path=path, verified_edges=[], penalised_edges=[])
+    miss = goal_errors(objects[-1, index], sub)
+    return SimpleNamespace(object_index=index, segment=segment, transition=transition,
+                           execution=execution, plan=plan, planning_time_s=planning_s,
+                           replanned=True, drift=miss, outcome=outcome)
+
+
+def _object_path(scene: Scene, index: int, pose: np.ndarray, poses: np.ndarray):
+    from lamp.search.gco_lattice import gco_object_path
+
+    for shrink in (0.0, 0.02):
+        path = gco_object_path(scene, index, pose, poses, -shrink, time_limit=10.0)
+        if path is not None and len(path) > 0:
+            return np.asarray(path, float)
+    return None
+
+
+def run_object(scene: Scene, index: int, sim, policy, record: MapushRecord,
+               render: bool = False, time_limit: float = OBJECT_TIME_LIMIT) -> ObjectResult:
+    """Move object ``index`` to its goal in ``sim`` within ``time_limit`` simulated seconds
+    (see the module docstring)."""
+    from lamp.env.core import PushConfig, PushCore
+    from lamp.env.gym_env import observation_space
+    from lamp.rl.train import SUBGOAL_AHEAD, SUBGOAL_TIME, SUBGOAL_TOLERANCE, along, pose_at
+
+    settings = {k: v for k, v in policy.info.env_settings.items()
+                if k in ("frame_skip", "max_speed", "patch_size", "patch_spacing",
+                         "patch_range", "frame")}
+    # the core never ends an episode by itself: success is judged here
+    config = PushConfig(**settings, position_tolerance=1e-9, orientation_tolerance=None,
+                        time_limit=time_limit + 1.0)
+    core = PushCore(scene, config, sim=sim)
+    core.resume(active=index)
+    obs_space = observation_space(core)
+    policy.check_env(core.n_robots, obs_space, f"scene {scene.name!r}")
+    goal = scene.objects[index].goal
+    lookahead = SUBGOAL_AHEAD
+    from lamp.planners.closed_loop import RENDER_EVERY
+
+    every = max(1, round(RENDER_EVERY / config.frame_skip))  # env steps per recorded state
+    segments, reason, left = 0, "", False
+    q = core.object_poses()[index]
+    while True:
+        if math.hypot(*(q[:2] - np.asarray(goal[:2]))) <= STOP_RADIUS:
+            break
+        if core.time >= time_limit - 1e-9:
+            reason = f"time limit ({time_limit:g} s simulated)"
+            break
+        t0 = time.perf_counter()
+        path = _object_path(scene, index, q, core.object_poses())
+        dt = time.perf_counter() - t0
+        if path is None:
+            reason = "no object path"
+            break
+        rest = along(path)[-1]
+        sub = np.asarray(goal, float) if rest <= lookahead else pose_at(path, lookahead)
+        core.set_goal(sub)
+        record.planning_time_s.append(dt)
+        segments += 1
+        t_sub = core.time
+        rows = [(core.steps, core.robot_positions().copy(), core.object_poses())]
+        reached = False
+        while core.time - t_sub < SUBGOAL_TIME - 1e-9 and core.time < time_limit - 1e-9:
+            out = core.step(policy.act(obs_space, core.observe()))
+            q = core.object_poses()[index]
+            d_goal = math.hypot(*(q[:2] - np.asarray(goal[:2])))
+            if not record.mapush_success and d_goal <= MAPUSH_RADIUS:
+                record.mapush_success, record.mapush_time_s = True, core.time
+            if render and core.steps % every == 0:
+                record.frames.append(_frame(core, index, sub))
+            if out.info["left_workspace"]:
+                left = True
+            elif math.hypot(*(q[:2] - sub[:2])) <= SUBGOAL_TOLERANCE or d_goal <= STOP_RADIUS:
+                reached = True
+            if core.steps % every == 0 or left or reached:
+                rows.append((core.steps, core.robot_positions().copy(), core.object_poses()))
+            if left or reached:
+                break
+        if rows[-1][0] != core.steps:
+            rows.append((core.steps, core.robot_positions().copy(), core.object_poses()))
+        if record.observer is not None and len(rows) > 1:
+            outcome = "left" if left else ("continue" if reached else "stalled")
+            record.observer(_segment_event(index, segments - 1, rows, sub, path, dt,
+                                           core.period, every, outcome))
+        if left:
+            reason = "object left the workspace"
+            break
+        lookahead = (min(SUBGOAL_AHEAD, 1.5 * lookahead) if reached
+                     else max(LOOKAHEAD_MIN, 0.5 * lookahead))
+    record.sim_time_s += core.time
+    record.makespan += int(round(core.time / MAKESPAN_STEP))
+    pos_err, rot_err = goal_errors(q, goal)
+    success = (not left) and within_goal(q, goal, SUCCESS_POSITION_TOL, SUCCESS_ORIENTATION_TOL)
+    if not success and not reason:
+        reason = "orientation off at the goal (the policy ignores orientation)"
+    return ObjectResult(
+        success=bool(success), final_pose=[float(v) for v in q], goal=[float(v) for v in goal],
+        position_error=pos_err, orientation_error=rot_err, left_workspace=bool(left),
+        segments=segments, full_horizon_plan=False, failure_reason="" if success else reason,
+        replans=max(segments - 1, 0), planning_time_s=float(sum(record.planning_time_s)),
+    )
+
+
+def _frame(core, index: int, subgoal: np.ndarray):
+    from lamp.viz.animation import Frame
+
+    return Frame(robot_positions=core.robot_positions().copy(),
+                 object_poses=core.object_poses(), active_object=index,
+                 planned_path=None, verified_edges=[], penalised_edges=[],
+                 caption=f"object {index + 1}/{core.n_objects}, subgoal "
+                         f"({subgoal[0]:.2f}, {subgoal[1]:.2f})")
+
+
+def solve_mapush(scene: Scene, seed: int = 0, *, policy=None, render: bool = False,
+                 progress=None, time_limit: float | None = None):
+    """Plan and execute ``scene`` object by object (``lamp.solve(..., planner="mapush")``);
+    returns a ``lamp.planners.run.Solution`` with the run's recording.
+
+    Deterministic: nothing is random (``seed`` is recorded only). ``result.stats`` adds
+    the MAPush criterion: ``mapush_success`` (every object within ``MAPUSH_RADIUS`` of its
+    goal position within ``time_limit`` simulated seconds per object), per object
+    ``mapush_objects``. ``progress`` receives ``lamp.progress.ProgressEvent``s.
+    """
+    from lamp.planners.closed_loop import RENDER_EVERY
+    from lamp.planners.result import RunResult
+    from lamp.planners.run import Solution
+    from lamp.progress import ProgressEvent
+    from lamp.record import Recorder
+    from lamp.rl.policy import load_policy
+    from lamp.sim import Simulator
+    from lamp.sim.mjcf import TIMESTEP
+
+    policy = policy or load_policy()
+    check_scene(scene, policy)
+    time_limit = OBJECT_TIME_LIMIT if time_limit is None else float(time_limit)
+    t_start = time.perf_counter()
+    sim = Simulator(scene)
+    result = RunResult(scene=scene.name, planner="mapush", seed=int(seed))
+    frame_skip = int(policy.info.env_settings.get("frame_skip", 10))
+    recorder = Recorder(scene, max(1, round(RENDER_EVERY / frame_skip)) * frame_skip * TIMESTEP)
+    frames: list[Any] = []
+    per_object = []
+    n = len(scene.objects)
+
+    def emit(kind: str, index: int, **kw: Any) -> None:
+        if progress is not None:
+            progress(ProgressEvent(kind, object_index=index, n_objects=n, **kw))
+
+    for index in range(n):
+        record = MapushRecord()
+
+        def observe(event, index=index) -> None:
+            recorder(event)
+            emit("segment", index, segments=event.segment + 1, replans=event.segment)
+
+        record.observer = observe
+        emit("object", index)
+        obj = run_object(scene, index, sim, policy, record, render=render,
+                         time_limit=time_limit)
+        emit("object-done", index, segments=obj.segments, replans=obj.replans,
+             success=obj.success)
+        result.objects.append(obj)
+        result.planning_time_s.extend(record.planning_time_s)
+        result.makespan += record.makespan
+        result.replans += obj.replans
+        frames.extend(record.frames)
+        per_object.append({"mapush_success": record.mapush_success,
+                           "mapush_time_s": record.mapush_time_s,
+                           "sim_time_s": round(record.sim_time_s, 3)})
+    result.wall_time_s = time.perf_counter() - t_start
+    result.stats = {
+        "mapush_success": all(o["mapush_success"] for o in per_object),
+        "mapush_objects": per_object,
+        "failure_reasons": [o.failure_reason for o in result.objects],
+    }
+    result.recording = recorder.finish("mapush", int(seed), result.to_dict())
+    return Solution(result, frames, result.recording)

@@ -1,0 +1,214 @@
+"""The MAPush-style baseline: policy files, training pieces, the planner and its bad input."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+import torch
+from gymnasium import spaces
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from typer.testing import CliRunner
+
+import lamp
+from lamp.cli import app
+from lamp.env import PushEnv
+from lamp.geometry.object_space import ObjectSpace
+from lamp.planners.mapush import MAKESPAN_STEP, MAPUSH_RADIUS, check_scene, solve_mapush
+from lamp.rl.policy import load_policy
+from lamp.rl.train import (
+    SUBGOAL_TOLERANCE,
+    SubgoalEnv,
+    SubgoalSampler,
+    TrainSettings,
+    export_actor,
+    info_kwargs,
+    train,
+)
+from lamp.scene import scene_from_dict
+
+SHORT = {
+    "format": "lamp-scene/1",
+    "name": "short-push",
+    "workspace": [2.0, 2.0],
+    "robots": {"radius": 0.05, "starts": [[0.55, 1.0], [0.6, 0.8], [0.6, 1.2]]},
+    "obstacles": [{"type": "circle", "center": [1.6, 1.6], "radius": 0.15}],
+    "objects": [{"type": "rectangle", "size": [0.3, 0.25], "start": [0.9, 1.0, 0.0],
+                 "goal": [1.3, 1.0, 0.0]}],
+}
+
+
+@pytest.fixture(scope="module")
+def ppo_env():
+    from stable_baselines3 import PPO
+
+    env = SubgoalEnv(["maze-02", "random-02"], seed=0)
+    model = PPO("MlpPolicy", env, seed=0, device="cpu", n_steps=64, batch_size=32,
+                policy_kwargs={"net_arch": [16, 16]})
+    return model, env
+
+
+def test_exported_actor_matches_ppo_and_survives_a_file_round_trip(ppo_env, tmp_path):
+    model, env = ppo_env
+    actor = export_actor(model, info_kwargs(env, TrainSettings(hidden=(16, 16)), {"x": 1}))
+    actor.save(tmp_path / "p.pt")
+    loaded = load_policy(tmp_path / "p.pt")
+    assert loaded.info == actor.info
+    for _ in range(5):
+        obs, _ = env.reset()
+        want, _ = model.predict(obs, deterministic=True)
+        got = loaded.act_flat(obs)
+        assert np.allclose(got, np.clip(want, -1, 1), atol=1e-6)
+    # the weights file holds tensors only: a weights-only load reads it
+    tensors = torch.load(tmp_path / "p.pt", weights_only=True)
+    assert set(tensors) == {f"layer{k}.{w}" for k in range(3) for w in ("weight", "bias")}
+
+
+def test_bad_policy_files_are_clear_errors(tmp_path):
+    with pytest.raises(ValueError, match="missing.pt: policy file not found"):
+        load_policy(tmp_path / "missing.pt")
+    (tmp_path / "bad.pt").write_bytes(b"not a torch file")
+    (tmp_path / "bad.json").write_text(json.dumps({"format": "lamp-push-policy/1",
+                                                   "n_robots": 3, "obs_dim": 4, "hidden": []}))
+    with pytest.raises(ValueError, match="bad.pt: not a valid policy"):
+        load_policy(tmp_path / "bad.pt")
+    (tmp_path / "bad.json").write_text(json.dumps({"format": "other"}))
+    with pytest.raises(ValueError, match="format is 'other'"):
+        load_policy(tmp_path / "bad.pt")
+
+
+@settings(max_examples=8, deadline=None)
+@given(st.integers(0, 2**31 - 1))
+def test_sampled_episodes_are_valid(seed):
+    """Object pose on its path and collision-free, subgoal farther than the tolerance,
+    robots free of obstacles and objects and of each other."""
+    sampler = _SAMPLER
+    sampler.rng = np.random.default_rng(seed)
+    k, opts = sampler.sample()
+    scene = sampler.scenes[k]
+    pose, goal, robots = opts["object_poses"][0], opts["goal"], opts["robot_positions"]
+    assert math.hypot(*(goal[:2] - pose[:2])) > SUBGOAL_TOLERANCE
+    space = ObjectSpace.from_scene(scene, 0, opts["object_poses"], 0.0)
+    assert space.pose_free(pose[None])[0]
+    r = scene.robot_radius
+    d = np.hypot(*(robots[:, None] - robots[None]).transpose(2, 0, 1))
+    assert (d[np.triu_indices(len(robots), 1)] >= 2 * r).all()
+    from lamp.geometry.robot_space import RobotSpace
+
+    free = RobotSpace.from_scene(scene, object_poses=opts["object_poses"]).is_free(robots,
+                                                                                  exact=True)
+    assert free.all()
+
+
+_SAMPLER = SubgoalSampler(["maze-02", "warehouse-02"], seed=0)
+
+
+def test_training_writes_a_loadable_policy_and_curve(tmp_path):
+    settings = TrainSettings(steps=64, eval_every=64, eval_episodes=1, hidden=(8,), rollout=64)
+    rec = train(tmp_path, settings, scenes=["maze-02"])
+    again = train(tmp_path / "again", settings, scenes=["maze-02"])
+    assert (tmp_path / "policy.pt").exists()
+    a = torch.load(tmp_path / "policy.pt", weights_only=True)
+    b = torch.load(tmp_path / "again" / "policy.pt", weights_only=True)
+    assert all(torch.equal(a[k], b[k]) for k in a)  # same seed, same weights
+    assert again["curve"][-1]["success_rate"] == rec["curve"][-1]["success_rate"]
+    assert [c["steps"] for c in rec["curve"]][0] == 0 and rec["steps"] >= 64
+    assert all(0.0 <= c["success_rate"] <= 1.0 for c in rec["curve"])
+    policy = load_policy(tmp_path / "policy.pt")
+    assert policy.info.n_robots == 3 and policy.info.hidden == (8,)
+    assert json.loads((tmp_path / "curve.json").read_text())["curve"] == rec["curve"]
+
+
+def _tiny_policy(tmp_path, ppo_env):
+    model, env = ppo_env
+    actor = export_actor(model, info_kwargs(env, TrainSettings(hidden=(16, 16)), {}))
+    actor.save(tmp_path / "tiny.pt")
+    return load_policy(tmp_path / "tiny.pt")
+
+
+def test_mapush_run_is_deterministic_and_reports_both_criteria(tmp_path, ppo_env):
+    scene = scene_from_dict(SHORT)
+    policy = _tiny_policy(tmp_path, ppo_env)
+    a = solve_mapush(scene, policy=policy, time_limit=10.0).result.to_dict()
+    b = solve_mapush(scene, policy=policy, time_limit=10.0).result.to_dict()
+    def untimed(d):  # wall-clock measurements differ between runs; nothing else may
+        if isinstance(d, dict):
+            return {k: untimed(v) for k, v in d.items() if "planning" not in k and "wall" not in k}
+        return [untimed(v) for v in d] if isinstance(d, list) else d
+
+    a, b = untimed(a), untimed(b)
+    assert a == b
+    obj, crit = a["objects"][0], a["stats"]["mapush_objects"][0]
+    assert a["planner"] == "mapush" and a["segments"] == obj["segments"] >= 1
+    # MAPush's criterion is looser than the strict one, and consistent with the final pose
+    assert not obj["success"] or crit["mapush_success"]
+    if obj["position_error"] <= MAPUSH_RADIUS:
+        assert crit["mapush_success"]
+    assert crit["sim_time_s"] <= 10.0 + 1e-6
+    assert a["makespan"] == round(crit["sim_time_s"] / MAKESPAN_STEP)
+
+
+def test_scene_with_other_robot_count_is_rejected(tmp_path, ppo_env):
+    d = json.loads(json.dumps(SHORT))
+    d["robots"]["starts"].append([0.3, 0.3])
+    scene = scene_from_dict(d)
+    policy = _tiny_policy(tmp_path, ppo_env)
+    with pytest.raises(ValueError, match="has 4 robots, but the mid-level policy was trained "
+                                         "for 3"):
+        check_scene(scene, policy)
+    with pytest.raises(ValueError, match="trained for 3"):
+        solve_mapush(scene, policy=policy)
+    env = PushEnv(scene)
+    with pytest.raises(ValueError, match="has 4 robots, but the policy was trained for 3"):
+        policy.check_env(4, env.observation_space, "scene 'x'")
+    assert spaces.flatdim(env.observation_space) != policy.info.obs_dim
+
+
+def test_cli_run_mapush_and_bad_robot_count(tmp_path, ppo_env, monkeypatch):
+    import lamp.planners.mapush as mapush
+    import lamp.rl.policy as policy_module
+
+    _tiny_policy(tmp_path, ppo_env)
+    monkeypatch.setattr(policy_module, "DEFAULT_POLICY", tmp_path / "tiny.pt")
+    monkeypatch.setattr(mapush, "OBJECT_TIME_LIMIT", 5.0)
+    d = json.loads(json.dumps(SHORT))
+    (tmp_path / "ok.json").write_text(json.dumps(d))
+    d["robots"]["starts"] = d["robots"]["starts"][:2]
+    (tmp_path / "two.json").write_text(json.dumps(d))
+    runner = CliRunner()
+    bad = runner.invoke(app, ["run", str(tmp_path / "two.json"), "--planner", "mapush",
+                              "--out", str(tmp_path / "o2")])
+    assert bad.exit_code == 2 and "has 2 robots" in bad.output
+    assert not (tmp_path / "o2").exists()
+    ok = runner.invoke(app, ["run", str(tmp_path / "ok.json"), "--planner", "mapush",
+                             "--out", str(tmp_path / "o1")])
+    assert ok.exit_code == 0, ok.output
+    res = json.loads((tmp_path / "o1" / "result.json").read_text())
+    assert res["planner"] == "mapush" and "mapush_success" in res["stats"]
+    assert lamp.solve(scene_from_dict(SHORT), planner="mapush").to_dict()["objects"][0][
+        "final_pose"] == res["objects"][0]["final_pose"]
+
+
+def test_rl_train_cli_rejects_bad_settings(tmp_path):
+    res = CliRunner().invoke(app, ["rl", "train", "--steps", "0", "--out", str(tmp_path / "o")])
+    assert res.exit_code == 2 and "steps = 0: must be an integer >= 1" in res.output
+    assert not (tmp_path / "o").exists()
+
+
+def test_shipped_policy_is_small_and_drives_a_suite_scene():
+    from lamp.env.gym_env import observation_space
+    from lamp.rl.policy import DEFAULT_POLICY
+
+    assert DEFAULT_POLICY.stat().st_size < 5 * 2**20
+    policy = load_policy()
+    assert policy.info.env_settings["frame"] == "goal"
+    env = PushEnv("warehouse-03", **{k: v for k, v in policy.info.env_settings.items()
+                                     if k not in ("time_limit",)})
+    policy.check_env(env.core.n_robots, observation_space(env.core), "warehouse-03")
+    obs, _ = env.reset()
+    a = policy.act(env.observation_space, obs)
+    assert a.shape == (3, 2) and np.isfinite(a).all() and np.abs(a).max() <= 1.0
+    check_scene(env.scene, policy)
