@@ -95,7 +95,7 @@ def _successor_kernel(
     out_prim: np.ndarray,
     margin: float,
     reach: float,
-    sd: np.ndarray,
+    sd: tuple,
     res: float,
     width: float,
     height: float,
@@ -235,6 +235,8 @@ class ObjectLattice:
             prim[:, 2]
         )
         self._prim_cost_list = self._prim_cost.tolist()
+        #: farthest a primitive moves the object's origin (m)
+        self._prim_reach = float(step * np.max(np.hypot(prim[:, 0], prim[:, 1])))
         self._rev = np.array(_REVERSE, dtype=np.int64)
         self._out_ids = np.empty(len(PRIMITIVES), dtype=np.int64)
         self._out_prim = np.empty(len(PRIMITIVES), dtype=np.int64)
@@ -242,7 +244,6 @@ class ObjectLattice:
         self._edge_valid = np.full((self.n_nodes, len(PRIMITIVES)), -1, dtype=np.int8)
         self._succ: dict[Node, list[tuple[Node, float]]] = {}
         self._tolerant: dict[float, ObjectSpace] = {}
-        self._table: tuple[list[float], list[float], list[float]] | None = None
         #: statistics: poses and motions checked so far
         self.n_pose_checks = 0
         self.n_motion_checks = 0
@@ -312,17 +313,7 @@ class ObjectLattice:
             self.anchor[2] + k * self.dtheta,
         )
 
-    def _node_table(self) -> tuple[list[float], list[float], list[float]]:
-        """Per-node x, y, theta (unwrapped) as Python lists: fast scalar lookups."""
-        if self._table is None:
-            x, y, th = self._decode(np.arange(self.n_nodes, dtype=np.int64))
-            self._table = (x.tolist(), y.tolist(), th.tolist())
-        return self._table
-
     def _xyt(self, u: Node | VirtualNode) -> tuple[float, float, float]:
-        if type(u) is int:
-            xs, ys, ts = self._table or self._node_table()
-            return xs[u], ys[u], ts[u]
         if isinstance(u, (int, np.integer)):
             rest, k = divmod(int(u), self.n_headings)
             ii, jj = divmod(rest, self.n_j)
@@ -368,6 +359,9 @@ class ObjectLattice:
         cached = self._succ.get(u)
         if cached is not None:
             return cached
+        if self.space.grid.capped:
+            x, y, _ = self._xyt(u)
+            self.space.prepare(np.array([x, y]), self._prim_reach)
         n, n_pose, n_motion = _successor_kernel(
             int(u), self.n_j, self.n_headings, self.i_min, self.j_min,
             self.anchor[0], self.anchor[1], self.anchor[2], self.step, self.dtheta,
