@@ -72,7 +72,7 @@ import numpy as np
 import shapely
 from numpy.typing import ArrayLike
 
-from lamp.geometry.distance_tiles import DistanceTiles
+from lamp.geometry.distance_tiles import DEFAULT_GRID_CAP, DistanceTiles
 from lamp.geometry.shapes import local_outline, obstacle_geometry
 from lamp.scene.model import Circle, Obstacle, Rectangle, Scene, Shape
 
@@ -425,11 +425,6 @@ class ObjectSpace:
         #: width of the band (m) within which clearance may under-estimate the truth
         self.band = 4.0 * self.resolution / math.sqrt(2.0) + 0.5 * spacing
 
-        if grid is None:
-            grid = DistanceTiles(self.workspace, self.obstacles, self.resolution)
-        elif (grid.workspace, grid.resolution) != (self.workspace, self.resolution):
-            raise ValueError("grid must have this space's workspace and resolution")
-        self.grid = grid
         dpts, drad, bpts, brad, poly = _footprint_disks(shape, self.inflation, spacing)
         if len(poly):
             cpts, crad = _cover_disks(poly, cover_cell)
@@ -448,6 +443,19 @@ class ObjectSpace:
         self.reach = float(
             max(np.max(np.hypot(p[:, 0], p[:, 1]), initial=0.0) for p in (dpts, bpts, cpts))
         )
+        #: smallest distance cap of a tiled grid that keeps every guarantee: beyond it a
+        #: footprint disk still reads clearance above ``band + motion_margin``
+        self.min_grid_cap = float(max(np.max(drad, initial=0.0), np.max(crad, initial=0.0))
+                                  + self.band + self.motion_margin)
+        if grid is None:
+            grid = DistanceTiles(self.workspace, self.obstacles, self.resolution,
+                                 cap=max(DEFAULT_GRID_CAP, self.min_grid_cap))
+        elif (grid.workspace, grid.resolution) != (self.workspace, self.resolution):
+            raise ValueError("grid must have this space's workspace and resolution")
+        elif grid.capped and grid.cap < self.min_grid_cap:
+            raise ValueError(f"grid cap {grid.cap:g} m is below this footprint's "
+                             f"min_grid_cap {self.min_grid_cap:g} m")
+        self.grid = grid
 
     @classmethod
     def from_scene(
@@ -491,7 +499,8 @@ class ObjectSpace:
             sample_spacing=self.sample_spacing,
             motion_margin=self.motion_margin,
             cover_cell=self.cover_cell,
-            grid=self.grid,
+            grid=self.grid if not self.grid.capped or self.grid.cap >= self.min_grid_cap
+            + abs(inflation - self.inflation) else None,
         )
 
     # ------------------------------------------------------------------ grid
