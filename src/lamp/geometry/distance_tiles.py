@@ -101,6 +101,8 @@ class DistanceTiles:
         self.table = np.full((-(-ny // TILE), -(-nx // TILE)), -1, dtype=np.int32)
         self._store = np.zeros((0, TILE, TILE))
         self._n = 0
+        #: tile boxes (tx0, ty0, tx1, ty1) known to be filled
+        self._ready: set[tuple[int, int, int, int]] = set()
         cells = [obstacle_cells(ob, self.workspace, self.resolution) for ob in obstacles]
         self._cells = [c for c in cells if c is not None]
         self._boxes = np.array(
@@ -165,6 +167,26 @@ class DistanceTiles:
             out[:] = self.cap - self.two_h
         self.table[tr, tc] = self._n
         self._n += 1
+
+    def ensure_point(self, x: float, y: float, radius: float) -> None:
+        """:meth:`ensure` for one point (the search's per-node call: no arrays)."""
+        if not self.capped:
+            return
+        span = TILE * self.resolution
+        nty, ntx = self.table.shape
+        tx0, tx1 = max(0, int((x - radius) // span)), min(ntx - 1, int((x + radius) // span))
+        ty0, ty1 = max(0, int((y - radius) // span)), min(nty - 1, int((y + radius) // span))
+        key = (tx0, ty0, tx1, ty1)
+        if key in self._ready:
+            return
+        table = self.table
+        todo = [(tr, tc) for tr in range(ty0, ty1 + 1) for tc in range(tx0, tx1 + 1)
+                if table[tr, tc] < 0]
+        for tr, tc in todo:
+            self._fill_tile(tr, tc)
+        if todo:
+            self.args = (self._store[: self._n], self.table, *self.shape)
+        self._ready.add(key)
 
     def ensure(self, points: ArrayLike, radius: float) -> None:
         """Fill every tile holding a cell within ``radius`` (m) of the (..., 2) world

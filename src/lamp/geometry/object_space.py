@@ -511,6 +511,10 @@ class ObjectSpace:
         class prepare what they read themselves."""
         self.grid.ensure(points, self.reach + extra + 2.0 * self.resolution)
 
+    def prepare_point(self, x: float, y: float, extra: float = 0.0) -> None:
+        """:meth:`prepare` for one position (x, y)."""
+        self.grid.ensure_point(x, y, self.reach + extra + 2.0 * self.resolution)
+
     # --------------------------------------------------------------- queries
     def _clearance_flat(self, poses: np.ndarray, stop_below: float, quick: bool) -> np.ndarray:
         self.prepare(poses[:, :2])

@@ -137,7 +137,7 @@ def _base_layer(
     workspace: tuple[float, float], obstacles: tuple[Obstacle, ...], h: float, cap: float,
     nodes: tuple[int, int, int, int],
 ) -> tuple[np.ndarray, GeometrySet]:
-    key = (workspace, obstacles, h, cap, nodes)
+    key = (workspace, _static_token(obstacles), h, cap, nodes)
     hit = _lru_get(_BASE_CACHE, key)
     if hit is not None:
         return hit
@@ -154,6 +154,45 @@ def _base_layer(
     _lru_put(_BASE_CACHE, key, (field, geo), _BASE_CACHE_SIZE, _BASE_CACHE_BYTES,
              lambda v: v[0].nbytes)
     return field, geo
+
+
+_TOKENS: OrderedDict[int, tuple[tuple, int]] = OrderedDict()
+_TOKEN_COUNT = [0]
+
+
+def _static_token(obstacles: tuple) -> int:
+    """A small integer standing for the static obstacle tuple ``obstacles`` in cache keys
+    (hashing hundreds of obstacles per lookup would dominate on large maps). The same
+    tuple object always gets the same token; an equal but distinct tuple may get another
+    one, which costs a cache miss, never a wrong hit (tokens are never reused)."""
+    hit = _TOKENS.get(id(obstacles))
+    if hit is not None and hit[0] is obstacles:
+        _TOKENS.move_to_end(id(obstacles))
+        return hit[1]
+    _TOKEN_COUNT[0] += 1
+    _TOKENS[id(obstacles)] = (obstacles, _TOKEN_COUNT[0])
+    while len(_TOKENS) > 64:
+        _TOKENS.popitem(last=False)
+    return _TOKEN_COUNT[0]
+
+
+def _as_obstacles(items: Iterable[Any]) -> tuple[Obstacle, ...]:
+    """``items`` as a tuple of Obstacles (the same tuple object when it already is one)."""
+    if isinstance(items, tuple) and all(type(o) is Obstacle for o in items):
+        return items
+    return tuple(as_obstacle(o) for o in items)
+
+
+class _Derived(dict):
+    """A space's derived structures; keeps the bytes of its arrays (counted on insertion)."""
+
+    nbytes = 0
+
+    def __setitem__(self, key: Any, value: Any) -> None:
+        if key in self:
+            self.nbytes -= _derived_nbytes(self[key])
+        super().__setitem__(key, value)
+        self.nbytes += _derived_nbytes(value)
 
 
 def _derived_nbytes(value: Any) -> int:
@@ -227,7 +266,7 @@ class RobotSpace:
         self.margin = float(margin)
         self.resolution = float(resolution)
         self.cap = float(max(cap, radius + margin + 2 * resolution))
-        base_obs = tuple(as_obstacle(o) for o in obstacles)
+        base_obs = _as_obstacles(obstacles)
         over_obs = tuple(as_obstacle(o) for o in overlay)
         nodes = window_nodes(self.workspace, self.resolution, window)
         #: (i0, j0): the whole grid's index of node ``field[0, 0]``.
@@ -255,7 +294,7 @@ class RobotSpace:
             self.cap, nodes,
         )
         # derived structures (e.g. planning lattices) cached by their users
-        self.derived: dict[Any, Any] = {}
+        self.derived: dict[Any, Any] = _Derived()
 
     # ---- construction -------------------------------------------------------------
 
@@ -301,7 +340,8 @@ class RobotSpace:
         overlay.extend(as_obstacle(o) for o in extra_obstacles)
         ws = tuple(float(v) for v in scene.workspace)
         key = (
-            ws, scene.obstacles, tuple(overlay), r, float(margin), float(resolution),
+            ws, _static_token(scene.obstacles), tuple(overlay), r, float(margin),
+            float(resolution),
             float(cap), window_nodes(ws, float(resolution), window),  # type: ignore[arg-type]
         )
         hit = _lru_get(_SPACE_CACHE, key)
@@ -343,7 +383,7 @@ class RobotSpace:
     def nbytes(self) -> int:
         """Bytes held by the field and the structures derived from it (lattices...)."""
         own = self.field.nbytes if self.overlay_obstacles else 0  # else the base cache's
-        return own + sum(_derived_nbytes(v) for v in self.derived.values())
+        return own + self.derived.nbytes  # type: ignore[attr-defined]
 
     def node_xy(self, i: ArrayLike, j: ArrayLike) -> np.ndarray:
         """World coordinates of field nodes (i, j) (indices into ``field``) as (..., 2)."""

@@ -361,7 +361,7 @@ class ObjectLattice:
             return cached
         if self.space.grid.capped:
             x, y, _ = self._xyt(u)
-            self.space.prepare(np.array([x, y]), self._prim_reach)
+            self.space.prepare_point(x, y, self._prim_reach)
         n, n_pose, n_motion = _successor_kernel(
             int(u), self.n_j, self.n_headings, self.i_min, self.j_min,
             self.anchor[0], self.anchor[1], self.anchor[2], self.step, self.dtheta,
