@@ -14,8 +14,9 @@ read as "not free", so a missing tile can never make a colliding pose free).
 * **Large maps**: tiles are filled on demand (:meth:`DistanceTiles.ensure`), each by a
   distance transform over the tile plus a halo of ``cap`` metres. An occupied centre
   within ``cap`` of a cell lies in that halo, so a cell stores ``min(D, cap) - 2h``:
-  exact where ``D <= cap`` and capped beyond (still a lower bound). Memory and time grow
-  with the part of the map the queries touch, not with the map.
+  exact where ``D <= cap`` and capped beyond (still a lower bound), stored as float32
+  rounded down (so still a lower bound, within 1e-7 relative of the float64 value).
+  Memory and time grow with the part of the map the queries touch, not with the map.
 """
 
 from __future__ import annotations
@@ -38,8 +39,11 @@ __all__ = ["DistanceTiles", "TILE", "FULL_GRID_CELLS", "DEFAULT_GRID_CAP"]
 TILE = 128
 #: Grids of at most this many cells are computed whole and exact (4 m maps: 1e6 cells).
 FULL_GRID_CELLS = 2**22
-#: Distances are exact up to this (m) in tiles filled on demand.
-DEFAULT_GRID_CAP = 0.5
+#: Distances are exact up to this (m) in tiles filled on demand (spaces raise it to their
+#: footprint's ``min_grid_cap`` where needed).
+DEFAULT_GRID_CAP = 0.15
+#: Tiles filled on demand are stored in blocks of this many.
+_GROW = 64
 
 
 def grid_shape(workspace: tuple[float, float], resolution: float) -> tuple[int, int]:
@@ -79,6 +83,14 @@ def obstacle_cells(
     return r0, c0, mask
 
 
+def _round_down(values: np.ndarray) -> np.ndarray:
+    """float32 values, each at most the float64 value it stands for."""
+    v32 = values.astype(np.float32)
+    up = v32.astype(np.float64) > values
+    v32[up] = np.nextafter(v32[up], np.float32(-np.inf))
+    return v32
+
+
 class DistanceTiles:
     """The obstacle distance grid of ``obstacles`` in ``workspace`` (see module doc).
 
@@ -99,7 +111,8 @@ class DistanceTiles:
         self.cap = float(cap)
         self._halo = int(math.ceil(self.cap / self.resolution))
         self.table = np.full((-(-ny // TILE), -(-nx // TILE)), -1, dtype=np.int32)
-        self._store = np.zeros((0, TILE, TILE))
+        self.capped = ny * nx > full_grid_cells
+        self._store = np.zeros((0, TILE, TILE), dtype=np.float32 if self.capped else np.float64)
         self._n = 0
         #: tile boxes (tx0, ty0, tx1, ty1) known to be filled
         self._ready: set[tuple[int, int, int, int]] = set()
@@ -108,7 +121,6 @@ class DistanceTiles:
         self._boxes = np.array(
             [(r0, c0, r0 + m.shape[0] - 1, c0 + m.shape[1] - 1) for r0, c0, m in self._cells],
             dtype=np.int64).reshape(-1, 4)
-        self.capped = ny * nx > full_grid_cells
         if not self.capped:
             self._fill_whole()
         self.args: tuple = (self._store[: self._n], self.table, ny, nx)
@@ -129,7 +141,8 @@ class DistanceTiles:
 
     def _reserve(self, n: int) -> None:
         if n > len(self._store):
-            grown = np.zeros((max(n, 2 * len(self._store), 4), TILE, TILE))
+            size = n if not self.capped else _GROW * -(-n // _GROW)
+            grown = np.zeros((size, TILE, TILE), dtype=self._store.dtype)
             grown[: self._n] = self._store[: self._n]
             self._store = grown
 
@@ -162,9 +175,9 @@ class DistanceTiles:
         if occ.any():
             d = ndimage.distance_transform_edt(~occ, sampling=self.resolution)
             blk = np.minimum(d[r0 - R0 : r1 - R0 + 1, c0 - C0 : c1 - C0 + 1], self.cap)
-            out[: blk.shape[0], : blk.shape[1]] = blk - self.two_h
+            out[: blk.shape[0], : blk.shape[1]] = _round_down(blk - self.two_h)
         else:
-            out[:] = self.cap - self.two_h
+            out[:] = _round_down(np.array([self.cap - self.two_h]))[0]
         self.table[tr, tc] = self._n
         self._n += 1
 

@@ -50,7 +50,9 @@ Guarantees (tested against Shapely in ``tests/test_object_space.py``)
   passes through such a pose.
 * ``clearance`` is a lower bound of the true clearance and at most ``band`` below it,
   where ``band = 4 * h + sample_spacing / 2`` (13.3 mm at the defaults) for the obstacle
-  part (the border part is exact). So a pose whose true clearance exceeds ``band`` is
+  part (the border part is exact); on a tiled grid filled on demand (large maps) the
+  obstacle part is moreover capped near the grid's ``cap`` (at least ``min_grid_cap``,
+  so the two statements below hold unchanged). So a pose whose true clearance exceeds ``band`` is
   reported free, and a motion whose every pose has true clearance above
   ``band + motion_margin`` is reported free.
 

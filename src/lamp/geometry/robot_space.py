@@ -68,8 +68,8 @@ DEFAULT_CAP = 0.3
 _SPACE_CACHE_SIZE = 32
 _BASE_CACHE_SIZE = 16
 #: Byte bounds of the two caches (fields and what is derived from them).
-_SPACE_CACHE_BYTES = 384 * 2**20
-_BASE_CACHE_BYTES = 256 * 2**20
+_SPACE_CACHE_BYTES = 128 * 2**20
+_BASE_CACHE_BYTES = 64 * 2**20
 
 
 # --------------------------------------------------------------------------------------

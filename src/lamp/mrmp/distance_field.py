@@ -142,7 +142,12 @@ class Lattice:
             raise ValueError(
                 f"lattice step must be a positive multiple of the grid spacing {h}, got {step!r}"
             )
-        self.space = space
+        # what links() needs, not the space itself: a lattice is cached on its space, and a
+        # reference back would make a cycle that keeps evicted spaces alive until a full GC
+        self.workspace = space.workspace
+        self.geometry = space.geometry
+        #: (x0, y0, x1, y1) of the space's window
+        self.window = space.window
         self.step = float(step)
         self.stride = s
         thr = space.threshold
@@ -196,9 +201,8 @@ class Lattice:
         """For each continuous point: (node ids, lengths) of the lattice nodes within
         ``radius`` reachable by a straight motion whose exact clearance stays
         >= ``thresholds[k]``."""
-        space = self.space
-        W, H = space.workspace
-        g = space.geometry
+        W, H = self.workspace
+        g = self.geometry
         cand = [self.nodes_near(p, radius) for p in points]
         counts = [len(c) for c in cand]
         out: list[tuple[np.ndarray, np.ndarray]] = []

@@ -38,7 +38,7 @@ WINDOW_MIN_SIDE = 4.0
 WINDOW_MAX_SIDE = 16.0
 #: Robot spaces kept per task: at most this many, and this many bytes in all.
 _SPACES_KEPT = 64
-_SPACES_BYTES = 256 * 2**20
+_SPACES_BYTES = 96 * 2**20
 
 
 @dataclass(frozen=True)
