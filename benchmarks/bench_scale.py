@@ -9,10 +9,12 @@ distance from each object's start to its goal, summed over the objects.
 Every point runs in its own subprocess, so that the peak resident memory printed is that
 point's alone (``ru_maxrss`` of the child). Printed per point: success, executed segments,
 planning time (sum over segments), planning time per metre of route, makespan (steps) and
-peak RSS. Segments are limited by ``--max-segments`` (default 2000), not the closed loop's
+peak RSS; with ``--repeats n`` each point runs n times and the medians are printed (the
+plan itself is deterministic: success, segments and makespan do not change). Segments are limited by ``--max-segments`` (default 2000), not the closed loop's
 default of 100 per object, so that long routes can finish.
 
-Run: ``python benchmarks/bench_scale.py [--sizes 4,8,16,32,50] [--robots 3] [--objects 1]``.
+Run: ``python benchmarks/bench_scale.py [--sizes 4,8,16,32,50] [--robots 3] [--objects 1]
+[--repeats 3]``.
 """
 
 from __future__ import annotations
@@ -102,6 +104,7 @@ def main() -> None:
     ap.add_argument("--objects", default="1", help="object counts, e.g. 1,3")
     ap.add_argument("--max-segments", type=int, default=2000)
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--repeats", type=int, default=1, help="runs per point (medians)")
     ap.add_argument("--json", type=Path, help="also write all points to this file")
     ap.add_argument("--point", help=argparse.SUPPRESS)  # child mode: size,robots,objects
     args = ap.parse_args()
@@ -120,12 +123,20 @@ def main() -> None:
             for objects in [int(k) for k in args.objects.split(",")]:
                 cmd = [sys.executable, __file__, "--point", f"{size:g},{robots},{objects}",
                        "--max-segments", str(args.max_segments), "--seed", str(args.seed)]
-                proc = subprocess.run(cmd, capture_output=True, text=True, env=env)
-                if proc.returncode != 0:
-                    print(f"{size:5g} {robots:3d} {objects:3d} failed: "
-                          f"{proc.stderr.strip().splitlines()[-1:]}", flush=True)
+                runs = []
+                for _ in range(max(1, args.repeats)):
+                    proc = subprocess.run(cmd, capture_output=True, text=True, env=env)
+                    if proc.returncode != 0:
+                        print(f"{size:5g} {robots:3d} {objects:3d} failed: "
+                              f"{proc.stderr.strip().splitlines()[-1:]}", flush=True)
+                        break
+                    runs.append(json.loads(proc.stdout.strip().splitlines()[-1]))
+                if not runs:
                     continue
-                r = json.loads(proc.stdout.strip().splitlines()[-1])
+                r = dict(runs[0])
+                for k in ("planning_s", "s_per_m", "wall_s", "peak_gb"):
+                    r[k] = float(np.median([x[k] for x in runs]))
+                r["runs"] = runs
                 rows.append(r)
                 print(f"{size:5g} {robots:3d} {objects:3d} {r['route_m']:6.1f} "
                       f"{'yes' if r['success'] else 'no':>3} {r['segments']:5d} "
