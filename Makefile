@@ -16,6 +16,7 @@ $(BIN)/activate:
 setup: $(BIN)/activate
 
 demo: setup
+	$(BIN)/lamp warmup   # compile the Numba kernels once (cached), outside the planning time
 	$(BIN)/lamp demo
 
 test: setup

@@ -388,7 +388,8 @@ def test_bench_end_to_end_resume_and_render(tmp_path):
     (["--planners", "lazy,dijkstra"], "unknown planner 'dijkstra'"),
     (["--model", "magic"], "unknown model"),
     (["--backend", "slurm"], "unknown backend"),
-    (["--seeds", "0"], "--seeds must be at least 1"),
+    (["--seeds", "0"], "--num-seeds must be at least 1"),
+    (["--num-seeds", "0"], "--num-seeds must be at least 1"),
     (["--time-cap", "-1"], "--time-cap must be positive"),
 ])
 def test_bench_rejects_bad_input_with_exit_2(tmp_path, extra, message):

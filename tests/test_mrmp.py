@@ -8,9 +8,11 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from mrmp_checker import check_plan, obstacle_parts, point_clearance, segment_clearance
 
+from lamp.errors import InputError
 from lamp.geometry.robot_space import RobotSpace
 from lamp.mrmp import MRMPPlan, plan_paths
 from lamp.mrmp.distance_field import get_lattice
+from lamp.mrmp.gspi import GspiStatus
 from lamp.scene.model import Circle, Obstacle, Polygon, Rectangle, Scene, SceneObject
 
 R = 0.05
@@ -71,8 +73,20 @@ def test_random_instances_verified(seed: int, n: int, k: int, frac: float) -> No
     m = int(round(frac * n))
     scene, S, G = _random_instance(seed, n, m, k, 2.0)
     plan = _plan_and_check(scene, S, G, time_limit=2.0, seed=seed)
+    assert (plan.status is GspiStatus.SOLVED) == plan.success
     if not plan.success:
         assert plan.reason
+
+
+def test_step_budget_and_stall_are_statuses() -> None:
+    scene, S, G = _random_instance(3, 4, 4, 4, 2.0)
+    plan = plan_paths(scene, S, G, lattice_step=0.05, max_steps=1)
+    assert plan.status is GspiStatus.STEP_BUDGET and "step budget" in plan.reason
+    # two robots that must swap places in a single lane, goal swapping off: a deadlock
+    S2 = np.array([[0.3, 0.25], [1.0, 0.25]])
+    plan = plan_paths(_corridor(), S2, S2[::-1].copy(), goal_swapping=False,
+                      initial_goal_of=[0, 1], lattice_step=0.05, time_limit=5.0)
+    assert plan.status is GspiStatus.STALLED and "no progress" in plan.reason
 
 
 @settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -139,6 +153,7 @@ def test_unreachable_goal_fails_cleanly() -> None:
     S = np.array([[0.2, 0.2], [0.4, 0.2]])
     plan = _plan_and_check(scene, S, np.array([[1.0, 0.75]]), time_limit=1.0)
     assert not plan.success and "unreachable" in plan.reason
+    assert plan.status is GspiStatus.UNREACHABLE
     # a robot inside the box, another goal outside: only the inside robot can take the
     # inside goal, and the outside goal goes to the other
     S2 = np.array([[1.0, 0.75], [0.4, 0.2]])
@@ -150,6 +165,7 @@ def test_unreachable_goal_fails_cleanly() -> None:
     G3 = np.array([[0.85, 0.6], [1.15, 0.9]])
     plan = _plan_and_check(scene, S3, G3, time_limit=1.0)
     assert not plan.success and "assignment" in plan.reason
+    assert plan.status is GspiStatus.UNREACHABLE
 
 
 def test_blocked_goal_fails_within_time_limit() -> None:
@@ -168,6 +184,7 @@ def test_time_limit_gives_a_clean_failure() -> None:
     plan = plan_paths(scene, S, G, time_limit=1e-6)
     check_plan(scene, S, G, plan)
     assert not plan.success and "time limit" in plan.reason
+    assert plan.status is GspiStatus.TIME_LIMIT
 
 
 def test_contact_goals_next_to_object() -> None:
@@ -193,10 +210,9 @@ def test_contact_goals_next_to_object() -> None:
     # 8 mm inside is beyond it, and so is 5 mm with a 2 mm tolerance
     G_bad = G.copy()
     G_bad[1] = [1.0 - s * (0.15 + R - 0.008), 0.75 + c * (0.15 + R - 0.008)]
-    with pytest.raises(ValueError, match=r"goals\[1\]"):
-        plan_paths(scene, S, G_bad)
-    with pytest.raises(ValueError, match=r"goals\[1\]"):
-        plan_paths(scene, S, G5, goal_tolerance=0.002)
+    for plan in (plan_paths(scene, S, G_bad), plan_paths(scene, S, G5, goal_tolerance=0.002)):
+        assert not plan.success and plan.status is GspiStatus.INVALID_GOAL
+        assert "goals[1]" in plan.reason and plan.paths.shape == (len(S), 1, 2)
 
 
 def test_object_poses_and_extra_obstacles_are_obstacles() -> None:
@@ -238,12 +254,18 @@ def test_invalid_arguments_raise() -> None:
     bad[0, 0] = np.nan
     with pytest.raises(ValueError, match="starts"):
         plan_paths(scene, bad, G)
-    with pytest.raises(ValueError, match=r"goals\[0\]"):
-        plan_paths(scene, S, np.array([[1.0, 1.0]]) + 0.0 * G[:1])  # inside the object
-    with pytest.raises(ValueError, match="overlap"):
-        plan_paths(scene, S, np.stack([G[0], G[0] + [0.03, 0.0]]))
-    with pytest.raises(ValueError, match="outside"):
-        plan_paths(scene, S, np.array([[5.0, 1.0]]))
+    # unusable starts and goals are a status, not an exception
+    for goals, words in ((np.array([[1.0, 1.0]]), "goals[0]"),  # inside the object
+                         (np.stack([G[0], G[0] + [0.03, 0.0]]), "overlap"),
+                         (np.array([[5.0, 1.0]]), "outside")):
+        plan = plan_paths(scene, S, goals)
+        assert plan.status is GspiStatus.INVALID_GOAL and words in plan.reason
+    crowded = S.copy()
+    crowded[1] = crowded[0] + [0.02, 0.0]
+    plan = plan_paths(scene, crowded, G)
+    assert plan.status is GspiStatus.INVALID_START and "starts[0] and starts[1]" in plan.reason
+    with pytest.raises(InputError, match="starts"):  # malformed input is still an error
+        plan_paths(scene, S[:, :1], G)
     with pytest.raises(ValueError, match="object_poses"):
         plan_paths(scene, S, G, object_poses=np.zeros((2, 3)))
     with pytest.raises(ValueError, match="time_limit"):
@@ -380,8 +402,10 @@ def test_checker_catches_violations() -> None:
     assert good.success
 
     def corrupted(**kw) -> MRMPPlan:
-        return MRMPPlan(kw.get("success", True), kw.get("paths", good.paths.copy()),
-                        kw.get("goal_of", good.goal_of.copy()), kw.get("reason", ""))
+        ok = kw.get("success", True)
+        return MRMPPlan(ok, kw.get("paths", good.paths.copy()),
+                        kw.get("goal_of", good.goal_of.copy()), kw.get("reason", ""),
+                        status=GspiStatus.SOLVED if ok else GspiStatus.STALLED)
 
     P = good.paths.copy()
     P[0, 5] += [0.0, 0.03]  # a jump > 2 cm

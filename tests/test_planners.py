@@ -16,7 +16,9 @@ from lamp.planners.run import solve
 from lamp.planners.task import ManipulationTask
 from lamp.scene import scene_from_dict
 
-TIME_KEYS = {"planning_time_s", "total_planning_time_s", "median_planning_time_s", "wall_time_s"}
+TIME_KEYS = {"planning_time_s", "total_planning_time_s", "median_planning_time_s", "wall_time_s",
+             "executed_planning_time_s", "unexecuted_planning_time_s",
+             "planning_time_per_segment_s"}
 
 
 def small_scene(goal=(1.45, 1.0, 0.0), obstacles=()) -> dict:

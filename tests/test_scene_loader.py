@@ -75,11 +75,72 @@ def test_spec_example_fixed_loads() -> None:
     assert scene_from_dict(scene.to_dict()) == scene
 
 
-def test_spec_example_verbatim_breaks_its_own_goal_rule() -> None:
-    """The spec's example puts objects[2].goal on obstacles[0]; the loader must say so."""
-    expect_error(
-        DATA / "spec_example.yaml", "objects[2].goal", "(3, 1, 0)", "overlaps obstacles[0]"
-    )
+def test_spec_example_verbatim_loads() -> None:
+    """The example of scene-format.md, copied verbatim, is a valid scene."""
+    scene = load_scene(DATA / "spec_example.yaml")
+    assert scene.name == "maze-07" and len(scene.objects) == 3 and len(scene.obstacles) == 3
+    assert scene.objects[2].goal == (3.2, 0.5, 0.0)
+    assert scene_from_dict(scene.to_dict()) == scene
+
+
+def test_docs_example_is_the_tested_copy() -> None:
+    """docs/scene-format.md's example is the file loaded above (so the docs' example loads)."""
+    doc = (Path(__file__).parents[1] / "docs" / "scene-format.md").read_text()
+    block = doc.split("```yaml\n", 1)[1].split("```", 1)[0]
+    copy_text = (DATA / "spec_example.yaml").read_text().split("\n", 1)[1]
+    assert block == copy_text
+
+
+def test_wall_at_angle_1_5708_touching_the_border_loads() -> None:
+    """``angle: 1.5708`` is not exactly pi/2: a wall touching the border pokes out by ~2e-7 m,
+    within the spec's 1e-6 m rounding; 2e-6 m beyond the border is still refused."""
+    d = valid()
+    # size (0.1, 2.0) turned by ~90 degrees: a horizontal wall from x = 0 to x = 2
+    a = 1.5708
+    wall = {"type": "rectangle", "center": [1.0, 2.0], "size": [0.1, 2.0], "angle": a}
+    overhang = 0.05 * abs(math.cos(a)) + 1.0 * abs(math.sin(a)) - 1.0
+    assert 1e-7 < overhang < 1e-6  # the rounding of the report, really there
+    d["obstacles"] = [wall]
+    assert scene_from_dict(d).obstacles[0].pose == (1.0, 2.0, a)
+    d["obstacles"] = [{**wall, "center": [1.0 - 2e-6, 2.0]}]
+    with pytest.raises(SceneError, match=r"obstacles\[0\]: .*lies outside the workspace"):
+        scene_from_dict(d)
+
+
+def test_overlap_allows_1e_6_of_rounding() -> None:
+    """Two disks overlapping by 5e-7 m count as touching; by 5e-6 m as overlapping."""
+    d = valid()
+    r, R = d["robots"]["radius"], d["obstacles"][0]["radius"]
+    cx, cy = d["obstacles"][0]["center"]
+    for depth, ok in ((5e-7, True), (5e-6, False)):
+        d["robots"]["starts"][0] = [cx - (r + R - depth), cy]
+        if ok:
+            scene_from_dict(d)
+        else:
+            with pytest.raises(SceneError, match=r"robots.starts\[0\]: .*overlaps obstacles\[0\]"):
+                scene_from_dict(d)
+
+
+def test_scene_error_carries_path_and_field(tmp_path: Path) -> None:
+    d = valid()
+    d["objects"][1]["radius"] = -0.2
+    path = write(tmp_path, d)
+    with pytest.raises(SceneError) as info:
+        load_scene(path)
+    err = info.value
+    assert (err.path, err.field) == (str(path), "objects[1].radius")
+    assert str(err) == f"{path}: objects[1].radius: {err.reason}" and "-0.2" in err.reason
+    with pytest.raises(SceneError) as info:
+        scene_from_dict(d)
+    assert info.value.path is None and info.value.field == "objects[1].radius"
+    with pytest.raises(SceneError) as info:
+        load_scene(tmp_path / "missing.yaml")
+    assert info.value.field == "(file)" and info.value.path == str(tmp_path / "missing.yaml")
+    import pickle
+
+    again = pickle.loads(pickle.dumps(err))
+    assert (str(again), again.path, again.field, again.reason) == (
+        str(err), err.path, err.field, err.reason)
 
 
 def test_json_loads_and_matches_yaml(tmp_path: Path) -> None:
@@ -367,8 +428,8 @@ def verdict(d: dict) -> str | None:
     return None
 
 
-# gap 0 is exact contact (allowed, up to rounding in the rotations); |gap| >= 1e-6 >> EPS.
-gaps = st.one_of(st.just(0.0), st.floats(-0.04, -1e-6), st.floats(1e-6, 0.5))
+# gap 0 is exact contact (allowed, up to rounding in the rotations); |gap| >= 1e-5 > EPS.
+gaps = st.one_of(st.just(0.0), st.floats(-0.04, -1e-5), st.floats(1e-5, 0.5))
 angles = st.floats(-math.pi, math.pi)
 sizes = st.floats(0.05, 1.0)
 

@@ -217,8 +217,12 @@ def test_bad_arguments(scene: Scene, tmp_path: Path) -> None:
     assert list(tmp_path.iterdir()) == []
 
 
-@pytest.mark.skipif(mp4_available(), reason="an ffmpeg writer is installed")
-def test_mp4_without_ffmpeg_is_a_clear_error(scene: Scene, tmp_path: Path) -> None:
+def test_mp4_without_ffmpeg_is_a_clear_error(
+    scene: Scene, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import lamp.viz.animation as animation
+
+    monkeypatch.setattr(animation, "mp4_available", lambda: False)  # as without imageio-ffmpeg
     with pytest.raises(RuntimeError, match="pip install imageio-ffmpeg"):
         write_animation(scene, moving_frames(scene, 2), tmp_path / "run.mp4")
     assert list(tmp_path.iterdir()) == []

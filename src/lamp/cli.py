@@ -1,8 +1,10 @@
 """The ``lamp`` command line: parses arguments, loads inputs, calls the library, writes outputs.
 
 Sub-command groups live beside the code they drive (``lamp.suites.cli``, ``lamp.manip.cli``,
-``lamp.bench.cli``); this module only wires them together. Exit status: 0 when a run
-finished (whatever its outcome), 2 for bad input, 1 for an internal error.
+``lamp.bench.cli``, ``lamp.scene.cli``); this module only wires them together; shared checks
+and the progress display are in ``lamp.cli_support``. Exit status: 0 when a run finished
+(whatever its outcome; ``lamp run --check`` exits 1 when the task failed), 2 for bad input
+(checked before any planning), 1 for an internal error.
 """
 
 from __future__ import annotations
@@ -11,20 +13,40 @@ from pathlib import Path
 
 import typer
 
+from lamp.cli_support import (
+    RunProgress,
+    check_choice,
+    check_model_option,
+    check_writable_dir,
+    check_writable_file,
+    fail_input,
+    image_format,
+    print_summary,
+    version_callback,
+)
+from lamp.errors import InputError
+from lamp.planners.config import PLANNER_DESCRIPTIONS, planning_limit_help
 from lamp.scene import SceneError, load_scene
 
 app = typer.Typer(
     help="LAMP: long-horizon multi-robot collaborative manipulation planning.",
     no_args_is_help=True,
-    add_completion=False,
+    add_completion=True,
     pretty_exceptions_enable=False,
+    context_settings={"help_option_names": ["-h", "--help"]},
 )
 
+PLANNER_HELP = "Planner: " + "; ".join(f"{k}: {v}" for k, v in PLANNER_DESCRIPTIONS.items())
+MODEL_HELP = ("Manipulation model: learned (the shipped checkpoint), geometric, or a checkpoint "
+              "file written by `lamp model train`.")
 
-def fail_input(message: str) -> None:
-    """Report bad input on stderr and exit with status 2."""
-    typer.echo(f"error: {message}", err=True)
-    raise typer.Exit(code=2)
+
+@app.callback()
+def main(
+    version: bool = typer.Option(False, "--version", "-V", callback=version_callback,
+                                 is_eager=True, help="Print the installed version and exit."),
+) -> None:
+    """LAMP: long-horizon multi-robot collaborative manipulation planning."""
 
 
 def load_scene_or_exit(path: Path):
@@ -36,108 +58,215 @@ def load_scene_or_exit(path: Path):
 
 @app.command()
 def show(
-    scene_file: Path = typer.Argument(..., help="Scene file (YAML or JSON)."),
-    out: Path = typer.Option(Path("scene.png"), "--out", "-o", help="PNG file to write."),
+    scene_file: Path = typer.Argument(..., help="Scene file (YAML or JSON).", show_default=False),
+    out: Path = typer.Option(Path("scene.png"), "--out", "-o",
+                             help="Image to write: .png, .svg or .pdf (by its extension)."),
 ) -> None:
     """Draw a scene: workspace, obstacles, robots, object start and goal outlines."""
+    fmt = image_format(out)
+    check_writable_file(out)
     scene = load_scene_or_exit(scene_file)
-    from lamp.viz.scene_plot import save_scene_png
+    from lamp.viz.scene_plot import save_scene_image
 
-    save_scene_png(scene, out)
+    save_scene_image(scene, out, fmt=fmt)
     typer.echo(f"wrote {out}")
 
 
-def _print_summary(result) -> None:
-    from rich.console import Console
-    from rich.table import Table
-
-    d = result.to_dict()
-    table = Table(title=f"{d['scene']} - {d['planner']} (seed {d['seed']})")
-    for col in ("object", "success", "position err (m)", "orientation err (rad)", "segments",
-                "full-horizon plan", "note"):
-        table.add_column(col)
-    for i, o in enumerate(d["objects"]):
-        table.add_row(str(i), "yes" if o["success"] else "no", f"{o['position_error']:.3f}",
-                      f"{o['orientation_error']:.3f}", str(o["segments"]),
-                      "yes" if o["full_horizon_plan"] else "no", o.get("failure_reason", ""))
-    console = Console()
-    console.print(table)
-    med = d["median_planning_time_s"]
-    console.print(
-        f"success: {d['success']}  segments: {d['segments']}  replans: {d['replans']}  "
-        f"planning time: {d['total_planning_time_s']:.2f} s total"
-        + (f", {med:.3f} s median per segment" if med is not None else "")
-        + f"  makespan: {d['makespan']} steps  wall time: {d['wall_time_s']:.1f} s"
-    )
-
-
 def _run_and_write(scene, planner: str, seed: int, out: Path, render: bool, model: str,
-                   time_limit: float | None) -> None:
+                   planning_limit: float | None, progress: RunProgress,
+                   html: bool = False) -> dict:
     from lamp.io import write_json_atomic
     from lamp.planners.run import solve_with_frames
+    from lamp.record import save_recording
+    from lamp.record.run_dir import GIF_NAME, HTML_NAME, RESULT_NAME, clear_stale
 
+    if out.exists() and not out.is_dir():
+        fail_input(f"--out: {out} exists and is not a folder")
     try:
-        solution = solve_with_frames(scene, planner, seed, model=model, render=render,
-                                     time_limit=time_limit)
+        with progress:
+            solution = solve_with_frames(scene, planner, seed, model=model,
+                                         time_limit=planning_limit, progress=progress)
+    except InputError as exc:  # e.g. robots the model was not trained for
+        fail_input(str(exc))
     except Exception as exc:  # an internal error: exit status 1 with a short message
         typer.echo(f"internal error: {type(exc).__name__}: {exc}", err=True)
         raise typer.Exit(code=1) from exc
-    out.mkdir(parents=True, exist_ok=True)
-    write_json_atomic(out / "result.json", solution.result.to_dict())
-    _print_summary(solution.result)
-    typer.echo(f"wrote {out / 'result.json'}")
-    if render:
-        from lamp.viz.animation import write_animation
+    result = solution.result.to_dict()
 
-        write_animation(scene, solution.frames, out / "run.gif")
-        typer.echo(f"wrote {out / 'run.gif'}")
+    def say(message: str) -> None:
+        if not progress.quiet:
+            typer.echo(message)
+
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        writes = [GIF_NAME] * render + [HTML_NAME] * html
+        for path in clear_stale(out, keep=writes):
+            say(f"removed {path} (left by an earlier run)")
+        if not progress.quiet:
+            print_summary(result)
+        # each file atomically, result.json last: it marks the folder complete
+        npz, index = save_recording(solution.recording, out)
+        say(f"wrote {index} and {npz.name}")
+        if writes:
+            from lamp.viz.replay import render as render_recording
+
+            for name in writes:
+                render_recording(solution.recording, out / name)
+                say(f"wrote {out / name}")
+        write_json_atomic(out / RESULT_NAME, result)
+    except OSError as exc:  # checked before planning; the disk may still fill up
+        fail_input(f"--out: cannot write into {out}: {exc.strerror or exc}")
+    except Exception as exc:
+        typer.echo(f"internal error while writing {out}: {type(exc).__name__}: {exc}", err=True)
+        raise typer.Exit(code=1) from exc
+    say(f"wrote {out / RESULT_NAME}")
+    return result
 
 
-def _check_run_options(planner: str, model: str) -> None:
-    from lamp.planners.run import PLANNERS
+OUT_HELP = ("Output folder: result.json, recording.npz + recording.json (lamp-recording/1) "
+            "and what was asked for. Outputs an earlier run left there (result.json, the "
+            "recording, run.gif, replay.html) are replaced, or removed when this run does not "
+            "write them; other files stay.")
 
-    if planner not in PLANNERS:
-        fail_input(f"--planner: unknown planner {planner!r}; expected one of: {', '.join(PLANNERS)}")
-    if model not in ("learned", "geometric"):
-        fail_input(f"--model: unknown model {model!r}; expected 'learned' or 'geometric'")
+
+def _check_run_options(planner: str, model: str, out: Path,
+                       planning_limit: float | None = None) -> str:
+    """Exit 2 for a bad planner, model, output folder or limit; returns the model value."""
+    check_choice("--planner", planner, tuple(PLANNER_DESCRIPTIONS), "planner")
+    if planning_limit is not None and not planning_limit > 0:
+        fail_input(f"--planning-limit: must be positive, got {planning_limit:g}")
+    check_writable_dir(out)
+    return check_model_option(model)
+
+
+def _quiet_verbose(quiet: bool, verbose: bool) -> RunProgress:
+    if quiet and verbose:
+        fail_input("--quiet and --verbose: choose one")
+    return RunProgress(quiet=quiet, verbose=verbose)
+
+
+QUIET_HELP = "Print nothing but errors (result.json is still written)."
+VERBOSE_HELP = "Print a line per object and segment, even when the output is not a terminal."
 
 
 @app.command()
 def run(
-    scene_file: Path = typer.Argument(..., help="Scene file (YAML or JSON)."),
-    planner: str = typer.Option("lazy", "--planner", "-p",
-                                help="lazy | astar | astar-replan | gco-ori | gco-var"),
+    scene_file: Path = typer.Argument(..., help="Scene file (YAML or JSON).", show_default=False),
+    planner: str = typer.Option("lazy", "--planner", "-p", help=PLANNER_HELP),
     seed: int = typer.Option(0, "--seed", "-s", help="Random seed (same seed, same result)."),
-    out: Path = typer.Option(Path("lamp-run"), "--out", "-o", help="Output folder."),
+    out: Path = typer.Option(Path("lamp-run"), "--out", "-o", help=OUT_HELP),
     render: bool = typer.Option(False, "--render", help="Also write DIR/run.gif."),
-    model: str = typer.Option("learned", "--model",
-                              help="Manipulation model: learned (shipped checkpoint) or geometric."),
-    time_limit: float = typer.Option(None, "--time-limit",
-                                     help="Cumulative planning limit per object in seconds."),
+    html: bool = typer.Option(False, "--html", help="Also write the replay viewer "
+                              "DIR/replay.html."),
+    model: str = typer.Option("learned", "--model", "-m", help=MODEL_HELP),
+    planning_limit: float = typer.Option(None, "--planning-limit",
+                                         help="Cumulative planning limit per object, seconds.",
+                                         show_default=planning_limit_help()),
+    time_limit: float = typer.Option(None, "--time-limit", hidden=True,
+                                     help="Old spelling of --planning-limit."),
+    check: bool = typer.Option(False, "--check", help="Exit with status 1 when the task "
+                               "failed (for scripts and CI); default: 0 whenever the run "
+                               "finished."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help=QUIET_HELP),
+    verbose: bool = typer.Option(False, "--verbose", "-v", help=VERBOSE_HELP),
 ) -> None:
-    """Plan and execute one scene file in MuJoCo; write DIR/result.json."""
+    """Plan and execute one scene file in MuJoCo; write DIR/result.json and the recording."""
+    progress = _quiet_verbose(quiet, verbose)
+    limit = time_limit if time_limit is not None else planning_limit
+    model = _check_run_options(planner, model, out, limit)
     scene = load_scene_or_exit(scene_file)
-    _check_run_options(planner, model)
-    _run_and_write(scene, planner, seed, out, render, model, time_limit)
+    result = _run_and_write(scene, planner, seed, out, render, model, limit, progress, html)
+    if check and not result["success"]:
+        raise typer.Exit(code=1)
 
 
 @app.command()
 def demo(
-    out: Path = typer.Option(Path("lamp-demo"), "--out", "-o", help="Output folder."),
+    out: Path = typer.Option(Path("lamp-demo"), "--out", "-o", help=OUT_HELP),
     seed: int = typer.Option(0, "--seed", "-s", help="Random seed."),
-    planner: str = typer.Option("lazy", "--planner", "-p", help="Planner (default LAMP-Lazy)."),
-    model: str = typer.Option("learned", "--model", help="learned or geometric."),
+    planner: str = typer.Option("lazy", "--planner", "-p", help=PLANNER_HELP),
+    model: str = typer.Option("learned", "--model", "-m", help=MODEL_HELP),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help=QUIET_HELP),
+    verbose: bool = typer.Option(False, "--verbose", "-v", help=VERBOSE_HELP),
 ) -> None:
-    """The main job: LAMP-Lazy on the built-in default scene; writes result.json and run.gif."""
+    """The main job: LAMP-Lazy on the built-in default scene; writes result.json, the
+    recording, run.gif and replay.html."""
     from lamp.demo import demo_scene
 
-    _check_run_options(planner, model)
-    _run_and_write(demo_scene(), planner, seed, out, True, model, None)
+    progress = _quiet_verbose(quiet, verbose)
+    model = _check_run_options(planner, model, out)
+    _run_and_write(demo_scene(), planner, seed, out, True, model, None, progress, html=True)
+
+
+@app.command()
+def warmup() -> None:
+    """Compile the Numba kernels now (cached on disk), so that no run pays for it later."""
+    from lamp.warmup import warm_up
+
+    progress = RunProgress(verbose=True)
+    report = warm_up(progress)
+    if report.compiled:
+        typer.echo(f"compiled {report.compiled} kernels in {report.compile_s:.1f} s "
+                   f"(cached on disk; warm-up {report.seconds:.1f} s)")
+    else:
+        typer.echo(f"kernels already compiled (loaded from the disk cache; warm-up "
+                   f"{report.seconds:.1f} s)")
+
+
+@app.command("render")
+def render_command(
+    run_dir: Path = typer.Argument(..., help="A run folder holding recording.json + .npz."),
+    out: Path = typer.Option(..., "--out", "-o", help="File to write: .gif, .mp4 (needs "
+                             "imageio-ffmpeg), .png (one still), .html (replay viewer) or "
+                             ".mcap (Foxglove; needs mcap)."),
+    at: int = typer.Option(None, "--at", help="PNG: draw the end of segment N, counted as in "
+                           "the pictures (1 = the first; default: the final state)."),
+    size: int = typer.Option(640, "--size", help="Pixels on the picture's longer side."),
+    fps: float = typer.Option(15.0, "--fps", help="Frames per second of video."),
+    speed: float = typer.Option(None, "--speed", help="Simulated seconds per video second "
+                                "(default: the video lasts at most 20 s)."),
+    follow: float = typer.Option(None, "--follow", help="Camera window in metres that "
+                                 "follows the moved object (default: whole workspace)."),
+    min_robot_px: float = typer.Option(3.0, "--min-robot-px", help="Smallest robot radius "
+                                       "drawn, in pixels."),
+    trail: float = typer.Option(4.0, "--trail", help="Robot trail length in simulated s."),
+) -> None:
+    """Draw a recorded run again, without replanning: GIF, MP4, PNG still, HTML viewer, or
+    export it to MCAP for Foxglove."""
+    from lamp.record import RecordingError, load_recording
+    from lamp.viz.replay import RenderOptions, render
+
+    try:
+        recording = load_recording(run_dir)
+    except RecordingError as exc:
+        fail_input(str(exc))
+    try:
+        if at is not None and out.suffix.lower() != ".png":
+            raise ValueError("at: only a .png still takes --at")
+        if at is not None and not 1 <= at <= recording.n_segments:
+            raise ValueError(f"at: segment {at} does not exist (the run has "
+                             f"{recording.n_segments} segments: 1..{recording.n_segments})")
+        options = RenderOptions(size=size, fps=fps, speed=speed, trail_s=trail,
+                                min_robot_px=min_robot_px, follow=follow,
+                                at=None if at is None else at - 1)
+        stats = render(recording, out, options)
+    except ValueError as exc:  # "field: problem" -> "--option: problem"
+        field, _, problem = str(exc).partition(": ")
+        flags = {"trail_s": "--trail", "min_robot_px": "--min-robot-px"}
+        flag = flags.get(field, f"--{field}")
+        fail_input(f"{flag}: {problem}" if problem else str(exc))
+    except RuntimeError as exc:
+        fail_input(str(exc))
+    frames = f" ({stats.frames} frames)" if stats.frames > 1 else ""
+    typer.echo(f"wrote {out}{frames} in {stats.seconds:.1f} s")
 
 
 def _register_groups() -> None:
+    from lamp.scene.cli import schema_command, validate_command
     from lamp.suites.cli import suite_app
 
+    app.command("validate")(validate_command)
+    app.command("schema")(schema_command)
     app.add_typer(suite_app, name="suite")
     try:
         from lamp.manip.cli import model_app

@@ -180,16 +180,19 @@ def write_config(out: Path, previous: dict[str, Any], *, suites: list[str], plan
 
 def canonical_command(suites: list[str], planners: list[str], *, seeds: int, workers: int,
                       out: Path, time_cap: float, planning_limit: float, model: str,
-                      backend: str, scenes: int | None, render_iros: bool, job_fn: str) -> str:
+                      backend: str, scenes: int | None, render_iros: bool, job_fn: str,
+                      record: bool = False) -> str:
     """The ``lamp bench`` command line that reproduces this run, every setting explicit."""
-    args = ["lamp", "bench", "--suite", ",".join(suites), "--planners", ",".join(planners),
-            "--seeds", str(seeds), "--workers", str(workers), "--out", str(out),
+    args = ["lamp", "bench", "--suites", ",".join(suites), "--planners", ",".join(planners),
+            "--num-seeds", str(seeds), "--workers", str(workers), "--out", str(out),
             "--time-cap", f"{time_cap:g}", "--planning-limit", f"{planning_limit:g}",
             "--model", model, "--backend", backend]
     if scenes is not None:
         args += ["--scenes", str(scenes)]
     if render_iros:
         args.append("--render-iros")
+    if record:
+        args.append("--record")
     if job_fn != DEFAULT_JOB_FN:
         args += ["--job-fn", job_fn]
     return shlex.join(args)
@@ -230,12 +233,17 @@ def _render_jobs(jobs: list[Job], pending: list[Job], out: Path, time_cap: float
 
 
 def bench_command(
-    suite: str = typer.Option(DEFAULT_SUITES, "--suite", help="Comma-separated suites "
+    suite: str = typer.Option(DEFAULT_SUITES, "--suites", help="Comma-separated suites "
                               "(random, maze, tilt, warehouse, iros) or folders of scene files."),
+    suite_alias: str = typer.Option(None, "--suite", hidden=True,
+                                    help="Old spelling of --suites."),
     planners: str = typer.Option(",".join(SPEC_PLANNERS), "--planners",
                                  help="Comma-separated: lazy, astar, astar-replan, gco-ori, "
                                       "gco-var."),
-    seeds: int = typer.Option(1, "--seeds", help="Number of seeds per scene (0..N-1)."),
+    seeds: int = typer.Option(1, "--num-seeds", help="Number of seeds per scene: runs seeds "
+                              "0..N-1."),
+    seeds_alias: int = typer.Option(None, "--seeds", hidden=True,
+                                    help="Old spelling of --num-seeds."),
     workers: int = typer.Option(os.cpu_count() or 1, "--workers", "-j",
                                 help="Jobs run at the same time (one core each)."),
     out: Path = typer.Option(..., "--out", "-o", help="Output folder (results.jsonl, "
@@ -250,15 +258,20 @@ def bench_command(
                                               "LAMP-A* (astar, astar-replan), seconds. The "
                                               "paper uses 500 s; the default keeps a full run "
                                               "near 2 h on 2 cores."),
-    model: str = typer.Option("learned", "--model", help="Manipulation model: learned or "
-                              "geometric."),
+    planning_limit_alias: float = typer.Option(None, "--time-limit", hidden=True,
+                                               help="Alias of --planning-limit (as in lamp run)."),
+    model: str = typer.Option("learned", "--model", "-m", help="Manipulation model: learned, "
+                              "geometric, or a checkpoint file from `lamp model train`."),
     backend: str = typer.Option("local", "--backend", help="local (process pool) or ray."),
     ray_address: str = typer.Option(None, "--ray-address", help="Ray cluster address (e.g. "
-                                    "auto); default: start a local Ray instance."),
+                                    "auto).", show_default="start a local Ray instance"),
     scenes: int = typer.Option(None, "--scenes", help="Only the first N scenes of each suite "
-                               "(quick runs)."),
+                               "(quick runs).", show_default="all"),
+    record: bool = typer.Option(False, "--record", help="Also save each job's recording "
+                                "(lamp-recording/1) in DIR/recordings/SUITE/SCENE-PLANNER-sSEED/; "
+                                "view it with `lamp render`."),
     render_iros: bool = typer.Option(False, "--render-iros", help="Also render the LAMP-Lazy "
-                                     "IROS run to DIR/iros.gif (needs --suite iros)."),
+                                     "IROS run to DIR/iros.gif (needs --suites iros)."),
     retry_errors: bool = typer.Option(True, "--retry-errors/--keep-errors", help="On --resume, "
                                       "re-run jobs that errored or crashed."),
     report: bool = typer.Option(True, "--report/--no-report", help="Write DIR/report.md at "
@@ -269,21 +282,34 @@ def bench_command(
                                help="module:function that runs one job (testing)."),
 ) -> None:
     """Run planners over benchmark suites; write results.jsonl, config.json and report.md."""
+    from lamp.cli_support import check_model_option, did_you_mean
+
+    suite = suite_alias if suite_alias is not None else suite
+    seeds = seeds_alias if seeds_alias is not None else seeds
+    if planning_limit_alias is not None:
+        planning_limit = planning_limit_alias
     known = known_planners()
     planner_list = _split(planners)
     for p in planner_list:
         if p not in known:
-            _fail(f"--planners: unknown planner {p!r}; expected one of: {', '.join(known)}")
+            _fail(f"--planners: unknown planner {p!r}; expected one of: {', '.join(known)}"
+                  + did_you_mean(p, known))
     if not planner_list:
         _fail("--planners: no planner given")
     suite_list = _split(suite)
     if not suite_list:
-        _fail("--suite: no suite given")
-    if model not in ("learned", "geometric"):
-        _fail(f"--model: unknown model {model!r}; expected 'learned' or 'geometric'")
+        _fail("--suites: no suite given")
+    from lamp.bench.jobs import builtin_suites
+
+    for name in suite_list:
+        if name not in builtin_suites() and not Path(name).is_dir():
+            _fail(f"--suites: unknown suite {name!r}; expected one of: "
+                  f"{', '.join(builtin_suites())}, or a folder of scene files"
+                  + did_you_mean(name, builtin_suites()))
+    model = check_model_option(model)
     if backend not in BACKENDS:
         _fail(f"--backend: unknown backend {backend!r}; expected one of: {', '.join(BACKENDS)}")
-    for name, value in (("--seeds", seeds), ("--workers", workers)):
+    for name, value in (("--num-seeds", seeds), ("--workers", workers)):
         if value < 1:
             _fail(f"{name} must be at least 1, got {value}")
     for name, fvalue in (("--time-cap", time_cap), ("--planning-limit", planning_limit)):
@@ -326,15 +352,21 @@ def bench_command(
         jobs = enumerate_jobs(loaded, planner_list, seed_list, scenes_per_suite=scenes,
                               model=model, time_cap_s=time_cap, planning_limit_s=planning_limit)
     except ValueError as exc:
-        _fail(f"--suite: {exc}")
+        _fail(f"--suites: {exc}")
     except Exception as exc:  # a scene that fails to load is bad input too
-        _fail(f"--suite: {type(exc).__name__}: {exc}")
+        _fail(f"--suites: {type(exc).__name__}: {exc}")
     if render_iros and not any(j.suite == "iros" for j in jobs):
-        _fail("--render-iros needs the iros suite in --suite")
+        _fail("--render-iros needs the iros suite in --suites")
     records = read_records(out / RESULTS_FILE) if resume else []
     pending = pending_jobs(jobs, records, retry_errors=retry_errors)
     if render_iros:
         pending = _render_jobs(jobs, pending, out, time_cap)
+    if record:
+        from dataclasses import replace
+
+        pending = [replace(j, recording_to=str(out / "recordings" / j.suite /
+                                               f"{j.scene_name}-{j.planner}-s{j.seed}"))
+                   if j.record else j for j in pending]
 
     per = Counter((j.suite, j.planner) for j in pending if j.record)
     typer.echo(f"{len(jobs)} jobs ({len({(j.suite, j.scene_name) for j in jobs})} scenes x "
@@ -346,12 +378,14 @@ def bench_command(
         for j in pending:
             if j.render_to:
                 typer.echo(f"  renders {j.render_to} ({j.label})")
+            if j.recording_to:
+                typer.echo(f"  records into {j.recording_to} ({j.label})")
         return
 
     command = canonical_command(
         suite_list, planner_list, seeds=seeds, workers=workers, out=out, time_cap=time_cap,
         planning_limit=planning_limit, model=model, backend=backend, scenes=scenes,
-        render_iros=render_iros, job_fn=job_fn)
+        render_iros=render_iros, job_fn=job_fn, record=record)
     out.mkdir(parents=True, exist_ok=True)
     write_config(out, previous, command=command, suites=list(dict.fromkeys(j.suite for j in jobs)),
                  planners=planner_list,

@@ -50,7 +50,8 @@ class Job:
     ``planning_limit_s`` is the cumulative planning limit handed to the planner when it is
     one of :data:`LIMITED_PLANNERS` (``None``: the planner's default). ``render_to`` asks the
     job function to also write an animation there; ``record`` is False for a render-only
-    re-run whose result is already in the results file.
+    re-run whose result is already in the results file; ``recording_to`` (``--record``) is
+    a folder where the job function saves the run's recording (``lamp-recording/1``).
     """
 
     suite: str
@@ -64,6 +65,7 @@ class Job:
     planning_limit_s: float | None = None
     render_to: str | None = None
     record: bool = True
+    recording_to: str | None = None
 
     @property
     def key(self) -> JobKey:

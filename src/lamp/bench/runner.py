@@ -56,10 +56,12 @@ MAX_TRACEBACK = 4000
 
 
 def solve_job(job: Job) -> dict[str, Any]:
-    """Run one job with the real planners; write ``job.render_to`` when rendering is asked.
+    """Run one job with the real planners; write ``job.render_to`` when rendering is asked
+    and save the recording into ``job.recording_to`` when recording is.
 
-    A failure to write the animation is reported on stderr (kept in the job's log) and in
-    the result's ``render_error`` key; it never costs the run's result.
+    A failure to write the animation (recording) is reported on stderr (kept in the job's
+    log) and in the result's ``render_error`` (``recording_error``) key; it never costs the
+    run's result.
     """
     from lamp.planners.run import solve_with_frames
 
@@ -78,6 +80,16 @@ def solve_job(job: Job) -> dict[str, Any]:
         except Exception as exc:  # the run itself is still a valid result
             traceback.print_exc()
             result["render_error"] = f"{type(exc).__name__}: {exc}"
+    if job.recording_to is not None:
+        try:
+            from lamp.record import save_recording
+
+            if solution.recording is None:
+                raise ValueError("the run returned no recording")
+            save_recording(solution.recording, job.recording_to)
+        except Exception as exc:  # as for the animation: the result stands
+            traceback.print_exc()
+            result["recording_error"] = f"{type(exc).__name__}: {exc}"
     return result
 
 

@@ -30,8 +30,8 @@ import shapely
 from numpy.typing import ArrayLike
 from scipy import ndimage
 
+from lamp.geometry.primitives import Obstacle
 from lamp.geometry.shapes import obstacle_geometry
-from lamp.scene.model import Obstacle
 
 __all__ = ["DistanceTiles", "TILE", "FULL_GRID_CELLS", "DEFAULT_GRID_CAP"]
 

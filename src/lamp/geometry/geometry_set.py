@@ -1,5 +1,5 @@
 """Obstacles in the array form the compiled clearance kernels read (``GeometrySet``), and
-the conversions into :class:`~lamp.scene.model.Obstacle` from the forms callers pass."""
+the conversions into :class:`~lamp.geometry.primitives.Obstacle` from the forms callers pass."""
 
 from __future__ import annotations
 
@@ -8,9 +8,9 @@ from typing import Any
 
 import numpy as np
 
+from lamp.geometry.primitives import Circle, Obstacle, Polygon, Rectangle
 from lamp.geometry.se2 import transform_points
 from lamp.geometry.shapes import local_outline
-from lamp.scene.model import Circle, Obstacle, Polygon, Rectangle
 
 __all__ = ["GeometrySet", "as_obstacle", "obstacle_from_dict"]
 

@@ -68,6 +68,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numba
 import numpy as np
@@ -75,8 +76,11 @@ import shapely
 from numpy.typing import ArrayLike
 
 from lamp.geometry.distance_tiles import DEFAULT_GRID_CAP, DistanceTiles
+from lamp.geometry.primitives import Circle, Obstacle, Rectangle, Shape
 from lamp.geometry.shapes import local_outline, obstacle_geometry
-from lamp.scene.model import Circle, Obstacle, Rectangle, Scene, Shape
+
+if TYPE_CHECKING:  # the scene layer builds on geometry, not the other way round
+    from lamp.scene.model import Scene
 
 DEFAULT_RESOLUTION = 0.004
 DEFAULT_MOTION_MARGIN = 0.005

@@ -40,7 +40,7 @@ from __future__ import annotations
 import math
 from collections import OrderedDict
 from collections.abc import Callable, Iterable, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -54,7 +54,10 @@ from lamp.geometry.clearance_kernels import (
     segments_clearance,
 )
 from lamp.geometry.geometry_set import GeometrySet, as_obstacle, obstacle_from_dict
-from lamp.scene.model import Obstacle, Scene
+from lamp.geometry.primitives import Obstacle
+
+if TYPE_CHECKING:  # the scene layer builds on geometry, not the other way round
+    from lamp.scene.model import Scene
 
 __all__ = [
     "RobotSpace",

@@ -10,8 +10,8 @@ import numpy as np
 import shapely
 from numpy.typing import ArrayLike
 
+from lamp.geometry.primitives import Circle, Obstacle, Polygon, Rectangle, Shape
 from lamp.geometry.se2 import transform_points
-from lamp.scene.model import Circle, Obstacle, Polygon, Rectangle, Shape
 
 CIRCLE_SEGMENTS = 64
 

@@ -34,9 +34,10 @@ def data_cmd(
     out: Path = typer.Option(DEFAULT_DATA, "--out", "-o", help="Dataset file (.npz) to write."),
     attempts: int = typer.Option(26000, help="Pushes to simulate (about 80% are kept)."),
     seed: int = typer.Option(0, help="Seed of the generator."),
-    workers: int = typer.Option(max(1, os.cpu_count() or 1), help="Worker processes."),
-    accept_translation: float = typer.Option(0.1, help="Keep pushes within this error [m]."),
-    accept_rotation: float = typer.Option(0.3, help="... and within this error [rad]."),
+    workers: int = typer.Option(max(1, os.cpu_count() or 1), "--workers", "-j",
+                                help="Worker processes."),
+    accept_translation: float = typer.Option(0.1, help="Keep pushes within this error \\[m]."),
+    accept_rotation: float = typer.Option(0.3, help="... and within this error \\[rad]."),
 ) -> None:
     """Simulate pushes with the contact strategies and keep those that land near the request."""
     from lamp.manip.dataset import generate
@@ -59,13 +60,18 @@ def train_cmd(
     epochs: int = typer.Option(30, help="Total epochs (a resumed run continues up to this)."),
     seed: int = typer.Option(0, help="Seed (initialisation, split, batches)."),
     threads: int = typer.Option(1, help="Torch threads."),
-    max_minutes: float = typer.Option(None, help="Stop after the epoch crossing this budget."),
+    max_minutes: float = typer.Option(None, help="Stop after the epoch crossing this budget.",
+                                      show_default="no budget"),
     export_to: Path = typer.Option(None, "--export", help="Also write the model here "
-                                   "(plus a .json with its metadata next to it)."),
-    guidance: float = typer.Option(None, help="Smoothness guidance stored in the export."),
-    temperature: float = typer.Option(None, help="Token temperature stored in the export."),
+                                   "(plus a .json with its metadata next to it).",
+                                   show_default="RUN_DIR/model.pt only"),
+    guidance: float = typer.Option(None, help="Smoothness guidance stored in the export.",
+                                   show_default="the sampler's default"),
+    temperature: float = typer.Option(None, help="Token temperature stored in the export.",
+                                      show_default="the sampler's default"),
     oversample: float = typer.Option(None, help="Candidates drawn per proposal returned "
-                                     "(best-ranked kept), stored in the export."),
+                                     "(best-ranked kept), stored in the export.",
+                                     show_default="the sampler's default"),
 ) -> None:
     """Train (or resume training) the flow-matching proposer; logs losses per epoch."""
     _threads(threads)
@@ -101,23 +107,39 @@ def train_cmd(
 
 @model_app.command("eval")
 def eval_cmd(
-    model: Path = typer.Option(None, "--model", help="Checkpoint (default: the shipped one)."),
+    model: str = typer.Option("learned", "--model", "-m", help="learned (the shipped "
+                              "checkpoint) or a checkpoint file from `lamp model train`."),
     cases: int = typer.Option(60, help="Held-out (shape, motion) cases per budget."),
-    k: int = typer.Option(4, help="Proposals executed per case."),
+    proposals: int = typer.Option(4, "--proposals", help="Proposals executed per case."),
+    k_alias: int = typer.Option(None, "--k", hidden=True, help="Old spelling of --proposals."),
     seed: int = typer.Option(12345, help="Seed of the held-out cases."),
     threads: int = typer.Option(1, help="Torch threads."),
-    out: Path = typer.Option(None, "--out", help="Write the report as JSON here."),
+    out: Path = typer.Option(None, "--out", help="Write the report as JSON here.",
+                             show_default="printed only"),
     geometric: bool = typer.Option(True, help="Run the geometric proposer side by side."),
     record: bool = typer.Option(False, help="Add the figures to the checkpoint's .json."),
     polygons: bool = typer.Option(False, help="Also evaluate on random convex polygons "
                                   "(out of the training distribution)."),
 ) -> None:
     """Execute proposals for held-out shapes and motions in the simulator; report accuracy."""
+    from lamp.cli_support import check_model_option, check_writable_file, fail_input
+
+    k = k_alias if k_alias is not None else proposals
+    if k < 1 or cases < 1:
+        fail_input(f"--proposals and --cases must be >= 1, got {k} and {cases}")
+    if model == "geometric":
+        fail_input("--model: eval measures a learned checkpoint; the geometric proposer runs "
+                   "beside it unless --no-geometric")
+    checkpoint = check_model_option(model)
+    if out is not None:
+        check_writable_file(out)
     _threads(threads)
     from lamp.manip import GeometricProposer, load_model
     from lamp.manip.evaluate import evaluate, format_report
+    from lamp.manip.network import DEFAULT_CHECKPOINT
 
-    proposers = {"flow": load_model(model, threads=threads)}
+    model_path = DEFAULT_CHECKPOINT if checkpoint == "learned" else Path(checkpoint)
+    proposers = {"flow": load_model(model_path, threads=threads)}
     if geometric:
         proposers["geometric"] = GeometricProposer()
     report = evaluate(proposers, cases_per_budget=cases, k=k, seed=seed)
@@ -131,9 +153,7 @@ def eval_cmd(
         out.write_text(json.dumps(report, indent=1))
         typer.echo(f"wrote {out}")
     if record:
-        from lamp.manip.network import DEFAULT_CHECKPOINT
-
-        meta_path = (model or DEFAULT_CHECKPOINT).with_suffix(".json")
+        meta_path = model_path.with_suffix(".json")
         meta = json.loads(meta_path.read_text()) if meta_path.is_file() else {}
         meta["evaluation"] = report
         meta_path.write_text(json.dumps(meta, indent=1) + "\n")

@@ -29,7 +29,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from lamp.geometry.se2 import relative, transform_points, wrap_angle
-from lamp.manip.contacts import HORIZON, MAX_ROBOTS, rigid_pushes
+from lamp.manip.contacts import HORIZON, MAX_ROBOTS, ROBOT_RADIUS, rigid_pushes
 from lamp.manip.geometric import STRATEGIES, strategy_contacts
 from lamp.scene.model import Circle, Rectangle, Scene, SceneObject, Shape
 
@@ -317,6 +317,7 @@ def generate(
     kept = sum(r.kept for r in results)
     meta = {
         "seed": seed,
+        "robot_radius": ROBOT_RADIUS,
         "attempts": n_attempts,
         "chunk": chunk,
         "accepted": int(kept.sum()),

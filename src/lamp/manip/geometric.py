@@ -431,6 +431,8 @@ class GeometricProposer:
     """
 
     horizon: int = HORIZON
+    #: The strategies place contacts for robots of this radius (``CONTACT_OFFSET``).
+    robot_radius: float = ROBOT_RADIUS
 
     def __init__(self, oversample: int = 3, temperature: float = 0.05, jitter: float = 0.5) -> None:
         if oversample < 1:

@@ -227,6 +227,10 @@ class FlowProposer:
         self.traj_scale = float(traj_scale)
         self.sampler = sampler or SamplerConfig()
         self.meta = meta or {}
+        #: Radius of the robots the training pushes were simulated with: contacts sit
+        #: ``robot_radius + CONTACT_GAP`` off the object. Checkpoints written before it was
+        #: recorded were all trained with ``ROBOT_RADIUS``.
+        self.robot_radius = float(self.meta.get("data_meta", {}).get("robot_radius", ROBOT_RADIUS))
         self._cache: OrderedDict[Any, torch.Tensor] = OrderedDict()
         self._cache_size = cache_size
         self.horizon = net.cfg.horizon

@@ -69,6 +69,9 @@ class ProposalModel(Protocol):
     """
 
     horizon: int
+    #: Radius (m) of the robots the proposals are made for: contacts lie that far (plus a
+    #: small gap) off the object's boundary. A scene with other robots cannot use them.
+    robot_radius: float
 
     def propose(
         self,

@@ -52,22 +52,44 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
+from enum import Enum
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 from scipy.optimize import linear_sum_assignment
 
+from lamp.errors import InputError
 from lamp.geometry.robot_space import RobotSpace
 from lamp.mrmp.distance_field import Lattice, get_lattice
 from lamp.mrmp.endpoints import as_points, check_points
 from lamp.mrmp.gspi_kernels import EPS, GoalDistances, Graph, run_steps, seed_goal, start_costs
 from lamp.scene.model import Scene
 
-__all__ = ["MRMPPlan", "plan_paths", "warmup"]
+__all__ = ["GspiStatus", "MRMPPlan", "plan_paths", "warmup"]
 
 #: Finite stand-in for an infinite cost in the assignment problem.
 _BIG = 1e9
+
+
+class GspiStatus(str, Enum):
+    """How a :func:`plan_paths` call ended (``MRMPPlan.status``); ``reason`` says more."""
+
+    SOLVED = "solved"
+    #: A start (robot) outside the workspace, inside an obstacle beyond the tolerance, or
+    #: overlapping another robot.
+    INVALID_START = "invalid_start"
+    #: The same for a goal.
+    INVALID_GOAL = "invalid_goal"
+    #: A goal that cannot be linked to the lattice or reached from any start, or no
+    #: assignment reaching every goal.
+    UNREACHABLE = "unreachable"
+    #: The step budget (``max_steps``) was spent.
+    STEP_BUDGET = "step_budget"
+    #: No progress for ``stall_steps`` steps (deadlock or livelock).
+    STALLED = "stalled"
+    #: The wall-clock ``time_limit`` passed.
+    TIME_LIMIT = "time_limit"
 
 
 @dataclass
@@ -83,6 +105,8 @@ class MRMPPlan:
     iterations: Gspi time steps taken.
     time_s: wall-clock time of the call.
     stats: extra figures (lattice size, link counts, steps removed ...).
+    status: how the call ended (``SOLVED`` exactly when ``success``); on several lattices,
+        the last one's.
     """
 
     success: bool
@@ -92,6 +116,11 @@ class MRMPPlan:
     iterations: int = 0
     time_s: float = 0.0
     stats: dict[str, Any] = field(default_factory=dict)
+    status: GspiStatus = GspiStatus.SOLVED
+
+    def __post_init__(self) -> None:
+        if self.success != (self.status is GspiStatus.SOLVED):
+            raise ValueError(f"success={self.success} contradicts status {self.status}")
 
     @property
     def n_steps(self) -> int:
@@ -178,7 +207,7 @@ def plan_paths(
         (contacts from the manipulation model touch the object and come on a 7.8 mm pixel
         grid; 6 mm is LAMP's ``contact_tolerance``), and two goals may be
         ``2r - goal_tolerance`` apart; the last approach then never gets closer than the
-        goal itself (non-worsening rule). Deeper goals raise ValueError.
+        goal itself (non-worsening rule). Deeper goals: status ``INVALID_GOAL``.
     start_tolerance: the same for starts (robots left in contact after a push); motions
         out of such a start never reduce the clearance or robot distance further.
     max_steps, stall_steps: step budget, and failure after this many steps without a
@@ -188,49 +217,55 @@ def plan_paths(
 
     Raises
     ------
-    ValueError for malformed arguments: shapes, non-finite values, M > N, starts or goals
-    outside the workspace, inside/overlapping obstacles beyond the tolerance, overlapping
-    each other. Unreachable or blocked goals are *not* errors: ``success=False``.
+    lamp.errors.InputError (a ValueError) for malformed arguments: shapes, non-finite
+    values, M > N, bad limits. Starts or goals that cannot be used (outside the workspace,
+    inside or overlapping obstacles beyond the tolerance, overlapping each other) are *not*
+    errors: ``success=False`` with status ``INVALID_START`` / ``INVALID_GOAL``, as are
+    unreachable or blocked goals (``UNREACHABLE``...).
     """
     if not _WARM:
         warmup()
     t_begin = time.perf_counter()
     if not isinstance(scene, Scene):
-        raise ValueError(f"scene must be a lamp Scene, got {type(scene).__name__}")
+        raise InputError(f"scene must be a lamp Scene, got {type(scene).__name__}")
     S = as_points(starts, "starts")
     G = as_points(goals, "goals")
     N, M = len(S), len(G)
     if N < 1:
-        raise ValueError("starts must hold at least one robot")
+        raise InputError("starts must hold at least one robot")
     if M > N:
-        raise ValueError(f"goals has {M} points but there are only {N} robots (need M <= N)")
+        raise InputError(f"goals has {M} points but there are only {N} robots (need M <= N)")
     if not (np.isfinite(time_limit) and time_limit > 0):
-        raise ValueError(f"time_limit must be positive, got {time_limit!r}")
+        raise InputError(f"time_limit must be positive, got {time_limit!r}")
     if not (np.isfinite(max_spacing) and max_spacing > 0):
-        raise ValueError(f"max_spacing must be positive, got {max_spacing!r}")
+        raise InputError(f"max_spacing must be positive, got {max_spacing!r}")
     if goal_tolerance < 0 or start_tolerance < 0:
-        raise ValueError("goal_tolerance and start_tolerance must be >= 0")
+        raise InputError("goal_tolerance and start_tolerance must be >= 0")
     if space is None:
         space = RobotSpace.from_scene(scene, object_poses, extra_obstacles)
     elif not isinstance(space, RobotSpace):
-        raise ValueError(f"space must be a RobotSpace, got {type(space).__name__}")
-    c_start = check_points(space, S, "starts", start_tolerance)
-    c_goal = check_points(space, G, "goals", goal_tolerance)
+        raise InputError(f"space must be a RobotSpace, got {type(space).__name__}")
+    c_start, bad_start = check_points(space, S, "starts", start_tolerance)
+    c_goal, bad_goal = check_points(space, G, "goals", goal_tolerance)
     goal0: np.ndarray | None = None
     if initial_goal_of is not None:
         goal0 = np.asarray(initial_goal_of, dtype=np.int64).reshape(-1)
         if goal0.shape != (N,) or np.any(goal0 < -1) or np.any(goal0 >= M):
-            raise ValueError(f"initial_goal_of must be (N,) goal indices or -1, got {goal0}")
+            raise InputError(f"initial_goal_of must be (N,) goal indices or -1, got {goal0}")
         used = goal0[goal0 >= 0]
         if len(np.unique(used)) != M or len(used) != M:
-            raise ValueError("initial_goal_of must give every goal to exactly one robot")
+            raise InputError("initial_goal_of must give every goal to exactly one robot")
 
+    steps = (lattice_step,) if np.isscalar(lattice_step) else tuple(lattice_step)  # type: ignore[arg-type]
+    if not steps:
+        raise InputError("lattice_step must be a step or a non-empty sequence of steps")
+    if bad_start or bad_goal:
+        status = GspiStatus.INVALID_START if bad_start else GspiStatus.INVALID_GOAL
+        return MRMPPlan(False, S[:, None, :].copy(), np.full(N, -1, np.int64),
+                        bad_start or bad_goal, 0, time.perf_counter() - t_begin, {}, status)
     if M == 0:
         return MRMPPlan(True, S[:, None, :].copy(), np.full(N, -1, np.int64), "", 0,
                         time.perf_counter() - t_begin, {})
-    steps = (lattice_step,) if np.isscalar(lattice_step) else tuple(lattice_step)  # type: ignore[arg-type]
-    if not steps:
-        raise ValueError("lattice_step must be a step or a non-empty sequence of steps")
     opts = _Options(link_radius, goal_swapping, float(max_spacing), max_steps, stall_steps,
                     seed, t_begin + float(time_limit), float(time_limit))
     stats: dict[str, Any] = {"attempts": []}
@@ -240,6 +275,7 @@ def plan_paths(
         if out is not None and time.perf_counter() >= opts.deadline:
             reasons.append(f"time limit of {time_limit:g} s reached before trying the "
                            f"{L:g} m lattice")
+            out.status = GspiStatus.TIME_LIMIT
             break
         out = _attempt(space, S, G, c_start, c_goal, float(L), goal0, opts)
         stats["attempts"].append({"lattice_step": float(L), **out.stats})
@@ -252,7 +288,7 @@ def plan_paths(
     assert out is not None
     reason = "" if out.success else "; ".join(reasons)
     return MRMPPlan(out.success, out.paths, out.goal_of, reason, out.iterations,
-                    time.perf_counter() - t_begin, stats)
+                    time.perf_counter() - t_begin, stats, out.status)
 
 
 @dataclass(frozen=True)
@@ -278,6 +314,7 @@ class _Attempt:
     iterations: int
     retry: bool  # a finer lattice may succeed (static or stall failure, time left)
     stats: dict[str, Any]
+    status: GspiStatus
 
 
 @dataclass(frozen=True)
@@ -384,6 +421,7 @@ class _Search:
     done: bool = False
     reason: str = ""
     retry: bool = False
+    status: GspiStatus = GspiStatus.SOLVED
 
 
 def _run(graph: Graph, V: int, gv0: int, hs: GoalDistances, goal: np.ndarray,
@@ -416,14 +454,16 @@ def _run(graph: Graph, V: int, gv0: int, hs: GoalDistances, goal: np.ndarray,
             return out
         if out.t >= max_steps:
             out.reason, out.retry = f"step budget of {max_steps} Gspi steps exhausted", True
+            out.status = GspiStatus.STEP_BUDGET
             return out
         if out.t - best_t > stall_steps:
             out.reason = f"no progress for {stall_steps} steps (deadlock or livelock)"
-            out.retry = True
+            out.retry, out.status = True, GspiStatus.STALLED
             return out
         now = time.perf_counter()
         if now > opts.deadline:
             out.reason = f"time limit of {opts.time_limit:g} s reached after {out.t} steps"
+            out.status = GspiStatus.TIME_LIMIT
             return out
         # next chunk: at most ~20 ms of work, so the time limit is kept closely
         per_step = (now - t_chunk) / max(1, out.t - t_prev)
@@ -458,13 +498,13 @@ def _attempt(space: RobotSpace, S: np.ndarray, G: np.ndarray, c_start: np.ndarra
     stats: dict[str, Any] = {"lattice_nodes": lat.V}
     unmoved = S[:, None, :].copy()
 
-    def failure(reason: str, retry: bool = False) -> _Attempt:
-        return _Attempt(False, reason, unmoved, np.full(N, -1, np.int64), 0, retry, stats)
+    def failure(reason: str, status: GspiStatus, retry: bool = False) -> _Attempt:
+        return _Attempt(False, reason, unmoved, np.full(N, -1, np.int64), 0, retry, stats,
+                        status)
 
     if time.perf_counter() > opts.deadline:
-        return _Attempt(False, f"time limit of {opts.time_limit:g} s reached while building "
-                        f"the {lattice_step:g} m lattice", unmoved, np.full(N, -1, np.int64),
-                        0, False, {})
+        return failure(f"time limit of {opts.time_limit:g} s reached while building the "
+                       f"{lattice_step:g} m lattice", GspiStatus.TIME_LIMIT)
     L = lat.step
     R = 1.5 * L if opts.link_radius is None else float(opts.link_radius)
     V = lat.V
@@ -481,10 +521,10 @@ def _attempt(space: RobotSpace, S: np.ndarray, G: np.ndarray, c_start: np.ndarra
         C[:, m] = start_costs(links.graph, V, gv0, hs, N, m)
         if time.perf_counter() > opts.deadline:
             return failure(f"time limit of {opts.time_limit:g} s reached while computing "
-                           "heuristic distances")
+                           "heuristic distances", GspiStatus.TIME_LIMIT)
     goal, why = _assign(C, G, links, goal0)
     if goal is None:
-        return failure(why, retry=True)
+        return failure(why, GspiStatus.UNREACHABLE, retry=True)
     prio = _priorities(C, goal, opts.seed)
 
     n_side = lat.ids.shape[0] + lat.ids.shape[1]
@@ -504,6 +544,7 @@ def _attempt(space: RobotSpace, S: np.ndarray, G: np.ndarray, c_start: np.ndarra
         held = goal >= 0
         final_ok = np.all(np.hypot(*(paths[held, -1] - G[goal[held]]).T) <= 1e-9)
         if final_ok and np.all(np.bincount(goal[held], minlength=M) == 1):
-            return _Attempt(True, "", paths, goal, run.t, False, stats)
-        reason = "internal error: final positions do not match the goals"  # pragma: no cover
-    return _Attempt(False, reason, paths, goal, run.t, run.retry, stats)
+            return _Attempt(True, "", paths, goal, run.t, False, stats, GspiStatus.SOLVED)
+        # pragma: no cover - the search's bookkeeping disagrees with its output
+        raise AssertionError("Gspi internal error: final positions do not match the goals")
+    return _Attempt(False, reason, paths, goal, run.t, run.retry, stats, run.status)

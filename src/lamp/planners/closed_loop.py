@@ -12,13 +12,21 @@ Multi-object scenes run object by object; the other objects stay physical bodies
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
 import numpy as np
 
 from lamp.geometry.se2 import pose_distance
-from lamp.planners.result import ObjectResult, goal_errors, within_goal
+from lamp.planners.result import (
+    SUCCESS_ORIENTATION_TOL,
+    SUCCESS_POSITION_TOL,
+    ObjectResult,
+    goal_errors,
+    within_goal,
+)
+from lamp.planners.robots import robots_match
 from lamp.planners.task import ManipulationTask
 from lamp.planners.trajectory import concat, straight_moves
 from lamp.planners.verify import Transition, reroute
@@ -53,6 +61,33 @@ class LoopRecord:
     frames: list[Any] = field(default_factory=list)
 
 
+@dataclass(frozen=True)
+class SegmentEvent:
+    """One executed segment, as handed to ``run_object``'s ``observer`` right after it ran.
+
+    ``execution`` is the simulator's result, with a ``trace`` sampled every
+    ``RENDER_EVERY`` physics steps (its row 0 is the state before the segment);
+    ``transition`` the (robot-adapted) transition that was executed; ``plan`` the plan in
+    force (``object_path``, ``verified_edges``, ``penalised_edges``) or None;
+    ``planning_time_s`` the planning time charged to this segment; ``replanned`` whether a
+    plan call preceded it; ``drift`` the (position, orientation) miss of the reached pose
+    against ``transition.q_to``; ``outcome`` what the loop did next: ``"continue"``,
+    ``"drift"`` (replan), ``"stalled"`` (push reported failed, replan) or ``"left"``.
+    """
+
+    object_index: int
+    segment: int
+    transition: Transition
+    execution: Any
+    plan: Any
+    planning_time_s: float
+    replanned: bool
+    drift: tuple[float, float]
+    outcome: str
+    #: Replans of this object so far (the first plan is not a replan).
+    replans: int = 0
+
+
 #: Robot start positions that differ from a transition's by less than this are joined
 #: with a short straight move; larger differences re-route the robots (Alg. 2 l. 27-33).
 ROBOT_SNAP = 0.01
@@ -62,10 +97,9 @@ RENDER_EVERY = 40
 
 
 def _adapt_to_robots(task: ManipulationTask, trans: Transition, q_R: np.ndarray) -> Transition | None:
-    gap = np.linalg.norm(trans.robot_start - q_R, axis=1)
-    if np.all(gap < 1e-9):
+    if robots_match(trans.robot_start, q_R, 1e-9):
         return trans
-    if np.all(gap <= ROBOT_SNAP):
+    if robots_match(trans.robot_start, q_R, ROBOT_SNAP):
         move = concat(straight_moves(q_R, trans.robot_start), trans.move)
         return Transition(trans.q_from, trans.q_to, trans.contacts, trans.pushes_local, move,
                           trans.manip, trans.edge)
@@ -83,8 +117,13 @@ def _stalled(q_before: np.ndarray, q_after: np.ndarray, trans: Transition) -> bo
 
 
 def run_object(task: ManipulationTask, planner: ObjectPlanner, policy: LoopPolicy, sim,
-               record: LoopRecord, render: bool = False, time_limit: float | None = None) -> ObjectResult:
-    """Move ``task``'s object to its goal in ``sim`` with ``planner`` (Alg. 2 lines 2-7)."""
+               record: LoopRecord, render: bool = False, time_limit: float | None = None,
+               observer: Callable[[SegmentEvent], None] | None = None) -> ObjectResult:
+    """Move ``task``'s object to its goal in ``sim`` with ``planner`` (Alg. 2 lines 2-7).
+
+    ``observer``, when given, is called with a :class:`SegmentEvent` after every executed
+    segment (in order); it only watches, the run is the same with or without it.
+    """
     cfg = task.config
     limit = cfg.planning_time_limit if time_limit is None else time_limit
     goal = task.goal
@@ -98,6 +137,7 @@ def run_object(task: ManipulationTask, planner: ObjectPlanner, policy: LoopPolic
     planned_once = False
     full_horizon = False
     reason = ""
+    replanned = False
     q_O = np.asarray(sim.object_poses[task.index], float)
     q_R = np.asarray(sim.robot_positions, float)
     while iterations < cfg.max_segments:
@@ -121,6 +161,7 @@ def run_object(task: ManipulationTask, planner: ObjectPlanner, policy: LoopPolic
             if not planned_once:
                 full_horizon = plan_obj is not None and policy.full_horizon
             planned_once = True
+            replanned = True
             if plan_obj is None or not plan_obj.transitions:
                 if policy.failure_is_final:
                     timed_out = time.perf_counter() >= t0 + remaining
@@ -143,31 +184,45 @@ def run_object(task: ManipulationTask, planner: ObjectPlanner, policy: LoopPolic
             continue
         paths = adapted.robot_paths
         q_before = q_O
-        out = sim.execute(paths, record_every=RENDER_EVERY if render else None)
+        traced = render or observer is not None
+        out = sim.execute(paths, record_every=RENDER_EVERY if traced else None)
         iterations += 1
         segments += 1
         record.planning_time_s.append(pending_time)
-        pending_time = 0.0
+        seg_time, seg_replanned = pending_time, replanned
+        pending_time, replanned = 0.0, False
         record.makespan += paths.shape[1] - 1
         q_O = np.asarray(out.object_poses[task.index], float)
         q_R = np.asarray(out.robot_positions, float)
         if render:
             record.frames.extend(_frames(task, out, plan_obj))
+        dpos, drot = pose_distance(q_O, adapted.q_to)
+        outcome = "continue"
         if out.left_workspace:
+            outcome = "left"
+        elif _stalled(q_before, q_O, adapted) and hasattr(planner, "report_failure"):
+            outcome = "stalled"
+        elif policy.replan_on_drift and (dpos > cfg.drift_position or drot > cfg.drift_orientation):
+            outcome = "drift"
+        if observer is not None:
+            observer(SegmentEvent(task.index, segments - 1, adapted, out, plan_obj, seg_time,
+                                  seg_replanned, (float(dpos), float(drot)), outcome,
+                                  record.replans))
+        if outcome == "left":
             left = True
             reason = "object left the workspace"
             break
-        dpos, drot = pose_distance(q_O, adapted.q_to)
-        if _stalled(q_before, q_O, adapted) and hasattr(planner, "report_failure"):
+        if outcome == "stalled":
             # The push executed but barely moved the object: the verified transition does
             # not work in practice, so it is treated like a failed verification.
             planner.report_failure(adapted)
             pending = []
-        elif policy.replan_on_drift and (dpos > cfg.drift_position or drot > cfg.drift_orientation):
+        elif outcome == "drift":
             pending = []  # line 6: drift -> replan from the observed state
     record.unexecuted_planning_s += pending_time
     pos_err, rot_err = goal_errors(q_O, goal)
-    success = (not left) and within_goal(q_O, goal, 0.1, 0.1)
+    success = (not left) and within_goal(q_O, goal, SUCCESS_POSITION_TOL,
+                                         SUCCESS_ORIENTATION_TOL)
     if not success and not reason:
         reason = "segment limit reached" if iterations >= cfg.max_segments else "stopped away from goal"
     return ObjectResult(

@@ -3,6 +3,35 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal
+
+#: The planner names (``lamp run --planner``, ``lamp.solve``) and what each stands for.
+PLANNER_DESCRIPTIONS = {
+    "lazy": "LAMP-Lazy (default)",
+    "astar": "LAMP-A*, open loop",
+    "astar-replan": "LAMP-A*, replanning on drift",
+    "gco-ori": "GCo with its 0.2 m buffer",
+    "gco-var": "GCo with zero buffer",
+}
+PlannerName = Literal["lazy", "astar", "astar-replan", "gco-ori", "gco-var"]
+#: Default cumulative planning limit per object (s): the paper's 500 s for LAMP-A*,
+#: ``DEFAULT_PLANNING_LIMIT`` for every other planner.
+DEFAULT_PLANNING_LIMIT = 300.0
+PLANNING_LIMIT_OVERRIDES = {"astar": 500.0, "astar-replan": 500.0}
+
+
+def default_planning_limit(planner: str) -> float:
+    """The cumulative planning limit per object that ``planner`` runs under by default."""
+    return PLANNING_LIMIT_OVERRIDES.get(planner, DEFAULT_PLANNING_LIMIT)
+
+
+def planning_limit_help() -> str:
+    """The per-planner defaults in words, e.g. ``300 s; 500 s for astar, astar-replan``."""
+    by_value: dict[float, list[str]] = {}
+    for name, value in PLANNING_LIMIT_OVERRIDES.items():
+        by_value.setdefault(value, []).append(name)
+    return f"{DEFAULT_PLANNING_LIMIT:g} s; " + "; ".join(
+        f"{v:g} s for {', '.join(names)}" for v, names in by_value.items())
 
 
 @dataclass(frozen=True)

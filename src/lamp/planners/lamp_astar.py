@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from lamp.planners.lazy import Plan, goal_lattice, join_lattice
+from lamp.planners.robots import robot_state_key
 from lamp.planners.task import ManipulationTask
 from lamp.planners.trajectory import MAX_STEP
 from lamp.planners.verify import Transition, verify
@@ -60,8 +61,7 @@ class LampAStar:
     def _robot_key(self, q_R: np.ndarray) -> tuple:
         """Explored-state key for robots: positions on a ``robot_match_tolerance`` grid, sorted
         (robots are anonymous, so permutations of one configuration are the same state)."""
-        cells = np.round(q_R / self.task.config.robot_match_tolerance).astype(int)
-        return tuple(sorted(map(tuple, cells.tolist())))
+        return robot_state_key(q_R, self.task.config.robot_match_tolerance)
 
     def _successors(self, state: SearchState) -> list[tuple[object, np.ndarray]]:
         if not self.lattice.is_node(state.node):  # the continuous start joins the lattice

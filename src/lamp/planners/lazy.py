@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from lamp.planners.robots import robots_match
 from lamp.planners.task import ManipulationTask
 from lamp.planners.verify import Transition, reroute, verify
 from lamp.search.dstar_lite import DStarLite
@@ -37,7 +38,7 @@ class TreeEntry:
     def lookup(self, q_R: np.ndarray, tolerance: float) -> Transition | None:
         """D_T[q_R]: a cached T_R whose robots started within ``tolerance`` of ``q_R``."""
         for key, trans in self.cache:
-            if np.max(np.linalg.norm(key - q_R, axis=1)) <= tolerance:
+            if robots_match(key, q_R, tolerance):
                 return trans
         return None
 

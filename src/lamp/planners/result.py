@@ -50,9 +50,17 @@ class ObjectResult:
         return asdict(self)
 
 
-@dataclass
+@dataclass(repr=False)
 class RunResult:
-    """The outcome of one (scene, planner, seed) run."""
+    """The outcome of one (scene, planner, seed) run.
+
+    Planning time: ``planning_time_s`` holds the time spent before each executed segment;
+    ``unexecuted_planning_time_s`` the planning after an object's last executed segment
+    (a failed final search, say). ``total_planning_time_s`` counts both: all planning.
+    ``planning_time_per_segment_s`` is total planning time over executed segments, the
+    figure of ``lamp bench``'s report (``lamp.bench.report.scenario_planning_time``).
+    Numba compilation is never planning time (``lamp.warmup``).
+    """
 
     scene: str
     planner: str
@@ -63,6 +71,9 @@ class RunResult:
     replans: int = 0
     wall_time_s: float = 0.0
     stats: dict[str, Any] = field(default_factory=dict)
+    unexecuted_planning_time_s: float = 0.0
+    #: The run's ``lamp.record.Recording`` (set by ``lamp.solve``); not part of result.json.
+    recording: Any = field(default=None, repr=False, compare=False)
 
     @property
     def success(self) -> bool:
@@ -71,6 +82,24 @@ class RunResult:
     @property
     def segments(self) -> int:
         return len(self.planning_time_s)
+
+    @property
+    def total_planning_time_s(self) -> float:
+        """All planning: before executed segments plus after the last one."""
+        return float(sum(self.planning_time_s)) + float(self.unexecuted_planning_time_s)
+
+    @property
+    def planning_time_per_segment_s(self) -> float | None:
+        """Total planning time over executed segments (None without a segment)."""
+        return self.total_planning_time_s / self.segments if self.segments else None
+
+    def __repr__(self) -> str:
+        solved = sum(o.success for o in self.objects)
+        return (f"RunResult(scene={self.scene!r}, planner={self.planner!r}, seed={self.seed}, "
+                f"success={self.success}, objects={solved}/{len(self.objects)} solved, "
+                f"segments={self.segments}, "
+                f"total_planning_time_s={self.total_planning_time_s:.3f}, "
+                f"makespan={self.makespan})")
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -81,7 +110,12 @@ class RunResult:
             "objects": [o.to_dict() for o in self.objects],
             "segments": self.segments,
             "planning_time_s": [round(float(t), 6) for t in self.planning_time_s],
-            "total_planning_time_s": round(float(sum(self.planning_time_s)), 6),
+            "total_planning_time_s": round(self.total_planning_time_s, 6),
+            "executed_planning_time_s": round(float(sum(self.planning_time_s)), 6),
+            "unexecuted_planning_time_s": round(float(self.unexecuted_planning_time_s), 6),
+            "planning_time_per_segment_s": (
+                round(per, 6) if (per := self.planning_time_per_segment_s) is not None else None
+            ),
             "median_planning_time_s": (
                 round(float(np.median(self.planning_time_s)), 6) if self.planning_time_s else None
             ),

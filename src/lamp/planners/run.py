@@ -4,18 +4,28 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from lamp.planners.closed_loop import LoopPolicy, LoopRecord, run_object
-from lamp.planners.config import PlannerConfig
+from lamp.planners.closed_loop import LoopPolicy, LoopRecord, SegmentEvent, run_object
+from lamp.planners.config import (
+    PLANNER_DESCRIPTIONS,
+    PlannerConfig,
+    PlannerName,
+    default_planning_limit,
+)
+from lamp.planners.models import load_proposer as _load_proposer
 from lamp.planners.result import RunResult
 from lamp.planners.task import ManipulationTask, TaskStats
+from lamp.progress import EventKind, ProgressCallback, ProgressEvent
+from lamp.scene.loader import SceneError
 from lamp.scene.model import Scene
+from lamp.warmup import ensure_warm
 
 #: Planner names accepted by ``lamp run --planner`` (interfaces spec).
-PLANNERS = ("lazy", "astar", "astar-replan", "gco-ori", "gco-var")
+PLANNERS = tuple(PLANNER_DESCRIPTIONS)
 
 POLICIES = {
     "lazy": LoopPolicy(replan_on_drift=True, replan_when_done=True),
@@ -29,16 +39,19 @@ POLICIES = {
 
 
 def check_planner(name: str) -> str:
+    """``name`` if it is a planner name; else ``ValueError`` with the names and a hint."""
     if name not in PLANNERS:
-        raise ValueError(f"unknown planner {name!r}; expected one of: {', '.join(PLANNERS)}")
+        import difflib
+
+        hint = difflib.get_close_matches(str(name), PLANNERS, n=1)
+        did = f"; did you mean {hint[0]!r}?" if hint else ""
+        raise ValueError(f"unknown planner {name!r}; expected one of: {', '.join(PLANNERS)}{did}")
     return name
 
 
 def default_config(planner: str) -> PlannerConfig:
     """Per-planner defaults: LAMP-A* keeps the paper's 500 s cumulative limit."""
-    if planner in ("astar", "astar-replan"):
-        return PlannerConfig(planning_time_limit=500.0)
-    return PlannerConfig(planning_time_limit=300.0)
+    return PlannerConfig(planning_time_limit=default_planning_limit(check_planner(planner)))
 
 
 def make_planner(name: str, task: ManipulationTask):
@@ -55,57 +68,119 @@ def make_planner(name: str, task: ManipulationTask):
     return GCoPlanner(task, inflation=0.2 if name == "gco-ori" else 0.0)
 
 
-def load_proposer(model: str | Any = "learned"):
-    """The manipulation model: ``"learned"`` (shipped checkpoint), ``"geometric"`` or an object."""
-    if not isinstance(model, str):
-        return model
-    from lamp import manip
+def load_proposer(model: str | Path | Any = "learned") -> Any:
+    """The manipulation model: ``"learned"``, ``"geometric"``, a checkpoint path or an object
+    (see ``lamp.planners.models``)."""
+    return _load_proposer(model)
 
-    if model == "learned":
-        return manip.load_model()
-    if model == "geometric":
-        return manip.GeometricProposer()
-    raise ValueError(f"unknown model {model!r}; expected 'learned' or 'geometric'")
+
+def check_robot_radius(scene: Scene, proposer: Any) -> None:
+    """Refuse a scene whose robots the manipulation model does not make contacts for.
+
+    The model's contacts sit ``robot_radius`` (plus a gap) off the object, so robots of
+    another size would fail every ``Collide`` check or touch the object before the push:
+    a :class:`~lamp.scene.SceneError` naming ``robots.radius`` instead of a run that
+    silently finds nothing.
+    """
+    want = getattr(proposer, "robot_radius", None)
+    if want is not None and abs(float(scene.robot_radius) - float(want)) > 1e-9:
+        where = scene.source or scene.name
+        reason = (f"the manipulation model makes contacts for robots of radius "
+                  f"{float(want):g} m, got {float(scene.robot_radius):g}; use robots of radius "
+                  f"{float(want):g} m (or train a model for yours: lamp model data/train)")
+        raise SceneError(f"{where}: robots.radius: {reason}", path=scene.source,
+                         field="robots.radius", reason=reason)
 
 
 @dataclass
 class Solution:
-    """``RunResult`` plus what only a renderer needs (animation frames)."""
+    """``RunResult`` plus what only a renderer needs (animation frames, the recording)."""
 
     result: RunResult
     frames: list[Any] = field(default_factory=list)
+    recording: Any = None
 
 
-def solve(scene: Scene, planner: str = "lazy", seed: int = 0, *, model: str | Any = "learned",
-          config: PlannerConfig | None = None, render: bool = False,
-          time_limit: float | None = None) -> RunResult:
-    """Plan and execute ``scene`` with ``planner``; ``result.to_dict()`` is result.json."""
+def solve(scene: Scene | str | Path, planner: PlannerName = "lazy", seed: int = 0, *,
+          model: str | Path | Any = "learned", config: PlannerConfig | None = None,
+          render: bool = False, time_limit: float | None = None,
+          progress: ProgressCallback | None = None) -> RunResult:
+    """Plan and execute ``scene`` with ``planner``; ``result.to_dict()`` is result.json and
+    ``result.recording`` the run's :class:`lamp.record.Recording`.
+
+    See :func:`solve_with_frames` for the arguments.
+    """
     return solve_with_frames(scene, planner, seed, model=model, config=config, render=render,
-                             time_limit=time_limit).result
+                             time_limit=time_limit, progress=progress).result
 
 
-def solve_with_frames(scene: Scene, planner: str = "lazy", seed: int = 0, *,
-                      model: str | Any = "learned", config: PlannerConfig | None = None,
-                      render: bool = False, time_limit: float | None = None,
-                      progress=None) -> Solution:
-    """As ``solve``, also returning the animation frames when ``render`` is set."""
+def solve_with_frames(scene: Scene | str | Path, planner: PlannerName = "lazy", seed: int = 0,
+                      *, model: str | Path | Any = "learned",
+                      config: PlannerConfig | None = None, render: bool = False,
+                      time_limit: float | None = None,
+                      progress: ProgressCallback | None = None) -> Solution:
+    """As ``solve``, also returning the animation frames when ``render`` is set.
+
+    ``scene``: a ``Scene`` or a scene file path (loaded with ``load_scene``). Numba kernels
+    are compiled (or loaded from their disk cache) once per process before planning starts
+    (``lamp.warmup.ensure_warm``): ``planning_time_s`` never includes compilation.
+    """
+    if isinstance(scene, (str, Path)):
+        from lamp.scene.loader import load_scene
+
+        scene = load_scene(scene)
+    check_planner(planner)
+    proposer = load_proposer(model)
+    ensure_warm(progress)
+    return run_scene(scene, planner, seed, proposer, config=config, render=render,
+                     time_limit=time_limit, progress=progress)
+
+
+def run_scene(scene: Scene, planner: str, seed: int, model: str | Path | Any, *,
+              config: PlannerConfig | None = None, render: bool = False,
+              time_limit: float | None = None,
+              progress: ProgressCallback | None = None) -> Solution:
+    """Plan and execute every object of ``scene`` in order (no warm-up; see ``solve``).
+
+    Every run is recorded (``Solution.recording``, also ``result.recording``): the
+    recording only observes, it does not change the run.
+    """
+    from lamp.planners.closed_loop import RENDER_EVERY
+    from lamp.record import Recorder
     from lamp.sim import Simulator
+    from lamp.sim.mjcf import TIMESTEP
 
     check_planner(planner)
     cfg = config or default_config(planner)
     proposer = load_proposer(model)
+    check_robot_radius(scene, proposer)
     t_start = time.perf_counter()
     sim = Simulator(scene)
     result = RunResult(scene=scene.name, planner=planner, seed=int(seed))
     totals = TaskStats()
     frames: list[Any] = []
     unexecuted = 0.0
-    for index in range(len(scene.objects)):
+    n = len(scene.objects)
+    recorder = Recorder(scene, RENDER_EVERY * TIMESTEP)
+
+    def emit(kind: EventKind, index: int, **kw: Any) -> None:
+        if progress is not None:
+            progress(ProgressEvent(kind, object_index=index, n_objects=n, **kw))
+
+    def observe(event: SegmentEvent) -> None:
+        recorder(event)
+        emit("segment", event.object_index, segments=event.segment + 1,
+             replans=event.replans)
+
+    for index in range(n):
         task = ManipulationTask(scene, index, np.asarray(sim.object_poses, float), proposer, cfg,
                                 seed=int(seed) * 1000 + index)
         record = LoopRecord()
+        emit("object", index)
         obj = run_object(task, make_planner(planner, task), POLICIES[planner], sim, record,
-                         render=render, time_limit=time_limit)
+                         render=render, time_limit=time_limit, observer=observe)
+        emit("object-done", index, segments=obj.segments, replans=obj.replans,
+             success=obj.success)
         result.objects.append(obj)
         result.planning_time_s.extend(record.planning_time_s)
         result.makespan += record.makespan
@@ -113,9 +188,9 @@ def solve_with_frames(scene: Scene, planner: str = "lazy", seed: int = 0, *,
         totals.add(task.stats)
         unexecuted += record.unexecuted_planning_s
         frames.extend(record.frames)
-        if progress is not None:
-            progress(index, obj)
     result.wall_time_s = time.perf_counter() - t_start
+    result.unexecuted_planning_time_s = unexecuted
     result.stats = {**vars(totals), "unexecuted_planning_time_s": round(unexecuted, 6),
                     "failure_reasons": [o.failure_reason for o in result.objects]}
-    return Solution(result, frames)
+    result.recording = recorder.finish(planner, int(seed), result.to_dict())
+    return Solution(result, frames, result.recording)

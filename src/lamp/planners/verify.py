@@ -20,11 +20,14 @@ from scipy.optimize import linear_sum_assignment
 from lamp.geometry import se2
 from lamp.geometry.shapes import signed_distance
 from lamp.mrmp import plan_paths
+from lamp.mrmp.gspi import GspiStatus
 from lamp.planners.task import WINDOW_MAX_SIDE, ManipulationTask, PushCandidates
 from lamp.planners.trajectory import concat, hold, retime, straight_moves
 
 #: How far (m) the breadth-first search for a robot's waiting spot may go.
 WAIT_SEARCH_RADIUS = 1.0
+#: Gspi failures that a larger robot-space window may fix.
+_WINDOW_BOUND = frozenset({GspiStatus.UNREACHABLE, GspiStatus.STALLED, GspiStatus.STEP_BUDGET})
 
 
 @dataclass
@@ -153,8 +156,9 @@ def approach(task: ManipulationTask, q_from: np.ndarray, q_R: np.ndarray,
              goals: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
     """Gspi (Alg. 1 line 23): paths for all robots to ``goals``; (paths, goal_of) or None.
 
-    Gspi plans in the robot space over ``task.window(q_from, q_R)``; when it fails for a
-    reason other than its time limit and the window does not hold the whole map, the
+    Gspi plans in the robot space over ``task.window(q_from, q_R)``; when it fails in a
+    way a larger window may fix (a goal unreachable, a stall, the step budget; not the
+    time limit nor an invalid start or goal) and the window does not hold the whole map, the
     window's margin and least side are doubled (up to ``WINDOW_MAX_SIDE``) and Gspi tries
     again in the time left of the one ``gspi_time_limit``."""
     backoff = leave_contact(task, q_from, q_R)
@@ -162,22 +166,20 @@ def approach(task: ManipulationTask, q_from: np.ndarray, q_R: np.ndarray,
     task.stats.gspi_calls += 1
     t_end = time.perf_counter() + task.config.gspi_time_limit
     scale = 1.0
-    plan = None
     while True:
         window = task.window(q_from, q_R, scale)
         space = task.robot_space_at(q_from, window)
-        try:
-            plan = plan_paths(
-                task.scene, starts, goals, object_poses=task.poses_with(q_from),
-                time_limit=max(1e-3, t_end - time.perf_counter()), space=space,
-                seed=task.seed, goal_tolerance=task.config.contact_tolerance,
-            )
-        except ValueError:
-            return None
+        # Contacts deeper than the tolerance or robots left overlapping come back as a failed
+        # plan (status INVALID_GOAL / INVALID_START), like any other infeasible approach.
+        plan = plan_paths(
+            task.scene, starts, goals, object_poses=task.poses_with(q_from),
+            time_limit=max(1e-3, t_end - time.perf_counter()), space=space,
+            seed=task.seed, goal_tolerance=task.config.contact_tolerance,
+        )
         if plan.success:
             break
         wider = task.window(q_from, q_R, 2.0 * scale)
-        if (space.covers_workspace or "time limit" in plan.reason
+        if (space.covers_workspace or plan.status not in _WINDOW_BOUND
                 or max(wider[2] - wider[0], wider[3] - wider[1]) > WINDOW_MAX_SIDE
                 or time.perf_counter() >= t_end):
             return None

@@ -1,6 +1,12 @@
-"""Scenes: the data model and the validating file loader (format ``lamp-scene/1``)."""
+"""Scenes: the data model and the validating file loader (format ``lamp-scene/1``).
 
-from lamp.scene.loader import SceneError, load_scene, scene_from_dict
+The model is imported at once; the loader and writer (YAML, Shapely) on first use.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
 from lamp.scene.model import (
     Circle,
     Obstacle,
@@ -13,6 +19,26 @@ from lamp.scene.model import (
     shape_from_dict,
 )
 
+#: Names defined by the loader and the writer, imported when first asked for.
+_LAZY = {"SceneError": "lamp.scene.loader", "load_scene": "lamp.scene.loader",
+         "scene_from_dict": "lamp.scene.loader", "save_scene": "lamp.scene.save"}
+
+if TYPE_CHECKING:
+    from lamp.scene.loader import SceneError, load_scene, scene_from_dict
+    from lamp.scene.save import save_scene
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'lamp.scene' has no attribute {name!r}")
+    import importlib
+
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
 __all__ = [
     "Circle",
     "Obstacle",
@@ -24,6 +50,7 @@ __all__ = [
     "SceneObject",
     "Shape",
     "load_scene",
+    "save_scene",
     "scene_from_dict",
     "shape_from_dict",
 ]

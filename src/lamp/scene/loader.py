@@ -14,8 +14,9 @@ message is about the first thing to fix:
    finite; sizes and radii are > 0; polygons have >= 3 vertices, no repeated consecutive
    vertex, are simple (not self-intersecting) and have positive area. An optional field
    written as ``null`` counts as absent (``obstacles:`` with nothing under it is common).
-2. geometry, with exact footprints (disks, rotated rectangles, polygons) and an absolute
-   tolerance ``EPS = 1e-9`` m: obstacles, robots and objects (at start and at goal) lie
+2. geometry, with exact footprints (disks, rotated rectangles, polygons) and the spec's
+   absolute rounding tolerance ``EPS = 1e-6`` m (a wall written with ``angle: 1.5708``
+   that touches the border is inside it): obstacles, robots and objects (at start and at goal) lie
    inside the workspace (touching the border is allowed, crossing by more than ``EPS``
    is not); robots do not overlap each other, an obstacle, or an object at its start; no
    object overlaps an obstacle at its start or at its goal.
@@ -49,11 +50,12 @@ import numpy as np
 import shapely
 import yaml
 
+from lamp.errors import InputError
 from lamp.geometry.se2 import transform_points
 from lamp.scene.model import Circle, Obstacle, Polygon, Rectangle, Scene, SceneObject, Shape
 
 FORMAT = "lamp-scene/1"
-EPS = 1e-9  # metres: tolerance for workspace containment and overlap tests
+EPS = 1e-6  # metres: rounding allowed in containment and overlap tests (scene-format.md)
 DEFAULT_ROBOT_RADIUS = 0.05
 SHAPE_TYPES = ("circle", "rectangle", "polygon")
 
@@ -72,8 +74,29 @@ _OBJECT_KEYS = {
 }
 
 
-class SceneError(ValueError):
-    """A scene file or dict is invalid; the message names the file, the field and the value."""
+class SceneError(InputError):
+    """A scene file or dict is invalid; the message names the file, the field and the value.
+
+    ``str(err)`` is ``"<file>: <field>: <reason>"``; the parts are also attributes:
+    ``path`` (the file as given, ``None`` for a dict validated without ``source``),
+    ``field`` (e.g. ``"objects[1].size[0]"``, or ``"(file)"`` for file-level problems) and
+    ``reason``.
+    """
+
+    def __init__(self, message: str, *, path: str | None = None, field: str | None = None,
+                 reason: str | None = None) -> None:
+        super().__init__(message)
+        self.path = path
+        self.field = field
+        self.reason = reason
+
+    def __reduce__(self):  # keep the attributes across pickling (worker processes)
+        return (_rebuild_scene_error, (str(self), self.path, self.field, self.reason))
+
+
+def _rebuild_scene_error(message: str, path: str | None, field: str | None,
+                         reason: str | None) -> SceneError:
+    return SceneError(message, path=path, field=field, reason=reason)
 
 
 # --------------------------------------------------------------------------- messages
@@ -116,11 +139,13 @@ def _fmt_xy(v: Sequence[float]) -> str:
 class _Ctx:
     """Carries the file label so that every check can raise a complete message."""
 
-    def __init__(self, label: str) -> None:
+    def __init__(self, label: str, path: str | None) -> None:
         self.label = label
+        self.path = path
 
     def fail(self, field: str, reason: str) -> NoReturn:
-        raise SceneError(f"{self.label}: {field}: {reason}")
+        raise SceneError(f"{self.label}: {field}: {reason}", path=self.path, field=field,
+                         reason=reason)
 
 
 # --------------------------------------------------------------------------- parsing
@@ -513,7 +538,7 @@ def scene_from_dict(d: dict[str, Any], source: str | None = None) -> Scene:
     ``source`` names the origin in messages and is stored as ``Scene.source``; without it
     messages say ``<dict>``. Raises :class:`SceneError` for any invalid input.
     """
-    ctx = _Ctx(source if source is not None else "<dict>")
+    ctx = _Ctx(source if source is not None else "<dict>", source)
     return _guarded(ctx, lambda: _validate(ctx, d, source))
 
 
@@ -524,7 +549,7 @@ def load_scene(path: str | Path) -> Scene:
     a mapping, or breaks any scene rule; the message starts with ``str(path)``.
     """
     label = str(path)
-    ctx = _Ctx(label)
+    ctx = _Ctx(label, label)
     try:
         data = Path(path).read_bytes()
     except FileNotFoundError:

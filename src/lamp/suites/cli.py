@@ -22,14 +22,18 @@ def list_command() -> None:
 
 @suite_app.command("export")
 def export_command(
-    name: str = typer.Argument(..., help=f"Suite name: {', '.join(SUITES)}."),
+    name: str = typer.Argument(..., help=f"Suite name: {', '.join(SUITES)}.",
+                               show_default=False),
     directory: Path = typer.Argument(
         ..., help="Folder to write the scene files and manifest.json to."
     ),
 ) -> None:
     """Write a suite's scene files (and its manifest.json) to DIRECTORY."""
     if name not in SUITES:
-        typer.echo(f"error: unknown suite {name!r}; valid names: {', '.join(SUITES)}", err=True)
+        from lamp.cli_support import did_you_mean
+
+        typer.echo(f"error: unknown suite {name!r}; valid names: {', '.join(SUITES)}"
+                   + did_you_mean(name, SUITES), err=True)
         raise typer.Exit(code=2)
     try:
         written = export_suite(name, directory)

@@ -24,6 +24,9 @@ from typing import Any
 from lamp.scene.loader import load_scene
 from lamp.scene.model import Scene
 
+#: The file beside a suite's scene files that records their hashes and generator.
+MANIFEST_FILE = "manifest.json"
+
 DATA_DIR = Path(str(resources.files("lamp.suites") / "data"))
 
 
@@ -91,7 +94,7 @@ def suite_scenes(name: str) -> list[Scene]:
 
 def suite_manifest(name: str) -> dict[str, Any]:
     """The suite's manifest (see ``scripts/generate_suites.py``)."""
-    with open(suite_dir(name) / "manifest.json", encoding="utf-8") as f:
+    with open(suite_dir(name) / MANIFEST_FILE, encoding="utf-8") as f:
         return json.load(f)
 
 
@@ -102,7 +105,7 @@ def export_suite(name: str, directory: str | Path) -> list[Path]:
     out = Path(directory)
     out.mkdir(parents=True, exist_ok=True)
     written = []
-    for p in [*suite_files(name), src / "manifest.json"]:
+    for p in [*suite_files(name), src / MANIFEST_FILE]:
         dst = out / p.name
         shutil.copyfile(p, dst)
         written.append(dst)

@@ -3,7 +3,9 @@
 - ``draw_scene(ax, scene, object_poses, robot_positions, highlight_object=...)`` and
   ``save_scene_png(scene, path, dpi)``: ``lamp.viz.scene_plot``;
 - ``Frame`` and ``write_animation(scene, frames, path, fps, max_frames)``:
-  ``lamp.viz.animation``.
+  ``lamp.viz.animation``;
+- ``render(recording, path, ...)``: recorded runs as GIF, MP4, PNG (``lamp.viz.replay``)
+  or the self-contained HTML viewer (``lamp.viz.replay_html``).
 """
 
 from lamp.viz.animation import AnimationStats, Frame, write_animation

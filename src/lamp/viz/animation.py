@@ -212,9 +212,9 @@ def write_animation(
     return AnimationStats(path, len(frames), len(chosen), render_s, write_s)
 
 
-def _palette_image(first: np.ndarray) -> Any:
+def _palette_image(first: np.ndarray, extra: Sequence[str] = ()) -> Any:
     """One 256-colour palette for the whole GIF: the first frame plus swatches of every
-    colour the frames may show later (objects, robots, path, edges)."""
+    colour the frames may show later (objects, robots, path, edges, and ``extra``)."""
     from matplotlib.colors import to_rgb
     from PIL import Image
 
@@ -228,6 +228,7 @@ def _palette_image(first: np.ndarray) -> Any:
         PENALISED_COLOR,
         "black",
         "white",
+        *extra,
     ]
     rgb = np.array([to_rgb(c) for c in colors])
     # each colour pure and half-blended with white (anti-aliased edges), 8 px per swatch

@@ -258,12 +258,29 @@ def _legend(fig: Figure) -> None:
     fig.legend(handles=handles, loc="lower center", ncol=4, fontsize=7, frameon=False)
 
 
+#: Formats ``save_scene_image`` writes, by file extension.
+SCENE_IMAGE_FORMATS = {".png": "png", ".svg": "svg", ".pdf": "pdf"}
+
+
 def save_scene_png(scene: Scene, path: str | Path, dpi: int = 120) -> Path:
     """Write a PNG of ``scene`` at its start state, titled with the scene name; returns the path.
 
     The picture is 6 inches on its longer side at ``dpi`` dots per inch; the file is written
     atomically (a reader never sees half a PNG).
     """
+    return save_scene_image(scene, path, dpi, fmt="png")
+
+
+def save_scene_image(scene: Scene, path: str | Path, dpi: int = 120,
+                     fmt: str | None = None) -> Path:
+    """As :func:`save_scene_png`, in the format of ``path``'s extension (PNG, SVG or PDF)
+    unless ``fmt`` names one; ``ValueError`` for any other extension, before drawing."""
+    path = Path(path)
+    if fmt is None:
+        fmt = SCENE_IMAGE_FORMATS.get(path.suffix.lower())
+        if fmt is None:
+            raise ValueError(f"{path}: unsupported image extension {path.suffix!r}; expected "
+                             f"one of {', '.join(SCENE_IMAGE_FORMATS)}")
     if dpi <= 0:
         raise ValueError(f"dpi: must be > 0, got {dpi}")
     fig, ax = new_figure(scene, 6.0, dpi)
@@ -271,7 +288,6 @@ def save_scene_png(scene: Scene, path: str | Path, dpi: int = 120) -> Path:
     ax.set_title(scene.name, fontsize=10)
     _legend(fig)
     fig.tight_layout(rect=(0.0, 0.05, 1.0, 1.0))
-    path = Path(path)
     with atomic_output(path) as tmp:
-        fig.savefig(tmp, format="png", dpi=dpi)
+        fig.savefig(tmp, format=fmt, dpi=dpi)
     return path

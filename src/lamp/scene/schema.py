@@ -1,0 +1,97 @@
+"""The scene format ``lamp-scene/1`` as a JSON Schema (draft 2020-12), for editors.
+
+The schema states the structural rules of ``scene-format.md``: required fields, no
+unknown keys, types, positive sizes and radii, list lengths. The geometric rules
+(containment, overlaps, simple polygons) are beyond JSON Schema; ``lamp validate``
+checks everything. Every file ``load_scene`` accepts validates against this schema (the
+tests check it on the spec's example and the built-in suites).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from lamp.scene.loader import DEFAULT_ROBOT_RADIUS, FORMAT
+
+SCHEMA_ID = "urn:lamp:scene-format:1"
+
+
+def _numbers(n: int, description: str, *, positive: bool = False) -> dict[str, Any]:
+    item: dict[str, Any] = {"type": "number"}
+    if positive:
+        item["exclusiveMinimum"] = 0
+    return {"type": "array", "items": item, "minItems": n, "maxItems": n,
+            "description": description}
+
+
+def _positive(description: str) -> dict[str, Any]:
+    return {"type": "number", "exclusiveMinimum": 0, "description": description}
+
+
+def _points(description: str) -> dict[str, Any]:
+    return {"type": "array", "items": _numbers(2, "[x, y]"), "minItems": 3,
+            "description": description}
+
+
+def _closed(kind: str, properties: dict[str, Any], required: list[str]) -> dict[str, Any]:
+    return {"type": "object", "properties": {"type": {"const": kind}, **properties},
+            "required": ["type", *required], "additionalProperties": False}
+
+
+def scene_schema() -> dict[str, Any]:
+    """The JSON Schema of a scene file (a fresh dict each call)."""
+    pose = _numbers(3, "pose [x, y, theta] (metres, radians)")
+    centre = _numbers(2, "centre [x, y] in the world frame (metres)")
+    obstacle = {"oneOf": [
+        _closed("circle", {"center": centre, "radius": _positive("radius (m)")},
+                ["center", "radius"]),
+        _closed("rectangle", {"center": centre,
+                              "size": _numbers(2, "extent [sx, sy] (m)", positive=True),
+                              "angle": {"type": ["number", "null"],
+                                        "description": "rotation (rad), default 0"}},
+                ["center", "size"]),
+        _closed("polygon", {"points": _points("world-frame vertices of a simple polygon")},
+                ["points"]),
+    ]}
+    motion = {"start": pose, "goal": pose}
+    obj = {"oneOf": [
+        _closed("circle", {"radius": _positive("radius (m)"), **motion},
+                ["radius", "start", "goal"]),
+        _closed("rectangle", {"size": _numbers(2, "extent along the object's own x and y "
+                                                  "axes (m)", positive=True), **motion},
+                ["size", "start", "goal"]),
+        _closed("polygon", {"points": _points("vertices in the object's own frame, around "
+                                              "its origin"), **motion},
+                ["points", "start", "goal"]),
+    ]}
+    return {
+        "$schema": "https://json-schema.org/draft/2020-12/schema",
+        "$id": SCHEMA_ID,
+        "title": f"LAMP scene ({FORMAT})",
+        "description": "A multi-robot manipulation scene. Units: metres and radians; the "
+                       "workspace is [0, W] x [0, H]. Geometric rules (containment, "
+                       "overlaps) are checked by `lamp validate`.",
+        "type": "object",
+        "properties": {
+            "format": {"const": FORMAT},
+            "name": {"type": "string"},
+            "workspace": _numbers(2, "[W, H] (m)", positive=True),
+            "robots": {
+                "type": "object",
+                "properties": {
+                    "radius": {"type": ["number", "null"], "exclusiveMinimum": 0,
+                               "default": DEFAULT_ROBOT_RADIUS,
+                               "description": "robot disk radius (m)"},
+                    "starts": {"type": "array", "items": _numbers(2, "[x, y]"),
+                               "minItems": 1},
+                },
+                "required": ["starts"], "additionalProperties": False,
+            },
+            "obstacles": {"type": ["array", "null"], "items": obstacle,
+                          "description": "static obstacles"},
+            "objects": {"type": "array", "items": obj, "minItems": 1,
+                        "description": "moved one after another in this order"},
+        },
+        "required": ["format", "name", "workspace", "robots", "objects"],
+        "additionalProperties": False,
+    }

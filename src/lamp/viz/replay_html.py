@@ -1,0 +1,139 @@
+"""The HTML replay viewer: one self-contained file (inline CSS, script and data, no network).
+
+``write_html(recording, path)`` fills ``lamp/viz/viewer/viewer.html`` with the viewer's
+stylesheet and script and the recording as JSON: trajectories as base64 of their
+little-endian float arrays (the recording's own values, bit for bit), shapes, plans and
+per-segment events as plain lists. The page draws on a canvas with play / pause / scrub /
+speed, layer toggles, zoom and pan, and a side panel of per-segment timings and events;
+after every draw it mirrors what it shows (row, segment, time, robot and object
+positions) in the data attributes of ``#state``.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import json
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from lamp.geometry.shapes import half_extents, local_outline, world_outline
+from lamp.io import write_text_atomic
+from lamp.record.format import FORMAT, OUTCOMES, Recording
+from lamp.scene.model import Circle
+from lamp.viz.animation import PATH_COLOR, PENALISED_COLOR, VERIFIED_COLOR
+from lamp.viz.replay import CONTACT_COLOR, TRAIL_COLOR, RenderOptions, outcome_text
+from lamp.viz.scene_plot import GOAL_COLOR, OBSTACLE_COLOR, ROBOT_COLOR, object_color
+
+#: Placeholders of viewer.html that ``write_html`` replaces.
+PLACEHOLDERS = ("__LAMP_TITLE__", "__LAMP_CSS__", "__LAMP_JS__", "__LAMP_DATA__")
+
+
+def _b64(arr: np.ndarray, dtype: str) -> str:
+    return base64.b64encode(np.ascontiguousarray(arr, dtype=np.dtype(dtype).newbyteorder("<"))
+                            .tobytes()).decode("ascii")
+
+
+def _shape(shape: Any, pose: Any | None) -> dict[str, Any]:
+    """A circle as its radius (plus its centre ``at`` for an obstacle), anything else as its
+    outline: world frame for an obstacle (``pose`` given), the shape's own frame otherwise."""
+    if isinstance(shape, Circle):
+        d: dict[str, Any] = {"circle": float(shape.radius)}
+        if pose is not None:
+            d["at"] = [float(pose[0]), float(pose[1]), 0.0]
+        return d
+    pts = local_outline(shape) if pose is None else world_outline(shape, pose)
+    return {"outline": np.asarray(pts, float).round(6).tolist()}
+
+
+def payload(recording: Recording, options: RenderOptions | None = None) -> dict[str, Any]:
+    """The JSON object the viewer reads (see the module docstring)."""
+    opt = options or RenderOptions()
+    scene = recording.scene_model()
+    a = recording.arrays
+    obstacles = [_shape(o.shape, o.pose) for o in scene.obstacles]
+    objects = [{**_shape(o.shape, None), "color": object_color(k),
+                "start": [float(v) for v in o.start], "goal": [float(v) for v in o.goal],
+                "tick": float(half_extents(o.shape)[0])} for k, o in enumerate(scene.objects)]
+    segments = []
+    for g in range(recording.n_segments):
+        segments.append({
+            "object": int(a["segment_object"][g]),
+            "plan": int(a["segment_plan"][g]),
+            "outcome": OUTCOMES[int(a["segment_outcome"][g])],
+            "replanned": bool(a["segment_replanned"][g]),
+            "planning_s": float(a["planning_time_s"][g]),
+            "sim_s": float(a["sim_time_s"][g]),
+            "drift": [float(v) for v in a["drift"][g]],
+            "contacts": recording.contacts_of(g).tolist(),
+            "pushes": [p.tolist() for p in recording.pushes_of(g)],
+        })
+    plans = [{"object": int(a["plan_object"][i]),
+              "path": recording.plan_path(i)[:, :2].tolist(),
+              "verified": recording.verified_of(i).tolist(),
+              "penalised": recording.penalised_of(i).tolist()}
+             for i in range(len(a["plan_object"]))]
+    result = recording.result
+    return {
+        "format": FORMAT,
+        "title": f"{scene.name} - {recording.planner} (seed {recording.seed})",
+        "planner": recording.planner,
+        "seed": int(recording.seed),
+        "outcome": outcome_text(recording),
+        "success": recording.success,
+        "result": {k: result.get(k, 0) for k in ("total_planning_time_s", "wall_time_s",
+                                                  "replans", "makespan")},
+        "workspace": [float(v) for v in scene.workspace],
+        "robot_radius": float(scene.robot_radius),
+        "n_robots": int(scene.n_robots),
+        "n_objects": len(scene.objects),
+        "n_rows": recording.n_rows,
+        "row_dt_s": float(recording.row_dt_s),
+        "trail_s": float(opt.trail_s),
+        "min_robot_px": float(opt.min_robot_px),
+        "obstacles": obstacles,
+        "objects": objects,
+        "colors": {"robot": ROBOT_COLOR, "goal": GOAL_COLOR, "obstacle": OBSTACLE_COLOR,
+                   "inflated": "rgba(69, 69, 69, 0.28)", "path": PATH_COLOR,
+                   "verified": VERIFIED_COLOR, "penalised": PENALISED_COLOR,
+                   "trail": TRAIL_COLOR, "contact": CONTACT_COLOR},
+        "times": _b64(a["times"], "float64"),
+        "robots": _b64(a["robots"], "float32"),
+        "object_poses": _b64(a["objects"], "float32"),
+        "segment_rows": [int(v) for v in a["segment_rows"]],
+        "segments": segments,
+        "plans": plans,
+    }
+
+
+def _asset(name: str) -> str:
+    return (resources.files("lamp.viz") / "viewer" / name).read_text(encoding="utf-8")
+
+
+def viewer_html(recording: Recording, options: RenderOptions | None = None) -> str:
+    """The viewer page for ``recording``: no external reference (no src=, href= or url())."""
+    data = json.dumps(payload(recording, options), separators=(",", ":"))
+    # inside <script> only "</" can end the element early; JSON allows "<\/" for it
+    data = data.replace("</", "<\\/")
+    page = _asset("viewer.html")
+    if "</script" in _asset("viewer.js").lower():
+        raise RuntimeError("viewer.js must not contain '</script' (it is inlined)")
+    parts = {
+        "__LAMP_TITLE__": html.escape(f"LAMP replay - {recording.planner}"),
+        "__LAMP_CSS__": _asset("viewer.css"),
+        "__LAMP_JS__": _asset("viewer.js"),
+        "__LAMP_DATA__": data,
+    }
+    for key in PLACEHOLDERS:  # one pass each, in order; the data goes in last
+        page = page.replace(key, parts[key], 1)
+    return page
+
+
+def write_html(recording: Recording, path: str | Path,
+               options: RenderOptions | None = None) -> Path:
+    """Write the viewer page of ``recording`` to ``path`` atomically; returns the path."""
+    write_text_atomic(path, viewer_html(recording, options))
+    return Path(path)

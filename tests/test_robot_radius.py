@@ -1,0 +1,59 @@
+"""The manipulation model's robot radius is part of its contract with the scene.
+
+Both proposers state the radius they make contacts for (``ProposalModel.robot_radius``);
+a scene with other robots is refused before planning, naming ``robots.radius``, instead
+of a run in which every proposal silently fails ``Collide``.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from lamp.cli import app
+from lamp.manip import ROBOT_RADIUS, GeometricProposer, load_model
+from lamp.planners.run import check_robot_radius, solve
+from lamp.scene import SceneError, scene_from_dict
+
+DATA = Path(__file__).parent / "data"
+
+
+def _scene_dict(radius: float) -> dict:
+    d = json.loads((DATA / "minimal.json").read_text())
+    d["robots"]["radius"] = radius
+    return d
+
+
+def test_proposers_state_their_robot_radius():
+    assert GeometricProposer().robot_radius == ROBOT_RADIUS
+    model = load_model()
+    assert model.robot_radius == ROBOT_RADIUS
+    # the contacts really are made for that radius: a robot centred on a contact is
+    # robot_radius (+ the small gap) away from the object boundary, never closer
+    props = model.propose({"type": "circle", "radius": 0.2}, (0.1, 0.0, 0.0), budget=2,
+                          k=4, seed=0)
+    for p in props:
+        d = [float((c[0] ** 2 + c[1] ** 2) ** 0.5) - 0.2 for c in p.contacts]
+        assert min(d) >= model.robot_radius - 0.01
+
+
+def test_other_radius_is_refused_by_name():
+    scene = scene_from_dict(_scene_dict(0.07), source="big-robots.json")
+    with pytest.raises(SceneError, match=r"big-robots.json: robots.radius: .*0.05 m, got 0.07"):
+        check_robot_radius(scene, GeometricProposer())
+    with pytest.raises(SceneError, match="robots.radius"):
+        solve(scene, "lazy", 0, model="geometric")
+    check_robot_radius(scene_from_dict(_scene_dict(ROBOT_RADIUS)), GeometricProposer())
+
+
+def test_lamp_run_exits_2_for_unsupported_robots(tmp_path):
+    path = tmp_path / "big.json"
+    path.write_text(json.dumps(_scene_dict(0.07)))
+    out = tmp_path / "out"
+    result = CliRunner().invoke(app, ["run", str(path), "--model", "geometric", "--out", str(out)])
+    assert result.exit_code == 2, result.output
+    assert "robots.radius" in result.output
+    assert not (out / "result.json").exists()
