@@ -150,23 +150,27 @@ def segments_clearance(
 @nb.njit(cache=True)
 def fill_field(
     field: np.ndarray, h: float, cap: float,
-    circles: np.ndarray, verts: np.ndarray, ptr: np.ndarray,
+    circles: np.ndarray, verts: np.ndarray, ptr: np.ndarray, i_off: int, j_off: int,
 ) -> None:
     """field = min(field, exact signed distance to each obstacle) inside a window of
-    ``cap`` around the obstacle (outside it the obstacle is at least ``cap`` away)."""
+    ``cap`` around the obstacle (outside it the obstacle is at least ``cap`` away).
+
+    ``field[j, i]`` holds grid node ``(i + i_off, j + j_off)`` at ``((i + i_off) * h,
+    (j + j_off) * h)``: a window of the workspace grid gets, bit for bit, the values the
+    same nodes of the whole grid get."""
     ny, nx = field.shape
     for c in range(circles.shape[0]):
         cx = circles[c, 0]
         cy = circles[c, 1]
         ext = circles[c, 2] + cap
-        i0 = max(0, int(math.floor((cx - ext) / h)))
-        i1 = min(nx - 1, int(math.ceil((cx + ext) / h)))
-        j0 = max(0, int(math.floor((cy - ext) / h)))
-        j1 = min(ny - 1, int(math.ceil((cy + ext) / h)))
+        i0 = max(0, int(math.floor((cx - ext) / h)) - i_off)
+        i1 = min(nx - 1, int(math.ceil((cx + ext) / h)) - i_off)
+        j0 = max(0, int(math.floor((cy - ext) / h)) - j_off)
+        j1 = min(ny - 1, int(math.ceil((cy + ext) / h)) - j_off)
         for j in range(j0, j1 + 1):
-            dy = j * h - cy
+            dy = (j + j_off) * h - cy
             for i in range(i0, i1 + 1):
-                dx = i * h - cx
+                dx = (i + i_off) * h - cx
                 d = math.sqrt(dx * dx + dy * dy) - circles[c, 2]
                 if d < field[j, i]:
                     field[j, i] = d
@@ -182,39 +186,48 @@ def fill_field(
             xmax = max(xmax, verts[k, 0])
             ymin = min(ymin, verts[k, 1])
             ymax = max(ymax, verts[k, 1])
-        i0 = max(0, int(math.floor((xmin - cap) / h)))
-        i1 = min(nx - 1, int(math.ceil((xmax + cap) / h)))
-        j0 = max(0, int(math.floor((ymin - cap) / h)))
-        j1 = min(ny - 1, int(math.ceil((ymax + cap) / h)))
+        i0 = max(0, int(math.floor((xmin - cap) / h)) - i_off)
+        i1 = min(nx - 1, int(math.ceil((xmax + cap) / h)) - i_off)
+        j0 = max(0, int(math.floor((ymin - cap) / h)) - j_off)
+        j1 = min(ny - 1, int(math.ceil((ymax + cap) / h)) - j_off)
         for j in range(j0, j1 + 1):
             for i in range(i0, i1 + 1):
-                d = _poly_signed_dist(i * h, j * h, verts, s, e)
+                d = _poly_signed_dist((i + i_off) * h, (j + j_off) * h, verts, s, e)
                 if d < field[j, i]:
                     field[j, i] = d
 
 
 @nb.njit(cache=True)
-def lower_bound(pts: np.ndarray, field: np.ndarray, h: float) -> np.ndarray:
+def lower_bound(pts: np.ndarray, field: np.ndarray, h: float, i_off: int, j_off: int,
+                NX: int, NY: int) -> np.ndarray:
     """Lipschitz lower bound on clearance: max over the cell's 4 nodes of f(c) - |p - c|.
-    Points outside the grid get -inf."""
+
+    The workspace grid has NX x NY nodes; ``field`` holds its window of nodes from
+    ``(i_off, j_off)`` on. Each node term is a lower bound by itself, so nodes outside the
+    window are left out; points outside the workspace, or whose cell has no node in the
+    window, get -inf. With the whole grid (offsets 0) this is the plain bound."""
     ny, nx = field.shape
     out = np.empty(pts.shape[0])
     for k in range(pts.shape[0]):
         x = pts[k, 0] / h
         y = pts[k, 1] / h
-        if not (x >= 0.0 and y >= 0.0 and x <= nx - 1 and y <= ny - 1):
+        if not (x >= 0.0 and y >= 0.0 and x <= NX - 1 and y <= NY - 1):
             out[k] = -np.inf
             continue
-        i = min(int(x), nx - 2) if nx > 1 else 0
-        j = min(int(y), ny - 2) if ny > 1 else 0
+        i = min(int(x), NX - 2) if NX > 1 else 0
+        j = min(int(y), NY - 2) if NY > 1 else 0
         best = -np.inf
         for dj in range(2):
             for di in range(2):
-                ii = min(i + di, nx - 1)
-                jj = min(j + dj, ny - 1)
+                ii = min(i + di, NX - 1)
+                jj = min(j + dj, NY - 1)
+                li = ii - i_off
+                lj = jj - j_off
+                if li < 0 or lj < 0 or li >= nx or lj >= ny:
+                    continue
                 ex = (x - ii) * h
                 ey = (y - jj) * h
-                v = field[jj, ii] - math.sqrt(ex * ex + ey * ey)
+                v = field[lj, li] - math.sqrt(ex * ex + ey * ey)
                 if v > best:
                     best = v
         out[k] = best
@@ -222,24 +235,32 @@ def lower_bound(pts: np.ndarray, field: np.ndarray, h: float) -> np.ndarray:
 
 
 @nb.njit(cache=True)
-def bilinear(pts: np.ndarray, field: np.ndarray, h: float) -> np.ndarray:
+def bilinear(pts: np.ndarray, field: np.ndarray, h: float, i_off: int, j_off: int,
+             NX: int, NY: int) -> np.ndarray:
+    """Bilinear reading of the grid (window convention of :func:`lower_bound`); -inf
+    outside the workspace or where a node of the cell lies outside the window."""
     ny, nx = field.shape
     out = np.empty(pts.shape[0])
     for k in range(pts.shape[0]):
         x = pts[k, 0] / h
         y = pts[k, 1] / h
-        if not (x >= 0.0 and y >= 0.0 and x <= nx - 1 and y <= ny - 1):
+        if not (x >= 0.0 and y >= 0.0 and x <= NX - 1 and y <= NY - 1):
             out[k] = -np.inf
             continue
-        i = min(int(x), nx - 2)
-        j = min(int(y), ny - 2)
+        i = min(int(x), NX - 2)
+        j = min(int(y), NY - 2)
+        li = i - i_off
+        lj = j - j_off
+        if li < 0 or lj < 0 or li + 1 >= nx or lj + 1 >= ny:
+            out[k] = -np.inf
+            continue
         fx = x - i
         fy = y - j
         out[k] = (
-            (1 - fx) * (1 - fy) * field[j, i]
-            + fx * (1 - fy) * field[j, i + 1]
-            + (1 - fx) * fy * field[j + 1, i]
-            + fx * fy * field[j + 1, i + 1]
+            (1 - fx) * (1 - fy) * field[lj, li]
+            + fx * (1 - fy) * field[lj, li + 1]
+            + (1 - fx) * fy * field[lj + 1, li]
+            + fx * fy * field[lj + 1, li + 1]
         )
     return out
 

@@ -9,7 +9,8 @@ compiled (Numba) loop over a precomputed obstacle distance grid.
 How it works
 ------------
 * **Obstacle distance grid.** Obstacles are rasterised on cells of side ``resolution``
-  (default 4 mm) covering the workspace. A cell is *occupied* when its centre lies within
+  (default 4 mm) covering the workspace (held in tiles, filled on demand on large maps
+  with distances capped at ``DEFAULT_GRID_CAP``: :mod:`lamp.geometry.distance_tiles`). A cell is *occupied* when its centre lies within
   ``h = resolution / sqrt(2)`` (half the cell diagonal) of an obstacle, so every obstacle
   point lies in an occupied cell and every occupied centre lies within ``h`` of an
   obstacle. ``scipy.ndimage.distance_transform_edt`` gives, at every free cell centre g,
@@ -49,7 +50,9 @@ Guarantees (tested against Shapely in ``tests/test_object_space.py``)
   passes through such a pose.
 * ``clearance`` is a lower bound of the true clearance and at most ``band`` below it,
   where ``band = 4 * h + sample_spacing / 2`` (13.3 mm at the defaults) for the obstacle
-  part (the border part is exact). So a pose whose true clearance exceeds ``band`` is
+  part (the border part is exact); on a tiled grid filled on demand (large maps) the
+  obstacle part is moreover capped near the grid's ``cap`` (at least ``min_grid_cap``,
+  so the two statements below hold unchanged). So a pose whose true clearance exceeds ``band`` is
   reported free, and a motion whose every pose has true clearance above
   ``band + motion_margin`` is reported free.
 
@@ -65,15 +68,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from functools import lru_cache
 from typing import TYPE_CHECKING
 
 import numba
 import numpy as np
 import shapely
 from numpy.typing import ArrayLike
-from scipy import ndimage
 
+from lamp.geometry.distance_tiles import DEFAULT_GRID_CAP, DistanceTiles
 from lamp.geometry.primitives import Circle, Obstacle, Rectangle, Shape
 from lamp.geometry.shapes import local_outline, obstacle_geometry
 
@@ -83,6 +85,8 @@ if TYPE_CHECKING:  # the scene layer builds on geometry, not the other way round
 DEFAULT_RESOLUTION = 0.004
 DEFAULT_MOTION_MARGIN = 0.005
 DEFAULT_COVER_CELL = 0.08
+#: Spacing (m) of the positions along a motion around which the grid is prepared.
+_PREPARE_STEP = 0.1
 
 
 def inflated_outline(shape: Shape, inflation: float) -> np.ndarray | None:
@@ -158,43 +162,6 @@ def _footprint_disks(
     )
 
 
-def _grid_shape(workspace: tuple[float, float], resolution: float) -> tuple[int, int]:
-    """(rows, columns) of the obstacle grid: cells of side ``resolution`` covering the
-    workspace (at least one each way). One definition, so that every obstacle's cells and
-    the grid they are written into agree."""
-    nx = max(1, math.ceil(workspace[0] / resolution - 1e-9))
-    ny = max(1, math.ceil(workspace[1] / resolution - 1e-9))
-    return ny, nx
-
-
-@lru_cache(maxsize=4096)
-def _obstacle_cells(
-    obstacle: Obstacle, workspace: tuple[float, float], resolution: float
-) -> tuple[int, int, np.ndarray] | None:
-    """Occupied cells of one obstacle: (row0, col0, bool mask) or None when none.
-
-    A cell is occupied when its centre is within half a cell diagonal of the obstacle.
-    Cached per obstacle: scenes share static obstacles across many ObjectSpaces.
-    """
-    ny, nx = _grid_shape(workspace, resolution)
-    h = resolution / math.sqrt(2.0)
-    geom = obstacle_geometry(obstacle).buffer(h, quad_segs=8)
-    x0, y0, x1, y1 = geom.bounds
-    c0 = max(0, math.floor(x0 / resolution - 0.5))
-    c1 = min(nx - 1, math.ceil(x1 / resolution - 0.5))
-    r0 = max(0, math.floor(y0 / resolution - 0.5))
-    r1 = min(ny - 1, math.ceil(y1 / resolution - 0.5))
-    if c1 < c0 or r1 < r0:
-        return None
-    xs = (np.arange(c0, c1 + 1) + 0.5) * resolution
-    ys = (np.arange(r0, r1 + 1) + 0.5) * resolution
-    gx, gy = np.meshgrid(xs, ys)
-    mask = shapely.contains_xy(geom, gx, gy) | shapely.intersects_xy(geom.boundary, gx, gy)
-    if not mask.any():
-        return None
-    return r0, c0, mask
-
-
 @numba.njit(cache=True, inline="always")
 def _point_in_polygon(px: float, py: float, poly: np.ndarray) -> bool:
     """Crossing-number test (points on the boundary may go either way)."""
@@ -213,13 +180,20 @@ def _point_in_polygon(px: float, py: float, poly: np.ndarray) -> bool:
 
 
 @numba.njit(cache=True, inline="always")
-def _grid_bound(sd: np.ndarray, res: float, px: float, py: float) -> float:
+def _grid_bound(sd: tuple, res: float, px: float, py: float) -> float:
     """The distance grid's clearance lower bound at world point p: the value of the cell
-    containing p (points outside the workspace take the nearest border cell)."""
-    ny, nx = sd.shape
+    containing p (points outside the workspace take the nearest border cell); -inf in a
+    tile not filled yet. ``sd`` is :attr:`DistanceTiles.args`."""
+    tiles, table, ny, nx = sd
     ci = min(max(int(math.floor(px / res)), 0), nx - 1)
     ri = min(max(int(math.floor(py / res)), 0), ny - 1)
-    return sd[ri, ci]
+    T = tiles.shape[1]
+    tr = ri // T
+    tc = ci // T
+    t = table[tr, tc]
+    if t < 0:
+        return -np.inf
+    return tiles[t, ri - tr * T, ci - tc * T]
 
 
 @numba.njit(cache=True)
@@ -227,7 +201,7 @@ def _pose_clearance(
     x: float,
     y: float,
     th: float,
-    sd: np.ndarray,
+    sd: tuple,
     res: float,
     width: float,
     height: float,
@@ -294,7 +268,7 @@ def _pose_clearance(
 @numba.njit(cache=True)
 def _batch_clearance(
     poses: np.ndarray,
-    sd: np.ndarray,
+    sd: tuple,
     res: float,
     width: float,
     height: float,
@@ -322,7 +296,7 @@ def motion_free_kernel(
     t1: float,
     margin: float,
     reach: float,
-    sd: np.ndarray,
+    sd: tuple,
     res: float,
     width: float,
     height: float,
@@ -352,7 +326,7 @@ def motion_free_kernel(
 
 @numba.njit(cache=True)
 def pose_free_kernel(
-    x: float, y: float, th: float, sd: np.ndarray, res: float, width: float, height: float,
+    x: float, y: float, th: float, sd: tuple, res: float, width: float, height: float,
     fp: tuple, reach2: float,
 ) -> bool:  # fmt: skip
     """``ObjectSpace.pose_free`` for one pose (for compiled callers)."""
@@ -365,7 +339,7 @@ def _batch_motions_free(
     ends: np.ndarray,
     margin: float,
     reach: float,
-    sd: np.ndarray,
+    sd: tuple,
     res: float,
     width: float,
     height: float,
@@ -412,6 +386,9 @@ class ObjectSpace:
         motion_margin: clearance a motion must keep at its checked poses.
         cover_cell: cell size of the coarse covering disks (a fast first test for
             polygonal footprints in boolean queries; does not change any answer's guarantee).
+        grid: the distance grid to use (it depends on the obstacles, workspace and
+            resolution only, so spaces of the same obstacles with other inflations share
+            it); default: a new one.
 
     See the module docstring for the conservativeness guarantee and the error ``band``.
     """
@@ -427,6 +404,7 @@ class ObjectSpace:
         sample_spacing: float | None = None,
         motion_margin: float = DEFAULT_MOTION_MARGIN,
         cover_cell: float = DEFAULT_COVER_CELL,
+        grid: DistanceTiles | None = None,
     ) -> None:
         w, h = (float(v) for v in workspace)
         if not (w > 0 and h > 0 and math.isfinite(w) and math.isfinite(h)):
@@ -453,7 +431,6 @@ class ObjectSpace:
         #: width of the band (m) within which clearance may under-estimate the truth
         self.band = 4.0 * self.resolution / math.sqrt(2.0) + 0.5 * spacing
 
-        self._sd = self._distance_grid()
         dpts, drad, bpts, brad, poly = _footprint_disks(shape, self.inflation, spacing)
         if len(poly):
             cpts, crad = _cover_disks(poly, cover_cell)
@@ -472,6 +449,19 @@ class ObjectSpace:
         self.reach = float(
             max(np.max(np.hypot(p[:, 0], p[:, 1]), initial=0.0) for p in (dpts, bpts, cpts))
         )
+        #: smallest distance cap of a tiled grid that keeps every guarantee: beyond it a
+        #: footprint disk still reads clearance above ``band + motion_margin``
+        self.min_grid_cap = float(max(np.max(drad, initial=0.0), np.max(crad, initial=0.0))
+                                  + self.band + self.motion_margin)
+        if grid is None:
+            grid = DistanceTiles(self.workspace, self.obstacles, self.resolution,
+                                 cap=max(DEFAULT_GRID_CAP, self.min_grid_cap))
+        elif (grid.workspace, grid.resolution) != (self.workspace, self.resolution):
+            raise ValueError("grid must have this space's workspace and resolution")
+        elif grid.capped and grid.cap < self.min_grid_cap:
+            raise ValueError(f"grid cap {grid.cap:g} m is below this footprint's "
+                             f"min_grid_cap {self.min_grid_cap:g} m")
+        self.grid = grid
 
     @classmethod
     def from_scene(
@@ -505,7 +495,7 @@ class ObjectSpace:
 
     def with_inflation(self, inflation: float) -> ObjectSpace:
         """The same object, obstacles and query settings with another ``inflation`` (a new
-        space: its grid is rebuilt, the per-obstacle cells come from the cache)."""
+        space sharing this one's distance grid)."""
         return ObjectSpace(
             self.shape,
             self.workspace,
@@ -515,30 +505,27 @@ class ObjectSpace:
             sample_spacing=self.sample_spacing,
             motion_margin=self.motion_margin,
             cover_cell=self.cover_cell,
+            grid=self.grid if not self.grid.capped or self.grid.cap >= self.min_grid_cap
+            + abs(inflation - self.inflation) else None,
         )
 
     # ------------------------------------------------------------------ grid
-    def _distance_grid(self) -> np.ndarray:
-        res = self.resolution
-        ny, nx = _grid_shape(self.workspace, res)
-        occ = np.zeros((ny, nx), dtype=bool)
-        for ob in self.obstacles:
-            cells = _obstacle_cells(ob, self.workspace, res)
-            if cells is None:
-                continue
-            r0, c0, mask = cells
-            occ[r0 : r0 + mask.shape[0], c0 : c0 + mask.shape[1]] |= mask
-        self.occupancy = occ
-        two_h = 2.0 * res / math.sqrt(2.0)
-        if not occ.any():
-            return np.full((ny, nx), np.inf)
-        outside = ndimage.distance_transform_edt(~occ, sampling=res)
-        return np.ascontiguousarray(outside - two_h)
+    def prepare(self, points: ArrayLike, extra: float = 0.0) -> None:
+        """Make the distance grid ready for footprints at the (..., 2) positions ``points``
+        moved by up to ``extra`` metres: compiled callers (``kernel_args``) read -inf,
+        i.e. "not free", where the grid was not prepared. The query methods of this
+        class prepare what they read themselves."""
+        self.grid.ensure(points, self.reach + extra + 2.0 * self.resolution)
+
+    def prepare_point(self, x: float, y: float, extra: float = 0.0) -> None:
+        """:meth:`prepare` for one position (x, y)."""
+        self.grid.ensure_point(x, y, self.reach + extra + 2.0 * self.resolution)
 
     # --------------------------------------------------------------- queries
     def _clearance_flat(self, poses: np.ndarray, stop_below: float, quick: bool) -> np.ndarray:
+        self.prepare(poses[:, :2])
         return _batch_clearance(
-            poses, self._sd, self.resolution, self.workspace[0], self.workspace[1],
+            poses, self.grid.args, self.resolution, self.workspace[0], self.workspace[1],
             self._fp, self._reach2, stop_below, quick,
         )  # fmt: skip
 
@@ -575,9 +562,15 @@ class ObjectSpace:
             raise ValueError(
                 f"starts and ends must have the same shape, got {a.shape} and {b.shape}"
             )
+        if self.grid.capped and len(a):
+            # positions along every motion, no farther apart than the prepared radius
+            n = int(np.ceil(np.max(np.hypot(*(b[:, :2] - a[:, :2]).T)) / _PREPARE_STEP)) + 1
+            u = np.linspace(0.0, 1.0, max(n, 2))[:, None, None]
+            self.prepare((a[None, :, :2] + u * (b[None, :, :2] - a[None, :, :2])),
+                         0.5 * _PREPARE_STEP)
         return _batch_motions_free(
             np.ascontiguousarray(a), np.ascontiguousarray(b), self.motion_margin, self.reach,
-            self._sd, self.resolution, self.workspace[0], self.workspace[1],
+            self.grid.args, self.resolution, self.workspace[0], self.workspace[1],
             self._fp, self._reach2,
         )  # fmt: skip
 
@@ -585,9 +578,10 @@ class ObjectSpace:
     def kernel_args(self) -> tuple:
         """``(margin, reach, sd, res, width, height, fp, reach2)``: the arguments that
         :func:`motion_free_kernel` takes after the two poses (``pose_free_kernel`` takes
-        ``sd`` to ``reach2``), for compiled callers."""
+        ``sd`` to ``reach2``), for compiled callers; call :meth:`prepare` for the places
+        they will query first."""
         return (
-            self.motion_margin, self.reach, self._sd, self.resolution,
+            self.motion_margin, self.reach, self.grid.args, self.resolution,
             self.workspace[0], self.workspace[1], self._fp, self._reach2,
         )  # fmt: skip
 
@@ -600,11 +594,12 @@ class ObjectSpace:
         the border (<= 0 inside obstacles / outside); useful for heuristics and drawing."""
         p = np.asarray(points, dtype=float)
         res = self.resolution
-        ny, nx = self._sd.shape
+        self.grid.ensure(p, 2.0 * res)
+        ny, nx = self.grid.shape
         ci = np.clip(np.floor(p[..., 0] / res).astype(int), 0, nx - 1)
         ri = np.clip(np.floor(p[..., 1] / res).astype(int), 0, ny - 1)
         border = np.minimum(
             np.minimum(p[..., 0], self.workspace[0] - p[..., 0]),
             np.minimum(p[..., 1], self.workspace[1] - p[..., 1]),
         )
-        return np.minimum(self._sd[ri, ci], border)
+        return np.minimum(self.grid.values(ri, ci), border)

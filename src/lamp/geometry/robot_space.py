@@ -19,7 +19,17 @@ Two layers of answers, both conservative (they never call a colliding placement 
 
 Static scene obstacles form a cached base layer; objects and extra shapes are laid over a
 copy of it, so building a space for a new object pose costs well under a millisecond of
-grid work plus the copy. Whole spaces are cached too (LRU keyed by :attr:`RobotSpace.key`).
+grid work plus the copy. Whole spaces are cached too (LRU keyed by :attr:`RobotSpace.key`,
+bounded in entries and in bytes).
+
+**Windows.** A space may hold only a rectangular *window* of the workspace grid (nodes
+``origin`` to ``origin + shape - 1``): its node values are bit for bit those of the whole
+grid (every obstacle within ``cap`` of a window node is filled in, wherever it lies), and
+every grid answer is the whole grid's where it needs only window nodes. Outside the window
+the space knows nothing and says so conservatively: ``is_free`` is False, ``clearance``
+(grid) is -inf, the lower bound drops missing nodes (each node's term is a bound by
+itself), BFS stays inside. Exact queries see every obstacle and do not depend on the
+window. Memory and build time thus grow with the window, not with the map.
 
 Conventions: metres; ``field`` is indexed ``[j, i]`` = ``[y, x]``; points are ``(..., 2)``
 arrays of ``(x, y)``.
@@ -60,6 +70,9 @@ DEFAULT_RESOLUTION = 0.01
 DEFAULT_CAP = 0.3
 _SPACE_CACHE_SIZE = 32
 _BASE_CACHE_SIZE = 16
+#: Byte bounds of the two caches (fields and what is derived from them).
+_SPACE_CACHE_BYTES = 128 * 2**20
+_BASE_CACHE_BYTES = 64 * 2**20
 
 
 # --------------------------------------------------------------------------------------
@@ -84,33 +97,118 @@ def _lru_get(cache: OrderedDict, key: Any) -> Any:
     return val
 
 
-def _lru_put(cache: OrderedDict, key: Any, val: Any, size: int) -> None:
+def _lru_put(cache: OrderedDict, key: Any, val: Any, size: int,
+             max_bytes: float = math.inf, nbytes: Callable[[Any], int] | None = None) -> None:
+    """Insert ``val``; evict least recently used entries beyond ``size`` entries or
+    beyond ``max_bytes`` in all (as measured by ``nbytes``; the newest entry stays)."""
     cache[key] = val
     cache.move_to_end(key)
     while len(cache) > size:
         cache.popitem(last=False)
+    if nbytes is not None:
+        total = sum(nbytes(v) for v in cache.values())
+        while total > max_bytes and len(cache) > 1:
+            _, old = cache.popitem(last=False)
+            total -= nbytes(old)
+
+
+def grid_nodes(workspace: tuple[float, float], h: float) -> tuple[int, int]:
+    """(NX, NY): nodes of the whole workspace grid of spacing ``h``."""
+    W, H = workspace
+    return int(math.floor(W / h + 1e-9)) + 1, int(math.floor(H / h + 1e-9)) + 1
+
+
+def window_nodes(workspace: tuple[float, float], h: float,
+                 window: Sequence[float] | None) -> tuple[int, int, int, int]:
+    """(i0, j0, i1, j1): the grid nodes (inclusive) of the smallest node rectangle that
+    covers ``window`` = (x0, y0, x1, y1) metres, clipped to the workspace (None: all)."""
+    NX, NY = grid_nodes(workspace, h)
+    if window is None:
+        return 0, 0, NX - 1, NY - 1
+    x0, y0, x1, y1 = (float(v) for v in window)
+    if not all(math.isfinite(v) for v in (x0, y0, x1, y1)) or x1 < x0 or y1 < y0:
+        raise ValueError(f"window must be finite (x0, y0, x1, y1) with x0 <= x1, y0 <= y1, "
+                         f"got {window!r}")
+    i0 = min(NX - 1, max(0, int(math.floor(x0 / h + 1e-9))))
+    j0 = min(NY - 1, max(0, int(math.floor(y0 / h + 1e-9))))
+    i1 = max(i0, min(NX - 1, int(math.ceil(x1 / h - 1e-9))))
+    j1 = max(j0, min(NY - 1, int(math.ceil(y1 / h - 1e-9))))
+    return i0, j0, i1, j1
 
 
 def _base_layer(
-    workspace: tuple[float, float], obstacles: tuple[Obstacle, ...], h: float, cap: float
+    workspace: tuple[float, float], obstacles: tuple[Obstacle, ...], h: float, cap: float,
+    nodes: tuple[int, int, int, int],
 ) -> tuple[np.ndarray, GeometrySet]:
-    key = (workspace, obstacles, h, cap)
+    key = (workspace, _static_token(obstacles), h, cap, nodes)
     hit = _lru_get(_BASE_CACHE, key)
     if hit is not None:
         return hit
     W, H = workspace
-    nx = int(math.floor(W / h + 1e-9)) + 1
-    ny = int(math.floor(H / h + 1e-9)) + 1
-    xs = np.arange(nx) * h
-    ys = np.arange(ny) * h
+    i0, j0, i1, j1 = nodes
+    xs = np.arange(i0, i1 + 1) * h
+    ys = np.arange(j0, j1 + 1) * h
     bx = np.minimum(xs, W - xs)
     by = np.minimum(ys, H - ys)
     field = np.minimum(np.minimum(bx[None, :], by[:, None]), cap).astype(np.float64)
     geo = GeometrySet(obstacles)
-    fill_field(field, h, cap, geo.circles, geo.verts, geo.ptr)
+    fill_field(field, h, cap, geo.circles, geo.verts, geo.ptr, i0, j0)
     field.setflags(write=False)
-    _lru_put(_BASE_CACHE, key, (field, geo), _BASE_CACHE_SIZE)
+    _lru_put(_BASE_CACHE, key, (field, geo), _BASE_CACHE_SIZE, _BASE_CACHE_BYTES,
+             lambda v: v[0].nbytes)
     return field, geo
+
+
+_TOKENS: OrderedDict[int, tuple[tuple, int]] = OrderedDict()
+_TOKEN_COUNT = [0]
+
+
+def _static_token(obstacles: tuple) -> int:
+    """A small integer standing for the static obstacle tuple ``obstacles`` in cache keys
+    (hashing hundreds of obstacles per lookup would dominate on large maps). The same
+    tuple object always gets the same token; an equal but distinct tuple may get another
+    one, which costs a cache miss, never a wrong hit (tokens are never reused)."""
+    hit = _TOKENS.get(id(obstacles))
+    if hit is not None and hit[0] is obstacles:
+        _TOKENS.move_to_end(id(obstacles))
+        return hit[1]
+    _TOKEN_COUNT[0] += 1
+    _TOKENS[id(obstacles)] = (obstacles, _TOKEN_COUNT[0])
+    while len(_TOKENS) > 64:
+        _TOKENS.popitem(last=False)
+    return _TOKEN_COUNT[0]
+
+
+def _as_obstacles(items: Iterable[Any]) -> tuple[Obstacle, ...]:
+    """``items`` as a tuple of Obstacles (the same tuple object when it already is one)."""
+    if isinstance(items, tuple) and all(type(o) is Obstacle for o in items):
+        return items
+    return tuple(as_obstacle(o) for o in items)
+
+
+class _Derived(dict):
+    """A space's derived structures; keeps the bytes of its arrays (counted on insertion)."""
+
+    nbytes = 0
+
+    def __setitem__(self, key: Any, value: Any) -> None:
+        if key in self:
+            self.nbytes -= _derived_nbytes(self[key])
+        super().__setitem__(key, value)
+        self.nbytes += _derived_nbytes(value)
+
+
+def _derived_nbytes(value: Any) -> int:
+    """Bytes of the arrays held by a derived structure (an array or an object's arrays)."""
+    if isinstance(value, np.ndarray):
+        return value.nbytes
+    total = 0
+    for v in getattr(value, "__dict__", {}).values():
+        if isinstance(v, np.ndarray):
+            total += v.nbytes
+        elif isinstance(v, dict):
+            total += sum(x.nbytes for x in v.values() if isinstance(x, np.ndarray))
+    return total
 
 
 # --------------------------------------------------------------------------------------
@@ -140,6 +238,8 @@ class RobotSpace:
     overlay: further obstacles laid over the base layer (objects, extra shapes).
     resolution: grid spacing h (default 1 cm).
     cap: clearance values are exact up to ``cap`` and reported as ``cap`` beyond it.
+    window: (x0, y0, x1, y1) metres: hold only the grid nodes of this rectangle (grown to
+        whole nodes, clipped to the workspace; see the module doc). None: the whole grid.
 
     Use :meth:`from_scene` in planners: it caches whole spaces.
     """
@@ -153,6 +253,7 @@ class RobotSpace:
         overlay: Iterable[Any] = (),
         resolution: float = DEFAULT_RESOLUTION,
         cap: float = DEFAULT_CAP,
+        window: Sequence[float] | None = None,
     ) -> None:
         W, H = (float(v) for v in workspace)
         if not (np.isfinite(W) and np.isfinite(H) and W > 0 and H > 0):
@@ -168,14 +269,21 @@ class RobotSpace:
         self.margin = float(margin)
         self.resolution = float(resolution)
         self.cap = float(max(cap, radius + margin + 2 * resolution))
-        base_obs = tuple(as_obstacle(o) for o in obstacles)
+        base_obs = _as_obstacles(obstacles)
         over_obs = tuple(as_obstacle(o) for o in overlay)
-        base_field, base_geo = _base_layer(self.workspace, base_obs, self.resolution, self.cap)
+        nodes = window_nodes(self.workspace, self.resolution, window)
+        #: (i0, j0): the whole grid's index of node ``field[0, 0]``.
+        self.origin: tuple[int, int] = (nodes[0], nodes[1])
+        #: (NX, NY): nodes of the whole workspace grid.
+        self.grid_nodes: tuple[int, int] = grid_nodes(self.workspace, self.resolution)
+        self.window_nodes = nodes
+        base_field, base_geo = _base_layer(self.workspace, base_obs, self.resolution, self.cap,
+                                           nodes)
         if over_obs:
             field = base_field.copy()
             over_geo = GeometrySet(over_obs)
             fill_field(field, self.resolution, self.cap, over_geo.circles, over_geo.verts,
-                        over_geo.ptr)
+                       over_geo.ptr, nodes[0], nodes[1])
             field.setflags(write=False)
             self.geometry = GeometrySet.concat(base_geo, over_geo)
         else:
@@ -186,10 +294,10 @@ class RobotSpace:
         self.overlay_obstacles = over_obs
         self.key: Any = (
             self.workspace, base_obs, over_obs, self.radius, self.margin, self.resolution,
-            self.cap,
+            self.cap, nodes,
         )
         # derived structures (e.g. planning lattices) cached by their users
-        self.derived: dict[Any, Any] = {}
+        self.derived: dict[Any, Any] = _Derived()
 
     # ---- construction -------------------------------------------------------------
 
@@ -204,10 +312,12 @@ class RobotSpace:
         margin: float = 0.0,
         resolution: float = DEFAULT_RESOLUTION,
         cap: float = DEFAULT_CAP,
+        window: Sequence[float] | None = None,
     ) -> RobotSpace:
         """The space for ``scene``: its obstacles, its objects at ``object_poses`` (default:
         their start poses) except the indices in ``exclude_objects``, plus
-        ``extra_obstacles`` (scene-file dicts, Obstacles or (Shape, pose) pairs).
+        ``extra_obstacles`` (scene-file dicts, Obstacles or (Shape, pose) pairs), over the
+        grid nodes of ``window`` (default: the whole workspace).
 
         Cached: the same arguments return the same (immutable) space object.
         """
@@ -231,15 +341,19 @@ class RobotSpace:
             if k not in excl
         ]
         overlay.extend(as_obstacle(o) for o in extra_obstacles)
+        ws = tuple(float(v) for v in scene.workspace)
         key = (
-            tuple(float(v) for v in scene.workspace), scene.obstacles, tuple(overlay), r,
-            float(margin), float(resolution), float(cap),
+            ws, _static_token(scene.obstacles), tuple(overlay), r, float(margin),
+            float(resolution),
+            float(cap), window_nodes(ws, float(resolution), window),  # type: ignore[arg-type]
         )
         hit = _lru_get(_SPACE_CACHE, key)
         if hit is not None:
             return hit
-        space = cls(scene.workspace, scene.obstacles, r, margin, overlay, resolution, cap)
-        _lru_put(_SPACE_CACHE, key, space, _SPACE_CACHE_SIZE)
+        space = cls(scene.workspace, scene.obstacles, r, margin, overlay, resolution, cap,
+                    window)
+        _lru_put(_SPACE_CACHE, key, space, _SPACE_CACHE_SIZE, _SPACE_CACHE_BYTES,
+                 lambda sp: sp.nbytes)
         return space
 
     # ---- properties ---------------------------------------------------------------
@@ -251,13 +365,33 @@ class RobotSpace:
 
     @property
     def shape(self) -> tuple[int, int]:
-        """Grid shape ``(ny, nx)``; node (j, i) sits at ``(i * h, j * h)``."""
+        """Shape ``(ny, nx)`` of ``field``; its node (j, i) sits at ``((i0 + i) * h,
+        (j0 + j) * h)`` with ``(i0, j0) = origin`` (0, 0 for a whole-workspace space)."""
         return self.field.shape  # type: ignore[return-value]
 
+    @property
+    def covers_workspace(self) -> bool:
+        """Whether the field holds the whole workspace grid (no window)."""
+        NX, NY = self.grid_nodes
+        return self.window_nodes == (0, 0, NX - 1, NY - 1)
+
+    @property
+    def window(self) -> tuple[float, float, float, float]:
+        """(x0, y0, x1, y1): the rectangle (metres) spanned by the field's nodes."""
+        h = self.resolution
+        i0, j0, i1, j1 = self.window_nodes
+        return (i0 * h, j0 * h, i1 * h, j1 * h)
+
+    @property
+    def nbytes(self) -> int:
+        """Bytes held by the field and the structures derived from it (lattices...)."""
+        own = self.field.nbytes if self.overlay_obstacles else 0  # else the base cache's
+        return own + self.derived.nbytes  # type: ignore[attr-defined]
+
     def node_xy(self, i: ArrayLike, j: ArrayLike) -> np.ndarray:
-        """World coordinates of grid nodes (i, j) as (..., 2)."""
-        i = np.asarray(i)
-        j = np.asarray(j)
+        """World coordinates of field nodes (i, j) (indices into ``field``) as (..., 2)."""
+        i = np.asarray(i) + self.origin[0]
+        j = np.asarray(j) + self.origin[1]
         return np.stack([i * self.resolution, j * self.resolution], axis=-1).astype(float)
 
     @property
@@ -276,7 +410,8 @@ class RobotSpace:
         """Distance from each centre to the nearest obstacle or border (negative inside).
 
         ``exact=False``: bilinear interpolation of the grid (error below ~h, values capped
-        at ``cap``; -inf outside the workspace). ``exact=True``: analytic, uncapped.
+        at ``cap``; -inf outside the workspace or the window). ``exact=True``: analytic,
+        uncapped.
         """
         p, lead = _points(points)
         if exact:
@@ -284,13 +419,14 @@ class RobotSpace:
             g = self.geometry
             out = points_clearance(p, g.circles, g.verts, g.ptr, W, H)
         else:
-            out = bilinear(p, self.field, self.resolution)
+            out = bilinear(p, self.field, self.resolution, *self.origin, *self.grid_nodes)
         return out.reshape(lead)
 
     def clearance_lower(self, points: ArrayLike) -> np.ndarray:
         """A lower bound on the clearance from the grid (1-Lipschitz bound, O(1) per point)."""
         p, lead = _points(points)
-        return lower_bound(p, self.field, self.resolution).reshape(lead)
+        return lower_bound(p, self.field, self.resolution, *self.origin,
+                           *self.grid_nodes).reshape(lead)
 
     def is_free(self, points: ArrayLike, exact: bool = False) -> np.ndarray:
         """Whether a robot centred at each point is collision-free (clearance >= threshold).
@@ -357,7 +493,8 @@ class RobotSpace:
             (e.g. "clear of the push paths"); called on batches of candidate nodes.
         max_distance: give up beyond this many metres (default: the whole workspace).
         Returns the (2,) spot, exactly a grid node: among the valid nodes met by the BFS,
-        the one closest to ``point`` in Euclidean distance; None when there is none.
+        the one closest to ``point`` in Euclidean distance; None when there is none. A
+        windowed space searches its window only (from the window node nearest ``point``).
         """
         p = np.asarray(point, dtype=np.float64).reshape(2)
         if not np.all(np.isfinite(p)):
@@ -365,6 +502,7 @@ class RobotSpace:
         thr = self.threshold if min_clearance is None else float(min_clearance)
         h = self.resolution
         ny, nx = self.shape
+        oi, oj = self.origin
         ok = self.field >= thr
         if avoid is not None:
             if isinstance(avoid, np.ndarray) and avoid.dtype == bool:
@@ -374,18 +512,18 @@ class RobotSpace:
             else:
                 disks = np.asarray(avoid, dtype=np.float64).reshape(-1, 3)
                 for x, y, rad in disks:
-                    i0 = max(0, int(math.floor((x - rad) / h)))
-                    i1 = min(nx - 1, int(math.ceil((x + rad) / h)))
-                    j0 = max(0, int(math.floor((y - rad) / h)))
-                    j1 = min(ny - 1, int(math.ceil((y + rad) / h)))
+                    i0 = max(0, int(math.floor((x - rad) / h)) - oi)
+                    i1 = min(nx - 1, int(math.ceil((x + rad) / h)) - oi)
+                    j0 = max(0, int(math.floor((y - rad) / h)) - oj)
+                    j1 = min(ny - 1, int(math.ceil((y + rad) / h)) - oj)
                     if i1 < i0 or j1 < j0:
                         continue
-                    xs = np.arange(i0, i1 + 1) * h - x
-                    ys = np.arange(j0, j1 + 1) * h - y
+                    xs = np.arange(oi + i0, oi + i1 + 1) * h - x
+                    ys = np.arange(oj + j0, oj + j1 + 1) * h - y
                     inside = xs[None, :] ** 2 + ys[:, None] ** 2 <= rad * rad
                     ok[j0:j1 + 1, i0:i1 + 1] &= ~inside
-        si = int(np.clip(round(p[0] / h), 0, nx - 1))
-        sj = int(np.clip(round(p[1] / h), 0, ny - 1))
+        si = int(np.clip(round(p[0] / h) - oi, 0, nx - 1))
+        sj = int(np.clip(round(p[1] / h) - oj, 0, ny - 1))
         if through_free and self.field[sj, si] >= self.threshold:
             reach = self.free_grid
         else:
@@ -400,7 +538,8 @@ class RobotSpace:
                 flat = cj.astype(np.int64) * nx + ci
                 todo = flat[judged[flat] < 0]
                 if len(todo):
-                    pts = np.stack([(todo % nx) * h, (todo // nx) * h], axis=1).astype(np.float64)
+                    pts = np.stack([(todo % nx + oi) * h, (todo // nx + oj) * h],
+                                   axis=1).astype(np.float64)
                     res = np.asarray(accept(pts), dtype=bool).reshape(-1)  # type: ignore[misc]
                     if res.shape != (len(todo),):
                         raise ValueError("accept must return one bool per point")
@@ -411,7 +550,7 @@ class RobotSpace:
                 # BFS depth counts 8-connected hops (chessboard distance in the open); a
                 # node at Euclidean distance e has depth >= e / h, so nodes closer than the
                 # first find lie within depth ceil(first Euclidean distance / h)
-                xy = np.stack([ci * h - p[0], cj * h - p[1]], axis=1)
+                xy = np.stack([(ci + oi) * h - p[0], (cj + oj) * h - p[1]], axis=1)
                 e = np.hypot(xy[:, 0], xy[:, 1])
                 need = int(math.ceil(e[good][cd[good] == d_first].min() / h)) + 1
                 if need <= depth_cap or depth_cap >= limit:
@@ -419,7 +558,7 @@ class RobotSpace:
                     k = int(np.argmin(np.where(sel, e, np.inf)))
                     if max_distance is not None and e[k] > max_distance:
                         return None
-                    return np.array([ci[k] * h, cj[k] * h], dtype=np.float64)
+                    return np.array([(ci[k] + oi) * h, (cj[k] + oj) * h], dtype=np.float64)
                 depth_cap = min(limit, max(need, 2 * depth_cap))
                 continue
             if depth_cap >= limit:
@@ -431,5 +570,6 @@ class RobotSpace:
         return (
             f"RobotSpace({W:g} x {H:g} m, r={self.radius:g}, margin={self.margin:g}, "
             f"{len(self.base_obstacles)}+{len(self.overlay_obstacles)} obstacles, "
-            f"grid {self.shape[1]}x{self.shape[0]} @ {self.resolution:g} m)"
+            f"grid {self.shape[1]}x{self.shape[0]} @ {self.resolution:g} m"
+            + ("" if self.covers_workspace else f" from node {self.origin}") + ")"
         )

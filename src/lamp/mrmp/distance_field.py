@@ -72,11 +72,12 @@ def _dijkstra(
 def _build_edges(
     F: np.ndarray, ids: np.ndarray, s: int, h: float, thr: float,
     circles: np.ndarray, verts: np.ndarray, ptr: np.ndarray, W: float, H: float, V: int,
+    a_off: int, b_off: int,
 ) -> np.ndarray:
     """(V, 8) neighbour table: an edge exists when both nodes are free and the motion
     keeps clearance >= thr, by the cone bound over the grid nodes it passes through
     (exact field values), or, when that bound misses by less than 0.75 h, by the exact
-    segment clearance."""
+    segment clearance. ``F[s * b, s * a]`` is lattice node ``(a + a_off, b + b_off)``."""
     nb_, na = ids.shape
     nbr = np.full((V, 8), -1, dtype=np.int64)
     diag = h * math.sqrt(2.0)
@@ -114,10 +115,10 @@ def _build_edges(
                         lo = c
                 ok = lo >= thr
                 if not ok and lo >= thr - 0.75 * h:
-                    ax = a * L
-                    ay = b * L
-                    ok = segment_clearance(ax, ay, a2 * L, b2 * L, circles, verts, ptr,
-                                            W, H) >= thr
+                    ax = (a + a_off) * L
+                    ay = (b + b_off) * L
+                    ok = segment_clearance(ax, ay, (a2 + a_off) * L, (b2 + b_off) * L, circles,
+                                           verts, ptr, W, H) >= thr
                 if ok:
                     nbr[u, d] = v
                     nbr[v, 7 - d] = u
@@ -128,7 +129,10 @@ class Lattice:
     """The free 8-connected lattice of step ``step`` over ``space`` (see module doc).
 
     Attributes: ``coords (V, 2)``; ``nbr (V, 8)`` neighbour ids or -1 in :data:`DIRS`
-    order; ``dlen (8,)`` move lengths; ``ids (nb, na)`` node id per lattice index or -1.
+    order; ``dlen (8,)`` move lengths; ``ids (nb, na)`` node id per lattice index or -1,
+    where ``ids[b, a]`` is the node at ``((a + a0) * L, (b + b0) * L)``, ``(a0, b0) =
+    offset``. Lattice nodes sit at the same places whatever the space's window: those
+    of the whole workspace's lattice that lie in the window, with the same edges.
     """
 
     def __init__(self, space: RobotSpace, step: float = 0.05) -> None:
@@ -138,14 +142,21 @@ class Lattice:
             raise ValueError(
                 f"lattice step must be a positive multiple of the grid spacing {h}, got {step!r}"
             )
-        self.space = space
+        # what links() needs, not the space itself: a lattice is cached on its space, and a
+        # reference back would make a cycle that keeps evicted spaces alive until a full GC
+        self.workspace = space.workspace
+        self.geometry = space.geometry
+        #: (x0, y0, x1, y1) of the space's window
+        self.window = space.window
         self.step = float(step)
         self.stride = s
-        F = space.field
         thr = space.threshold
-        ny, nx = F.shape
-        na = (nx - 1) // s + 1
-        nb_ = (ny - 1) // s + 1
+        gi0, gj0, gi1, gj1 = space.window_nodes
+        a0, b0 = -(-gi0 // s), -(-gj0 // s)  # first lattice index inside the window
+        F = space.field[s * b0 - gj0:, s * a0 - gi0:]
+        na = (gi1 // s) - a0 + 1
+        nb_ = (gj1 // s) - b0 + 1
+        self.offset = (a0, b0)
         Fl = F[: s * (nb_ - 1) + 1 : s, : s * (na - 1) + 1 : s]
         free = Fl >= thr
         ids = np.full((nb_, na), -1, dtype=np.int64)
@@ -153,13 +164,13 @@ class Lattice:
         ids[free] = np.arange(V)
         bb, aa = np.nonzero(free)
         self.ids = ids
-        self.coords = np.ascontiguousarray(np.stack([aa * step, bb * step], axis=1), dtype=float)
-        self.ab = np.stack([aa, bb], axis=1)
+        self.coords = np.ascontiguousarray(
+            np.stack([(aa + a0) * step, (bb + b0) * step], axis=1), dtype=float)
 
         self.dlen = np.array([step * math.hypot(*d) for d in DIRS.tolist()], dtype=float)
         W, H = space.workspace
         g = space.geometry
-        nbr = _build_edges(F, ids, s, h, thr, g.circles, g.verts, g.ptr, W, H, V)
+        nbr = _build_edges(F, ids, s, h, thr, g.circles, g.verts, g.ptr, W, H, V, a0, b0)
         self.nbr = nbr
         self.V = V
         self._fields: OrderedDict[Any, np.ndarray] = OrderedDict()
@@ -170,10 +181,11 @@ class Lattice:
         """Ids of free lattice nodes within ``radius`` of point ``p`` (sorted by distance)."""
         L = self.step
         nb_, na = self.ids.shape
-        a0 = max(0, int(math.floor((p[0] - radius) / L)))
-        a1 = min(na - 1, int(math.ceil((p[0] + radius) / L)))
-        b0 = max(0, int(math.floor((p[1] - radius) / L)))
-        b1 = min(nb_ - 1, int(math.ceil((p[1] + radius) / L)))
+        oa, ob = self.offset
+        a0 = max(0, int(math.floor((p[0] - radius) / L)) - oa)
+        a1 = min(na - 1, int(math.ceil((p[0] + radius) / L)) - oa)
+        b0 = max(0, int(math.floor((p[1] - radius) / L)) - ob)
+        b1 = min(nb_ - 1, int(math.ceil((p[1] + radius) / L)) - ob)
         if a1 < a0 or b1 < b0:
             return np.zeros(0, dtype=np.int64)
         blk = self.ids[b0 : b1 + 1, a0 : a1 + 1].ravel()
@@ -189,9 +201,8 @@ class Lattice:
         """For each continuous point: (node ids, lengths) of the lattice nodes within
         ``radius`` reachable by a straight motion whose exact clearance stays
         >= ``thresholds[k]``."""
-        space = self.space
-        W, H = space.workspace
-        g = space.geometry
+        W, H = self.workspace
+        g = self.geometry
         cand = [self.nodes_near(p, radius) for p in points]
         counts = [len(c) for c in cand]
         out: list[tuple[np.ndarray, np.ndarray]] = []

@@ -189,7 +189,9 @@ def plan_paths(
     time_limit: seconds; on expiry the result is a failure with a reason.
     space: a prebuilt :class:`RobotSpace` to plan in (then ``object_poses`` and
         ``extra_obstacles`` are ignored); its threshold ``r + margin`` is the clearance
-        every lattice position keeps.
+        every lattice position keeps. A space over a window of the map plans on the
+        part of the lattice inside the window (starts and goals outside it cannot be
+        linked: a failure, not an error).
     seed: tie-breaking seed (the plan is a deterministic function of all arguments).
     lattice_step: lattice spacing L (multiple of the space's 1 cm grid), or a sequence
         of them tried in turn while time is left: after a failure that a finer lattice can

@@ -3,10 +3,18 @@
 A ``ManipulationTask`` bundles what every planner asks repeatedly while moving one object,
 and caches it: the object's collision space, the robots' configuration spaces (without the
 object, and with the object at a given pose), and model proposals per requested motion.
+
+Robot spaces are built over a *window* of the map around the object and the robots
+(:meth:`ManipulationTask.window`): approach paths, waiting spots and ``Collide`` are local
+to them, so memory and time per space grow with that window, not with the map. Windows
+are snapped to a 1 m grid (nearby poses share spaces) and at least 4 m wide (the paper's
+4 m maps are always covered whole).
 """
 
 from __future__ import annotations
 
+import math
+from collections import OrderedDict
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -18,6 +26,19 @@ from lamp.geometry.shapes import signed_distance
 from lamp.planners.config import PlannerConfig
 from lamp.planners.trajectory import MAX_STEP, densify
 from lamp.scene.model import Scene, Shape
+
+#: Margin (m) of a robot-space window around the object and the robots; more than the
+#: waiting-spot search radius of ``Reassign`` plus a robot.
+WINDOW_MARGIN = 1.5
+#: Windows are snapped outward to multiples of this (m), so that nearby poses share spaces.
+WINDOW_SNAP = 1.0
+#: Smallest window side (m), where the map allows.
+WINDOW_MIN_SIDE = 4.0
+#: Largest window side (m) a failed approach may grow its window to.
+WINDOW_MAX_SIDE = 16.0
+#: Robot spaces kept per task: at most this many, and this many bytes in all.
+_SPACES_KEPT = 64
+_SPACES_BYTES = 96 * 2**20
 
 
 @dataclass(frozen=True)
@@ -79,10 +100,7 @@ class ManipulationTask:
     def __post_init__(self) -> None:
         self.object_poses = np.array(self.object_poses, dtype=float).reshape(-1, 3)
         self.object_space = ObjectSpace.from_scene(self.scene, self.index, self.object_poses)
-        self.static_space = RobotSpace.from_scene(
-            self.scene, object_poses=self.object_poses, exclude_objects=(self.index,)
-        )
-        self._spaces: dict[tuple, RobotSpace] = {}
+        self._spaces: OrderedDict[tuple, RobotSpace] = OrderedDict()
         self._proposals: dict[tuple, list] = {}
         self._candidates: dict[tuple, PushCandidates] = {}
 
@@ -108,16 +126,73 @@ class ManipulationTask:
         poses[self.index] = q_object
         return poses
 
-    def robot_space_at(self, q_object: np.ndarray) -> RobotSpace:
-        """Robot configuration space with the manipulated object at ``q_object`` (cached)."""
-        key = tuple(np.round(np.asarray(q_object, float), 4))
+    @property
+    def static_space(self) -> RobotSpace:
+        """Robot space of the whole map without the manipulated object (the other objects
+        at their poses); planners use the windowed :meth:`static_space_near`."""
+        return RobotSpace.from_scene(self.scene, object_poses=self.object_poses,
+                                     exclude_objects=(self.index,))
+
+    def window(self, q_object: np.ndarray, points: np.ndarray | None = None,
+               scale: float = 1.0) -> tuple[float, float, float, float]:
+        """(x0, y0, x1, y1): the robot-space window for the object at ``q_object`` and the
+        (K, 2) ``points`` (robots, goals): their bounding box grown by the object's
+        bounding radius and ``scale * WINDOW_MARGIN``, snapped outward to ``WINDOW_SNAP``,
+        widened to ``scale * WINDOW_MIN_SIDE`` (at most the map) and kept inside the map.
+        Every given point and the whole object lie inside it, at least the margin from
+        its sides that face into the map."""
+        W, H = (float(v) for v in self.scene.workspace)
+        q = np.asarray(q_object, float).reshape(3)
+        rad = float(self.shape.bounding_radius)
+        lo = q[:2] - rad
+        hi = q[:2] + rad
+        if points is not None and len(points):
+            pts = np.asarray(points, float).reshape(-1, 2)
+            lo = np.minimum(lo, pts.min(axis=0))
+            hi = np.maximum(hi, pts.max(axis=0))
+        m = scale * WINDOW_MARGIN
+        out = []
+        for axis, size in ((0, W), (1, H)):
+            a = max(0.0, WINDOW_SNAP * math.floor((lo[axis] - m) / WINDOW_SNAP))
+            b = min(size, WINDOW_SNAP * math.ceil((hi[axis] + m) / WINDOW_SNAP))
+            short = min(size, scale * WINDOW_MIN_SIDE) - (b - a)
+            if short > 0:  # widen both ways, then shift back inside the map
+                a, b = a - 0.5 * short, b + 0.5 * short
+                a, b = (0.0, b - a) if a < 0 else (a, b)
+                a, b = (max(0.0, a - (b - size)), size) if b > size else (a, b)
+                a = max(0.0, WINDOW_SNAP * math.floor(a / WINDOW_SNAP + 1e-9))
+                b = min(size, WINDOW_SNAP * math.ceil(b / WINDOW_SNAP - 1e-9))
+            out.append((a, b))
+        (x0, x1), (y0, y1) = out
+        return (x0, y0, x1, y1)
+
+    def robot_space_at(self, q_object: np.ndarray,
+                       window: tuple[float, float, float, float] | None = None) -> RobotSpace:
+        """Robot configuration space with the manipulated object at ``q_object``, over
+        ``window`` (default: the whole map). Cached, bounded in entries and bytes."""
+        key = (tuple(np.round(np.asarray(q_object, float), 4)),
+               None if window is None else tuple(float(v) for v in window))
         space = self._spaces.get(key)
         if space is None:
-            if len(self._spaces) > 256:
-                self._spaces.clear()
-            space = RobotSpace.from_scene(self.scene, object_poses=self.poses_with(q_object))
+            space = RobotSpace.from_scene(self.scene, object_poses=self.poses_with(q_object),
+                                          window=window)
             self._spaces[key] = space
+            total = sum(sp.nbytes for sp in self._spaces.values())
+            while len(self._spaces) > 1 and (len(self._spaces) > _SPACES_KEPT
+                                             or total > _SPACES_BYTES):
+                _, old = self._spaces.popitem(last=False)
+                total -= old.nbytes
+        else:
+            self._spaces.move_to_end(key)
         return space
+
+    def static_space_near(self, q_object: np.ndarray) -> RobotSpace:
+        """The space without the manipulated object (see :attr:`static_space`) over the
+        window of :meth:`window` around ``q_object``: it answers every point within
+        ``WINDOW_MARGIN`` of the object (farther points may read as not free)."""
+        return RobotSpace.from_scene(self.scene, object_poses=self.object_poses,
+                                     exclude_objects=(self.index,),
+                                     window=self.window(q_object))
 
     def proposals(self, motion: np.ndarray, budget: int, attempt: int) -> list:
         """K model proposals for ``motion`` (object frame) with ``budget`` robots.

@@ -20,11 +20,14 @@ from scipy.optimize import linear_sum_assignment
 from lamp.geometry import se2
 from lamp.geometry.shapes import signed_distance
 from lamp.mrmp import plan_paths
-from lamp.planners.task import ManipulationTask, PushCandidates
+from lamp.mrmp.gspi import GspiStatus
+from lamp.planners.task import WINDOW_MAX_SIDE, ManipulationTask, PushCandidates
 from lamp.planners.trajectory import concat, hold, retime, straight_moves
 
 #: How far (m) the breadth-first search for a robot's waiting spot may go.
 WAIT_SEARCH_RADIUS = 1.0
+#: Gspi failures that a larger robot-space window may fix.
+_WINDOW_BOUND = frozenset({GspiStatus.UNREACHABLE, GspiStatus.STALLED, GspiStatus.STEP_BUDGET})
 
 
 @dataclass
@@ -70,12 +73,14 @@ def usable_mask(task: ManipulationTask, q_from: np.ndarray, cands: PushCandidate
     free space (obstacles, other objects, border), when a contact lies inside the object
     (deeper than ``contact_tolerance``), or when two pushing robots come closer than 2r.
     The pose-independent tests come precomputed (``PushCandidates.intrinsic_ok``); the
-    free-space test is one query for all the candidates' points.
+    free-space test is one query for all the candidates' points, in the robots' space
+    around ``q_from`` (a point beyond its window counts as not free).
     """
     ok = cands.intrinsic_ok.copy()
     if not ok.any():
         return ok
-    free = task.static_space.is_free(se2.transform_points(q_from, cands.dense_points))
+    free = task.static_space_near(q_from).is_free(
+        se2.transform_points(q_from, cands.dense_points))
     ok &= np.logical_and.reduceat(free, cands.starts[:-1])
     return ok
 
@@ -103,7 +108,7 @@ def reassign(task: ManipulationTask, q_from: np.ndarray, q_to: np.ndarray, q_R: 
         return goals
     rows, _ = assign_to_contacts(q_R, contacts)
     unpaired = [i for i in range(n) if i not in set(rows.tolist())]
-    space = task.robot_space_at(q_from)
+    space = task.robot_space_at(q_from, task.window(q_from, q_R))
     r = task.robot_radius
     swept = se2.interpolate(q_from, q_to, np.linspace(0.0, 1.0, 5))
     keep_out = [pushes_world.reshape(-1, 2)]
@@ -135,7 +140,7 @@ def leave_contact(task: ManipulationTask, q_from: np.ndarray, q_R: np.ndarray) -
     inside its configuration-space obstacle. Such a robot first backs off to the nearest
     free configuration (a move of at most a few centimetres, away from the object).
     """
-    space = task.robot_space_at(q_from)
+    space = task.robot_space_at(q_from, task.window(q_from, q_R))
     free = space.is_free(q_R)
     if np.all(free):
         return q_R[:, None, :].copy()
@@ -149,19 +154,36 @@ def leave_contact(task: ManipulationTask, q_from: np.ndarray, q_R: np.ndarray) -
 
 def approach(task: ManipulationTask, q_from: np.ndarray, q_R: np.ndarray,
              goals: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
-    """Gspi (Alg. 1 line 23): paths for all robots to ``goals``; (paths, goal_of) or None."""
+    """Gspi (Alg. 1 line 23): paths for all robots to ``goals``; (paths, goal_of) or None.
+
+    Gspi plans in the robot space over ``task.window(q_from, q_R)``; when it fails in a
+    way a larger window may fix (a goal unreachable, a stall, the step budget; not the
+    time limit nor an invalid start or goal) and the window does not hold the whole map, the
+    window's margin and least side are doubled (up to ``WINDOW_MAX_SIDE``) and Gspi tries
+    again in the time left of the one ``gspi_time_limit``."""
     backoff = leave_contact(task, q_from, q_R)
     starts = backoff[:, -1]
     task.stats.gspi_calls += 1
-    # Contacts deeper than the tolerance or robots left overlapping come back as a failed
-    # plan (status INVALID_GOAL / INVALID_START), like any other infeasible approach.
-    plan = plan_paths(
-        task.scene, starts, goals, object_poses=task.poses_with(q_from),
-        time_limit=task.config.gspi_time_limit, space=task.robot_space_at(q_from),
-        seed=task.seed, goal_tolerance=task.config.contact_tolerance,
-    )
-    if not plan.success:
-        return None
+    t_end = time.perf_counter() + task.config.gspi_time_limit
+    scale = 1.0
+    while True:
+        window = task.window(q_from, q_R, scale)
+        space = task.robot_space_at(q_from, window)
+        # Contacts deeper than the tolerance or robots left overlapping come back as a failed
+        # plan (status INVALID_GOAL / INVALID_START), like any other infeasible approach.
+        plan = plan_paths(
+            task.scene, starts, goals, object_poses=task.poses_with(q_from),
+            time_limit=max(1e-3, t_end - time.perf_counter()), space=space,
+            seed=task.seed, goal_tolerance=task.config.contact_tolerance,
+        )
+        if plan.success:
+            break
+        wider = task.window(q_from, q_R, 2.0 * scale)
+        if (space.covers_workspace or plan.status not in _WINDOW_BOUND
+                or max(wider[2] - wider[0], wider[3] - wider[1]) > WINDOW_MAX_SIDE
+                or time.perf_counter() >= t_end):
+            return None
+        scale *= 2.0
     task.stats.gspi_success += 1
     return concat(backoff, plan.paths), np.asarray(plan.goal_of)
 

@@ -59,6 +59,11 @@ VirtualNode = tuple[float, float, float]
 
 TWO_PI = 2.0 * math.pi
 
+#: Cached validity of nodes and edges: not checked yet, checked and blocked, checked and free.
+UNKNOWN, BLOCKED, FREE = 0, 1, 2
+#: Successor lists kept (they take ~1.5 kB a node; validity stays cached regardless).
+_SUCC_KEPT = 20_000
+
 #: the 26 primitives (di, dj, dk): 8 translations x {-1, 0, +1} heading bins, 2 rotations
 PRIMITIVES: tuple[tuple[int, int, int], ...] = tuple(
     (di, dj, dk)
@@ -95,7 +100,7 @@ def _successor_kernel(
     out_prim: np.ndarray,
     margin: float,
     reach: float,
-    sd: np.ndarray,
+    sd: tuple,
     res: float,
     width: float,
     height: float,
@@ -117,10 +122,11 @@ def _successor_kernel(
     tu = (at + k * dth + math.pi) % two_pi - math.pi
     n_pose = 0
     n_motion = 0
-    if node_valid[u] < 0:
-        node_valid[u] = pose_free_kernel(xu, yu, tu, sd, res, width, height, fp, reach2)
+    if node_valid[u] == UNKNOWN:
+        node_valid[u] = BLOCKED + pose_free_kernel(xu, yu, tu, sd, res, width, height, fp,
+                                                   reach2)
         n_pose += 1
-    if node_valid[u] == 0:
+    if node_valid[u] == BLOCKED:
         return 0, n_pose, n_motion
     n = 0
     for p in range(prim.shape[0]):
@@ -133,12 +139,13 @@ def _successor_kernel(
         xv = ax + (ni + i_min) * step
         yv = ay + (nj + j_min) * step
         tv = (at + nk * dth + math.pi) % two_pi - math.pi
-        if node_valid[v] < 0:
-            node_valid[v] = pose_free_kernel(xv, yv, tv, sd, res, width, height, fp, reach2)
+        if node_valid[v] == UNKNOWN:
+            node_valid[v] = BLOCKED + pose_free_kernel(xv, yv, tv, sd, res, width, height, fp,
+                                                       reach2)
             n_pose += 1
-        if node_valid[v] == 0:
+        if node_valid[v] == BLOCKED:
             continue
-        if edge_valid[u, p] < 0:
+        if edge_valid[u, p] == UNKNOWN:
             if u < v:
                 free = motion_free_kernel(
                     xu, yu, tu, xv, yv, tv, margin, reach, sd, res, width, height, fp, reach2
@@ -148,9 +155,9 @@ def _successor_kernel(
                     xv, yv, tv, xu, yu, tu, margin, reach, sd, res, width, height, fp, reach2
                 )
             n_motion += 1
-            edge_valid[u, p] = free
-            edge_valid[v, rev[p]] = free
-        if edge_valid[u, p] == 1:
+            edge_valid[u, p] = BLOCKED + free
+            edge_valid[v, rev[p]] = BLOCKED + free
+        if edge_valid[u, p] == FREE:
             out_ids[n] = v
             out_prim[n] = p
             n += 1
@@ -235,14 +242,17 @@ class ObjectLattice:
             prim[:, 2]
         )
         self._prim_cost_list = self._prim_cost.tolist()
+        #: farthest a primitive moves the object's origin (m)
+        self._prim_reach = float(step * np.max(np.hypot(prim[:, 0], prim[:, 1])))
         self._rev = np.array(_REVERSE, dtype=np.int64)
         self._out_ids = np.empty(len(PRIMITIVES), dtype=np.int64)
         self._out_prim = np.empty(len(PRIMITIVES), dtype=np.int64)
-        self._node_valid = np.full(self.n_nodes, -1, dtype=np.int8)
-        self._edge_valid = np.full((self.n_nodes, len(PRIMITIVES)), -1, dtype=np.int8)
+        # zero-filled (UNKNOWN): the pages of nodes never looked at stay untouched, so the
+        # memory they take grows with the part of the map the search visits
+        self._node_valid = np.zeros(self.n_nodes, dtype=np.int8)
+        self._edge_valid = np.zeros((self.n_nodes, len(PRIMITIVES)), dtype=np.int8)
         self._succ: dict[Node, list[tuple[Node, float]]] = {}
         self._tolerant: dict[float, ObjectSpace] = {}
-        self._table: tuple[list[float], list[float], list[float]] | None = None
         #: statistics: poses and motions checked so far
         self.n_pose_checks = 0
         self.n_motion_checks = 0
@@ -312,17 +322,7 @@ class ObjectLattice:
             self.anchor[2] + k * self.dtheta,
         )
 
-    def _node_table(self) -> tuple[list[float], list[float], list[float]]:
-        """Per-node x, y, theta (unwrapped) as Python lists: fast scalar lookups."""
-        if self._table is None:
-            x, y, th = self._decode(np.arange(self.n_nodes, dtype=np.int64))
-            self._table = (x.tolist(), y.tolist(), th.tolist())
-        return self._table
-
     def _xyt(self, u: Node | VirtualNode) -> tuple[float, float, float]:
-        if type(u) is int:
-            xs, ys, ts = self._table or self._node_table()
-            return xs[u], ys[u], ts[u]
         if isinstance(u, (int, np.integer)):
             rest, k = divmod(int(u), self.n_headings)
             ii, jj = divmod(rest, self.n_j)
@@ -335,21 +335,21 @@ class ObjectLattice:
 
     # ------------------------------------------------------------ validity
     def _ensure_nodes(self, nodes: np.ndarray) -> None:
-        unknown = nodes[self._node_valid[nodes] < 0]
+        unknown = nodes[self._node_valid[nodes] == UNKNOWN]
         if len(unknown):
             unknown = np.unique(unknown)
-            self._node_valid[unknown] = self.space.pose_free(self.poses(unknown))
+            self._node_valid[unknown] = BLOCKED + self.space.pose_free(self.poses(unknown))
             self.n_pose_checks += len(unknown)
 
     def node_valid(self, u: Node) -> bool:
         """Whether the node's pose is free (cached)."""
         self._ensure_nodes(np.array([u], dtype=np.int64))
-        return bool(self._node_valid[u])
+        return bool(self._node_valid[u] == FREE)
 
     def validate_all_nodes(self) -> np.ndarray:
         """Check every node at once (one batch) and return the (n_nodes,) validity mask."""
         self._ensure_nodes(np.arange(self.n_nodes, dtype=np.int64))
-        return self._node_valid.astype(bool)
+        return self._node_valid == FREE
 
     def _neighbours(self, u: Node) -> tuple[np.ndarray, np.ndarray]:
         """(primitive indices, neighbour ids) of the primitives from ``u`` that stay on the grid."""
@@ -368,6 +368,9 @@ class ObjectLattice:
         cached = self._succ.get(u)
         if cached is not None:
             return cached
+        if self.space.grid.capped:
+            x, y, _ = self._xyt(u)
+            self.space.prepare_point(x, y, self._prim_reach)
         n, n_pose, n_motion = _successor_kernel(
             int(u), self.n_j, self.n_headings, self.i_min, self.j_min,
             self.anchor[0], self.anchor[1], self.anchor[2], self.step, self.dtheta,
@@ -379,6 +382,8 @@ class ObjectLattice:
         cost = self._prim_cost_list
         ids = self._out_ids[:n].tolist()
         out = list(zip(ids, [cost[p] for p in self._out_prim[:n].tolist()], strict=True))
+        if len(self._succ) >= _SUCC_KEPT:
+            self._succ.clear()  # recomputing from the validity caches is cheap
         self._succ[u] = out
         return out
 
@@ -456,7 +461,7 @@ class ObjectLattice:
         cand, d = cand[keep], d[keep]
         if valid_only and len(cand):
             self._ensure_nodes(cand)
-            ok = self._node_valid[cand] == 1
+            ok = self._node_valid[cand] == FREE
             cand, d = cand[ok], d[ok]
         order = np.argsort(d, kind="stable")
         return [(int(cand[o]), float(d[o])) for o in order]
@@ -499,7 +504,7 @@ class ObjectLattice:
         if len(cand) == 0:
             return []
         self._ensure_nodes(cand)
-        ok = self._node_valid[cand] == 1
+        ok = self._node_valid[cand] == FREE
         cand, targets = cand[ok], targets[ok]
         space = self._tolerant_space(tolerance)
         free = space.motions_free(np.broadcast_to(pose, targets.shape), targets)

@@ -1,0 +1,246 @@
+"""The obstacle distance grid of :class:`~lamp.geometry.object_space.ObjectSpace`, in tiles.
+
+The grid has cells of side ``resolution`` covering the workspace; a cell is *occupied*
+when its centre lies within half a cell diagonal ``h`` of an obstacle, and a free cell
+stores ``D - 2h``, ``D`` the distance from its centre to the nearest occupied centre
+(see :mod:`lamp.geometry.object_space` for why that is a clearance lower bound).
+
+The grid is held as square tiles of ``TILE`` x ``TILE`` cells and a table of which tile
+holds which block (-1: not filled; a compiled reader answers -inf there, which callers
+read as "not free", so a missing tile can never make a colliding pose free).
+
+* **Small maps** (at most ``FULL_GRID_CELLS`` cells): one distance transform over the
+  whole grid, cut into tiles at once; the values are exactly the whole-grid values.
+* **Large maps**: tiles are filled on demand (:meth:`DistanceTiles.ensure`), each by a
+  distance transform over the tile plus a halo of ``cap`` metres. An occupied centre
+  within ``cap`` of a cell lies in that halo, so a cell stores ``min(D, cap) - 2h``:
+  exact where ``D <= cap`` and capped beyond (still a lower bound), stored as float32
+  rounded down (so still a lower bound, within 1e-7 relative of the float64 value).
+  Memory and time grow with the part of the map the queries touch, not with the map.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from functools import lru_cache
+
+import numpy as np
+import shapely
+from numpy.typing import ArrayLike
+from scipy import ndimage
+
+from lamp.geometry.primitives import Obstacle
+from lamp.geometry.shapes import obstacle_geometry
+
+__all__ = ["DistanceTiles", "TILE", "FULL_GRID_CELLS", "DEFAULT_GRID_CAP"]
+
+#: Cells per tile side.
+TILE = 128
+#: Grids of at most this many cells are computed whole and exact (4 m maps: 1e6 cells).
+FULL_GRID_CELLS = 2**22
+#: Distances are exact up to this (m) in tiles filled on demand (spaces raise it to their
+#: footprint's ``min_grid_cap`` where needed).
+DEFAULT_GRID_CAP = 0.15
+#: Tiles filled on demand are stored in blocks of this many.
+_GROW = 64
+
+
+def grid_shape(workspace: tuple[float, float], resolution: float) -> tuple[int, int]:
+    """(rows, columns) of the obstacle grid: cells of side ``resolution`` covering the
+    workspace (at least one each way). One definition, so that every obstacle's cells and
+    the grid they are written into agree."""
+    nx = max(1, math.ceil(workspace[0] / resolution - 1e-9))
+    ny = max(1, math.ceil(workspace[1] / resolution - 1e-9))
+    return ny, nx
+
+
+@lru_cache(maxsize=4096)
+def obstacle_cells(
+    obstacle: Obstacle, workspace: tuple[float, float], resolution: float
+) -> tuple[int, int, np.ndarray] | None:
+    """Occupied cells of one obstacle: (row0, col0, bool mask) or None when none.
+
+    A cell is occupied when its centre is within half a cell diagonal of the obstacle.
+    Cached per obstacle: scenes share static obstacles across many ObjectSpaces.
+    """
+    ny, nx = grid_shape(workspace, resolution)
+    h = resolution / math.sqrt(2.0)
+    geom = obstacle_geometry(obstacle).buffer(h, quad_segs=8)
+    x0, y0, x1, y1 = geom.bounds
+    c0 = max(0, math.floor(x0 / resolution - 0.5))
+    c1 = min(nx - 1, math.ceil(x1 / resolution - 0.5))
+    r0 = max(0, math.floor(y0 / resolution - 0.5))
+    r1 = min(ny - 1, math.ceil(y1 / resolution - 0.5))
+    if c1 < c0 or r1 < r0:
+        return None
+    xs = (np.arange(c0, c1 + 1) + 0.5) * resolution
+    ys = (np.arange(r0, r1 + 1) + 0.5) * resolution
+    gx, gy = np.meshgrid(xs, ys)
+    mask = shapely.contains_xy(geom, gx, gy) | shapely.intersects_xy(geom.boundary, gx, gy)
+    if not mask.any():
+        return None
+    return r0, c0, mask
+
+
+def _round_down(values: np.ndarray) -> np.ndarray:
+    """float32 values, each at most the float64 value it stands for."""
+    v32 = values.astype(np.float32)
+    up = v32.astype(np.float64) > values
+    v32[up] = np.nextafter(v32[up], np.float32(-np.inf))
+    return v32
+
+
+class DistanceTiles:
+    """The obstacle distance grid of ``obstacles`` in ``workspace`` (see module doc).
+
+    ``args`` is what the compiled readers take: ``(tiles, table, rows, columns)``.
+    ``capped`` tells whether tiles are filled on demand with distances capped at ``cap``.
+    """
+
+    def __init__(self, workspace: tuple[float, float], obstacles: Sequence[Obstacle],
+                 resolution: float, cap: float = DEFAULT_GRID_CAP,
+                 full_grid_cells: int = FULL_GRID_CELLS) -> None:
+        if not (cap > 0 and math.isfinite(cap)):
+            raise ValueError(f"cap must be finite and > 0, got {cap!r}")
+        self.workspace = (float(workspace[0]), float(workspace[1]))
+        self.resolution = float(resolution)
+        self.shape = grid_shape(self.workspace, self.resolution)
+        ny, nx = self.shape
+        self.two_h = 2.0 * self.resolution / math.sqrt(2.0)
+        self.cap = float(cap)
+        self._halo = int(math.ceil(self.cap / self.resolution))
+        self.table = np.full((-(-ny // TILE), -(-nx // TILE)), -1, dtype=np.int32)
+        self.capped = ny * nx > full_grid_cells
+        self._store = np.zeros((0, TILE, TILE), dtype=np.float32 if self.capped else np.float64)
+        self._n = 0
+        #: tile boxes (tx0, ty0, tx1, ty1) known to be filled
+        self._ready: set[tuple[int, int, int, int]] = set()
+        cells = [obstacle_cells(ob, self.workspace, self.resolution) for ob in obstacles]
+        self._cells = [c for c in cells if c is not None]
+        self._boxes = np.array(
+            [(r0, c0, r0 + m.shape[0] - 1, c0 + m.shape[1] - 1) for r0, c0, m in self._cells],
+            dtype=np.int64).reshape(-1, 4)
+        if not self.capped:
+            self._fill_whole()
+        self.args: tuple = (self._store[: self._n], self.table, ny, nx)
+
+    # ---------------------------------------------------------------- filling
+    def _occupancy(self, r0: int, c0: int, r1: int, c1: int) -> np.ndarray:
+        """Occupied cells of rows r0..r1 and columns c0..c1 (inclusive)."""
+        occ = np.zeros((r1 - r0 + 1, c1 - c0 + 1), dtype=bool)
+        b = self._boxes
+        hit = np.nonzero((b[:, 0] <= r1) & (b[:, 2] >= r0) & (b[:, 1] <= c1) & (b[:, 3] >= c0))[0]
+        for k in hit.tolist():
+            rr, cc, mask = self._cells[k]
+            a0, a1 = max(rr, r0), min(rr + mask.shape[0] - 1, r1)
+            b0, b1 = max(cc, c0), min(cc + mask.shape[1] - 1, c1)
+            occ[a0 - r0 : a1 - r0 + 1, b0 - c0 : b1 - c0 + 1] |= mask[
+                a0 - rr : a1 - rr + 1, b0 - cc : b1 - cc + 1]
+        return occ
+
+    def _reserve(self, n: int) -> None:
+        if n > len(self._store):
+            size = n if not self.capped else _GROW * -(-n // _GROW)
+            grown = np.zeros((size, TILE, TILE), dtype=self._store.dtype)
+            grown[: self._n] = self._store[: self._n]
+            self._store = grown
+
+    def _fill_whole(self) -> None:
+        ny, nx = self.shape
+        occ = self._occupancy(0, 0, ny - 1, nx - 1)
+        if not occ.any():
+            sd = np.full((ny, nx), np.inf)
+        else:
+            sd = ndimage.distance_transform_edt(~occ, sampling=self.resolution) - self.two_h
+        nty, ntx = self.table.shape
+        self._reserve(nty * ntx)
+        for tr in range(nty):
+            for tc in range(ntx):
+                blk = sd[tr * TILE : (tr + 1) * TILE, tc * TILE : (tc + 1) * TILE]
+                self._store[self._n, : blk.shape[0], : blk.shape[1]] = blk
+                self.table[tr, tc] = self._n
+                self._n += 1
+
+    def _fill_tile(self, tr: int, tc: int) -> None:
+        ny, nx = self.shape
+        r0, c0 = tr * TILE, tc * TILE
+        r1, c1 = min(ny, r0 + TILE) - 1, min(nx, c0 + TILE) - 1
+        g = self._halo
+        R0, C0 = max(0, r0 - g), max(0, c0 - g)
+        R1, C1 = min(ny - 1, r1 + g), min(nx - 1, c1 + g)
+        occ = self._occupancy(R0, C0, R1, C1)
+        self._reserve(self._n + 1)
+        out = self._store[self._n]
+        if occ.any():
+            d = ndimage.distance_transform_edt(~occ, sampling=self.resolution)
+            blk = np.minimum(d[r0 - R0 : r1 - R0 + 1, c0 - C0 : c1 - C0 + 1], self.cap)
+            out[: blk.shape[0], : blk.shape[1]] = _round_down(blk - self.two_h)
+        else:
+            out[:] = _round_down(np.array([self.cap - self.two_h]))[0]
+        self.table[tr, tc] = self._n
+        self._n += 1
+
+    def ensure_point(self, x: float, y: float, radius: float) -> None:
+        """:meth:`ensure` for one point (the search's per-node call: no arrays)."""
+        if not self.capped:
+            return
+        span = TILE * self.resolution
+        nty, ntx = self.table.shape
+        tx0, tx1 = max(0, int((x - radius) // span)), min(ntx - 1, int((x + radius) // span))
+        ty0, ty1 = max(0, int((y - radius) // span)), min(nty - 1, int((y + radius) // span))
+        key = (tx0, ty0, tx1, ty1)
+        if key in self._ready:
+            return
+        table = self.table
+        todo = [(tr, tc) for tr in range(ty0, ty1 + 1) for tc in range(tx0, tx1 + 1)
+                if table[tr, tc] < 0]
+        for tr, tc in todo:
+            self._fill_tile(tr, tc)
+        if todo:
+            self.args = (self._store[: self._n], self.table, *self.shape)
+        self._ready.add(key)
+
+    def ensure(self, points: ArrayLike, radius: float) -> None:
+        """Fill every tile holding a cell within ``radius`` (m) of the (..., 2) world
+        ``points``, so that compiled reads there see values, not -inf."""
+        if not self.capped:
+            return
+        p = np.asarray(points, dtype=float).reshape(-1, 2)
+        if not len(p):
+            return
+        ny, nx = self.shape
+        span = TILE * self.resolution
+        nty, ntx = self.table.shape
+        lo = np.maximum(np.floor((p - radius) / span).astype(np.int64), 0)
+        hi = np.minimum(np.floor((p + radius) / span).astype(np.int64), [ntx - 1, nty - 1])
+        ext = np.maximum(hi - lo, -1).max(axis=0)
+        ids = []
+        for ox in range(int(ext[0]) + 1):
+            for oy in range(int(ext[1]) + 1):
+                tx, ty = lo[:, 0] + ox, lo[:, 1] + oy
+                ok = (tx <= hi[:, 0]) & (ty <= hi[:, 1])
+                ids.append(ty[ok] * ntx + tx[ok])
+        flat = np.unique(np.concatenate(ids)) if ids else np.zeros(0, np.int64)
+        missing = flat[self.table.ravel()[flat] < 0]
+        need = [(int(f // ntx), int(f % ntx)) for f in missing]
+        if not need:
+            return
+        for tr, tc in need:
+            self._fill_tile(tr, tc)
+        self.args = (self._store[: self._n], self.table, ny, nx)
+
+    @property
+    def nbytes(self) -> int:
+        """Bytes of the filled tiles and the table."""
+        return int(self._store[: self._n].nbytes + self.table.nbytes)
+
+    def values(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+        """Stored values of cells (rows, cols) (indices inside the grid); -inf where the
+        tile is not filled."""
+        tiles, table = self.args[0], self.table
+        t = table[rows // TILE, cols // TILE]
+        out = np.full(np.shape(rows), -np.inf)
+        ok = t >= 0
+        out[ok] = tiles[t[ok], rows[ok] % TILE, cols[ok] % TILE]
+        return out
