@@ -434,8 +434,8 @@ def test_solve_job_wiring_and_render_failure(monkeypatch, tmp_path):
 
     calls = []
 
-    def fake_solve(scene, planner, seed, *, model, render, time_limit):
-        calls.append((scene.name, planner, seed, model, render, time_limit))
+    def fake_solve(scene, planner, seed, *, model, config, render, time_limit):
+        calls.append((scene.name, planner, seed, model, render, time_limit, config.max_segments))
         return run_mod.Solution(RunResult(scene=scene.name, planner=planner, seed=seed), [])
 
     def broken_writer(scene, frames, path):
@@ -450,8 +450,9 @@ def test_solve_job_wiring_and_render_failure(monkeypatch, tmp_path):
     assert out["render_error"] == "OSError: disk full" and out["scene"] == "iros-00"
     assert not (tmp_path / "iros.gif").exists()
     solve_job(jobs[1])
-    assert calls == [("iros-00", "lazy", 2, "geometric", True, None),
-                     ("iros-00", "astar", 2, "geometric", False, 12.0)]
+    # a built-in suite: the paper's segment limit
+    assert calls == [("iros-00", "lazy", 2, "geometric", True, None, 100),
+                     ("iros-00", "astar", 2, "geometric", False, 12.0, 100)]
 
 
 @pytest.mark.parametrize(("changed", "dirty"), [

@@ -25,7 +25,12 @@ from lamp.cli_support import (
     version_callback,
 )
 from lamp.errors import InputError
-from lamp.planners.config import PLANNER_DESCRIPTIONS, planning_limit_help
+from lamp.planners.config import (
+    PAPER_MAX_SEGMENTS,
+    PLANNER_DESCRIPTIONS,
+    SEGMENTS_PER_METRE,
+    planning_limit_help,
+)
 from lamp.scene import SceneError, load_scene
 
 app = typer.Typer(
@@ -74,7 +79,7 @@ def show(
 
 def _run_and_write(scene, planner: str, seed: int, out: Path, render: bool, model: str,
                    planning_limit: float | None, progress: RunProgress,
-                   html: bool = False) -> dict:
+                   html: bool = False, max_segments: int | None = None) -> dict:
     from lamp.io import write_json_atomic
     from lamp.planners.run import solve_with_frames
     from lamp.record import save_recording
@@ -83,8 +88,13 @@ def _run_and_write(scene, planner: str, seed: int, out: Path, render: bool, mode
     if out.exists() and not out.is_dir():
         fail_input(f"--out: {out} exists and is not a folder")
     try:
+        from dataclasses import replace
+
+        from lamp.planners.run import default_config
+
+        config = replace(default_config(planner), max_segments=max_segments)
         with progress:
-            solution = solve_with_frames(scene, planner, seed, model=model,
+            solution = solve_with_frames(scene, planner, seed, model=model, config=config,
                                          time_limit=planning_limit, progress=progress)
     except InputError as exc:  # e.g. robots the model was not trained for
         fail_input(str(exc))
@@ -145,6 +155,8 @@ def _quiet_verbose(quiet: bool, verbose: bool) -> RunProgress:
     return RunProgress(quiet=quiet, verbose=verbose)
 
 
+SEGMENT_LIMIT_HELP = (f"{PAPER_MAX_SEGMENTS}, or {SEGMENTS_PER_METRE:g} per metre from start to "
+                      f"goal when that is more; the paper benchmark keeps {PAPER_MAX_SEGMENTS}")
 QUIET_HELP = "Print nothing but errors (result.json is still written)."
 VERBOSE_HELP = "Print a line per object and segment, even when the output is not a terminal."
 
@@ -164,6 +176,9 @@ def run(
                                          show_default=planning_limit_help()),
     time_limit: float = typer.Option(None, "--time-limit", hidden=True,
                                      help="Old spelling of --planning-limit."),
+    max_segments: int = typer.Option(None, "--max-segments", min=1,
+                                     help="Executed segments allowed per object.",
+                                     show_default=SEGMENT_LIMIT_HELP),
     check: bool = typer.Option(False, "--check", help="Exit with status 1 when the task "
                                "failed (for scripts and CI); default: 0 whenever the run "
                                "finished."),
@@ -182,7 +197,8 @@ def run(
             check_scene(scene)
         except ValueError as exc:
             fail_input(str(exc))
-    result = _run_and_write(scene, planner, seed, out, render, model, limit, progress, html)
+    result = _run_and_write(scene, planner, seed, out, render, model, limit, progress, html,
+                            max_segments)
     if check and not result["success"]:
         raise typer.Exit(code=1)
 

@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from lamp.planners.config import PAPER_MAX_SEGMENTS
 from lamp.scene.model import Scene
 
 log = logging.getLogger(__name__)
@@ -63,6 +64,9 @@ class Job:
     model: str = "learned"
     time_cap_s: float = 600.0
     planning_limit_s: float | None = None
+    #: Executed-segment limit per object: the paper's 100 on the built-in suites, None
+    #: (scaled with the task, ``lamp.planners.config.segment_limit``) on scene folders.
+    max_segments: int | None = None
     render_to: str | None = None
     record: bool = True
     recording_to: str | None = None
@@ -88,6 +92,8 @@ class SuiteScene:
     suite: str
     scene: Scene
     scene_file: str
+    #: A scene of the built-in suites: the paper's settings hold (``PAPER_MAX_SEGMENTS``).
+    builtin: bool = False
 
 
 def enumerate_jobs(
@@ -123,7 +129,8 @@ def enumerate_jobs(
                     jobs.append(Job(suite=entry.suite, scene_name=entry.scene.name,
                                     scene_file=entry.scene_file, scene=entry.scene,
                                     planner=planner, seed=int(seed), model=model,
-                                    time_cap_s=float(cap), planning_limit_s=planning_limit_s))
+                                    time_cap_s=float(cap), planning_limit_s=planning_limit_s,
+                                    max_segments=PAPER_MAX_SEGMENTS if entry.builtin else None))
     keys = [j.key for j in jobs]
     if len(set(keys)) != len(keys):
         dup = next(k for k in keys if keys.count(k) > 1)
@@ -264,6 +271,7 @@ def make_record(job: Job, result: dict[str, Any], *, status: str, job_wall_time_
         "model": job.model,
         "time_cap_s": job.time_cap_s,
         "planning_limit_s": job.time_limit,
+        "max_segments": job.max_segments,
         "job_wall_time_s": round(float(job_wall_time_s), 3),
     })
     rec.setdefault("failure_reason", _failure_reason(rec))
@@ -324,7 +332,7 @@ def load_suite(name: str) -> list[SuiteScene]:
             raise ValueError(f"built-in suite {name!r} has no scene files in this installation")
         # a portable name (suite/file), not the path inside this installation
         return [SuiteScene(name, sc, f"{name}/{Path(sc.source).name}" if sc.source
-                           else f"{name}/{sc.name}.yaml") for sc in scenes]
+                           else f"{name}/{sc.name}.yaml", builtin=True) for sc in scenes]
     path = Path(name)
     if path.is_dir():
         from lamp.scene import load_scene

@@ -58,11 +58,14 @@ def solve_job(job: Job) -> dict[str, Any]:
     log) and in the result's ``render_error`` (``recording_error``) key; it never costs the
     run's result.
     """
-    from lamp.planners.run import solve_with_frames
+    from dataclasses import replace
+
+    from lamp.planners.run import default_config, solve_with_frames
 
     render = job.render_to is not None
+    config = replace(default_config(job.planner), max_segments=job.max_segments)
     solution = solve_with_frames(job.scene, job.planner, job.seed, model=job.model,
-                                 render=render, time_limit=job.time_limit)
+                                 config=config, render=render, time_limit=job.time_limit)
     result = solution.result.to_dict()
     if render:
         target = Path(str(job.render_to))

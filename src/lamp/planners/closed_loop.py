@@ -20,6 +20,7 @@ import numpy as np
 
 from lamp.geometry.se2 import pose_distance
 from lamp.planners.base import ObjectPlanner
+from lamp.planners.config import segment_limit
 from lamp.planners.long_push import merge, take_long_push
 from lamp.planners.result import (
     SUCCESS_ORIENTATION_TOL,
@@ -139,7 +140,8 @@ def run_object(task: ManipulationTask, planner: ObjectPlanner, policy: LoopPolic
     replanned = False
     q_O = np.asarray(sim.object_poses[task.index], float)
     q_R = np.asarray(sim.robot_positions, float)
-    while iterations < cfg.max_segments:
+    max_segments = segment_limit(cfg.max_segments, float(np.hypot(*(goal[:2] - q_O[:2]))))
+    while iterations < max_segments:
         if within_goal(q_O, goal, cfg.stop_position, cfg.stop_orientation):
             break
         if not pending:
@@ -225,7 +227,8 @@ def run_object(task: ManipulationTask, planner: ObjectPlanner, policy: LoopPolic
     success = (not left) and within_goal(q_O, goal, SUCCESS_POSITION_TOL,
                                          SUCCESS_ORIENTATION_TOL)
     if not success and not reason:
-        reason = "segment limit reached" if iterations >= cfg.max_segments else "stopped away from goal"
+        reason = (f"segment limit reached ({max_segments})" if iterations >= max_segments
+                  else "stopped away from goal")
     return ObjectResult(
         success=bool(success), final_pose=[float(v) for v in q_O], goal=[float(v) for v in goal],
         position_error=pos_err, orientation_error=rot_err, left_workspace=bool(left),

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Literal
 
@@ -35,6 +36,24 @@ def planning_limit_help() -> str:
         f"{v:g} s for {', '.join(names)}" for v, names in by_value.items())
 
 
+#: The paper's limit: at most 100 executed segments ("execution iterations") per object.
+#: ``lamp bench`` keeps it on the built-in paper suites.
+PAPER_MAX_SEGMENTS = 100
+#: When the limit scales with the task (``max_segments=None``, the default for user scenes):
+#: segments allowed per metre of straight-line start-goal distance, ten per metre (one per
+#: 0.1 m lattice step, though a long push covers many) times a detour factor of three.
+SEGMENTS_PER_METRE = 30.0
+
+
+def segment_limit(max_segments: int | None, distance: float) -> int:
+    """The executed-segment limit for an object whose goal is ``distance`` m from its start:
+    ``max_segments`` when set, else ``max(PAPER_MAX_SEGMENTS, ceil(SEGMENTS_PER_METRE *
+    distance))``, so a large map never runs out of segments before the route does."""
+    if max_segments is not None:
+        return int(max_segments)
+    return max(PAPER_MAX_SEGMENTS, math.ceil(SEGMENTS_PER_METRE * float(distance) - 1e-9))
+
+
 @dataclass(frozen=True)
 class PlannerConfig:
     """Parameters shared by LAMP-Lazy, LAMP-A* and the GCo baselines."""
@@ -54,8 +73,9 @@ class PlannerConfig:
     #: (tighter than the success tolerance of 0.1 m / 0.1 rad, to keep a margin).
     stop_position: float = 0.05
     stop_orientation: float = 0.07
-    #: At most this many executed segments per object (the paper's 100 iterations).
-    max_segments: int = 100
+    #: At most this many executed segments per object; None scales the limit with the task
+    #: (``segment_limit``), the paper benchmark sets ``PAPER_MAX_SEGMENTS``.
+    max_segments: int | None = None
     #: Long pushes (``lamp.planners.long_push``): consecutive transitions whose approach
     #: moves no robot more than ``continuous_push_gap`` (m) execute as one segment, up to
     #: ``long_push_length`` m of planned object motion; 0 executes every transition alone.
@@ -88,3 +108,14 @@ class PlannerConfig:
     contact_tolerance: float = 0.006
     #: Largest number of D* Lite replans inside one Plan call before giving up.
     max_plan_iterations: int = 400
+
+    def __post_init__(self) -> None:
+        if self.max_segments is not None and (isinstance(self.max_segments, bool)
+                                              or int(self.max_segments) != self.max_segments
+                                              or self.max_segments < 1):
+            raise ValueError(f"max_segments must be a positive integer or None, got "
+                             f"{self.max_segments!r}")
+        if not (math.isfinite(self.long_push_length) and self.long_push_length >= 0):
+            raise ValueError(f"long_push_length must be >= 0, got {self.long_push_length!r}")
+        if not (math.isfinite(self.continuous_push_gap) and self.continuous_push_gap >= 0):
+            raise ValueError(f"continuous_push_gap must be >= 0, got {self.continuous_push_gap!r}")
