@@ -450,9 +450,9 @@ def test_solve_job_wiring_and_render_failure(monkeypatch, tmp_path):
     assert out["render_error"] == "OSError: disk full" and out["scene"] == "iros-00"
     assert not (tmp_path / "iros.gif").exists()
     solve_job(jobs[1])
-    # a built-in suite: the paper's segment limit
-    assert calls == [("iros-00", "lazy", 2, "geometric", True, None, 100),
-                     ("iros-00", "astar", 2, "geometric", False, 12.0, 100)]
+    # synthetic scenes, not the built-in suite: the segment limit scales with the task
+    assert calls == [("iros-00", "lazy", 2, "geometric", True, None, None),
+                     ("iros-00", "astar", 2, "geometric", False, 12.0, None)]
 
 
 @pytest.mark.parametrize(("changed", "dirty"), [
