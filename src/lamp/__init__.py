@@ -21,6 +21,7 @@ except _metadata.PackageNotFoundError:  # running from a source tree that is not
 
 # Light imports (NumPy at most): the types of ``solve``'s signature, so that
 # ``typing.get_type_hints(lamp.solve)`` resolves.
+from lamp._lazy import lazy_getattr
 from lamp.planners.config import PlannerConfig, PlannerName
 from lamp.planners.result import RunResult
 from lamp.progress import ProgressCallback
@@ -39,15 +40,7 @@ if TYPE_CHECKING:
     from lamp.scene.save import save_scene
 
 
-def __getattr__(name: str) -> Any:
-    module = _EXPORTS.get(name)
-    if module is None:
-        raise AttributeError(f"module 'lamp' has no attribute {name!r}")
-    import importlib
-
-    value = getattr(importlib.import_module(module), name)
-    globals()[name] = value
-    return value
+__getattr__ = lazy_getattr("lamp", _EXPORTS, globals())
 
 
 def solve(scene: Scene | str | Path, planner: PlannerName = "lazy", seed: int = 0, *,

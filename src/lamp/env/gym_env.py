@@ -64,6 +64,14 @@ def make_config(config: PushConfig | None, overrides: dict[str, Any]) -> PushCon
     return replace(base, **overrides)
 
 
+def make_core(scene: Scene | str | Path, render_mode: str | None, render_modes: list[str],
+              config: PushConfig | None, overrides: dict[str, Any]) -> PushCore:
+    """The shared task behind both environments, after checking ``render_mode``."""
+    if render_mode is not None and render_mode not in render_modes:
+        raise ValueError(f"render_mode = {render_mode!r}: must be None or one of {render_modes}")
+    return PushCore(scene, make_config(config, overrides))
+
+
 def common_bounds(scene: Scene) -> float:
     """Bound on any coordinate in the common frame (workspace diagonal plus a margin)."""
     return float(math.hypot(*scene.workspace)) + 1.0
@@ -104,12 +112,8 @@ class PushEnv(gym.Env):
         config: PushConfig | None = None,
         **settings: Any,
     ) -> None:
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(
-                f"render_mode = {render_mode!r}: must be None or one of "
-                f"{self.metadata['render_modes']}"
-            )
-        self.core = PushCore(scene, make_config(config, settings))
+        self.core = make_core(scene, render_mode, self.metadata["render_modes"], config,
+                              settings)
         self.render_mode = render_mode
         self.metadata = {**self.metadata, "render_fps": round(1.0 / self.core.period)}
         self.action_space = spaces.Box(-1.0, 1.0, (self.core.n_robots, 2), np.float32)

@@ -24,8 +24,8 @@ import numpy as np
 from gymnasium import spaces
 from pettingzoo import ParallelEnv
 
-from lamp.env.core import PushConfig, PushCore
-from lamp.env.gym_env import common_bounds, make_config, reset_kwargs
+from lamp.env.core import PushConfig
+from lamp.env.gym_env import common_bounds, make_core, reset_kwargs
 from lamp.scene.model import Scene
 
 
@@ -46,12 +46,8 @@ class PushParallelEnv(ParallelEnv):
         config: PushConfig | None = None,
         **settings: Any,
     ) -> None:
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(
-                f"render_mode = {render_mode!r}: must be None or one of "
-                f"{self.metadata['render_modes']}"
-            )
-        self.core = PushCore(scene, make_config(config, settings))
+        self.core = make_core(scene, render_mode, self.metadata["render_modes"], config,
+                              settings)
         self.render_mode = render_mode
         n = self.core.n_robots
         self.possible_agents = [f"robot_{i}" for i in range(n)]

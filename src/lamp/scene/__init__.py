@@ -5,8 +5,9 @@ The model is imported at once; the loader and writer (YAML, Shapely) on first us
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
+from lamp._lazy import lazy_getattr
 from lamp.scene.model import (
     Circle,
     Obstacle,
@@ -28,15 +29,7 @@ if TYPE_CHECKING:
     from lamp.scene.save import save_scene
 
 
-def __getattr__(name: str) -> Any:
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module 'lamp.scene' has no attribute {name!r}")
-    import importlib
-
-    value = getattr(importlib.import_module(module), name)
-    globals()[name] = value
-    return value
+__getattr__ = lazy_getattr("lamp.scene", _LAZY, globals())
 
 
 __all__ = [
