@@ -51,7 +51,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from lamp.geometry import se2
-from lamp.geometry.object_space import ObjectSpace, motion_free_kernel, pose_free_kernel
+from lamp.geometry.object_kernels import motion_free_kernel, pose_free_kernel
+from lamp.geometry.object_space import ObjectSpace
 from lamp.scene.model import Scene
 
 Node = int
