@@ -53,6 +53,17 @@ from lamp.geometry.clearance_kernels import (
     points_clearance,
     segments_clearance,
 )
+from lamp.geometry.clearance_layers import (
+    Derived,
+    as_obstacles,
+    base_layer,
+    clear_base_layers,
+    grid_nodes,
+    lru_get,
+    lru_put,
+    static_token,
+    window_nodes,
+)
 from lamp.geometry.geometry_set import GeometrySet, as_obstacle, obstacle_from_dict
 from lamp.geometry.primitives import Obstacle
 
@@ -69,146 +80,22 @@ __all__ = [
 DEFAULT_RESOLUTION = 0.01
 DEFAULT_CAP = 0.3
 _SPACE_CACHE_SIZE = 32
-_BASE_CACHE_SIZE = 16
 #: Byte bounds of the two caches (fields and what is derived from them).
 _SPACE_CACHE_BYTES = 128 * 2**20
-_BASE_CACHE_BYTES = 64 * 2**20
 
 
 # --------------------------------------------------------------------------------------
-# Caches
+# Caches (whole spaces; the base layers live in lamp.geometry.clearance_layers)
 # --------------------------------------------------------------------------------------
 
-_BASE_CACHE: OrderedDict[Any, tuple[np.ndarray, GeometrySet]] = OrderedDict()
 _SPACE_CACHE: OrderedDict[Any, RobotSpace] = OrderedDict()
 
 
 def clear_caches(keep_base: bool = False) -> None:
     """Drop cached spaces (and, unless ``keep_base``, the static base layers)."""
     if not keep_base:
-        _BASE_CACHE.clear()
+        clear_base_layers()
     _SPACE_CACHE.clear()
-
-
-def _lru_get(cache: OrderedDict, key: Any) -> Any:
-    val = cache.get(key)
-    if val is not None:
-        cache.move_to_end(key)
-    return val
-
-
-def _lru_put(cache: OrderedDict, key: Any, val: Any, size: int,
-             max_bytes: float = math.inf, nbytes: Callable[[Any], int] | None = None) -> None:
-    """Insert ``val``; evict least recently used entries beyond ``size`` entries or
-    beyond ``max_bytes`` in all (as measured by ``nbytes``; the newest entry stays)."""
-    cache[key] = val
-    cache.move_to_end(key)
-    while len(cache) > size:
-        cache.popitem(last=False)
-    if nbytes is not None:
-        total = sum(nbytes(v) for v in cache.values())
-        while total > max_bytes and len(cache) > 1:
-            _, old = cache.popitem(last=False)
-            total -= nbytes(old)
-
-
-def grid_nodes(workspace: tuple[float, float], h: float) -> tuple[int, int]:
-    """(NX, NY): nodes of the whole workspace grid of spacing ``h``."""
-    W, H = workspace
-    return int(math.floor(W / h + 1e-9)) + 1, int(math.floor(H / h + 1e-9)) + 1
-
-
-def window_nodes(workspace: tuple[float, float], h: float,
-                 window: Sequence[float] | None) -> tuple[int, int, int, int]:
-    """(i0, j0, i1, j1): the grid nodes (inclusive) of the smallest node rectangle that
-    covers ``window`` = (x0, y0, x1, y1) metres, clipped to the workspace (None: all)."""
-    NX, NY = grid_nodes(workspace, h)
-    if window is None:
-        return 0, 0, NX - 1, NY - 1
-    x0, y0, x1, y1 = (float(v) for v in window)
-    if not all(math.isfinite(v) for v in (x0, y0, x1, y1)) or x1 < x0 or y1 < y0:
-        raise ValueError(f"window must be finite (x0, y0, x1, y1) with x0 <= x1, y0 <= y1, "
-                         f"got {window!r}")
-    i0 = min(NX - 1, max(0, int(math.floor(x0 / h + 1e-9))))
-    j0 = min(NY - 1, max(0, int(math.floor(y0 / h + 1e-9))))
-    i1 = max(i0, min(NX - 1, int(math.ceil(x1 / h - 1e-9))))
-    j1 = max(j0, min(NY - 1, int(math.ceil(y1 / h - 1e-9))))
-    return i0, j0, i1, j1
-
-
-def _base_layer(
-    workspace: tuple[float, float], obstacles: tuple[Obstacle, ...], h: float, cap: float,
-    nodes: tuple[int, int, int, int],
-) -> tuple[np.ndarray, GeometrySet]:
-    key = (workspace, _static_token(obstacles), h, cap, nodes)
-    hit = _lru_get(_BASE_CACHE, key)
-    if hit is not None:
-        return hit
-    W, H = workspace
-    i0, j0, i1, j1 = nodes
-    xs = np.arange(i0, i1 + 1) * h
-    ys = np.arange(j0, j1 + 1) * h
-    bx = np.minimum(xs, W - xs)
-    by = np.minimum(ys, H - ys)
-    field = np.minimum(np.minimum(bx[None, :], by[:, None]), cap).astype(np.float64)
-    geo = GeometrySet(obstacles)
-    fill_field(field, h, cap, geo.circles, geo.verts, geo.ptr, i0, j0)
-    field.setflags(write=False)
-    _lru_put(_BASE_CACHE, key, (field, geo), _BASE_CACHE_SIZE, _BASE_CACHE_BYTES,
-             lambda v: v[0].nbytes)
-    return field, geo
-
-
-_TOKENS: OrderedDict[int, tuple[tuple, int]] = OrderedDict()
-_TOKEN_COUNT = [0]
-
-
-def _static_token(obstacles: tuple) -> int:
-    """A small integer standing for the static obstacle tuple ``obstacles`` in cache keys
-    (hashing hundreds of obstacles per lookup would dominate on large maps). The same
-    tuple object always gets the same token; an equal but distinct tuple may get another
-    one, which costs a cache miss, never a wrong hit (tokens are never reused)."""
-    hit = _TOKENS.get(id(obstacles))
-    if hit is not None and hit[0] is obstacles:
-        _TOKENS.move_to_end(id(obstacles))
-        return hit[1]
-    _TOKEN_COUNT[0] += 1
-    _TOKENS[id(obstacles)] = (obstacles, _TOKEN_COUNT[0])
-    while len(_TOKENS) > 64:
-        _TOKENS.popitem(last=False)
-    return _TOKEN_COUNT[0]
-
-
-def _as_obstacles(items: Iterable[Any]) -> tuple[Obstacle, ...]:
-    """``items`` as a tuple of Obstacles (the same tuple object when it already is one)."""
-    if isinstance(items, tuple) and all(type(o) is Obstacle for o in items):
-        return items
-    return tuple(as_obstacle(o) for o in items)
-
-
-class _Derived(dict):
-    """A space's derived structures; keeps the bytes of its arrays (counted on insertion)."""
-
-    nbytes = 0
-
-    def __setitem__(self, key: Any, value: Any) -> None:
-        if key in self:
-            self.nbytes -= _derived_nbytes(self[key])
-        super().__setitem__(key, value)
-        self.nbytes += _derived_nbytes(value)
-
-
-def _derived_nbytes(value: Any) -> int:
-    """Bytes of the arrays held by a derived structure (an array or an object's arrays)."""
-    if isinstance(value, np.ndarray):
-        return value.nbytes
-    total = 0
-    for v in getattr(value, "__dict__", {}).values():
-        if isinstance(v, np.ndarray):
-            total += v.nbytes
-        elif isinstance(v, dict):
-            total += sum(x.nbytes for x in v.values() if isinstance(x, np.ndarray))
-    return total
 
 
 # --------------------------------------------------------------------------------------
@@ -269,7 +156,7 @@ class RobotSpace:
         self.margin = float(margin)
         self.resolution = float(resolution)
         self.cap = float(max(cap, radius + margin + 2 * resolution))
-        base_obs = _as_obstacles(obstacles)
+        base_obs = as_obstacles(obstacles)
         over_obs = tuple(as_obstacle(o) for o in overlay)
         nodes = window_nodes(self.workspace, self.resolution, window)
         #: (i0, j0): the whole grid's index of node ``field[0, 0]``.
@@ -277,7 +164,7 @@ class RobotSpace:
         #: (NX, NY): nodes of the whole workspace grid.
         self.grid_nodes: tuple[int, int] = grid_nodes(self.workspace, self.resolution)
         self.window_nodes = nodes
-        base_field, base_geo = _base_layer(self.workspace, base_obs, self.resolution, self.cap,
+        base_field, base_geo = base_layer(self.workspace, base_obs, self.resolution, self.cap,
                                            nodes)
         if over_obs:
             field = base_field.copy()
@@ -297,7 +184,7 @@ class RobotSpace:
             self.cap, nodes,
         )
         # derived structures (e.g. planning lattices) cached by their users
-        self.derived: dict[Any, Any] = _Derived()
+        self.derived: dict[Any, Any] = Derived()
 
     # ---- construction -------------------------------------------------------------
 
@@ -343,16 +230,16 @@ class RobotSpace:
         overlay.extend(as_obstacle(o) for o in extra_obstacles)
         ws = tuple(float(v) for v in scene.workspace)
         key = (
-            ws, _static_token(scene.obstacles), tuple(overlay), r, float(margin),
+            ws, static_token(scene.obstacles), tuple(overlay), r, float(margin),
             float(resolution),
             float(cap), window_nodes(ws, float(resolution), window),  # type: ignore[arg-type]
         )
-        hit = _lru_get(_SPACE_CACHE, key)
+        hit = lru_get(_SPACE_CACHE, key)
         if hit is not None:
             return hit
         space = cls(scene.workspace, scene.obstacles, r, margin, overlay, resolution, cap,
                     window)
-        _lru_put(_SPACE_CACHE, key, space, _SPACE_CACHE_SIZE, _SPACE_CACHE_BYTES,
+        lru_put(_SPACE_CACHE, key, space, _SPACE_CACHE_SIZE, _SPACE_CACHE_BYTES,
                  lambda sp: sp.nbytes)
         return space
 
