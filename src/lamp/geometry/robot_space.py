@@ -80,7 +80,7 @@ __all__ = [
 DEFAULT_RESOLUTION = 0.01
 DEFAULT_CAP = 0.3
 _SPACE_CACHE_SIZE = 32
-#: Byte bounds of the two caches (fields and what is derived from them).
+#: Byte bound of the space cache (fields and what is derived from them).
 _SPACE_CACHE_BYTES = 128 * 2**20
 
 
