@@ -39,23 +39,22 @@ from __future__ import annotations
 import difflib
 import json
 import math
-import numbers
 import re
-import reprlib
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Mapping
 from pathlib import Path
-from typing import Any, NoReturn
+from typing import Any
 
 import numpy as np
 import shapely
 import yaml
 
-from lamp.errors import InputError
-from lamp.geometry.se2 import transform_points
+from lamp.scene.errors import Ctx, SceneError, fmt_xy, is_number, show, value_kind
+from lamp.scene.geometry_checks import check_geometry
 from lamp.scene.model import Circle, Obstacle, Polygon, Rectangle, Scene, SceneObject, Shape
 
+__all__ = ["DEFAULT_ROBOT_RADIUS", "FORMAT", "SceneError", "load_scene", "scene_from_dict"]
+
 FORMAT = "lamp-scene/1"
-EPS = 1e-6  # metres: rounding allowed in containment and overlap tests (scene-format.md)
 DEFAULT_ROBOT_RADIUS = 0.05
 SHAPE_TYPES = ("circle", "rectangle", "polygon")
 
@@ -72,80 +71,6 @@ _OBJECT_KEYS = {
     "rectangle": (("type", "size", "start", "goal"), ()),
     "polygon": (("type", "points", "start", "goal"), ()),
 }
-
-
-class SceneError(InputError):
-    """A scene file or dict is invalid; the message names the file, the field and the value.
-
-    ``str(err)`` is ``"<file>: <field>: <reason>"``; the parts are also attributes:
-    ``path`` (the file as given, ``None`` for a dict validated without ``source``),
-    ``field`` (e.g. ``"objects[1].size[0]"``, or ``"(file)"`` for file-level problems) and
-    ``reason``.
-    """
-
-    def __init__(self, message: str, *, path: str | None = None, field: str | None = None,
-                 reason: str | None = None) -> None:
-        super().__init__(message)
-        self.path = path
-        self.field = field
-        self.reason = reason
-
-    def __reduce__(self):  # keep the attributes across pickling (worker processes)
-        return (_rebuild_scene_error, (str(self), self.path, self.field, self.reason))
-
-
-def _rebuild_scene_error(message: str, path: str | None, field: str | None,
-                         reason: str | None) -> SceneError:
-    return SceneError(message, path=path, field=field, reason=reason)
-
-
-# --------------------------------------------------------------------------- messages
-
-_repr = reprlib.Repr()
-_repr.maxstring = 40
-_repr.maxother = 40
-_repr.maxlist = _repr.maxtuple = _repr.maxdict = 6
-_repr.maxlevel = 3
-
-
-def _show(value: Any) -> str:
-    """Short, bounded repr of a user value (safe for huge or self-referencing structures)."""
-    if isinstance(value, float):
-        return repr(value)
-    return _repr.repr(value)
-
-
-def _kind(value: Any) -> str:
-    """Human name of a value's type for 'wrong type' messages."""
-    if value is None:
-        return "null"
-    if isinstance(value, bool):
-        return "bool"
-    if isinstance(value, str):
-        return "string"
-    if isinstance(value, Mapping):
-        return "mapping"
-    if isinstance(value, (list, tuple)):
-        return "list"
-    if _is_number(value):
-        return "number"
-    return type(value).__name__
-
-
-def _fmt_xy(v: Sequence[float]) -> str:
-    return "(" + ", ".join(f"{float(c):.6g}" for c in v) + ")"
-
-
-class _Ctx:
-    """Carries the file label so that every check can raise a complete message."""
-
-    def __init__(self, label: str, path: str | None) -> None:
-        self.label = label
-        self.path = path
-
-    def fail(self, field: str, reason: str) -> NoReturn:
-        raise SceneError(f"{self.label}: {field}: {reason}", path=self.path, field=field,
-                         reason=reason)
 
 
 # --------------------------------------------------------------------------- parsing
@@ -187,7 +112,7 @@ def _json_pairs(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
     return out
 
 
-def _parse(data: bytes, ctx: _Ctx, as_json: bool) -> Any:
+def _parse(data: bytes, ctx: Ctx, as_json: bool) -> Any:
     """Bytes of a scene file -> Python data; every failure becomes a SceneError."""
     try:
         if as_json:
@@ -213,55 +138,53 @@ def _parse(data: bytes, ctx: _Ctx, as_json: bool) -> Any:
 # --------------------------------------------------------------------------- leaf checks
 
 
-def _is_number(v: Any) -> bool:
-    return isinstance(v, numbers.Real) and not isinstance(v, (bool, np.bool_))
 
 
-def _number(ctx: _Ctx, v: Any, field: str, *, positive: bool = False) -> float:
+def _number(ctx: Ctx, v: Any, field: str, *, positive: bool = False) -> float:
     """A finite real number (not a bool, not a string); ``positive`` demands > 0."""
-    if not _is_number(v):
-        ctx.fail(field, f"must be a number, got {_show(v)} ({_kind(v)})")
+    if not is_number(v):
+        ctx.fail(field, f"must be a number, got {show(v)} ({value_kind(v)})")
     try:
         x = float(v)
     except (OverflowError, ValueError, TypeError):
-        ctx.fail(field, f"must be a finite number, got {_show(v)}")
+        ctx.fail(field, f"must be a finite number, got {show(v)}")
     if not math.isfinite(x):
-        ctx.fail(field, f"must be a finite number, got {_show(v)}")
+        ctx.fail(field, f"must be a finite number, got {show(v)}")
     if positive and x <= 0.0:
-        ctx.fail(field, f"must be > 0, got {_show(v)}")
+        ctx.fail(field, f"must be > 0, got {show(v)}")
     return x
 
 
-def _list(ctx: _Ctx, v: Any, field: str, *, min_len: int = 0, what: str = "items") -> list:
+def _list(ctx: Ctx, v: Any, field: str, *, min_len: int = 0, what: str = "items") -> list:
     if not isinstance(v, (list, tuple)):
-        ctx.fail(field, f"must be a list, got {_show(v)} ({_kind(v)})")
+        ctx.fail(field, f"must be a list, got {show(v)} ({value_kind(v)})")
     if len(v) < min_len:
         ctx.fail(field, f"must have at least {min_len} {what}, got {len(v)}")
     return list(v)
 
 
-def _vector(ctx: _Ctx, v: Any, field: str, n: int, names: str, **kw: Any) -> tuple[float, ...]:
+def _vector(ctx: Ctx, v: Any, field: str, n: int, names: str, **kw: Any) -> tuple[float, ...]:
     """A list of exactly ``n`` finite numbers, e.g. ``[x, y]`` (``names`` says which)."""
     if not isinstance(v, (list, tuple)) or len(v) != n:
-        ctx.fail(field, f"must be a list of {n} numbers [{names}], got {_show(v)}")
+        ctx.fail(field, f"must be a list of {n} numbers [{names}], got {show(v)}")
     return tuple(_number(ctx, c, f"{field}[{i}]", **kw) for i, c in enumerate(v))
 
 
-def _string(ctx: _Ctx, v: Any, field: str) -> str:
+def _string(ctx: Ctx, v: Any, field: str) -> str:
     if not isinstance(v, str):
-        ctx.fail(field, f"must be a string (quote it in YAML), got {_show(v)} ({_kind(v)})")
+        ctx.fail(field, f"must be a string (quote it in YAML), got {show(v)} ({value_kind(v)})")
     return v
 
 
 def _mapping(
-    ctx: _Ctx, v: Any, field: str, keys: tuple[tuple[str, ...], tuple[str, ...]]
+    ctx: Ctx, v: Any, field: str, keys: tuple[tuple[str, ...], tuple[str, ...]]
 ) -> dict[str, Any]:
     """Check that ``v`` is a mapping with all required keys and no unknown ones.
 
     Optional keys whose value is ``None`` are dropped (null means "use the default").
     """
     if not isinstance(v, Mapping):
-        ctx.fail(field or "(top level)", f"must be a mapping, got {_show(v)} ({_kind(v)})")
+        ctx.fail(field or "(top level)", f"must be a mapping, got {show(v)} ({value_kind(v)})")
     required, optional = keys
     allowed = required + optional
     prefix = f"{field}." if field else ""
@@ -270,7 +193,7 @@ def _mapping(
             hint = difflib.get_close_matches(str(k), allowed, n=1)
             did = f"; did you mean {hint[0]!r}?" if hint else ""
             ctx.fail(
-                f"{prefix}{_show(k) if not isinstance(k, str) else k}",
+                f"{prefix}{show(k) if not isinstance(k, str) else k}",
                 f"unknown key (allowed here: {', '.join(allowed)}){did}",
             )
     for k in required:
@@ -279,7 +202,7 @@ def _mapping(
     return {k: val for k, val in v.items() if not (k in optional and val is None)}
 
 
-def _polygon_points(ctx: _Ctx, v: Any, field: str) -> tuple[tuple[float, float], ...]:
+def _polygon_points(ctx: Ctx, v: Any, field: str) -> tuple[tuple[float, float], ...]:
     """>= 3 finite [x, y] vertices forming a simple polygon of positive area."""
     raw = _list(ctx, v, field, min_len=3, what="points")
     pts = tuple(_vector(ctx, p, f"{field}[{i}]", 2, "x, y") for i, p in enumerate(raw))
@@ -290,18 +213,18 @@ def _polygon_points(ctx: _Ctx, v: Any, field: str) -> tuple[tuple[float, float],
         first, later = (0, i) if i == len(pts) - 1 else (i, i + 1)
         ctx.fail(
             f"{field}[{later}]",
-            f"repeats vertex {field}[{first}] {_fmt_xy(pts[first])}; list each vertex once "
+            f"repeats vertex {field}[{first}] {fmt_xy(pts[first])}; list each vertex once "
             "(the polygon closes itself)",
         )
     if shapely.MultiPoint(arr).convex_hull.area == 0.0:
-        ctx.fail(field, f"polygon must have positive area (all points on one line), got {_show(v)}")
+        ctx.fail(field, f"polygon must have positive area (all points on one line), got {show(v)}")
     poly = shapely.Polygon(arr)
     if not (shapely.is_simple(poly.exterior) and shapely.is_valid(poly)):
-        ctx.fail(field, f"polygon must be simple (edges must not cross), got {_show(v)}")
+        ctx.fail(field, f"polygon must be simple (edges must not cross), got {show(v)}")
     return pts  # type: ignore[return-value]
 
 
-def _shape(ctx: _Ctx, d: Mapping[str, Any], field: str, kind: str) -> Shape:
+def _shape(ctx: Ctx, d: Mapping[str, Any], field: str, kind: str) -> Shape:
     """The size part of an object entry (obstacle circles/rectangles are built separately)."""
     if kind == "circle":
         return Circle(_number(ctx, d["radius"], f"{field}.radius", positive=True))
@@ -310,21 +233,21 @@ def _shape(ctx: _Ctx, d: Mapping[str, Any], field: str, kind: str) -> Shape:
     return Polygon(_polygon_points(ctx, d["points"], f"{field}.points"))
 
 
-def _shape_type(ctx: _Ctx, v: Any, field: str) -> str:
+def _shape_type(ctx: Ctx, v: Any, field: str) -> str:
     if not isinstance(v, Mapping):
-        ctx.fail(field, f"must be a mapping, got {_show(v)} ({_kind(v)})")
+        ctx.fail(field, f"must be a mapping, got {show(v)} ({value_kind(v)})")
     if "type" not in v:
         ctx.fail(f"{field}.type", f"missing required field (one of {', '.join(SHAPE_TYPES)})")
     kind = v["type"]
     if not isinstance(kind, str) or kind not in SHAPE_TYPES:
-        ctx.fail(f"{field}.type", f"must be one of {', '.join(SHAPE_TYPES)}, got {_show(kind)}")
+        ctx.fail(f"{field}.type", f"must be one of {', '.join(SHAPE_TYPES)}, got {show(kind)}")
     return kind
 
 
 # --------------------------------------------------------------------------- structure
 
 
-def _obstacle(ctx: _Ctx, v: Any, field: str) -> Obstacle:
+def _obstacle(ctx: Ctx, v: Any, field: str) -> Obstacle:
     kind = _shape_type(ctx, v, field)
     d = _mapping(ctx, v, field, _OBSTACLE_KEYS[kind])
     if kind == "polygon":  # world-frame vertices, identity pose
@@ -338,7 +261,7 @@ def _obstacle(ctx: _Ctx, v: Any, field: str) -> Obstacle:
     return Obstacle(Rectangle(size), (cx, cy, angle))
 
 
-def _object(ctx: _Ctx, v: Any, field: str) -> SceneObject:
+def _object(ctx: Ctx, v: Any, field: str) -> SceneObject:
     kind = _shape_type(ctx, v, field)
     d = _mapping(ctx, v, field, _OBJECT_KEYS[kind])
     shape = _shape(ctx, d, field, kind)
@@ -347,10 +270,10 @@ def _object(ctx: _Ctx, v: Any, field: str) -> SceneObject:
     return SceneObject(shape, start, goal)  # type: ignore[arg-type]
 
 
-def _structure(ctx: _Ctx, raw: Any, source: str | None) -> Scene:
+def _structure(ctx: Ctx, raw: Any, source: str | None) -> Scene:
     d = _mapping(ctx, raw, "", _TOP_KEYS)
     if not (isinstance(d["format"], str) and d["format"] == FORMAT):
-        ctx.fail("format", f"must be exactly {FORMAT!r}, got {_show(d['format'])}")
+        ctx.fail("format", f"must be exactly {FORMAT!r}, got {show(d['format'])}")
     name = _string(ctx, d["name"], "name")
     workspace = _vector(ctx, d["workspace"], "workspace", 2, "W, H", positive=True)
     robots = _mapping(ctx, d["robots"], "robots", _ROBOT_KEYS)
@@ -382,134 +305,12 @@ def _structure(ctx: _Ctx, raw: Any, source: str | None) -> Scene:
     )
 
 
-# --------------------------------------------------------------------------- geometry
-
-
-class _Footprint:
-    """Exact footprint of one scene item: a disk (centre, radius) or a world polygon."""
-
-    def __init__(self, field: str, what: str, shape: Shape, pose: Sequence[float]) -> None:
-        self.field = field
-        self.what = what
-        x, y, th = (float(c) for c in pose)
-        if isinstance(shape, Circle):
-            self.center: np.ndarray | None = np.array([x, y])
-            self.radius = float(shape.radius)
-            self.vertices: np.ndarray | None = None
-            self.lo = self.center - self.radius
-            self.hi = self.center + self.radius
-        else:
-            if isinstance(shape, Rectangle):
-                hx, hy = 0.5 * shape.size[0], 0.5 * shape.size[1]
-                local = np.array([[-hx, -hy], [hx, -hy], [hx, hy], [-hx, hy]])
-            else:
-                local = np.asarray(shape.points, dtype=float)
-            self.center = None
-            self.radius = 0.0
-            self.vertices = transform_points((x, y, th), local)
-            self.lo = self.vertices.min(axis=0)
-            self.hi = self.vertices.max(axis=0)
-        self._geom: shapely.Geometry | None = None
-        self._shrunk: shapely.Geometry | None = None
-
-    @property
-    def geom(self) -> shapely.Geometry:
-        if self._geom is None:
-            self._geom = shapely.Polygon(self.vertices)
-        return self._geom
-
-    @property
-    def shrunk(self) -> shapely.Geometry:
-        """The polygon shrunk by EPS: intersecting it means penetrating by more than EPS."""
-        if self._shrunk is None:
-            self._shrunk = shapely.buffer(self.geom, -EPS, join_style="mitre")
-        return self._shrunk
-
-
-def _overlaps(a: _Footprint, b: _Footprint) -> bool:
-    """Positive-area intersection of two footprints (touching within EPS is not overlap)."""
-    if np.any(a.lo >= b.hi - EPS) or np.any(b.lo >= a.hi - EPS):
-        return False  # bounding boxes at most touch
-    if a.center is not None and b.center is not None:
-        return math.hypot(*(a.center - b.center)) < a.radius + b.radius - EPS
-    if a.center is not None or b.center is not None:
-        disk, poly = (a, b) if a.center is not None else (b, a)
-        return float(shapely.distance(shapely.Point(disk.center), poly.geom)) < disk.radius - EPS
-    return bool(shapely.intersects(a.shrunk, b.geom))
-
-
-def _check_inside(ctx: _Ctx, fp: _Footprint, W: float, H: float) -> None:
-    if np.any(fp.lo < -EPS) or fp.hi[0] > W + EPS or fp.hi[1] > H + EPS:
-        ctx.fail(
-            fp.field,
-            f"{fp.what} lies outside the workspace [0, {W:g}] x [0, {H:g}]: its footprint spans "
-            f"x [{fp.lo[0]:.6g}, {fp.hi[0]:.6g}], y [{fp.lo[1]:.6g}, {fp.hi[1]:.6g}]",
-        )
-
-
-def _describe_obstacle(o: Obstacle) -> str:
-    if isinstance(o.shape, Circle):
-        return f"circle at {_fmt_xy(o.pose[:2])}, radius {o.shape.radius:g}"
-    if isinstance(o.shape, Rectangle):
-        return f"rectangle at {_fmt_xy(o.pose[:2])}, size {_fmt_xy(o.shape.size)}"
-    return f"polygon with {len(o.shape.points)} vertices"
-
-
-def _check_geometry(ctx: _Ctx, scene: Scene) -> None:
-    W, H = scene.workspace
-    r = scene.robot_radius
-    obstacles = [
-        _Footprint(f"obstacles[{i}]", _describe_obstacle(o), o.shape, o.pose)
-        for i, o in enumerate(scene.obstacles)
-    ]
-    robots = [
-        _Footprint(
-            f"robots.starts[{i}]", f"robot at {_fmt_xy(p)} (radius {r:g})", Circle(r), (*p, 0.0)
-        )
-        for i, p in enumerate(scene.robot_starts)
-    ]
-    starts = [
-        _Footprint(
-            f"objects[{k}].start", f"object {k} at its start {_fmt_xy(o.start)}", o.shape, o.start
-        )
-        for k, o in enumerate(scene.objects)
-    ]
-    goals = [
-        _Footprint(
-            f"objects[{k}].goal", f"object {k} at its goal {_fmt_xy(o.goal)}", o.shape, o.goal
-        )
-        for k, o in enumerate(scene.objects)
-    ]
-    for fp in (*obstacles, *robots, *starts, *goals):
-        _check_inside(ctx, fp, W, H)
-
-    def pairwise(group_a: list[_Footprint], group_b: list[_Footprint], same: bool) -> None:
-        for i, a in enumerate(group_a):
-            for b in group_b[i + 1 :] if same else group_b:
-                if _overlaps(a, b):
-                    ctx.fail(a.field, f"{a.what} overlaps {b.field} ({b.what})")
-
-    # Robots against each other: vectorised, since teams can be large.
-    p = scene.robot_starts_array
-    dist = np.hypot(*(p[:, None, :] - p[None, :, :]).transpose(2, 0, 1))
-    close = np.argwhere(np.triu(dist < 2.0 * r - EPS, k=1))
-    if close.size:
-        i, j = (int(c) for c in close[np.lexsort((close[:, 0], close[:, 1]))][0])
-        ctx.fail(robots[j].field, f"{robots[j].what} overlaps {robots[i].field} ({robots[i].what})")
-    pairwise(robots, obstacles, same=False)
-    pairwise(robots, starts, same=False)
-    pairwise(starts, obstacles, same=False)
-    pairwise(goals, obstacles, same=False)
-    pairwise(starts, starts, same=True)
-    pairwise(goals, goals, same=True)
-
-
 # --------------------------------------------------------------------------- public API
 
 _UNEXPECTED = "unexpected error while validating"  # marks a loader bug; tests assert it never shows
 
 
-def _guarded(ctx: _Ctx, fn: Callable[[], Scene]) -> Scene:
+def _guarded(ctx: Ctx, fn: Callable[[], Scene]) -> Scene:
     """Run ``fn``; let SceneError through, turn anything else into one.
 
     A safety net only: the checks above are meant to catch every bad input first, and the
@@ -525,10 +326,10 @@ def _guarded(ctx: _Ctx, fn: Callable[[], Scene]) -> Scene:
         ctx.fail("(file)", f"{_UNEXPECTED}: {type(exc).__name__}: {exc}")
 
 
-def _validate(ctx: _Ctx, raw: Any, source: str | None) -> Scene:
+def _validate(ctx: Ctx, raw: Any, source: str | None) -> Scene:
     """Structure first (types, values), then geometry; see the module docstring."""
     scene = _structure(ctx, raw, source)
-    _check_geometry(ctx, scene)
+    check_geometry(ctx, scene)
     return scene
 
 
@@ -538,7 +339,7 @@ def scene_from_dict(d: dict[str, Any], source: str | None = None) -> Scene:
     ``source`` names the origin in messages and is stored as ``Scene.source``; without it
     messages say ``<dict>``. Raises :class:`SceneError` for any invalid input.
     """
-    ctx = _Ctx(source if source is not None else "<dict>", source)
+    ctx = Ctx(source if source is not None else "<dict>", source)
     return _guarded(ctx, lambda: _validate(ctx, d, source))
 
 
@@ -549,7 +350,7 @@ def load_scene(path: str | Path) -> Scene:
     a mapping, or breaks any scene rule; the message starts with ``str(path)``.
     """
     label = str(path)
-    ctx = _Ctx(label, label)
+    ctx = Ctx(label, label)
     try:
         data = Path(path).read_bytes()
     except FileNotFoundError:
