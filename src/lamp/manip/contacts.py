@@ -31,6 +31,10 @@ HORIZON = 20
 """Waypoints per push trajectory (GCo's H)."""
 MAX_ROBOTS = 3
 """Largest robot budget the proposers support."""
+MOTION_RANGE = (0.2, 0.2, 0.5)
+"""The requested motions the model is trained for (object frame): |dx|, |dy| (m) and
+|dtheta| (rad) at most this. The training data draws from it, the network scales by it and
+the object lattice keeps its primitives inside it."""
 
 
 def as_shape(shape: Shape | Mapping[str, Any]) -> Shape:

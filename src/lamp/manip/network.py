@@ -31,6 +31,7 @@ from lamp.manip.contacts import (
     CONTACT_OFFSET,
     HORIZON,
     MAX_ROBOTS,
+    MOTION_RANGE,
     ROBOT_RADIUS,
     as_shape,
     check_budget,
@@ -54,7 +55,7 @@ from lamp.manip.image import IMAGE_SIZE, object_image
 from lamp.manip.proposals import Proposal, ShapeLike, check_k, make_rng
 from lamp.scene.model import Shape
 
-MOTION_SCALE = (0.2, 0.2, 0.5)
+MOTION_SCALE = MOTION_RANGE
 """Requested motions are divided by these before entering the network (training range)."""
 DEFAULT_CHECKPOINT = Path(__file__).parent / "checkpoints" / "flow_dc.pt"
 REPAIR_SHIFT = 0.15

@@ -53,6 +53,7 @@ from numpy.typing import ArrayLike
 from lamp.geometry import se2
 from lamp.geometry.object_kernels import motion_free_kernel, pose_free_kernel
 from lamp.geometry.object_space import ObjectSpace
+from lamp.manip.contacts import MOTION_RANGE
 from lamp.scene.model import Scene
 
 Node = int
@@ -77,8 +78,8 @@ PRIMITIVES: tuple[tuple[int, int, int], ...] = tuple(
 _REVERSE = tuple(PRIMITIVES.index((-di, -dj, -dk)) for di, dj, dk in PRIMITIVES)
 
 #: the manipulation model's trained range (object frame): |dx|, |dy| and |dtheta|
-MODEL_MAX_TRANSLATION = 0.2
-MODEL_MAX_ROTATION = 0.5
+MODEL_MAX_TRANSLATION = MOTION_RANGE[0]
+MODEL_MAX_ROTATION = MOTION_RANGE[2]
 
 
 @numba.njit(cache=True)
