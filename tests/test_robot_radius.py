@@ -57,3 +57,22 @@ def test_lamp_run_exits_2_for_unsupported_robots(tmp_path):
     assert result.exit_code == 2, result.output
     assert "robots.radius" in result.output
     assert not (out / "result.json").exists()
+
+
+def test_one_owner_for_the_team_constants():
+    """Radius, row step and speed come from ``geometry.team.DEFAULT_TEAM`` everywhere."""
+    from lamp.geometry.team import DEFAULT_TEAM, RobotTeam
+    from lamp.manip.dataset import SIM_STEP
+    from lamp.planners.trajectory import MAX_STEP
+    from lamp.scene.loader import DEFAULT_ROBOT_RADIUS
+    from lamp.scene.model import Scene
+    from lamp.sim.simulator import MAX_STEP as SIM_MAX_STEP
+    from lamp.sim.simulator import ROBOT_SPEED
+
+    assert ROBOT_RADIUS == DEFAULT_ROBOT_RADIUS == DEFAULT_TEAM.radius
+    assert Scene("s", (1.0, 1.0), (), ()).robot_radius == DEFAULT_TEAM.radius
+    assert MAX_STEP == SIM_MAX_STEP == DEFAULT_TEAM.row_step and SIM_STEP < MAX_STEP
+    assert ROBOT_SPEED == DEFAULT_TEAM.speed
+    assert DEFAULT_TEAM.row_time == pytest.approx(0.08)
+    with pytest.raises(ValueError, match="RobotTeam.speed"):
+        RobotTeam(speed=0.0)

@@ -19,9 +19,10 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from lamp.geometry.shapes import local_outline
+from lamp.geometry.team import DEFAULT_TEAM
 from lamp.scene.model import Circle, Polygon, Rectangle, Shape, shape_from_dict
 
-ROBOT_RADIUS = 0.05
+ROBOT_RADIUS = DEFAULT_TEAM.radius
 """Robot disk radius (m); the project-wide default (``Scene.robot_radius``)."""
 CONTACT_GAP = 0.005
 """Clearance (m) between a robot placed at a contact and the object boundary."""

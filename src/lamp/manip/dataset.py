@@ -29,6 +29,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from lamp.geometry.se2 import relative, transform_points, wrap_angle
+from lamp.geometry.team import DEFAULT_TEAM
 from lamp.manip.contacts import HORIZON, MAX_ROBOTS, MOTION_RANGE, ROBOT_RADIUS, rigid_pushes
 from lamp.manip.geometric import STRATEGIES, strategy_contacts
 from lamp.scene.model import Circle, Rectangle, Scene, SceneObject, Shape
@@ -37,7 +38,7 @@ log = logging.getLogger(__name__)
 
 WORKSPACE = 4.0
 """Side of the open square workspace the pushes run in (m); the object starts at its centre."""
-SIM_STEP = 0.018
+SIM_STEP = round(0.9 * DEFAULT_TEAM.row_step, 12)
 """Densified step of the commanded robot paths (m), under the simulator's 0.02 m limit."""
 MOTION_LIMITS = np.array(MOTION_RANGE)
 """Bounds of the requested motions (|dx|, |dy| in m, |dtheta| in rad)."""

@@ -8,8 +8,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from lamp.geometry.team import DEFAULT_TEAM
+
 #: Largest distance a robot may travel between two consecutive rows.
-MAX_STEP = 0.02
+MAX_STEP = DEFAULT_TEAM.row_step
 
 
 def densify(paths: np.ndarray, max_step: float = MAX_STEP) -> np.ndarray:

@@ -48,6 +48,7 @@ import numpy as np
 import shapely
 import yaml
 
+from lamp.geometry.team import DEFAULT_TEAM
 from lamp.scene.errors import Ctx, SceneError, fmt_xy, is_number, show, value_kind
 from lamp.scene.geometry_checks import check_geometry
 from lamp.scene.model import Circle, Obstacle, Polygon, Rectangle, Scene, SceneObject, Shape
@@ -55,7 +56,7 @@ from lamp.scene.model import Circle, Obstacle, Polygon, Rectangle, Scene, SceneO
 __all__ = ["DEFAULT_ROBOT_RADIUS", "FORMAT", "SceneError", "load_scene", "scene_from_dict"]
 
 FORMAT = "lamp-scene/1"
-DEFAULT_ROBOT_RADIUS = 0.05
+DEFAULT_ROBOT_RADIUS = DEFAULT_TEAM.radius
 SHAPE_TYPES = ("circle", "rectangle", "polygon")
 
 # Allowed keys per mapping: (required, optional).

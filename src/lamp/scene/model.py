@@ -22,6 +22,7 @@ from lamp.geometry.primitives import (
     Shape,
     shape_from_dict,
 )
+from lamp.geometry.team import DEFAULT_TEAM
 
 __all__ = ["Circle", "Obstacle", "Point", "Polygon", "Pose", "Rectangle", "Scene",
            "SceneObject", "Shape", "shape_from_dict"]
@@ -50,7 +51,7 @@ class Scene:
     robot_starts: tuple[Point, ...]
     objects: tuple[SceneObject, ...]
     obstacles: tuple[Obstacle, ...] = ()
-    robot_radius: float = 0.05
+    robot_radius: float = DEFAULT_TEAM.radius
     source: str | None = field(default=None, compare=False)
 
     @property

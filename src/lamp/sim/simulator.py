@@ -50,6 +50,7 @@ from numpy.typing import ArrayLike
 
 from lamp.geometry.se2 import wrap_angle
 from lamp.geometry.shapes import local_outline
+from lamp.geometry.team import DEFAULT_TEAM
 from lamp.scene.model import Circle, Scene, Shape
 from lamp.sim.mjcf import (
     ROBOT_KP,
@@ -60,9 +61,9 @@ from lamp.sim.mjcf import (
 )
 
 #: Speed of the robots along their paths [m/s] (the fastest robot of each row).
-ROBOT_SPEED = 0.25
+ROBOT_SPEED = DEFAULT_TEAM.speed
 #: Largest allowed distance between consecutive rows of one robot's path [m].
-MAX_STEP = 0.02
+MAX_STEP = DEFAULT_TEAM.row_step
 #: Largest allowed distance between a robot and the first row of its path [m].
 MAX_START_GAP = 0.05
 #: Time the last waypoint is held at the end of every ``execute`` call [s].

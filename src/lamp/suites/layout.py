@@ -11,6 +11,7 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import shortest_path
 
+from lamp.geometry.team import DEFAULT_TEAM
 from lamp.scene.model import Obstacle, shape_from_dict
 
 FAMILIES = ("random", "maze", "tilt", "warehouse")
@@ -19,7 +20,7 @@ SCENES_PER_FAMILY = 25
 SUITE_SEED = 20260
 WORKSPACE = (4.0, 4.0)
 N_ROBOTS = 3
-ROBOT_RADIUS = 0.05
+ROBOT_RADIUS = DEFAULT_TEAM.radius
 #: share of maze/tilt/warehouse scenes whose start and goal are chosen for a too-tight
 #: shortest route (the others pick any far-apart pair; decoy tight passages remain)
 TIGHT_SHARE = 0.8
