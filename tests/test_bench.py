@@ -9,6 +9,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import multiprocessing as mp
+import os
 from pathlib import Path
 
 import numpy as np
@@ -406,7 +407,8 @@ def test_report_shows_both_mapush_criteria_and_where_rows_come_from(tmp_path):
     for rec in [*SYNTHETIC, *(dict(r, run_id=1) for r in MAPUSH)]:
         rf.append(rec)
     sessions = [{"command": "lamp bench a", "git_commit": "aaaaaaaaaaaa1", "git_dirty": False},
-                {"command": "lamp bench b", "git_commit": "bbbbbbbbbbbb2", "git_dirty": False}]
+                {"command": "lamp bench b", "git_commit": "bbbbbbbbbbbb2", "git_dirty": False,
+                 "machine": {"cpu": "Zen 9"}}]
     (tmp_path / "config.json").write_text(json.dumps({"sessions": sessions}))
     res = runner.invoke(app, ["report", str(tmp_path)])
     assert res.exit_code == 0, res.output
@@ -416,7 +418,8 @@ def test_report_shows_both_mapush_criteria_and_where_rows_come_from(tmp_path):
     assert ("| MAPush criterion (0.5 m, position only, 120 s) | 100% (2/2) [paper 8%] "
             "| 0% (0/2) [paper 0%] | 50% (2/4) |") in md
     assert "| strict criterion (0.1 m and 0.1 rad, as Table I) | 50% (1/2) | 0% (0/2) |" in md
-    assert "- run 1: `lamp bench b`" in md
+    assert "- run 1: `lamp bench b` on ?, commit `bbbbbbbbbbbb2`, on Zen 9\n" in md
+    assert "- run 0: `lamp bench a` on ?, commit `aaaaaaaaaaaa1`\n" in md
     assert ("MAPush: 5 from run 1 (commit `bbbbbbbbbb`); GCo_var: 4 from runs before lines "
             "carried a run id") in md
 
@@ -592,3 +595,4 @@ def test_session_ignores_changes_inside_the_output_folder(tmp_path, monkeypatch,
     monkeypatch.setattr(bench_cli, "_git", lambda *args: answers[args[0]])
     session = bench_cli._session("lamp bench", tmp_path / "docs" / "results" / "full")
     assert session["git_dirty"] is dirty
+    assert session["machine"]["cpu_count"] == os.cpu_count()  # each run says where it ran

@@ -193,7 +193,7 @@ def _session(command: str, out: Path) -> dict[str, Any]:
         "command": command, "argv": shlex.join(sys.argv),
         "date": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
         "git_commit": commit, "git_dirty": dirty,
-        "packages": _package_versions(),
+        "packages": _package_versions(), "machine": machine_info(),
     }
 
 
@@ -201,7 +201,10 @@ def write_config(out: Path, previous: dict[str, Any], *, suites: list[str], plan
                  seeds: list[int], workers: int, backend: str, model: str, time_cap: float,
                  planning_limit: float, scenes: int | None, job_fn: str, command: str
                  ) -> dict[str, Any]:
-    """Write ``out/config.json``: this invocation's settings plus every session's provenance."""
+    """Write ``out/config.json``: this invocation's settings plus every session's provenance.
+
+    The top-level ``machine`` is this invocation's; each session records its own as well.
+    """
     from lamp.io import write_json_atomic
 
     def union(key: str, new: list) -> list:

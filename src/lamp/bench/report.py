@@ -650,7 +650,9 @@ def _config_markdown(config: dict[str, Any], records: Sequence[dict[str, Any]]) 
     for i, s in enumerate(sessions):
         lines.append(f"- run {i}: `{s.get('command', '?')}` on {s.get('date', '?')}, commit "
                      f"`{s.get('git_commit') or 'unknown'}`"
-                     + (" (uncommitted changes)" if s.get("git_dirty") else ""))
+                     + (" (uncommitted changes)" if s.get("git_dirty") else "")
+                     + (f", on {s['machine'].get('cpu', '?')}"
+                        if isinstance(s.get("machine"), dict) else ""))
     origin = []
     for p, c in sorted(record_runs(records).items(), key=lambda kv: _order(kv[0])):
         parts = []
