@@ -420,8 +420,8 @@ def test_report_shows_both_mapush_criteria_and_where_rows_come_from(tmp_path):
     assert "| strict criterion (0.1 m and 0.1 rad, as Table I) | 50% (1/2) | 0% (0/2) |" in md
     assert "- run 1: `lamp bench b` on ?, commit `bbbbbbbbbbbb2`, on Zen 9\n" in md
     assert "- run 0: `lamp bench a` on ?, commit `aaaaaaaaaaaa1`\n" in md
-    assert ("MAPush: 5 from run 1 (commit `bbbbbbbbbb`); GCo_var: 4 from runs before lines "
-            "carried a run id") in md
+    assert ("MAPush: 5 from run 1 (commit `bbbbbbbbbb`); GCo_var: 4 written before lines "
+            "carried a run id (run 0)") in md
 
 
 def test_report_needs_results(tmp_path):

@@ -654,11 +654,15 @@ def _config_markdown(config: dict[str, Any], records: Sequence[dict[str, Any]]) 
                      + (f", on {s['machine'].get('cpu', '?')}"
                         if isinstance(s.get("machine"), dict) else ""))
     origin = []
-    for p, c in sorted(record_runs(records).items(), key=lambda kv: _order(kv[0])):
+    by_run = record_runs(records)
+    # lines without a run id are older than the first line with one
+    first = min((rid for c in by_run.values() for rid in c if rid is not None), default=None)
+    older = ("" if not first else " (run 0)" if first == 1 else f" (runs 0-{first - 1})")
+    for p, c in sorted(by_run.items(), key=lambda kv: _order(kv[0])):
         parts = []
         for rid, n in sorted(c.items(), key=lambda kv: (kv[0] is None, kv[0] or 0)):
             if rid is None:
-                parts.append(f"{n} from runs before lines carried a run id")
+                parts.append(f"{n} written before lines carried a run id{older}")
             else:
                 s = sessions[rid] if 0 <= rid < len(sessions) else {}
                 commit = (s.get("git_commit") or "unknown")[:10]
