@@ -9,6 +9,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import multiprocessing as mp
+import os
 from pathlib import Path
 
 import numpy as np
@@ -116,6 +117,31 @@ def test_resume_skips_recorded_jobs_and_retries_errors():
     records.append(_record("random", "random-01", "lazy", status="ok"))
     assert latest_by_key(records)[("random", "random-01", "lazy", 0)]["status"] == "ok"
     assert {j.key for j in pending_jobs(jobs, records)} == {("random", "random-01", "astar", 0)}
+
+
+def test_rerun_repeats_a_planners_jobs_unless_redone_by_the_current_code():
+    jobs = enumerate_jobs([suite("random", 2)], ["lazy", "astar"], [0])
+    records = [_record("random", f"random-0{i}", p, run_id=0) for i in range(2)
+               for p in ("lazy", "astar")]
+    assert pending_jobs(jobs, records, rerun=["lazy"]) == [j for j in jobs if j.planner == "lazy"]
+    # random-00 lazy was redone by run 1, the current code: only random-01 lazy is left
+    records.append(_record("random", "random-00", "lazy", run_id=1))
+    todo = pending_jobs(jobs, records, rerun=["lazy"], current_runs={1})
+    assert [j.key for j in todo] == [("random", "random-01", "lazy", 0)]
+    assert pending_jobs(jobs, records) == []  # without --rerun nothing is pending
+
+
+@pytest.mark.parametrize(("sessions", "commit", "dirty", "expected"), [
+    ([("a", False), ("b", False), ("a", True), ("a", False)], "a", False, {0, 3}),
+    ([("a", False)], "a", True, set()),  # uncommitted code matches no recorded run
+    ([("a", False)], None, None, set()),
+    ([("a", None)], "a", False, set()),
+])
+def test_current_runs_are_clean_runs_of_the_running_commit(sessions, commit, dirty, expected):
+    from lamp.bench.cli import current_runs
+
+    previous = {"sessions": [{"git_commit": c, "git_dirty": d} for c, d in sessions]}
+    assert current_runs(previous, commit, dirty) == expected
 
 
 # ----------------------------------------------------------------------- results file
@@ -335,6 +361,69 @@ def test_lamp_report_rebuilds_from_results(tmp_path):
     assert "no config.json" in md
 
 
+def _mapush(suite_name, scene, loose, strict=False, status="ok", run_id=None):
+    rec = dict(_res(suite_name, scene, "mapush", strict, [0.1] * 15, 0, False),
+               status=status, stats={} if status != "ok" else {"mapush_success": loose})
+    return rec if run_id is None else dict(rec, run_id=run_id)
+
+
+MAPUSH = [_mapush("random", "r1", True), _mapush("random", "r2", True, strict=True),
+          _mapush("maze", "m1", False), _mapush("maze", "m2", False, status="timeout"),
+          _mapush("iros", "iros", True)]
+
+
+def test_mapush_criteria_equal_hand_computed_numbers():
+    from lamp.bench.report import mapush_criteria_table
+
+    table = mapush_criteria_table(SYNTHETIC + MAPUSH)
+    assert {c: {f: (r.k, r.n) for f, r in row.items()} for c, row in table.items()} == {
+        "mapush": {"random": (2, 2), "maze": (0, 2), "all": (2, 4)},  # IROS left out
+        "strict": {"random": (1, 2), "maze": (0, 2), "all": (1, 4)},
+    }
+    assert mapush_criteria_table(SYNTHETIC) == {}
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.tuples(st.sampled_from(["random", "maze", "tilt", "warehouse"]),
+                          st.integers(0, 5), st.booleans(), st.booleans(),
+                          st.sampled_from(["ok", "ok", "timeout"])), max_size=30))
+def test_mapush_criterion_counts_the_raw_records(rows):
+    """Each cell is the brute-force count of ``stats.mapush_success`` over the MAPush lines."""
+    from lamp.bench.report import mapush_criteria_table
+
+    records = list(latest_by_key(_mapush(f, f"{f}-{i}", loose, strict, status)
+                                 for f, i, loose, strict, status in rows).values())
+    table = mapush_criteria_table(records + SYNTHETIC)
+    assert bool(table) == bool(records)
+    for f in ([*{r["suite"] for r in records}, "all"] if records else []):
+        cell = [r for r in records if f in ("all", r["suite"])]
+        k = sum(bool(r["stats"].get("mapush_success")) for r in cell)
+        assert (table["mapush"][f].k, table["mapush"][f].n) == (k, len(cell))
+        assert table["strict"][f].k == sum(r["success"] for r in cell)
+
+
+def test_report_shows_both_mapush_criteria_and_where_rows_come_from(tmp_path):
+    rf = ResultsFile(tmp_path / "results.jsonl")
+    for rec in [*SYNTHETIC, *(dict(r, run_id=1) for r in MAPUSH)]:
+        rf.append(rec)
+    sessions = [{"command": "lamp bench a", "git_commit": "aaaaaaaaaaaa1", "git_dirty": False},
+                {"command": "lamp bench b", "git_commit": "bbbbbbbbbbbb2", "git_dirty": False,
+                 "machine": {"cpu": "Zen 9"}}]
+    (tmp_path / "config.json").write_text(json.dumps({"sessions": sessions}))
+    res = runner.invoke(app, ["report", str(tmp_path)])
+    assert res.exit_code == 0, res.output
+    md = (tmp_path / "report.md").read_text()
+    # Table I: strict, without the paper's MAPush figures (they count the other criterion)
+    assert "| MAPush (strict criterion) | 50% (1/2) | 0% (0/2) | 25% (1/4) |" in md
+    assert ("| MAPush criterion (0.5 m, position only, 120 s) | 100% (2/2) [paper 8%] "
+            "| 0% (0/2) [paper 0%] | 50% (2/4) |") in md
+    assert "| strict criterion (0.1 m and 0.1 rad, as Table I) | 50% (1/2) | 0% (0/2) |" in md
+    assert "- run 1: `lamp bench b` on ?, commit `bbbbbbbbbbbb2`, on Zen 9\n" in md
+    assert "- run 0: `lamp bench a` on ?, commit `aaaaaaaaaaaa1`\n" in md
+    assert ("MAPush: 5 from run 1 (commit `bbbbbbbbbb`); GCo_var: 4 written before lines "
+            "carried a run id (run 0)") in md
+
+
 def test_report_needs_results(tmp_path):
     res = runner.invoke(app, ["report", str(tmp_path)])
     assert res.exit_code == 2 and "no results.jsonl" in res.output
@@ -382,6 +471,46 @@ def test_bench_end_to_end_resume_and_render(tmp_path):
     assert res.exit_code == 0 and "0 to run" in res.output
     res = runner.invoke(app, [*args, "--time-cap", "31", "--resume"])
     assert res.exit_code == 2 and "time_cap_s" in res.output
+
+
+def test_bench_rerun_replaces_one_planners_records(tmp_path, monkeypatch):
+    """--resume --rerun lazy appends new LAMP-Lazy lines only; the report counts those; a
+    second --rerun with the same code has nothing left to do, new code re-runs them again."""
+    from lamp.bench import cli as bench_cli
+    from lamp.bench.report import load_results
+
+    version = ["c0"]
+    monkeypatch.setattr(bench_cli, "_code_version", lambda out: (version[0], False))
+    folder = write_suite(tmp_path, "random", 2)
+    out = tmp_path / "run"
+    args = ["bench", "--suites", str(folder), "--planners", "lazy,gco-var", "--workers", "1",
+            "--out", str(out), "--job-fn", "lamp.bench.fake:synthetic_job", "--no-progress"]
+    assert runner.invoke(app, args).exit_code == 0
+    res = runner.invoke(app, [*args, "--resume", "--rerun", "lazy"])
+    assert res.exit_code == 0 and "0 to run" in res.output  # recorded by this very code
+    version[0] = "c1"
+    before = (out / "results.jsonl").read_bytes()
+    res = runner.invoke(app, [*args, "--resume", "--rerun", "lazy"])
+    assert res.exit_code == 0, res.output
+    assert "2 to run, 2 already recorded; re-running lazy" in res.output
+    after = (out / "results.jsonl").read_bytes()
+    assert after.startswith(before)  # nothing rewritten
+    new = read_records(out / "results.jsonl")[4:]
+    assert [(r["scene"], r["planner"], r["run_id"]) for r in new] == [
+        ("random-00", "lazy", 1), ("random-01", "lazy", 1)]
+    latest = {(r["scene"], r["planner"]): r["run_id"] for r in load_results(out)}
+    assert latest == {("random-00", "lazy"): 1, ("random-01", "lazy"): 1,
+                      ("random-00", "gco-var"): 0, ("random-01", "gco-var"): 0}
+    res = runner.invoke(app, [*args, "--resume", "--rerun", "lazy"])
+    assert res.exit_code == 0 and "0 to run" in res.output
+    version[0] = "c2"
+    res = runner.invoke(app, [*args, "--resume", "--rerun", "lazy"])
+    assert res.exit_code == 0 and "2 to run" in res.output
+    for extra, message in ((["--rerun", "lazy"], "--rerun needs --resume"),
+                           (["--resume", "--rerun", "astar"], "'astar' is not in --planners")):
+        res = runner.invoke(app, [*args, *extra])
+        assert res.exit_code == 2 and message in res.output, res.output
+    assert len(read_records(out / "results.jsonl")) == 8
 
 
 @pytest.mark.parametrize("extra, message", [
@@ -467,3 +596,4 @@ def test_session_ignores_changes_inside_the_output_folder(tmp_path, monkeypatch,
     monkeypatch.setattr(bench_cli, "_git", lambda *args: answers[args[0]])
     session = bench_cli._session("lamp bench", tmp_path / "docs" / "results" / "full")
     assert session["git_dirty"] is dirty
+    assert session["machine"]["cpu_count"] == os.cpu_count()  # each run says where it ran

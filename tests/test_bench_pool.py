@@ -216,7 +216,7 @@ def test_resume_with_nothing_to_do_adds_no_run(tmp_path):
     assert len(config["sessions"]) == 1
     assert (out / "report.md").read_text() == report
     run_lines = [line for line in report.split("## Run")[1].split("##")[0].splitlines()
-                 if line.startswith("- `lamp bench")]
+                 if line.startswith("- run 0: `lamp bench")]
     assert len(run_lines) == 1
     assert {r["run_id"] for r in read_records(out / "results.jsonl")} == {0}
 

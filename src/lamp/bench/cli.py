@@ -4,7 +4,7 @@ Registered by ``lamp.cli`` as ``app.command("bench")(bench_command)`` and
 ``app.command("report")(report_command)``. Exit status: 0 when the run finished (whatever
 the planners' outcomes), 2 for bad input (unknown suite or planner, bad numbers, a non-empty
 output folder without ``--resume``, caps differing from the run being resumed, Ray missing,
-an unusable ``--db`` path), 1 when no worker process can start, 130 when interrupted and 143
+an unusable ``--db`` path, ``--rerun`` without ``--resume`` or naming a planner not run), 1 when no worker process can start, 130 when interrupted and 143
 when terminated (``SIGTERM``); after either, no worker process is left running, the scratch
 folder is removed, and the run continues with ``--resume``.
 """
@@ -161,7 +161,8 @@ def planner_limits(planners: list[str], planning_limit: float) -> dict[str, floa
     return out
 
 
-def _session(command: str, out: Path) -> dict[str, Any]:
+def _code_version(out: Path) -> tuple[str | None, bool | None]:
+    """(commit, uncommitted changes) of the running code; changes inside ``out`` do not count."""
     status = _git("status", "--porcelain", "--untracked-files=no")
     top = _git("rev-parse", "--show-toplevel")
     dirty = None
@@ -170,11 +171,29 @@ def _session(command: str, out: Path) -> dict[str, Any]:
         changed = [Path(top or ".", line[3:].split(" -> ")[-1]).resolve()
                    for line in status.splitlines() if line.strip()]
         dirty = any(not p.is_relative_to(out.resolve()) for p in changed)
+    return _git("rev-parse", "HEAD"), dirty
+
+
+def current_runs(previous: dict[str, Any], commit: str | None, dirty: bool | None) -> set[int]:
+    """Indices of the recorded invocations that ran the code running now (``--rerun``).
+
+    Those made at ``commit`` without uncommitted changes; none when the running code is
+    itself uncommitted or its commit is unknown (then everything asked for is re-run).
+    """
+    if commit is None or dirty is not False:
+        return set()
+    return {i for i, s in enumerate(previous.get("sessions") or [])
+            if isinstance(s, dict) and s.get("git_commit") == commit
+            and s.get("git_dirty") is False}
+
+
+def _session(command: str, out: Path) -> dict[str, Any]:
+    commit, dirty = _code_version(out)
     return {
         "command": command, "argv": shlex.join(sys.argv),
         "date": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
-        "git_commit": _git("rev-parse", "HEAD"), "git_dirty": dirty,
-        "packages": _package_versions(),
+        "git_commit": commit, "git_dirty": dirty,
+        "packages": _package_versions(), "machine": machine_info(),
     }
 
 
@@ -182,7 +201,10 @@ def write_config(out: Path, previous: dict[str, Any], *, suites: list[str], plan
                  seeds: list[int], workers: int, backend: str, model: str, time_cap: float,
                  planning_limit: float, scenes: int | None, job_fn: str, command: str
                  ) -> dict[str, Any]:
-    """Write ``out/config.json``: this invocation's settings plus every session's provenance."""
+    """Write ``out/config.json``: this invocation's settings plus every session's provenance.
+
+    The top-level ``machine`` is this invocation's; each session records its own as well.
+    """
     from lamp.io import write_json_atomic
 
     def union(key: str, new: list) -> list:
@@ -306,6 +328,10 @@ def bench_command(
                                      "IROS run to DIR/iros.gif (needs --suites iros)."),
     retry_errors: bool = typer.Option(True, "--retry-errors/--keep-errors", help="On --resume, "
                                       "re-run jobs that errored or crashed."),
+    rerun: str = typer.Option("", "--rerun", help="With --resume: comma-separated planners "
+                              "whose recorded jobs are run again (e.g. after a change to "
+                              "them), except those already redone by a run of the current "
+                              "commit; the new lines supersede the old ones in the report."),
     report: bool = typer.Option(True, "--report/--no-report", help="Write DIR/report.md at "
                                 "the end."),
     progress: bool = typer.Option(True, "--progress/--no-progress", help="Progress bar."),
@@ -335,6 +361,12 @@ def bench_command(
                   + did_you_mean(p, known))
     if not planner_list:
         _fail("--planners: no planner given")
+    rerun_list = _split(rerun)
+    for p in rerun_list:
+        if p not in planner_list:
+            _fail(f"--rerun: planner {p!r} is not in --planners ({', '.join(planner_list)})")
+    if rerun_list and not resume:
+        _fail("--rerun needs --resume (it re-runs jobs recorded in --out)")
     suite_list = _split(suite)
     if not suite_list:
         _fail("--suites: no suite given")
@@ -404,7 +436,9 @@ def bench_command(
     if render_iros and not any(j.suite == "iros" for j in jobs):
         _fail("--render-iros needs the iros suite in --suites")
     records = read_records(out / RESULTS_FILE) if resume else []
-    pending = pending_jobs(jobs, records, retry_errors=retry_errors)
+    current = current_runs(previous, *_code_version(out)) if rerun_list else set()
+    pending = pending_jobs(jobs, records, retry_errors=retry_errors, rerun=rerun_list,
+                           current_runs=current)
     if render_iros:
         pending = _render_jobs(jobs, pending, out, time_cap)
     if record:
@@ -417,7 +451,8 @@ def bench_command(
     per = Counter((j.suite, j.planner) for j in pending if j.record)
     typer.echo(f"{len(jobs)} jobs ({len({(j.suite, j.scene_name) for j in jobs})} scenes x "
                f"{len(planner_list)} planners x {seeds} seeds); {len(pending)} to run"
-               + (f", {len(jobs) - sum(per.values())} already recorded" if resume else ""))
+               + (f", {len(jobs) - sum(per.values())} already recorded" if resume else "")
+               + (f"; re-running {', '.join(rerun_list)}" if rerun_list else ""))
     if dry_run:
         for (s, p), n in sorted(per.items()):
             typer.echo(f"  {s:12s} {p:14s} {n}")

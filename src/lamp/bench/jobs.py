@@ -18,7 +18,7 @@ import fcntl
 import json
 import logging
 import os
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Collection, Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -145,13 +145,20 @@ def record_key(record: dict[str, Any]) -> JobKey:
 
 
 def pending_jobs(jobs: Iterable[Job], records: Iterable[dict[str, Any]], *,
-                 retry_errors: bool = True) -> list[Job]:
-    """Jobs without a recorded result (``--resume``); errored/crashed ones too if asked."""
+                 retry_errors: bool = True, rerun: Collection[str] = (),
+                 current_runs: Collection[int] = ()) -> list[Job]:
+    """Jobs without a recorded result (``--resume``); errored/crashed ones too if asked.
+
+    A job of a planner in ``rerun`` (``--rerun``) is pending as well unless its latest
+    record carries a ``run_id`` in ``current_runs`` (the invocations made with the code
+    that runs now), so an interrupted re-run, resumed, only runs what it has not redone.
+    """
     latest = latest_by_key(records)
     out = []
     for job in jobs:
         rec = latest.get(job.key)
-        if rec is None or (retry_errors and rec.get("status") in RETRYABLE):
+        if (rec is None or (retry_errors and rec.get("status") in RETRYABLE)
+                or (job.planner in rerun and rec.get("run_id") not in current_runs)):
             out.append(job)
     return out
 
