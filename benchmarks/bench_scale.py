@@ -10,8 +10,8 @@ Every point runs in its own subprocess, so that the peak resident memory printed
 point's alone (``ru_maxrss`` of the child). Printed per point: success, executed segments,
 planning time (sum over segments), planning time per metre of route, makespan (steps) and
 peak RSS; with ``--repeats n`` each point runs n times and the medians are printed (the
-plan itself is deterministic: success, segments and makespan do not change). Segments are limited by ``--max-segments`` (default 2000), not the closed loop's
-default of 100 per object, so that long routes can finish.
+plan itself is deterministic: success, segments and makespan do not change). Segments are limited as for any user scene (``lamp.planners.config.segment_limit``:
+max(100, 30 per metre from start to goal)); ``--max-segments N`` sets a fixed limit.
 
 Run: ``python benchmarks/bench_scale.py [--sizes 4,8,16,32,50] [--robots 3] [--objects 1]
 [--repeats 3]``.
@@ -70,7 +70,8 @@ def pillar_scene(size: float, robots: int = 3, objects: int = 1) -> dict:
     }
 
 
-def run_point(size: float, robots: int, objects: int, max_segments: int, seed: int) -> dict:
+def run_point(size: float, robots: int, objects: int, max_segments: int | None,
+              seed: int) -> dict:
     """Solve one map in this process; the figures of one point."""
     import resource
     import time
@@ -102,7 +103,8 @@ def main() -> None:
     ap.add_argument("--sizes", default="4,8,16,32,50", help="map sides in metres")
     ap.add_argument("--robots", default="3", help="robot counts, e.g. 3,6")
     ap.add_argument("--objects", default="1", help="object counts, e.g. 1,3")
-    ap.add_argument("--max-segments", type=int, default=2000)
+    ap.add_argument("--max-segments", type=int, default=None,
+                    help="fixed segment limit per object (default: scaled with the task)")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--repeats", type=int, default=1, help="runs per point (medians)")
     ap.add_argument("--json", type=Path, help="also write all points to this file")
@@ -122,7 +124,9 @@ def main() -> None:
         for robots in [int(r) for r in args.robots.split(",")]:
             for objects in [int(k) for k in args.objects.split(",")]:
                 cmd = [sys.executable, __file__, "--point", f"{size:g},{robots},{objects}",
-                       "--max-segments", str(args.max_segments), "--seed", str(args.seed)]
+                       "--seed", str(args.seed)]
+                if args.max_segments is not None:
+                    cmd += ["--max-segments", str(args.max_segments)]
                 runs = []
                 for _ in range(max(1, args.repeats)):
                     proc = subprocess.run(cmd, capture_output=True, text=True, env=env)
