@@ -18,7 +18,7 @@ import numpy as np
 if TYPE_CHECKING:
     from lamp.planners.verify import Transition
 
-__all__ = ["ObjectPlanner", "Plan", "PlanStatus"]
+__all__ = ["LoopPolicy", "ObjectPlanner", "Plan", "PlanStatus"]
 
 Edge = tuple[np.ndarray, np.ndarray]
 
@@ -102,3 +102,20 @@ class ObjectPlanner(Protocol):
     def clear(self) -> None:
         """Forget caches and penalties: the next ``plan`` starts from scratch."""
         ...
+
+
+@dataclass(frozen=True)
+class LoopPolicy:
+    """When the closed loop (``lamp.planners.closed_loop.run_object``) calls ``plan`` again."""
+
+    #: Replan after a segment whose object pose misses the planned one (Alg. 2 line 6).
+    replan_on_drift: bool
+    #: Replan when the plan is used up but the object is not at its goal.
+    replan_when_done: bool
+    #: Plans yield a full horizon (LAMP); GCo's one-step "plans" do not.
+    full_horizon: bool = True
+    #: A failed plan call ends the object (LAMP) or only wastes one iteration (GCo).
+    failure_is_final: bool = True
+    #: A push that executed but barely moved the object is reported to the planner
+    #: (``report_failure``) and the rest of the plan dropped (LAMP-Lazy).
+    replan_on_stall: bool = False

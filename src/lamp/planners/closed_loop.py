@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from lamp.geometry.se2 import pose_distance
-from lamp.planners.base import ObjectPlanner
+from lamp.planners.base import LoopPolicy, ObjectPlanner
 from lamp.planners.long_push import merge, take_long_push
 from lamp.planners.result import (
     SUCCESS_ORIENTATION_TOL,
@@ -32,19 +32,6 @@ from lamp.planners.robots import robots_match
 from lamp.planners.task import ManipulationTask
 from lamp.planners.trajectory import concat, straight_moves
 from lamp.planners.verify import Transition, reroute
-
-
-@dataclass(frozen=True)
-class LoopPolicy:
-    replan_on_drift: bool
-    replan_when_done: bool
-    #: Plans yield a full horizon (LAMP); GCo's one-step "plans" do not.
-    full_horizon: bool = True
-    #: A failed plan call ends the object (LAMP) or only wastes one iteration (GCo).
-    failure_is_final: bool = True
-    #: A push that executed but barely moved the object is reported to the planner
-    #: (``report_failure``) and the rest of the plan dropped (LAMP-Lazy).
-    replan_on_stall: bool = False
 
 
 @dataclass

@@ -3,36 +3,41 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal
+from typing import Any, Literal
 
-#: The planner names (``lamp run --planner``, ``lamp.solve``) and what each stands for.
-PLANNER_DESCRIPTIONS = {
-    "lazy": "LAMP-Lazy (default)",
-    "astar": "LAMP-A*, open loop",
-    "astar-replan": "LAMP-A*, replanning on drift",
-    "gco-ori": "GCo with its 0.2 m buffer",
-    "gco-var": "GCo with zero buffer",
-    "mapush": "MAPush-style RL baseline (lattice subgoals + PPO pushing policy)",
-}
+#: The names of the built-in planners (``lamp run --planner``, ``lamp.solve``); the
+#: registry (``lamp.planners.registry``) holds what each one is.
 PlannerName = Literal["lazy", "astar", "astar-replan", "gco-ori", "gco-var", "mapush"]
-#: Default cumulative planning limit per object (s): the paper's 500 s for LAMP-A*,
-#: ``DEFAULT_PLANNING_LIMIT`` for every other planner.
+#: Cumulative planning limit per object (s) of a planner that does not set its own
+#: (``PlannerSpec.planning_limit``; LAMP-A* keeps the paper's 500 s).
 DEFAULT_PLANNING_LIMIT = 300.0
-PLANNING_LIMIT_OVERRIDES = {"astar": 500.0, "astar-replan": 500.0}
+
+
+def __getattr__(name: str) -> Any:
+    if name == "PLANNER_DESCRIPTIONS":  # name -> description, read from the registry
+        from lamp.planners import registry
+
+        return {s.name: s.description for s in registry.specs()}
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def default_planning_limit(planner: str) -> float:
     """The cumulative planning limit per object that ``planner`` runs under by default."""
-    return PLANNING_LIMIT_OVERRIDES.get(planner, DEFAULT_PLANNING_LIMIT)
+    from lamp.planners import registry
+
+    return registry.get(planner).planning_limit
 
 
 def planning_limit_help() -> str:
     """The per-planner defaults in words, e.g. ``300 s; 500 s for astar, astar-replan``."""
+    from lamp.planners import registry
+
     by_value: dict[float, list[str]] = {}
-    for name, value in PLANNING_LIMIT_OVERRIDES.items():
-        by_value.setdefault(value, []).append(name)
-    return f"{DEFAULT_PLANNING_LIMIT:g} s; " + "; ".join(
-        f"{v:g} s for {', '.join(names)}" for v, names in by_value.items())
+    for spec in registry.specs():
+        if spec.planning_limit != DEFAULT_PLANNING_LIMIT:
+            by_value.setdefault(spec.planning_limit, []).append(spec.name)
+    return f"{DEFAULT_PLANNING_LIMIT:g} s" + "".join(
+        f"; {v:g} s for {', '.join(names)}" for v, names in by_value.items())
 
 
 @dataclass(frozen=True)
