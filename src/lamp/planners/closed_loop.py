@@ -150,7 +150,7 @@ def run_object(task: ManipulationTask, planner: ObjectPlanner, policy: LoopPolic
             replanned = True
             if not plan_obj.solved:
                 if policy.failure_is_final:
-                    reason = plan_obj.status.reason
+                    reason = plan_obj.reason
                     break
                 iterations += 1
                 continue

@@ -50,8 +50,12 @@ class PlannerConfig:
     max_budget: int = 3
     #: Candidates per budget that are handed to Gspi before trying a smaller budget.
     gspi_attempts_per_budget: int = 3
-    #: Wall-clock limit of one Gspi call (seconds).
-    gspi_time_limit: float = 1.0
+    #: Wall-clock cap of one Gspi call inside Verify (seconds): an outer cap only. Gspi
+    #: stops on counts first (its step budget and stall count, ``lamp.mrmp.plan_paths``),
+    #: so the result does not depend on the machine's load; the cap fires only on a
+    #: machine some 10x slower than the one this was tuned on (``TaskStats.gspi_timeouts``
+    #: counts the calls it ended).
+    gspi_time_limit: float = 10.0
     #: Execution drift that triggers replanning (Alg. 2 line 6): metres / radians.
     drift_position: float = 0.05
     drift_orientation: float = 0.1
@@ -85,7 +89,12 @@ class PlannerConfig:
     #: a dead end holds dozens of states that must all be expanded before the search
     #: backs out; 2 keeps two ways of standing around each object pose.
     astar_states_per_node: int | None = 2
-    #: Cumulative planning limit per object (s): the paper's 500 s for LAMP-A*.
+    #: Most states LAMP-A* expands in one ``plan`` call (``BUDGET_EXHAUSTED``); the
+    #: deterministic limit of the search, the planning time limit is its outer cap.
+    astar_max_expansions: int = 2000
+    #: Cumulative planning limit per object (s): the paper's 500 s for LAMP-A*. Wall
+    #: clock, so an outer cap: the counts (plan iterations, Verify calls, expansions)
+    #: end a search first on an unloaded machine.
     planning_time_limit: float = 500.0
     #: Robot configurations closer than this (m, per robot) count as the same (D_T keys).
     robot_match_tolerance: float = 0.05
@@ -93,3 +102,16 @@ class PlannerConfig:
     contact_tolerance: float = 0.006
     #: Largest number of D* Lite replans inside one Plan call before giving up.
     max_plan_iterations: int = 400
+    #: Most Verify calls in one LAMP-Lazy Plan call (``BUDGET_EXHAUSTED``).
+    max_verify_calls: int = 4000
+
+    def __post_init__(self) -> None:
+        for name in ("max_plan_iterations", "max_verify_calls", "astar_max_expansions",
+                     "max_segments"):
+            value = getattr(self, name)
+            if not (isinstance(value, int) and not isinstance(value, bool) and value >= 1):
+                raise ValueError(f"PlannerConfig.{name}: a positive integer, got {value!r}")
+        for name in ("gspi_time_limit", "planning_time_limit"):
+            value = getattr(self, name)
+            if not (isinstance(value, int | float) and value > 0):
+                raise ValueError(f"PlannerConfig.{name}: positive seconds, got {value!r}")
