@@ -120,7 +120,7 @@ class ObjectPlanner(Protocol):
 class LoopPolicy:
     """When the closed loop (``lamp.planners.closed_loop.run_object``) calls ``plan`` again."""
 
-    #: Replan after a segment whose object pose misses the planned one (Alg. 2 line 6).
+    #: Replan on Drift: the object missed its planned pose after a segment (Alg. 2 line 6).
     replan_on_drift: bool
     #: Replan when the plan is used up but the object is not at its goal.
     replan_when_done: bool
