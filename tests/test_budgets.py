@@ -114,6 +114,42 @@ def test_astar_expansion_budget_names_itself(proposer):
         "no plan found: astar_max_expansions exhausted"
 
 
+def test_astar_budget_is_per_object_and_follows_the_limit(proposer):
+    """The expansions of one object's searches add up (like its cumulative planning
+    limit); ``clear`` restores the budget; by default the budget is
+    ``ASTAR_EXPANSION_RATE`` per second of the planning limit, whichever way it is set."""
+    from lamp.planners.config import ASTAR_EXPANSION_RATE
+    from lamp.planners.run import default_config
+
+    task = _task(proposer, PlannerConfig(astar_max_expansions=1000))
+    astar = LampAStar(task)
+    q_O, q_R = task.object_poses[0], task.scene.robot_starts_array
+    assert astar.plan(q_O, q_R).solved
+    used = astar.expanded
+    assert 0 < used < 1000
+    astar.task = _task(proposer, PlannerConfig(astar_max_expansions=used + 1))
+    assert astar.plan(q_O, q_R).limit == "astar_max_expansions"  # only 1 left
+    assert astar.expanded == used + 1
+    astar.clear()
+    assert astar.plan(q_O, q_R).solved and astar.expanded == used
+    assert default_config("astar").astar_expansions == round(500 * ASTAR_EXPANSION_RATE)
+    assert PlannerConfig(planning_time_limit=30.0).astar_expansions == round(
+        30 * ASTAR_EXPANSION_RATE)
+    assert PlannerConfig(planning_time_limit=float("inf")).astar_expansions > 10**9
+
+def test_solve_time_limit_sets_the_astar_budget(proposer, monkeypatch):
+    """``lamp.solve``'s ``time_limit`` stands for a budget of expansions: with the clock
+    stopped (so that no wall-clock limit can fire) a limit worth one expansion ends the
+    search on the count."""
+    from lamp.planners.config import ASTAR_EXPANSION_RATE
+
+    monkeypatch.setattr(time, "perf_counter", lambda: 0.0)
+    res = lamp.solve(scene_from_dict(SCENE), "astar", seed=1, model=proposer,
+                     time_limit=1.0 / ASTAR_EXPANSION_RATE).to_dict()
+    assert res["objects"][0]["failure_reason"] == "no plan found: astar_max_expansions exhausted"
+    assert res["stats"]["verify_calls"] > 0
+
+
 @pytest.mark.parametrize("field, value", [("max_verify_calls", 0), ("astar_max_expansions", -1),
                                           ("max_plan_iterations", 1.5),
                                           ("gspi_time_limit", 0.0)])

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -132,6 +133,8 @@ def run_scene(scene: Scene, planner: str, seed: int, model: str | Path | Any, *,
         return spec.runner(scene, int(seed), model=model, config=config, render=render,
                            time_limit=time_limit, progress=progress)
     cfg = config or default_config(planner)
+    if time_limit is not None:  # the budgets that stand for the limit follow it
+        cfg = dataclasses.replace(cfg, planning_time_limit=float(time_limit))
     proposer = load_proposer(model)
     check_robot_radius(scene, proposer)
     t_start = time.perf_counter()
