@@ -156,3 +156,9 @@ def test_solve_time_limit_sets_the_astar_budget(proposer, monkeypatch):
 def test_config_rejects_bad_budgets(field, value):
     with pytest.raises(ValueError, match=field):
         PlannerConfig(**{field: value})
+
+
+@pytest.mark.parametrize("limit", [0.0, -1.0, float("nan")])
+def test_solve_rejects_a_bad_time_limit(limit, proposer):
+    with pytest.raises(ValueError, match="time_limit: positive seconds"):
+        lamp.solve(scene_from_dict(SCENE), "lazy", model=proposer, time_limit=limit)

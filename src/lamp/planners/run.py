@@ -134,6 +134,10 @@ def run_scene(scene: Scene, planner: str, seed: int, model: str | Path | Any, *,
                            time_limit=time_limit, progress=progress)
     cfg = config or default_config(planner)
     if time_limit is not None:  # the budgets that stand for the limit follow it
+        if not float(time_limit) > 0:
+            from lamp.errors import InputError
+
+            raise InputError(f"time_limit: positive seconds, got {time_limit!r}")
         cfg = dataclasses.replace(cfg, planning_time_limit=float(time_limit))
     proposer = load_proposer(model)
     check_robot_radius(scene, proposer)
