@@ -11,6 +11,8 @@ import time
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from lamp.mrmp import plan_paths
 from lamp.mrmp.gspi import GspiStatus
@@ -32,21 +34,25 @@ def _deadlock(stall_steps: int):
                       max_steps=100_000)
 
 
-@pytest.mark.parametrize("stall_steps", [5, 40, 300])
-def test_stall_is_declared_at_the_same_step_under_load(stall_steps, monkeypatch):
+@settings(max_examples=15, deadline=None)
+@given(stall_steps=st.integers(1, 400), factor=st.floats(2.0, 5000.0))
+def test_stall_is_declared_at_the_same_step_under_load(stall_steps, factor):
     calm = _deadlock(stall_steps)
     assert calm.status is GspiStatus.STALLED
     real = time.perf_counter
     t0 = real()
-    monkeypatch.setattr(time, "perf_counter", lambda: t0 + (real() - t0) * 1000.0)
-    busy = _deadlock(stall_steps)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(time, "perf_counter", lambda: t0 + (real() - t0) * factor)
+        busy = _deadlock(stall_steps)
     assert busy.status is GspiStatus.STALLED
     assert busy.iterations == calm.iterations
     assert np.array_equal(busy.paths, calm.paths)
 
 
-def test_stall_count_is_exact():
+@settings(max_examples=10, deadline=None)
+@given(k=st.integers(40, 300), more=st.integers(1, 300))
+def test_stall_count_is_exact(k, more):
     """Past the last improvement, the search runs exactly ``stall_steps`` + 1 steps: a
     longer stall count runs that many more steps on the same deadlock."""
-    a, b = _deadlock(40), _deadlock(140)
-    assert b.iterations - a.iterations == 100
+    a, b = _deadlock(k), _deadlock(k + more)
+    assert b.iterations - a.iterations == more
