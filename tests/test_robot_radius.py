@@ -72,7 +72,7 @@ def test_one_owner_for_the_team_constants():
     assert ROBOT_RADIUS == DEFAULT_ROBOT_RADIUS == DEFAULT_TEAM.radius
     assert Scene("s", (1.0, 1.0), (), ()).robot_radius == DEFAULT_TEAM.radius
     assert MAX_STEP == SIM_MAX_STEP == DEFAULT_TEAM.row_step and SIM_STEP < MAX_STEP
-    assert ROBOT_SPEED == DEFAULT_TEAM.speed
+    assert DEFAULT_TEAM.speed == ROBOT_SPEED
     assert DEFAULT_TEAM.row_time == pytest.approx(0.08)
     with pytest.raises(ValueError, match="RobotTeam.speed"):
         RobotTeam(speed=0.0)

@@ -25,12 +25,8 @@ from lamp.cli_support import (
     version_callback,
 )
 from lamp.errors import InputError
-from lamp.planners.config import (
-    PAPER_MAX_SEGMENTS,
-    PLANNER_DESCRIPTIONS,
-    SEGMENTS_PER_METRE,
-    planning_limit_help,
-)
+from lamp.planners import registry
+from lamp.planners.config import PAPER_MAX_SEGMENTS, SEGMENTS_PER_METRE, planning_limit_help
 from lamp.scene import SceneError, load_scene
 
 app = typer.Typer(
@@ -41,7 +37,7 @@ app = typer.Typer(
     context_settings={"help_option_names": ["-h", "--help"]},
 )
 
-PLANNER_HELP = "Planner: " + "; ".join(f"{k}: {v}" for k, v in PLANNER_DESCRIPTIONS.items())
+PLANNER_HELP = "Planner: " + "; ".join(f"{s.name}: {s.description}" for s in registry.specs())
 MODEL_HELP = ("Manipulation model: learned (the shipped checkpoint), geometric, or a checkpoint "
               "file written by `lamp model train`.")
 
@@ -142,7 +138,7 @@ OUT_HELP = ("Output folder: result.json, recording.npz + recording.json (lamp-re
 def _check_run_options(planner: str, model: str, out: Path,
                        planning_limit: float | None = None) -> str:
     """Exit 2 for a bad planner, model, output folder or limit; returns the model value."""
-    check_choice("--planner", planner, tuple(PLANNER_DESCRIPTIONS), "planner")
+    check_choice("--planner", planner, registry.names(), "planner")
     if planning_limit is not None and not planning_limit > 0:
         fail_input(f"--planning-limit: must be positive, got {planning_limit:g}")
     check_writable_dir(out)
@@ -190,9 +186,8 @@ def run(
     limit = time_limit if time_limit is not None else planning_limit
     model = _check_run_options(planner, model, out, limit)
     scene = load_scene_or_exit(scene_file)
-    if planner == "mapush":
-        from lamp.planners.mapush import check_scene
-
+    check_scene = registry.get(planner).check_scene
+    if check_scene is not None:
         try:
             check_scene(scene)
         except ValueError as exc:

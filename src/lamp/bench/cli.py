@@ -28,18 +28,17 @@ from typing import Any
 import typer
 
 from lamp.bench.jobs import (
-    LIMITED_PLANNERS,
     RESULTS_FILE,
     Job,
     enumerate_jobs,
     load_suite,
     pending_jobs,
+    planning_limit_applies,
     read_records,
 )
 from lamp.bench.runner import BACKENDS, DEFAULT_JOB_FN
+from lamp.planners import registry
 
-#: Planner names of the interfaces spec (used if ``lamp.planners.run`` cannot be imported).
-SPEC_PLANNERS = ("lazy", "astar", "astar-replan", "gco-ori", "gco-var")
 DEFAULT_SUITES = "random,maze,tilt,warehouse"
 #: Default cumulative planning limit per object for LAMP-A* (the paper: 500 s). The paper's
 #: LAMP-A* runs out of it in most cluttered scenes, so 100 scenes x 2 LAMP-A* variants at
@@ -86,11 +85,8 @@ def _fail(message: str) -> None:
 
 
 def known_planners() -> tuple[str, ...]:
-    try:
-        from lamp.planners.run import PLANNERS
-    except Exception:  # the planners may be mid-rewrite; the spec's names still hold
-        return SPEC_PLANNERS
-    return tuple(PLANNERS)
+    """The registered planner names (``lamp.planners.registry``)."""
+    return registry.names()
 
 
 def _split(value: str) -> list[str]:
@@ -149,7 +145,7 @@ def planner_limits(planners: list[str], planning_limit: float) -> dict[str, floa
     """The cumulative planning limit per object each planner runs under."""
     out = {}
     for p in planners:
-        if p in LIMITED_PLANNERS:
+        if planning_limit_applies(p):
             out[p] = planning_limit
             continue
         try:
@@ -220,8 +216,8 @@ def write_config(out: Path, previous: dict[str, Any], *, suites: list[str], plan
         "time_cap_s": time_cap, "time_cap_note": "per job, times the number of objects of the "
         "scene; a job past its cap is killed and recorded as a failure ('timeout')",
         "planning_limit_s": planning_limit,
-        "planning_limit_note": "cumulative planning limit per object for LAMP-A* (astar, "
-        "astar-replan); the paper uses 500 s",
+        "planning_limit_note": "cumulative planning limit per object for "
+        f"{', '.join(registry.bench_limited())}; the paper uses 500 s for LAMP-A*",
         "planner_planning_limits_s": planner_limits(all_planners, planning_limit),
         "job_fn": job_fn, "machine": machine_info(),
         "sessions": [*(previous.get("sessions") or []), _session(command, out)],
@@ -291,9 +287,8 @@ def bench_command(
                               "(random, maze, tilt, warehouse, iros) or folders of scene files."),
     suite_alias: str = typer.Option(None, "--suite", hidden=True,
                                     help="Old spelling of --suites."),
-    planners: str = typer.Option(",".join(SPEC_PLANNERS), "--planners",
-                                 help="Comma-separated: lazy, astar, astar-replan, gco-ori, "
-                                      "gco-var."),
+    planners: str = typer.Option(",".join(registry.bench_defaults()), "--planners",
+                                 help="Comma-separated: " + ", ".join(registry.names()) + "."),
     seeds: int = typer.Option(1, "--num-seeds", help="Number of seeds per scene: runs seeds "
                               "0..N-1."),
     seeds_alias: int = typer.Option(None, "--seeds", hidden=True,
@@ -309,9 +304,10 @@ def bench_command(
                                    "killed and recorded as a failure ('timeout')."),
     planning_limit: float = typer.Option(DEFAULT_PLANNING_LIMIT, "--planning-limit",
                                          help="Cumulative planning limit per object for "
-                                              "LAMP-A* (astar, astar-replan), seconds. The "
-                                              "paper uses 500 s; the default keeps a full run "
-                                              "near 2 h on 2 cores."),
+                                              f"{', '.join(registry.bench_limited())}, "
+                                              "seconds. The paper uses 500 s for LAMP-A*; "
+                                              "the default keeps a full run near 2 h on 2 "
+                                              "cores."),
     planning_limit_alias: float = typer.Option(None, "--time-limit", hidden=True,
                                                help="Alias of --planning-limit (as in lamp run)."),
     model: str = typer.Option("learned", "--model", "-m", help="Manipulation model: learned, "

@@ -31,9 +31,12 @@ log = logging.getLogger(__name__)
 #: Name of the results file inside a benchmark folder.
 RESULTS_FILE = "results.jsonl"
 
-#: Planners whose cumulative planning limit ``--planning-limit`` sets (the paper gives
-#: LAMP-A* a 500 s limit; the others stop after 100 execution iterations).
-LIMITED_PLANNERS = ("astar", "astar-replan")
+def planning_limit_applies(planner: str) -> bool:
+    """Whether ``--planning-limit`` sets ``planner``'s limit (``PlannerSpec.bench_limited``:
+    the paper gives LAMP-A* a 500 s limit; the others stop after 100 execution iterations)."""
+    from lamp.planners import registry
+
+    return planner in registry.bench_limited()
 
 #: Job outcomes. ``error`` and ``crashed`` are re-run by a resumed benchmark by default.
 STATUSES = ("ok", "timeout", "error", "crashed")
@@ -49,7 +52,7 @@ class Job:
 
     ``time_cap_s`` is the wall-clock cap of the whole job (the process is killed after it);
     ``planning_limit_s`` is the cumulative planning limit handed to the planner when it is
-    one of :data:`LIMITED_PLANNERS` (``None``: the planner's default). ``render_to`` asks the
+    one that ``planning_limit_applies`` to (``None``: the planner's default). ``render_to`` asks the
     job function to also write an animation there; ``record`` is False for a render-only
     re-run whose result is already in the results file; ``recording_to`` (``--record``) is
     a folder where the job function saves the run's recording (``lamp-recording/1``).
@@ -82,7 +85,7 @@ class Job:
     @property
     def time_limit(self) -> float | None:
         """The ``time_limit`` argument for ``lamp.planners.run.solve``."""
-        return self.planning_limit_s if self.planner in LIMITED_PLANNERS else None
+        return self.planning_limit_s if planning_limit_applies(self.planner) else None
 
 
 @dataclass(frozen=True)

@@ -39,38 +39,18 @@ from typing import Any
 import numpy as np
 
 from lamp.bench.jobs import RESULTS_FILE, JobKey, latest_by_key, read_records, record_key
+from lamp.planners import registry
 
 #: The paper's four map families, in its column order.
 FAMILY_ORDER = ("random", "maze", "tilt", "warehouse")
-#: Planners in the paper's row order (``lamp.planners.run.PLANNERS``).
-PLANNER_ORDER = ("mapush", "gco-ori", "gco-var", "astar", "astar-replan", "lazy")
-PLANNER_LABELS = {
-    "lazy": "LAMP-Lazy", "astar": "LAMP-A*_ori", "astar-replan": "LAMP-A*_replan",
-    "gco-ori": "GCo_ori", "gco-var": "GCo_var", "mapush": "MAPush",
-}
-#: LAMP planners: the rows of Table II.
-LAMP_PLANNERS = ("astar", "astar-replan", "lazy")
 #: The suite reported as the long-horizon case study rather than as a family.
 IROS_SUITE = "iros"
 REFERENCE_PLANNER = "lazy"
 
-#: Table I of the paper (success rate, %), per family. Its MAPush row counts MAPush's own
-#: criterion (:data:`MAPUSH_CRITERION`), every other row the strict one.
-PAPER_SUCCESS: dict[str, dict[str, float]] = {
-    "mapush": {"random": 8, "maze": 0, "tilt": 0, "warehouse": 0},
-    "gco-ori": {"random": 0, "maze": 0, "tilt": 0, "warehouse": 0},
-    "gco-var": {"random": 68, "maze": 12, "tilt": 28, "warehouse": 20},
-    "astar": {"random": 24, "maze": 0, "tilt": 0, "warehouse": 12},
-    "astar-replan": {"random": 88, "maze": 0, "tilt": 8, "warehouse": 0},
-    "lazy": {"random": 100, "maze": 96, "tilt": 100, "warehouse": 88},
-}
-#: Table II of the paper (full-horizon plan rate, %). The paper's single LAMP-A* row holds
-#: for both of our LAMP-A* variants (they plan identically before the first segment).
-PAPER_FULL_HORIZON: dict[str, dict[str, float]] = {
-    "astar": {"random": 100, "maze": 8, "tilt": 32, "warehouse": 40},
-    "astar-replan": {"random": 100, "maze": 8, "tilt": 32, "warehouse": 40},
-    "lazy": {"random": 100, "maze": 100, "tilt": 100, "warehouse": 100},
-}
+# Per-planner facts (row order, labels, colours, markers, the paper's Table I and II
+# figures, which planners are LAMP's) come from ``lamp.planners.registry``. The paper's
+# MAPush row counts MAPush's own criterion (:data:`MAPUSH_CRITERION`), every other row the
+# strict one.
 #: The MAPush baseline's own success criterion (paper, footnote to Sec. V-A), recorded per
 #: run as ``stats.mapush_success`` by ``lamp.planners.mapush``.
 MAPUSH_PLANNER = "mapush"
@@ -147,6 +127,32 @@ def load_config(run_dir: str | Path) -> dict[str, Any]:
         return {}
 
 
+def _spec(planner: str) -> registry.PlannerSpec | None:
+    """The registered planner, or None for a name recorded by a planner since removed."""
+    try:
+        return registry.get(planner)
+    except ValueError:
+        return None
+
+
+def _rank(planner: str) -> int:
+    """The planner's row in the paper's tables (unknown planners last)."""
+    spec = _spec(planner)
+    return spec.row if spec is not None else 1 << 30
+
+
+def paper_success(planner: str) -> dict[str, float]:
+    """Table I of the paper (success rate, %) per family for ``planner`` ({} if none)."""
+    spec = _spec(planner)
+    return dict(spec.paper_success) if spec is not None else {}
+
+
+def paper_full_horizon(planner: str) -> dict[str, float]:
+    """Table II of the paper (full-horizon plan rate, %) per family ({} if none)."""
+    spec = _spec(planner)
+    return dict(spec.paper_full_horizon) if spec is not None else {}
+
+
 def _ordered(names: Iterable[str], order: Sequence[str]) -> list[str]:
     names = set(names)
     return [n for n in order if n in names] + sorted(names - set(order))
@@ -158,7 +164,7 @@ def families(records: Iterable[dict[str, Any]]) -> list[str]:
 
 
 def planners(records: Iterable[dict[str, Any]]) -> list[str]:
-    return _ordered((r["planner"] for r in records), PLANNER_ORDER)
+    return _ordered((r["planner"] for r in records), registry.table_order())
 
 
 def family_records(records: Iterable[dict[str, Any]]) -> list[dict[str, Any]]:
@@ -218,7 +224,7 @@ def mapush_criteria_table(records: Sequence[dict[str, Any]]) -> dict[str, dict[s
 
 def full_horizon_table(records: Sequence[dict[str, Any]]) -> dict[str, dict[str, Rate]]:
     """Table II: full-horizon plan rate of the LAMP planners per family (plus ``"all"``)."""
-    return _rate_table(records, run_full_horizon, only=LAMP_PLANNERS)
+    return _rate_table(records, run_full_horizon, only=registry.lamp_planners())
 
 
 def median_planning_time_table(records: Sequence[dict[str, Any]]
@@ -377,8 +383,7 @@ def iros_summary(records: Sequence[dict[str, Any]]) -> list[IrosRun]:
             # one definition of "per segment" everywhere: all planning over executed segments
             mean_planning_time_s=(total / seg) if seg else None, planning_time_s=times,
             makespan=int(r.get("makespan") or 0)))
-    order = {p: i for i, p in enumerate(PLANNER_ORDER)}
-    runs.sort(key=lambda x: (order.get(x.planner, 99), x.planner, x.seed))
+    runs.sort(key=lambda x: (_rank(x.planner), x.planner, x.seed))
     return runs
 
 
@@ -393,19 +398,23 @@ def failure_line(config: dict[str, Any], records: Sequence[dict[str, Any]]) -> f
 
 
 # ------------------------------------------------------------------------------ figures
-COLORS = {"gco-ori": "#8c564b", "gco-var": "#d62728", "astar": "#1f77b4",
-          "astar-replan": "#9467bd", "lazy": "#2ca02c", "mapush": "#7f7f7f"}
 FAMILY_COLORS = {"random": "#1f77b4", "maze": "#ff7f0e", "tilt": "#2ca02c",
                  "warehouse": "#d62728"}
-MARKERS = {"gco-ori": "o", "gco-var": "s", "astar": "^", "astar-replan": "D"}
 
 
 def _label(p: str) -> str:
-    return PLANNER_LABELS.get(p, p)
+    spec = _spec(p)
+    return spec.label if spec is not None else p
 
 
-def _order(p: str) -> int:
-    return PLANNER_ORDER.index(p) if p in PLANNER_ORDER else 99
+def _color(p: str) -> str:
+    spec = _spec(p)
+    return spec.color if spec is not None else registry.DEFAULT_COLOR
+
+
+def _marker(p: str) -> str:
+    spec = _spec(p)
+    return spec.marker if spec is not None else "o"
 
 
 def _violin_axes(ax, points: dict[str, list[tuple[str, float, bool]]], fail_value: float,
@@ -419,7 +428,7 @@ def _violin_axes(ax, points: dict[str, list[tuple[str, float, bool]]], fail_valu
         if vals.size >= 2 and np.ptp(vals) > 0:
             parts = ax.violinplot([vals], positions=[i], widths=0.8, showextrema=False)
             for body in parts["bodies"]:
-                body.set_facecolor(COLORS.get(p, "#7f7f7f"))
+                body.set_facecolor(_color(p))
                 body.set_alpha(0.3)
         if vals.size:
             ax.boxplot([vals], positions=[i], widths=0.12, showfliers=False,
@@ -491,7 +500,7 @@ def plot_path_cost(costs: dict[str, PathCost], path: Path) -> Path | None:
             ratio = f"{pc.mean_ratio:.2f}"
         else:
             xs, ys, ratio = [], [], "-"
-        ax.scatter(xs, ys, marker=MARKERS.get(base, "o"), color=COLORS.get(base, "#7f7f7f"),
+        ax.scatter(xs, ys, marker=_marker(base), color=_color(base),
                    s=22, alpha=0.8,
                    label=f"{_label(base)}: n={pc.n}, ratio={ratio}, "
                          f"DNF {pc.dnf_baseline}/{pc.dnf_reference}")
@@ -519,7 +528,7 @@ def plot_iros(runs: Sequence[IrosRun], path: Path) -> Path | None:
         if not run.planning_time_s:
             continue
         ax.plot(range(1, len(run.planning_time_s) + 1), run.planning_time_s, marker=".",
-                lw=0.8, color=COLORS.get(run.planner, "#7f7f7f"),
+                lw=0.8, color=_color(run.planner),
                 label=f"{_label(run.planner)} (seed {run.seed})")
     ax.set_yscale("log")
     ax.set_xlabel("executed segment")
@@ -552,11 +561,11 @@ def success_markdown(table: dict[str, dict[str, Rate]], fams: Sequence[str]) -> 
     rows = []
     if any(f in FAMILY_ORDER for f in fams) and "mapush" not in table:
         rows.append(["MAPush (paper only, not run)"]
-                    + [(f"[paper {PAPER_SUCCESS['mapush'][f]:.0f}%]" if f in FAMILY_ORDER
+                    + [(f"[paper {paper_success('mapush')[f]:.0f}%]" if f in FAMILY_ORDER
                         else "-") for f in fams] + ["-"])
     for p, row in table.items():
         # the paper's MAPush row counts MAPush's criterion: it is beside that one instead
-        ref = {} if p == MAPUSH_PLANNER else PAPER_SUCCESS.get(p, {})
+        ref = {} if p == MAPUSH_PLANNER else paper_success(p)
         label = _label(p) + (" (strict criterion)" if p == MAPUSH_PLANNER else "")
         rows.append([label] + [row[f].cell() + _paper(ref.get(f)) for f in fams]
                     + [row["all"].cell()])
@@ -565,7 +574,7 @@ def success_markdown(table: dict[str, dict[str, Rate]], fams: Sequence[str]) -> 
 
 def mapush_criteria_markdown(table: dict[str, dict[str, Rate]], fams: Sequence[str]) -> str:
     """Both criteria of the MAPush runs; the paper's MAPush figures beside MAPush's one."""
-    ref = PAPER_SUCCESS[MAPUSH_PLANNER]
+    ref = paper_success(MAPUSH_PLANNER)
     labels = {"mapush": "MAPush criterion (0.5 m, position only, 120 s)",
               "strict": "strict criterion (0.1 m and 0.1 rad, as Table I)"}
     rows = [[labels[name]] + [row[f].cell() + (_paper(ref.get(f)) if name == "mapush" else "")
@@ -577,7 +586,7 @@ def mapush_criteria_markdown(table: dict[str, dict[str, Rate]], fams: Sequence[s
 def full_horizon_markdown(table: dict[str, dict[str, Rate]], fams: Sequence[str]) -> str:
     rows = []
     for p, row in table.items():
-        ref = PAPER_FULL_HORIZON.get(p, {})
+        ref = paper_full_horizon(p)
         rows.append([_label(p)] + [row[f].cell() + _paper(ref.get(f)) for f in fams]
                     + [row["all"].cell()])
     return _table(["method", *fams, "all"], rows)
@@ -658,7 +667,7 @@ def _config_markdown(config: dict[str, Any], records: Sequence[dict[str, Any]]) 
     # lines without a run id are older than the first line with one
     first = min((rid for c in by_run.values() for rid in c if rid is not None), default=None)
     older = ("" if not first else " (run 0)" if first == 1 else f" (runs 0-{first - 1})")
-    for p, c in sorted(by_run.items(), key=lambda kv: _order(kv[0])):
+    for p, c in sorted(by_run.items(), key=lambda kv: _rank(kv[0])):
         parts = []
         for rid, n in sorted(c.items(), key=lambda kv: (kv[0] is None, kv[0] or 0)):
             if rid is None:
@@ -696,7 +705,7 @@ def _config_markdown(config: dict[str, Any], records: Sequence[dict[str, Any]]) 
         f"{_label(p)} {sum(c.values())}"
         + (" (" + ", ".join(f"{k} {v}" for k, v in sorted(c.items()) if k != "ok") + ")"
            if any(k != "ok" for k in c) else "")
-        for p, c in sorted(counts.items(), key=lambda kv: _order(kv[0]))))
+        for p, c in sorted(counts.items(), key=lambda kv: _rank(kv[0]))))
     return "\n".join(lines)
 
 
@@ -763,9 +772,7 @@ def build_report(run_dir: str | Path) -> Path:
         reasons = failure_reasons(main)
         if reasons:
             rows = [[_label(p), "; ".join(f"{k}: {v}" for k, v in c.most_common())]
-                    for p, c in sorted(reasons.items(), key=lambda kv:
-                                       PLANNER_ORDER.index(kv[0]) if kv[0] in PLANNER_ORDER
-                                       else 99)]
+                    for p, c in sorted(reasons.items(), key=lambda kv: _rank(kv[0]))]
             md += ["## Failure reasons", "", _table(["method", "reasons (runs)"], rows), ""]
     runs = iros_summary(records)
     n_obj = max((len(r.objects) for r in runs), default=9)

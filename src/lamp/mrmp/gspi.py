@@ -441,7 +441,9 @@ def _run(graph: Graph, V: int, gv0: int, hs: GoalDistances, goal: np.ndarray,
     while True:
         t_chunk = time.perf_counter()
         t_prev = out.t
-        t1 = min(out.t + chunk, max_steps)
+        # never past the step where a stall would be declared: where the search stops
+        # then depends on the steps alone, not on how the clock cut them into chunks
+        t1 = min(out.t + chunk, max_steps, best_t + stall_steps + 1)
         t_new, out.done = run_steps(graph, V, gv0, hs, cur, goal, prio, two_r, seed_i,
                                     opts.goal_swapping, out.hist, hsum, out.t, t1,
                                     max_candidates)

@@ -18,7 +18,7 @@ import numpy as np
 if TYPE_CHECKING:
     from lamp.planners.verify import Transition
 
-__all__ = ["ObjectPlanner", "Plan", "PlanStatus"]
+__all__ = ["LoopPolicy", "ObjectPlanner", "Plan", "PlanStatus"]
 
 Edge = tuple[np.ndarray, np.ndarray]
 
@@ -31,7 +31,8 @@ class PlanStatus(str, Enum):
     START_BLOCKED = "start_blocked"
     #: No object route to the goal remains (every route is blocked or was exhausted).
     NO_PATH = "no_path"
-    #: A deterministic count ran out (plan iterations, search expansions).
+    #: A deterministic count ran out (plan iterations, Verify calls, search expansions):
+    #: ``Plan.limit`` names it.
     BUDGET_EXHAUSTED = "budget_exhausted"
     #: The wall-clock deadline passed.
     TIME_LIMIT = "time_limit"
@@ -47,7 +48,7 @@ _REASONS = {
     PlanStatus.SOLVED: "",
     PlanStatus.START_BLOCKED: "no plan found: the object's pose cannot join the lattice",
     PlanStatus.NO_PATH: "no plan found",
-    PlanStatus.BUDGET_EXHAUSTED: "no plan found: plan iterations exhausted",
+    PlanStatus.BUDGET_EXHAUSTED: "no plan found: a search budget exhausted",
     PlanStatus.TIME_LIMIT: "planning time limit",
     PlanStatus.PUSH_UNREACHABLE: "robots cannot reach the push",
 }
@@ -65,11 +66,22 @@ class Plan:
     transitions: list[Transition] = field(default_factory=list)
     verified_edges: list[Edge] = field(default_factory=list)
     penalised_edges: list[Edge] = field(default_factory=list)
+    #: Which limit ended a ``BUDGET_EXHAUSTED`` or ``TIME_LIMIT`` call: the name of the
+    #: ``PlannerConfig`` count that ran out (``max_plan_iterations``, ``max_verify_calls``,
+    #: ``astar_max_expansions``) or ``"deadline"`` (wall clock); "" otherwise.
+    limit: str = ""
 
     def __post_init__(self) -> None:
         if (self.status is PlanStatus.SOLVED) != bool(self.transitions):
             raise ValueError(f"a {self.status.value} plan with {len(self.transitions)} "
                              "transitions: SOLVED plans, and only they, have transitions")
+
+    @property
+    def reason(self) -> str:
+        """The result.json wording of how the call ended, naming the limit that fired."""
+        if self.status is PlanStatus.BUDGET_EXHAUSTED and self.limit:
+            return f"no plan found: {self.limit} exhausted"
+        return self.status.reason
 
     @property
     def solved(self) -> bool:
@@ -83,8 +95,8 @@ class Plan:
         return np.array([self.transitions[0].q_from] + [t.q_to for t in self.transitions])
 
     @staticmethod
-    def failed(status: PlanStatus, penalised: list[Edge] | None = None) -> Plan:
-        return Plan(status, [], [], list(penalised or []))
+    def failed(status: PlanStatus, penalised: list[Edge] | None = None, limit: str = "") -> Plan:
+        return Plan(status, [], [], list(penalised or []), limit)
 
 
 class ObjectPlanner(Protocol):
@@ -102,3 +114,20 @@ class ObjectPlanner(Protocol):
     def clear(self) -> None:
         """Forget caches and penalties: the next ``plan`` starts from scratch."""
         ...
+
+
+@dataclass(frozen=True)
+class LoopPolicy:
+    """When the closed loop (``lamp.planners.closed_loop.run_object``) calls ``plan`` again."""
+
+    #: Replan on Drift: the object missed its planned pose after a segment (Alg. 2 line 6).
+    replan_on_drift: bool
+    #: Replan when the plan is used up but the object is not at its goal.
+    replan_when_done: bool
+    #: Plans yield a full horizon (LAMP); GCo's one-step "plans" do not.
+    full_horizon: bool = True
+    #: A failed plan call ends the object (LAMP) or only wastes one iteration (GCo).
+    failure_is_final: bool = True
+    #: A push that executed but barely moved the object is reported to the planner
+    #: (``report_failure``) and the rest of the plan dropped (LAMP-Lazy).
+    replan_on_stall: bool = False

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from lamp.geometry.se2 import pose_distance
-from lamp.planners.base import ObjectPlanner
+from lamp.planners.base import LoopPolicy, ObjectPlanner
 from lamp.planners.config import segment_limit
 from lamp.planners.long_push import merge, take_long_push
 from lamp.planners.result import (
@@ -33,19 +33,6 @@ from lamp.planners.robots import robots_match
 from lamp.planners.task import ManipulationTask
 from lamp.planners.trajectory import concat, straight_moves
 from lamp.planners.verify import Transition, reroute
-
-
-@dataclass(frozen=True)
-class LoopPolicy:
-    replan_on_drift: bool
-    replan_when_done: bool
-    #: Plans yield a full horizon (LAMP); GCo's one-step "plans" do not.
-    full_horizon: bool = True
-    #: A failed plan call ends the object (LAMP) or only wastes one iteration (GCo).
-    failure_is_final: bool = True
-    #: A push that executed but barely moved the object is reported to the planner
-    #: (``report_failure``) and the rest of the plan dropped (LAMP-Lazy).
-    replan_on_stall: bool = False
 
 
 @dataclass
@@ -165,7 +152,7 @@ def run_object(task: ManipulationTask, planner: ObjectPlanner, policy: LoopPolic
             replanned = True
             if not plan_obj.solved:
                 if policy.failure_is_final:
-                    reason = plan_obj.status.reason
+                    reason = plan_obj.reason
                     break
                 iterations += 1
                 continue

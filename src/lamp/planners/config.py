@@ -3,37 +3,49 @@
 from __future__ import annotations
 
 import math
+import sys
 from dataclasses import dataclass
-from typing import Literal
+from typing import Any, Literal
 
-#: The planner names (``lamp run --planner``, ``lamp.solve``) and what each stands for.
-PLANNER_DESCRIPTIONS = {
-    "lazy": "LAMP-Lazy (default)",
-    "astar": "LAMP-A*, open loop",
-    "astar-replan": "LAMP-A*, replanning on drift",
-    "gco-ori": "GCo with its 0.2 m buffer",
-    "gco-var": "GCo with zero buffer",
-    "mapush": "MAPush-style RL baseline (lattice subgoals + PPO pushing policy)",
-}
+#: The names of the built-in planners (``lamp run --planner``, ``lamp.solve``); the
+#: registry (``lamp.planners.registry``) holds what each one is.
 PlannerName = Literal["lazy", "astar", "astar-replan", "gco-ori", "gco-var", "mapush"]
-#: Default cumulative planning limit per object (s): the paper's 500 s for LAMP-A*,
-#: ``DEFAULT_PLANNING_LIMIT`` for every other planner.
+#: Cumulative planning limit per object (s) of a planner that does not set its own
+#: (``PlannerSpec.planning_limit``; LAMP-A* keeps the paper's 500 s).
 DEFAULT_PLANNING_LIMIT = 300.0
-PLANNING_LIMIT_OVERRIDES = {"astar": 500.0, "astar-replan": 500.0}
+
+
+def __getattr__(name: str) -> Any:
+    if name == "PLANNER_DESCRIPTIONS":  # name -> description, read from the registry
+        from lamp.planners import registry
+
+        return {s.name: s.description for s in registry.specs()}
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def default_planning_limit(planner: str) -> float:
     """The cumulative planning limit per object that ``planner`` runs under by default."""
-    return PLANNING_LIMIT_OVERRIDES.get(planner, DEFAULT_PLANNING_LIMIT)
+    from lamp.planners import registry
+
+    return registry.get(planner).planning_limit
 
 
 def planning_limit_help() -> str:
     """The per-planner defaults in words, e.g. ``300 s; 500 s for astar, astar-replan``."""
+    from lamp.planners import registry
+
     by_value: dict[float, list[str]] = {}
-    for name, value in PLANNING_LIMIT_OVERRIDES.items():
-        by_value.setdefault(value, []).append(name)
-    return f"{DEFAULT_PLANNING_LIMIT:g} s; " + "; ".join(
-        f"{v:g} s for {', '.join(names)}" for v, names in by_value.items())
+    for spec in registry.specs():
+        if spec.planning_limit != DEFAULT_PLANNING_LIMIT:
+            by_value.setdefault(spec.planning_limit, []).append(spec.name)
+    return f"{DEFAULT_PLANNING_LIMIT:g} s" + "".join(
+        f"; {v:g} s for {', '.join(names)}" for v, names in by_value.items())
+
+
+#: LAMP-A*'s default expansion budget per second of planning limit. It expands about 9
+#: states/s on a suite maze with the learned model (2 cores), so at 4 the count ends a
+#: search at under half the wall-clock limit, with room for a machine twice as busy.
+ASTAR_EXPANSION_RATE = 4.0
 
 
 #: The paper's limit: at most 100 executed segments ("execution iterations") per object.
@@ -64,8 +76,12 @@ class PlannerConfig:
     max_budget: int = 3
     #: Candidates per budget that are handed to Gspi before trying a smaller budget.
     gspi_attempts_per_budget: int = 3
-    #: Wall-clock limit of one Gspi call (seconds).
-    gspi_time_limit: float = 1.0
+    #: Wall-clock cap of one Gspi call inside Verify (seconds): an outer cap only. Gspi
+    #: stops on counts first (its step budget and stall count, ``lamp.mrmp.plan_paths``),
+    #: so the result does not depend on the machine's load; the cap fires only on a
+    #: machine some 10x slower than the one this was tuned on (``TaskStats.gspi_timeouts``
+    #: counts the calls it ended).
+    gspi_time_limit: float = 10.0
     #: Execution drift that triggers replanning (Alg. 2 line 6): metres / radians.
     drift_position: float = 0.05
     drift_orientation: float = 0.1
@@ -100,7 +116,14 @@ class PlannerConfig:
     #: a dead end holds dozens of states that must all be expanded before the search
     #: backs out; 2 keeps two ways of standing around each object pose.
     astar_states_per_node: int | None = 2
-    #: Cumulative planning limit per object (s): the paper's 500 s for LAMP-A*.
+    #: Most states LAMP-A* expands per object, over all its ``plan`` calls
+    #: (``BUDGET_EXHAUSTED``): the deterministic limit of the search, of which the
+    #: cumulative planning time limit is only the outer cap. None: ``ASTAR_EXPANSION_RATE``
+    #: per second of ``planning_time_limit`` (2000 for the paper's 500 s).
+    astar_max_expansions: int | None = None
+    #: Cumulative planning limit per object (s): the paper's 500 s for LAMP-A*. Wall
+    #: clock, so an outer cap: the counts (plan iterations, Verify calls, expansions)
+    #: end a search first on an unloaded machine.
     planning_time_limit: float = 500.0
     #: Robot configurations closer than this (m, per robot) count as the same (D_T keys).
     robot_match_tolerance: float = 0.05
@@ -108,14 +131,31 @@ class PlannerConfig:
     contact_tolerance: float = 0.006
     #: Largest number of D* Lite replans inside one Plan call before giving up.
     max_plan_iterations: int = 400
+    #: Most Verify calls in one LAMP-Lazy Plan call (``BUDGET_EXHAUSTED``).
+    max_verify_calls: int = 4000
 
     def __post_init__(self) -> None:
-        if self.max_segments is not None and (isinstance(self.max_segments, bool)
-                                              or int(self.max_segments) != self.max_segments
-                                              or self.max_segments < 1):
-            raise ValueError(f"max_segments must be a positive integer or None, got "
-                             f"{self.max_segments!r}")
-        if not (math.isfinite(self.long_push_length) and self.long_push_length >= 0):
-            raise ValueError(f"long_push_length must be >= 0, got {self.long_push_length!r}")
-        if not (math.isfinite(self.continuous_push_gap) and self.continuous_push_gap >= 0):
-            raise ValueError(f"continuous_push_gap must be >= 0, got {self.continuous_push_gap!r}")
+        for name in ("max_plan_iterations", "max_verify_calls", "astar_max_expansions",
+                     "max_segments"):
+            value = getattr(self, name)
+            if value is None and name in ("astar_max_expansions", "max_segments"):
+                continue
+            if not (isinstance(value, int) and not isinstance(value, bool) and value >= 1):
+                raise ValueError(f"PlannerConfig.{name}: a positive integer, got {value!r}")
+        for name in ("gspi_time_limit", "planning_time_limit"):
+            value = getattr(self, name)
+            if not (isinstance(value, int | float) and value > 0):
+                raise ValueError(f"PlannerConfig.{name}: positive seconds, got {value!r}")
+        for name in ("long_push_length", "continuous_push_gap"):
+            value = getattr(self, name)
+            if not (isinstance(value, int | float) and math.isfinite(value) and value >= 0):
+                raise ValueError(f"PlannerConfig.{name}: a length >= 0 m, got {value!r}")
+
+    @property
+    def astar_expansions(self) -> int:
+        """LAMP-A*'s expansion budget per object (``astar_max_expansions`` or its default)."""
+        if self.astar_max_expansions is not None:
+            return self.astar_max_expansions
+        if not math.isfinite(self.planning_time_limit):
+            return sys.maxsize
+        return max(1, round(ASTAR_EXPANSION_RATE * self.planning_time_limit))

@@ -70,7 +70,9 @@ class GCoPlanner:
         q_to = self._next_pose(q_O, deadline)
         if q_to is None:
             timed_out = deadline is not None and time.perf_counter() > deadline
-            return Plan.failed(PlanStatus.TIME_LIMIT if timed_out else PlanStatus.NO_PATH)
+            if timed_out:
+                return Plan.failed(PlanStatus.TIME_LIMIT, limit="deadline")
+            return Plan.failed(PlanStatus.NO_PATH)
         motion = se2.relative(q_O, q_to)
         budget = min(task.n_robots, task.config.max_budget)
         seed = (task.seed * 7919 + self.iteration) % (2**31 - 1)

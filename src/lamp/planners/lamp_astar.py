@@ -58,6 +58,7 @@ class LampAStar:
         self.task = task
         self.lattice = goal_lattice(task)
         self.to_goal = ReverseDistance(self.lattice, self.lattice.goal_node)
+        self.clear()
 
     def _robot_key(self, q_R: np.ndarray) -> tuple:
         """Explored-state key for robots: positions on a ``robot_match_tolerance`` grid, sorted
@@ -82,9 +83,17 @@ class LampAStar:
         """Nothing to forget: every search starts afresh (LAMP-A* keeps no cache)."""
 
     def clear(self) -> None:
-        """Nothing to clear (see ``report_failure``)."""
+        """Restore the full expansion budget (``PlannerConfig.astar_expansions``); LAMP-A*
+        keeps no cache."""
+        #: States expanded so far by this object's searches (the budget is per object).
+        self.expanded = 0
 
     def plan(self, q_O: np.ndarray, q_R: np.ndarray, deadline: float | None = None) -> Plan:
+        """Alg. 1 from the current state. Departure: the paper's search runs until its time
+        limit; here the searches of one object expand at most ``config.astar_expansions``
+        states together (``BUDGET_EXHAUSTED``; a count, like the cumulative limit it stands
+        for, so the result does not depend on the machine's speed) and ``deadline``
+        (``TIME_LIMIT``) is only an outer cap."""
         cfg = self.task.config
         goal = self.lattice.goal_node
         start_node, self._start_edges = join_lattice(self.lattice, np.asarray(q_O, float))
@@ -102,17 +111,21 @@ class LampAStar:
         explored: dict[tuple, SearchState] = {(start_node, self._robot_key(start.q_R)): start}
         per_node: dict[object, int] = {}
         cap = cfg.astar_states_per_node
+        budget = cfg.astar_expansions
         while open_list:  # line 3: until the time limit is reached
             if deadline is not None and time.perf_counter() > deadline:
-                return Plan.failed(PlanStatus.TIME_LIMIT)
+                return Plan.failed(PlanStatus.TIME_LIMIT, limit="deadline")
             f, _, _, s = heapq.heappop(open_list)  # line 4: Open.pop
             if f < s.cost + self._h(s) + penalty.get(id(s), 0.0) - 1e-9:
                 continue  # stale entry: the state's cost or penalty changed since
             if s.node == goal:  # line 6: ReachGoal
                 return self._backtrack(s)
+            if self.expanded >= budget:  # departure: a count, not the clock
+                return Plan.failed(PlanStatus.BUDGET_EXHAUSTED, limit="astar_max_expansions")
+            self.expanded += 1
             for v, q_next in self._successors(s):  # line 7: each motion primitive
                 if deadline is not None and time.perf_counter() > deadline:
-                    return Plan.failed(PlanStatus.TIME_LIMIT)
+                    return Plan.failed(PlanStatus.TIME_LIMIT, limit="deadline")
                 trans = verify(self.task, s.q_O, q_next, s.q_R, attempt=s.expansions)  # line 8: Verify
                 if trans is None:  # line 9: no C_R, continue
                     continue

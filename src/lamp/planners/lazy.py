@@ -113,14 +113,21 @@ class LazyPlanner:
         """``Plan`` (Alg. 2 lines 8-42): a full-horizon plan from the current state.
 
         Departure: the paper's loop (lines 10-40) runs until a plan is found; here it runs at
-        most ``max_plan_iterations`` times (``BUDGET_EXHAUSTED``) and stops at ``deadline``.
+        most ``max_plan_iterations`` times and makes at most ``max_verify_calls`` Verify
+        calls (both ``BUDGET_EXHAUSTED``, ``Plan.limit`` naming the count): counts, so
+        the result does not depend on the machine's speed; ``deadline`` (``TIME_LIMIT``) is
+        only an outer cap.
         """
         cfg = self.task.config
         tol = cfg.robot_match_tolerance
         goal = self.lattice.goal_node
+        stats = self.task.stats
+        verify_cap = stats.verify_calls + cfg.max_verify_calls
         for _ in range(cfg.max_plan_iterations):
+            if stats.verify_calls >= verify_cap:
+                return Plan.failed(PlanStatus.BUDGET_EXHAUSTED, self.penalised, "max_verify_calls")
             if deadline is not None and time.perf_counter() > deadline:
-                return Plan.failed(PlanStatus.TIME_LIMIT, self.penalised)
+                return Plan.failed(PlanStatus.TIME_LIMIT, self.penalised, "deadline")
             start, edges = join_lattice(self.lattice, np.asarray(q_O_now, float))
             if edges == []:
                 return Plan.failed(PlanStatus.START_BLOCKED, self.penalised)
@@ -135,6 +142,9 @@ class LazyPlanner:
             for nxt in path[1:]:  # line 13: each q_next on P_O
                 if self.lattice.is_node(curr) and curr in self.tree_eval:  # line 14: in Tree_eval, break
                     break
+                if stats.verify_calls >= verify_cap:
+                    return Plan.failed(PlanStatus.BUDGET_EXHAUSTED, self.penalised,
+                                       "max_verify_calls")
                 attempt = self.failures.get((curr, nxt), 0)
                 trans = verify(self.task, self.lattice.pose(curr), self.lattice.pose(nxt), q_R, attempt)
                 if trans is None:  # lines 17-20: no C_R, UpdateChange
@@ -172,4 +182,4 @@ class LazyPlanner:
             if not transitions:  # already at the goal node
                 return Plan.failed(PlanStatus.NO_PATH, self.penalised)
             return Plan(PlanStatus.SOLVED, transitions, verified, list(self.penalised))
-        return Plan.failed(PlanStatus.BUDGET_EXHAUSTED, self.penalised)
+        return Plan.failed(PlanStatus.BUDGET_EXHAUSTED, self.penalised, "max_plan_iterations")

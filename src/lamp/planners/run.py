@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -9,13 +10,9 @@ from typing import Any
 
 import numpy as np
 
-from lamp.planners.closed_loop import LoopPolicy, LoopRecord, SegmentEvent, run_object
-from lamp.planners.config import (
-    PLANNER_DESCRIPTIONS,
-    PlannerConfig,
-    PlannerName,
-    default_planning_limit,
-)
+from lamp.planners import registry
+from lamp.planners.closed_loop import LoopRecord, SegmentEvent, run_object
+from lamp.planners.config import PlannerConfig, PlannerName
 from lamp.planners.models import load_proposer as _load_proposer
 from lamp.planners.result import RunResult
 from lamp.planners.task import ManipulationTask, TaskStats
@@ -24,48 +21,29 @@ from lamp.scene.loader import SceneError
 from lamp.scene.model import Scene
 from lamp.warmup import ensure_warm
 
-#: Planner names accepted by ``lamp run --planner`` (interfaces spec).
-PLANNERS = tuple(PLANNER_DESCRIPTIONS)
 
-POLICIES = {
-    "lazy": LoopPolicy(replan_on_drift=True, replan_when_done=True, replan_on_stall=True),
-    "astar": LoopPolicy(replan_on_drift=False, replan_when_done=False),
-    "astar-replan": LoopPolicy(replan_on_drift=True, replan_when_done=True),
-    "gco-ori": LoopPolicy(replan_on_drift=False, replan_when_done=True, full_horizon=False,
-                          failure_is_final=False),
-    "gco-var": LoopPolicy(replan_on_drift=False, replan_when_done=True, full_horizon=False,
-                          failure_is_final=False),
-}
+def __getattr__(name: str) -> Any:
+    if name == "PLANNERS":  # planner names accepted by ``lamp run --planner`` (the registry's)
+        return registry.names()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def check_planner(name: str) -> str:
     """``name`` if it is a planner name; else ``ValueError`` with the names and a hint."""
-    if name not in PLANNERS:
-        import difflib
-
-        hint = difflib.get_close_matches(str(name), PLANNERS, n=1)
-        did = f"; did you mean {hint[0]!r}?" if hint else ""
-        raise ValueError(f"unknown planner {name!r}; expected one of: {', '.join(PLANNERS)}{did}")
-    return name
+    return registry.get(name).name
 
 
 def default_config(planner: str) -> PlannerConfig:
-    """Per-planner defaults: LAMP-A* keeps the paper's 500 s cumulative limit."""
-    return PlannerConfig(planning_time_limit=default_planning_limit(check_planner(planner)))
+    """Per-planner defaults: the planner's own cumulative limit (``PlannerSpec.planning_limit``)."""
+    return PlannerConfig(planning_time_limit=registry.get(planner).planning_limit)
 
 
 def make_planner(name: str, task: ManipulationTask):
-    if name == "lazy":
-        from lamp.planners.lazy import LazyPlanner
-
-        return LazyPlanner(task)
-    if name in ("astar", "astar-replan"):
-        from lamp.planners.lamp_astar import LampAStar
-
-        return LampAStar(task)
-    from lamp.planners.gco import GCoPlanner
-
-    return GCoPlanner(task, inflation=0.2 if name == "gco-ori" else 0.0)
+    """The closed-loop planner ``name`` for ``task``'s object."""
+    spec = registry.get(name)
+    if spec.factory is None:
+        raise ValueError(f"planner {name!r} runs whole scenes, not in the closed loop")
+    return spec.factory(task)
 
 
 def load_proposer(model: str | Path | Any = "learned") -> Any:
@@ -150,12 +128,17 @@ def run_scene(scene: Scene, planner: str, seed: int, model: str | Path | Any, *,
     from lamp.sim import Simulator
     from lamp.sim.mjcf import TIMESTEP
 
-    check_planner(planner)
-    if planner == "mapush":
-        from lamp.planners.mapush import solve_mapush
-
-        return solve_mapush(scene, seed, render=render, progress=progress)
+    spec = registry.get(planner)
+    if spec.runner is not None:
+        return spec.runner(scene, int(seed), model=model, config=config, render=render,
+                           time_limit=time_limit, progress=progress)
     cfg = config or default_config(planner)
+    if time_limit is not None:  # the budgets that stand for the limit follow it
+        if not float(time_limit) > 0:
+            from lamp.errors import InputError
+
+            raise InputError(f"time_limit: positive seconds, got {time_limit!r}")
+        cfg = dataclasses.replace(cfg, planning_time_limit=float(time_limit))
     proposer = load_proposer(model)
     check_robot_radius(scene, proposer)
     t_start = time.perf_counter()
@@ -181,7 +164,7 @@ def run_scene(scene: Scene, planner: str, seed: int, model: str | Path | Any, *,
                                 seed=int(seed) * 1000 + index)
         record = LoopRecord()
         emit("object", index)
-        obj = run_object(task, make_planner(planner, task), POLICIES[planner], sim, record,
+        obj = run_object(task, spec.factory(task), spec.policy, sim, record,
                          render=render, time_limit=time_limit, observer=observe)
         emit("object-done", index, segments=obj.segments, replans=obj.replans,
              success=obj.success)

@@ -78,6 +78,9 @@ class TaskStats:
     model_calls: int = 0
     gspi_calls: int = 0
     gspi_success: int = 0
+    #: Gspi calls ended by the wall-clock cap ``gspi_time_limit`` (0 on an unloaded
+    #: machine: then no result depended on the clock).
+    gspi_timeouts: int = 0
     cache_hits: int = 0
 
     def add(self, other: TaskStats) -> None:

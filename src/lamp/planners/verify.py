@@ -160,7 +160,8 @@ def approach(task: ManipulationTask, q_from: np.ndarray, q_R: np.ndarray,
     way a larger window may fix (a goal unreachable, a stall, the step budget; not the
     time limit nor an invalid start or goal) and the window does not hold the whole map, the
     window's margin and least side are doubled (up to ``WINDOW_MAX_SIDE``) and Gspi tries
-    again in the time left of the one ``gspi_time_limit``."""
+    again. Gspi ends on its step and stall counts; ``gspi_time_limit`` caps all the
+    windows' calls together, as an outer wall-clock cap."""
     backoff = leave_contact(task, q_from, q_R)
     starts = backoff[:, -1]
     task.stats.gspi_calls += 1
@@ -178,6 +179,8 @@ def approach(task: ManipulationTask, q_from: np.ndarray, q_R: np.ndarray,
         )
         if plan.success:
             break
+        if plan.status is GspiStatus.TIME_LIMIT:
+            task.stats.gspi_timeouts += 1
         wider = task.window(q_from, q_R, 2.0 * scale)
         if (space.covers_workspace or plan.status not in _WINDOW_BOUND
                 or max(wider[2] - wider[0], wider[3] - wider[1]) > WINDOW_MAX_SIDE

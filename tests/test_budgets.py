@@ -1,0 +1,164 @@
+"""Deterministic budgets: planners stop on counts, wall time is only an outer cap.
+
+Under simulated load (every ``time.perf_counter`` reading runs 8x fast, so each
+wall-clock limit fires 8x earlier) a run gives the same result; a count that runs out
+says which one in the plan's status and the object's failure reason.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pytest
+
+import lamp
+from lamp.planners.base import PlanStatus
+from lamp.planners.config import PlannerConfig
+from lamp.planners.lamp_astar import LampAStar
+from lamp.planners.lazy import LazyPlanner
+from lamp.planners.task import ManipulationTask
+from lamp.scene import scene_from_dict
+
+TIME_KEYS = {"planning_time_s", "total_planning_time_s", "median_planning_time_s",
+             "wall_time_s", "executed_planning_time_s", "unexecuted_planning_time_s",
+             "planning_time_per_segment_s"}
+
+SCENE = {
+    "format": "lamp-scene/1", "name": "budgets", "workspace": [2.4, 2.0],
+    "robots": {"radius": 0.05, "starts": [[0.2, 0.3], [0.2, 0.6], [0.2, 0.9]]},
+    "obstacles": [{"type": "rectangle", "center": [1.3, 0.75], "size": [0.1, 0.9]},
+                  {"type": "circle", "center": [0.6, 1.6], "radius": 0.15}],
+    "objects": [{"type": "rectangle", "size": [0.3, 0.2], "start": [0.8, 1.0, 0.0],
+                 "goal": [1.8, 0.55, 1.5708]}],
+}
+
+
+@pytest.fixture(scope="module")
+def proposer():
+    from lamp.manip import GeometricProposer
+
+    return GeometricProposer()
+
+
+def strip_times(d: dict) -> dict:
+    d = {k: v for k, v in d.items() if k not in TIME_KEYS}
+    d["objects"] = [{k: v for k, v in o.items() if k != "planning_time_s"} for o in d["objects"]]
+    return d
+
+
+def loaded_clock(monkeypatch, factor: float) -> None:
+    """Make ``time.perf_counter`` (what every planner module reads) run ``factor`` x fast."""
+    real = time.perf_counter
+    t0 = real()
+    monkeypatch.setattr(time, "perf_counter", lambda: t0 + (real() - t0) * factor)
+
+
+@pytest.mark.parametrize("planner", ["lazy", "astar"])
+def test_same_result_under_load(planner, proposer, monkeypatch):
+    scene = scene_from_dict(SCENE)
+    # a planning limit that the unloaded run keeps well inside even when it is 8x shorter
+    calm = lamp.solve(scene, planner, seed=1, model=proposer, time_limit=60.0).to_dict()
+    assert calm["stats"]["gspi_calls"] > 0 and calm["stats"]["gspi_timeouts"] == 0
+    loaded_clock(monkeypatch, 8.0)
+    busy = lamp.solve(scene, planner, seed=1, model=proposer, time_limit=60.0).to_dict()
+    assert strip_times(busy) == strip_times(calm)
+
+
+def test_same_result_on_a_maze_under_heavy_load(proposer, monkeypatch):
+    """A suite maze (about 70 Gspi calls of up to ~50 ms) under a 25x fast clock: the
+    former 1 s Gspi limit (40 ms at that speed) cut some calls short and changed the run;
+    the counts do not depend on the clock."""
+    from importlib.resources import files
+
+    from lamp.scene import load_scene
+
+    scene = load_scene(files("lamp.suites") / "data" / "maze" / "maze-03.yaml")
+    calm = lamp.solve(scene, "lazy", seed=0, model=proposer).to_dict()
+    assert calm["success"] and calm["stats"]["gspi_timeouts"] == 0
+    loaded_clock(monkeypatch, 25.0)
+    busy = lamp.solve(scene, "lazy", seed=0, model=proposer).to_dict()
+    assert strip_times(busy) == strip_times(calm)
+
+
+def test_the_clock_is_still_an_outer_cap(proposer, monkeypatch):
+    """A clock 10^6 x fast ends the search on the deadline, and the status says so."""
+    scene = scene_from_dict(SCENE)
+    loaded_clock(monkeypatch, 1e6)
+    res = lamp.solve(scene, "lazy", seed=1, model=proposer, time_limit=60.0).to_dict()
+    assert not res["success"]
+    assert res["objects"][0]["failure_reason"] == PlanStatus.TIME_LIMIT.reason
+
+
+def _task(proposer, config: PlannerConfig) -> ManipulationTask:
+    scene = scene_from_dict(SCENE)
+    poses = np.array([o.start for o in scene.objects], float)
+    return ManipulationTask(scene, 0, poses, proposer, config, seed=1)
+
+
+def test_lazy_verify_budget_names_itself(proposer):
+    task = _task(proposer, PlannerConfig(max_verify_calls=2))
+    plan = LazyPlanner(task).plan(task.object_poses[0], task.scene.robot_starts_array)
+    assert plan.status is PlanStatus.BUDGET_EXHAUSTED and plan.limit == "max_verify_calls"
+    assert plan.reason == "no plan found: max_verify_calls exhausted"
+    assert task.stats.verify_calls == 2  # counted from the call's start, never past it
+
+
+def test_astar_expansion_budget_names_itself(proposer):
+    task = _task(proposer, PlannerConfig(astar_max_expansions=3))
+    plan = LampAStar(task).plan(task.object_poses[0], task.scene.robot_starts_array)
+    assert plan.status is PlanStatus.BUDGET_EXHAUSTED and plan.limit == "astar_max_expansions"
+    cfg = PlannerConfig(astar_max_expansions=3, planning_time_limit=500.0)
+    res = lamp.solve(scene_from_dict(SCENE), "astar", seed=1, model=proposer, config=cfg)
+    assert res.to_dict()["objects"][0]["failure_reason"] == \
+        "no plan found: astar_max_expansions exhausted"
+
+
+def test_astar_budget_is_per_object_and_follows_the_limit(proposer):
+    """The expansions of one object's searches add up (like its cumulative planning
+    limit); ``clear`` restores the budget; by default the budget is
+    ``ASTAR_EXPANSION_RATE`` per second of the planning limit, whichever way it is set."""
+    from lamp.planners.config import ASTAR_EXPANSION_RATE
+    from lamp.planners.run import default_config
+
+    task = _task(proposer, PlannerConfig(astar_max_expansions=1000))
+    astar = LampAStar(task)
+    q_O, q_R = task.object_poses[0], task.scene.robot_starts_array
+    assert astar.plan(q_O, q_R).solved
+    used = astar.expanded
+    assert 0 < used < 1000
+    astar.task = _task(proposer, PlannerConfig(astar_max_expansions=used + 1))
+    assert astar.plan(q_O, q_R).limit == "astar_max_expansions"  # only 1 left
+    assert astar.expanded == used + 1
+    astar.clear()
+    assert astar.plan(q_O, q_R).solved and astar.expanded == used
+    assert default_config("astar").astar_expansions == round(500 * ASTAR_EXPANSION_RATE)
+    assert PlannerConfig(planning_time_limit=30.0).astar_expansions == round(
+        30 * ASTAR_EXPANSION_RATE)
+    assert PlannerConfig(planning_time_limit=float("inf")).astar_expansions > 10**9
+
+def test_solve_time_limit_sets_the_astar_budget(proposer, monkeypatch):
+    """``lamp.solve``'s ``time_limit`` stands for a budget of expansions: with the clock
+    stopped (so that no wall-clock limit can fire) a limit worth one expansion ends the
+    search on the count."""
+    from lamp.planners.config import ASTAR_EXPANSION_RATE
+
+    monkeypatch.setattr(time, "perf_counter", lambda: 0.0)
+    res = lamp.solve(scene_from_dict(SCENE), "astar", seed=1, model=proposer,
+                     time_limit=1.0 / ASTAR_EXPANSION_RATE).to_dict()
+    assert res["objects"][0]["failure_reason"] == "no plan found: astar_max_expansions exhausted"
+    assert res["stats"]["verify_calls"] > 0
+
+
+@pytest.mark.parametrize("field, value", [("max_verify_calls", 0), ("astar_max_expansions", -1),
+                                          ("max_plan_iterations", 1.5),
+                                          ("gspi_time_limit", 0.0)])
+def test_config_rejects_bad_budgets(field, value):
+    with pytest.raises(ValueError, match=field):
+        PlannerConfig(**{field: value})
+
+
+@pytest.mark.parametrize("limit", [0.0, -1.0, float("nan")])
+def test_solve_rejects_a_bad_time_limit(limit, proposer):
+    with pytest.raises(ValueError, match="time_limit: positive seconds"):
+        lamp.solve(scene_from_dict(SCENE), "lazy", model=proposer, time_limit=limit)

@@ -1,0 +1,197 @@
+"""The planner registry: validated specs, one entry adds a planner everywhere."""
+
+from __future__ import annotations
+
+import json
+import typing
+from dataclasses import replace
+
+import pytest
+from typer.testing import CliRunner
+
+import lamp
+from lamp.bench import report
+from lamp.bench.jobs import Job, planning_limit_applies
+from lamp.planners import registry
+from lamp.planners.config import PlannerName, default_planning_limit, planning_limit_help
+from lamp.planners.run import default_config, make_planner
+from lamp.scene import scene_from_dict
+
+BUILT_IN = ("lazy", "astar", "astar-replan", "gco-ori", "gco-var", "mapush")
+
+SCENE = {
+    "format": "lamp-scene/1", "name": "tiny", "workspace": [2.2, 2.0],
+    "robots": {"radius": 0.05, "starts": [[0.2, 0.3], [0.2, 0.6], [0.2, 0.9]]},
+    "obstacles": [],
+    "objects": [{"type": "rectangle", "size": [0.3, 0.2], "start": [0.85, 1.0, 0.0],
+                 "goal": [1.25, 1.0, 0.0]}],
+}
+
+
+def _lazy_factory(task):
+    from lamp.planners.lazy import LazyPlanner
+
+    return LazyPlanner(task)
+
+
+DUMMY = registry.PlannerSpec(
+    "dummy", "Dummy-Lazy", "LAMP-Lazy under another name (tests)", factory=_lazy_factory,
+    policy=registry.get("lazy").policy, planning_limit=42.0, bench_limited=True, row=4,
+    color="#123456", marker="X", lamp=True, paper_success={"random": 55},
+    paper_full_horizon={"random": 66})
+
+
+@pytest.fixture
+def dummy():
+    """``DUMMY`` registered for one test, removed after it."""
+    registry.register(DUMMY)
+    try:
+        yield DUMMY
+    finally:
+        registry.unregister("dummy")
+
+
+def test_planner_name_literal_is_the_registry():
+    assert typing.get_args(PlannerName) == registry.names() == BUILT_IN
+
+
+def test_builtin_specs_say_what_the_tables_said():
+    assert registry.table_order() == ("mapush", "gco-ori", "gco-var", "astar",
+                                      "astar-replan", "lazy")
+    assert registry.lamp_planners() == ("astar", "astar-replan", "lazy")
+    assert registry.bench_limited() == ("astar", "astar-replan")
+    assert "mapush" not in registry.bench_defaults()
+    assert [default_planning_limit(n) for n in BUILT_IN] == [300, 500, 500, 300, 300, 300]
+    assert planning_limit_help() == "300 s; 500 s for astar, astar-replan"
+    assert registry.get("mapush").runner is not None and not registry.get("mapush").closed_loop
+    assert all(registry.get(n).closed_loop for n in BUILT_IN[:-1])
+    assert report.paper_success("lazy") == {"random": 100, "maze": 96, "tilt": 100,
+                                            "warehouse": 88}
+
+
+@pytest.mark.parametrize("change, field", [
+    ({"name": "Bad Name"}, "planner name"),
+    ({"label": " "}, "label"),
+    ({"runner": lambda *a, **k: None}, "exactly one of factory"),
+    ({"factory": None}, "exactly one of factory"),
+    ({"policy": None}, "policy"),
+    ({"planning_limit": 0.0}, "planning_limit"),
+    ({"planning_limit": float("inf")}, "planning_limit"),
+    ({"color": "green"}, "color"),
+    ({"marker": "star"}, "marker"),
+    ({"paper_success": {"random": 101}}, "paper_success"),
+    ({"paper_full_horizon": {"maze": 5}, "lamp": False}, "paper_full_horizon"),
+])
+def test_spec_validation_names_the_field(change, field):
+    with pytest.raises(ValueError, match=field):
+        replace(DUMMY, **change)
+
+
+def test_spec_is_frozen_and_register_refuses_duplicates():
+    with pytest.raises(AttributeError):
+        DUMMY.label = "x"  # type: ignore[misc]
+    with pytest.raises(TypeError):
+        DUMMY.paper_success["maze"] = 1  # type: ignore[index]
+    with pytest.raises(ValueError, match="already registered"):
+        registry.register(replace(registry.get("lazy")))
+    with pytest.raises(ValueError, match="did you mean 'lazy'"):
+        registry.get("lazzy")
+
+
+def test_one_entry_adds_a_planner_everywhere(dummy, tmp_path):
+    """Registered once, the dummy runs through ``lamp.solve`` like LAMP-Lazy (the same
+    factory and policy give the same run), and the CLI, bench and report know it."""
+    from lamp.manip import GeometricProposer
+
+    scene = scene_from_dict(SCENE)
+    model = GeometricProposer()
+    got = lamp.solve(scene, "dummy", seed=3, model=model).to_dict()
+    want = lamp.solve(scene, "lazy", seed=3, model=model).to_dict()
+    assert got["planner"] == "dummy" and got["success"]
+    assert got["objects"][0]["final_pose"] == want["objects"][0]["final_pose"]
+    assert got["segments"] == want["segments"] and got["makespan"] == want["makespan"]
+    assert default_config("dummy").planning_time_limit == 42.0
+    assert type(make_planner("dummy", _task(scene, model))).__name__ == "LazyPlanner"
+
+    # bench: --planning-limit applies, the name is accepted
+    assert planning_limit_applies("dummy") and not planning_limit_applies("lazy")
+    job = Job("random", "tiny", "x.json", scene, "dummy", 0, planning_limit_s=7.0)
+    assert job.time_limit == 7.0
+    from lamp.cli import app
+
+    res = CliRunner().invoke(app, ["bench", "--suites", "iros", "--planners", "dummy",
+                                   "--out", str(tmp_path / "b"), "--dry-run"])
+    assert res.exit_code == 0, res.output
+
+    # report: a row in Tables I and II, between LAMP-A*_replan (row 4) and LAMP-Lazy (5)
+    records = [{**r, "suite": "random", "status": "ok", "seed": 0}
+               for r in (got, want, {**want, "planner": "astar-replan"})]
+    table = report.success_table(records)
+    assert list(table) == ["astar-replan", "dummy", "lazy"]
+    assert table["dummy"]["random"].cell() == report.Rate(1, 1).cell()
+    md = report.success_markdown(table, ["random"])
+    line = next(x for x in md.splitlines() if x.startswith("| Dummy-Lazy"))
+    assert "[paper 55%]" in line
+    fh = report.full_horizon_markdown(report.full_horizon_table(records), ["random"])
+    assert "| Dummy-Lazy" in fh and "[paper 66%]" in fh
+    assert report._color("dummy") == "#123456" and report._marker("dummy") == "X"
+
+    run_dir = tmp_path / "run"
+    run_dir.mkdir()
+    (run_dir / "results.jsonl").write_text("".join(json.dumps(r) + "\n" for r in records))
+    text = report.build_report(run_dir).read_text()
+    assert "Dummy-Lazy" in text
+
+
+def test_unregister_undoes_it(dummy):
+    registry.unregister("dummy")
+    try:
+        assert "dummy" not in registry.names()
+        with pytest.raises(ValueError, match="unknown planner 'dummy'"):
+            lamp.solve(scene_from_dict(SCENE), "dummy")  # type: ignore[arg-type]
+        assert report._label("dummy") == "dummy"  # old results still render
+    finally:
+        registry.register(DUMMY)
+
+
+def _task(scene, model):
+    import numpy as np
+
+    from lamp.planners.config import PlannerConfig
+    from lamp.planners.task import ManipulationTask
+
+    poses = np.array([o.start for o in scene.objects], float)
+    return ManipulationTask(scene, 0, poses, model, PlannerConfig(), seed=0)
+
+
+def test_a_whole_scene_runner_bypasses_the_loop(tmp_path):
+    """A planner with a ``runner`` is handed the scene; its ``check_scene`` guards the CLI."""
+    from lamp.planners.result import RunResult
+    from lamp.planners.run import Solution
+
+    calls = []
+
+    def runner(scene, seed, *, model, config, render, time_limit, progress):
+        calls.append((scene.name, seed, time_limit))
+        return Solution(RunResult(scene=scene.name, planner="whole", seed=seed))
+
+    def check(scene):
+        if scene.name != "tiny":
+            raise ValueError("planner whole: only the tiny scene")
+
+    registry.register(registry.PlannerSpec("whole", "Whole", "whole-scene test runner",
+                                           runner=runner, check_scene=check))
+    try:
+        res = lamp.solve(scene_from_dict(SCENE), "whole", seed=5, model="geometric",
+                         time_limit=9.0)
+        assert calls == [("tiny", 5, 9.0)] and res.planner == "whole"
+        from lamp.cli import app
+
+        other = tmp_path / "other.json"
+        other.write_text(json.dumps({**SCENE, "name": "other"}))
+        out = tmp_path / "out"
+        res = CliRunner().invoke(app, ["run", str(other), "-p", "whole", "-o", str(out)])
+        assert res.exit_code == 2 and "only the tiny scene" in res.stderr
+        assert not (out / "result.json").exists()
+    finally:
+        registry.unregister("whole")
