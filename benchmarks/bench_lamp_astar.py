@@ -43,13 +43,14 @@ def main() -> None:
     import torch
 
     torch.set_num_threads(1)
-    cfg = default_config("astar")
+    # the planning limit sets the expansion budget as in lamp bench (astar_expansions)
+    cfg = dataclasses.replace(default_config("astar"), planning_time_limit=args.limit)
     if args.weight is not None:
         cfg = dataclasses.replace(cfg, astar_heuristic_weight=args.weight)
     if args.cap is not None:
         cfg = dataclasses.replace(cfg, astar_states_per_node=args.cap or None)
     print(f"weight {cfg.astar_heuristic_weight}, states per node {cfg.astar_states_per_node}, "
-          f"limit {args.limit} s")
+          f"limit {args.limit} s, {cfg.astar_expansions} expansions")
     model = load_proposer("learned")
     summary = []
     for family in FAMILIES:
@@ -61,9 +62,9 @@ def main() -> None:
             plan = LampAStar(task).plan(poses[0], scene.robot_starts_array, deadline=t0 + args.limit)
             dt = time.perf_counter() - t0
             times.append(dt)
-            found += plan is not None
+            found += plan.solved
             what = (f"{len(plan.transitions):3d} pushes, cost {sum(map(edge_cost, plan.transitions)):6.2f} m"
-                    if plan is not None else "no plan")
+                    if plan.solved else f"no plan ({plan.status.value})")
             print(f"{scene.name:14s} {dt:6.1f} s  {task.stats.verify_calls:6d} verify  {what}", flush=True)
         summary.append(f"{family:10s} planned {found}/{len(times)}   median time {np.median(times):5.1f} s")
     print("\n".join(summary))

@@ -42,10 +42,12 @@ def planning_limit_help() -> str:
         f"; {v:g} s for {', '.join(names)}" for v, names in by_value.items())
 
 
-#: LAMP-A*'s default expansion budget per second of planning limit. It expands about 9
-#: states/s on a suite maze with the learned model (2 cores), so at 4 the count ends a
-#: search at under half the wall-clock limit, with room for a machine twice as busy.
-ASTAR_EXPANSION_RATE = 4.0
+#: LAMP-A*'s default expansion budget per second of planning limit. It expands 9-12
+#: states/s on the suite mazes with the learned model (2 cores), so at 8 the count ends a
+#: search at about 3/4 of the wall-clock limit (maze-03 at 20 s: 160 expansions in 15 s).
+#: With the first 4 scenes per family and a 20 s limit it plans 15 of 16, as the wall-clock
+#: limit did (at 4: 14 of 16; `benchmarks/bench_lamp_astar.py --scenes 4 --limit 20`).
+ASTAR_EXPANSION_RATE = 8.0
 
 
 #: The paper's limit: at most 100 executed segments ("execution iterations") per object.
@@ -119,7 +121,7 @@ class PlannerConfig:
     #: Most states LAMP-A* expands per object, over all its ``plan`` calls
     #: (``BUDGET_EXHAUSTED``): the deterministic limit of the search, of which the
     #: cumulative planning time limit is only the outer cap. None: ``ASTAR_EXPANSION_RATE``
-    #: per second of ``planning_time_limit`` (2000 for the paper's 500 s).
+    #: per second of ``planning_time_limit`` (4000 for the paper's 500 s).
     astar_max_expansions: int | None = None
     #: Cumulative planning limit per object (s): the paper's 500 s for LAMP-A*. Wall
     #: clock, so an outer cap: the counts (plan iterations, Verify calls, expansions)
