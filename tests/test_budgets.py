@@ -127,7 +127,8 @@ def test_astar_budget_is_per_object_and_follows_the_limit(proposer):
     assert astar.plan(q_O, q_R).solved
     used = astar.expanded
     assert 0 < used < 1000
-    astar.task = _task(proposer, PlannerConfig(astar_max_expansions=used + 1))
+    smaller = _task(proposer, PlannerConfig(astar_max_expansions=used + 1))
+    astar.config, astar.verifier = smaller.config, smaller.verifier
     assert astar.plan(q_O, q_R).limit == "astar_max_expansions"  # only 1 left
     assert astar.expanded == used + 1
     astar.clear()
