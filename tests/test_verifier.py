@@ -100,7 +100,7 @@ def test_verify_builds_the_transition_and_counts() -> None:
 
 
 @settings(max_examples=20, deadline=None)
-@given(motion=st.tuples(st.floats(-0.2, 0.2), st.floats(-0.2, 0.2), st.floats(-0.3, 0.3)),
+@given(motion=st.tuples(st.integers(-200, 200), st.integers(-200, 200), st.integers(-300, 300)),
        attempts=st.lists(st.integers(0, 2), min_size=1, max_size=6))
 def test_proposals_are_cached_per_motion_budget_and_attempt(motion, attempts) -> None:
     """One model call per distinct (motion, budget, attempt), a cache hit for every
@@ -108,7 +108,7 @@ def test_proposals_are_cached_per_motion_budget_and_attempt(motion, attempts) ->
     v = make()
     first = {}
     for a in attempts:
-        props = v.proposals(np.array(motion), 2, a)
+        props = v.proposals(np.array(motion) / 1000.0, 2, a)  # mm and mrad
         assert first.setdefault(a, props) is props
     assert v.stats.model_calls == len(set(attempts))
     assert v.stats.cache_hits == len(attempts) - len(set(attempts))
