@@ -95,7 +95,8 @@ class Reroute(Protocol):
 def adapt_to_robots(trans: Transition, q_R: np.ndarray, reroute: Reroute) -> Transition | None:
     """``trans`` made to start from the robots at ``q_R``: unchanged when they stand at its
     start, joined by a short straight move when every robot is within ``ROBOT_SNAP`` of it,
-    else re-routed (Alg. 2 lines 27-33; None when ``reroute`` finds no approach)."""
+    else re-routed: ``Reassign`` and Gspi anew (Alg. 2 lines 27-33; None when ``reroute``
+    finds no approach)."""
     if robots_match(trans.robot_start, q_R, 1e-9):
         return trans
     if robots_match(trans.robot_start, q_R, ROBOT_SNAP):

@@ -1,4 +1,4 @@
-"""The ``Verifier``: can the robots realise one object transition? (paper Sec. III-A-1, Alg. 1 lines 17-25)
+"""Verify, as a ``Verifier``: can the robots realise one object transition? (Alg. 1 lines 17-25)
 
 A :class:`Verifier` is built from three narrow pieces and a few numbers:
 
@@ -13,14 +13,15 @@ A :class:`Verifier` is built from three narrow pieces and a few numbers:
 It owns its proposal cache and its counters (:class:`TaskStats`). Planners hold a
 ``Verifier`` and never the task that built it (``ManipulationTask.verifier``).
 
-``verify`` follows the algorithm: for budgets B = min(N, max_budget) down to 1 (line 19),
-draw K proposals (line 20), drop those whose contacts or push paths collide with the
-obstacles, the border, the object or each other (line 21, ``Collide``), pair robots with
-contacts by shortest distance and send unpaired robots to waiting spots out of the push's
-way (line 22, ``Reassign``), and ask the multi-robot planner for approach paths (line 23).
-The first success returns the transition T_R = T_move (+) T_manip (line 24); otherwise
-failure (line 25). ``sample`` is the unverified path the GCo baselines take: one fresh
-model sample, no ``Collide``.
+``verify`` follows the algorithm (paper Sec. III-A-1): for each budget B = min(N,
+max_budget) down to 1 (line 19), draw K proposals from the manipulation model (line 20),
+drop those whose contacts or push paths collide with the obstacles, the border, the object
+or each other (line 21, ``Collide``), pair robots with contacts by shortest distance and
+send unpaired robots to waiting spots out of the push's way (line 22, ``Reassign``), and
+ask the multi-robot planner (Gspi) for approach paths T_move (line 23). The first success
+returns the transition T_R = T_move (+) T_manip (line 24); otherwise ``verify``
+returns None (line 25, failure). ``sample`` is the unverified path the GCo baselines take: one
+fresh model sample, no ``Collide``.
 """
 
 from __future__ import annotations
@@ -459,7 +460,7 @@ class Verifier:
         for budget in range(top, 0, -1):  # line 19: budgets N down to 1
             candidates = self._usable_proposals(q_from, q_R, motion, budget, attempt)
             for pushes_local in candidates[: self.params.gspi_attempts_per_budget]:
-                trans = self.route_push(q_from, q_to, q_R, pushes_local)  # lines 22-23
+                trans = self.route_push(q_from, q_to, q_R, pushes_local)  # lines 22-23: Reassign, Gspi
                 if trans is not None:  # line 24: T_move found, return it
                     self.stats.verify_success += 1
                     return trans
