@@ -59,7 +59,7 @@ def main() -> None:
             poses = scene.object_starts()
             t0 = time.perf_counter()
             task = ManipulationTask(scene, 0, poses, model, cfg, seed=0)
-            plan = LampAStar(task).plan(poses[0], scene.robot_starts_array, deadline=t0 + args.limit)
+            plan = LampAStar.from_task(task).plan(poses[0], scene.robot_starts_array, deadline=t0 + args.limit)
             dt = time.perf_counter() - t0
             times.append(dt)
             found += plan.solved

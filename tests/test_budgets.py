@@ -98,7 +98,7 @@ def _task(proposer, config: PlannerConfig) -> ManipulationTask:
 
 def test_lazy_verify_budget_names_itself(proposer):
     task = _task(proposer, PlannerConfig(max_verify_calls=2))
-    plan = LazyPlanner(task).plan(task.object_poses[0], task.scene.robot_starts_array)
+    plan = LazyPlanner.from_task(task).plan(task.object_poses[0], task.scene.robot_starts_array)
     assert plan.status is PlanStatus.BUDGET_EXHAUSTED and plan.limit == "max_verify_calls"
     assert plan.reason == "no plan found: max_verify_calls exhausted"
     assert task.stats.verify_calls == 2  # counted from the call's start, never past it
@@ -106,7 +106,7 @@ def test_lazy_verify_budget_names_itself(proposer):
 
 def test_astar_expansion_budget_names_itself(proposer):
     task = _task(proposer, PlannerConfig(astar_max_expansions=3))
-    plan = LampAStar(task).plan(task.object_poses[0], task.scene.robot_starts_array)
+    plan = LampAStar.from_task(task).plan(task.object_poses[0], task.scene.robot_starts_array)
     assert plan.status is PlanStatus.BUDGET_EXHAUSTED and plan.limit == "astar_max_expansions"
     cfg = PlannerConfig(astar_max_expansions=3, planning_time_limit=500.0)
     res = lamp.solve(scene_from_dict(SCENE), "astar", seed=1, model=proposer, config=cfg)
@@ -122,12 +122,13 @@ def test_astar_budget_is_per_object_and_follows_the_limit(proposer):
     from lamp.planners.run import default_config
 
     task = _task(proposer, PlannerConfig(astar_max_expansions=1000))
-    astar = LampAStar(task)
+    astar = LampAStar.from_task(task)
     q_O, q_R = task.object_poses[0], task.scene.robot_starts_array
     assert astar.plan(q_O, q_R).solved
     used = astar.expanded
     assert 0 < used < 1000
-    astar.task = _task(proposer, PlannerConfig(astar_max_expansions=used + 1))
+    smaller = _task(proposer, PlannerConfig(astar_max_expansions=used + 1))
+    astar.config, astar.verifier = smaller.config, smaller.verifier
     assert astar.plan(q_O, q_R).limit == "astar_max_expansions"  # only 1 left
     assert astar.expanded == used + 1
     astar.clear()

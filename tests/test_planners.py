@@ -77,7 +77,7 @@ def test_lazy_replanning_reuses_verified_transitions(proposer):
     and one after a small drift needs far fewer than the first plan."""
     scene = scene_from_dict(small_scene())
     task = ManipulationTask(scene, 0, scene.object_starts(), proposer, PlannerConfig(), seed=0)
-    planner = LazyPlanner(task)
+    planner = LazyPlanner.from_task(task)
     first = planner.plan(scene.object_starts()[0], scene.robot_starts_array)
     assert first.solved and len(first.transitions) >= 3
     calls_first = task.stats.verify_calls
@@ -104,7 +104,7 @@ def test_astar_plans_around_a_wall(proposer):
     scene = scene_from_dict(small_scene(goal=(1.7, 0.6, 0.0), obstacles=[wall]))
     poses = scene.object_starts()
     task = ManipulationTask(scene, 0, poses, proposer, PlannerConfig(), seed=0)
-    plan = LampAStar(task).plan(poses[0], scene.robot_starts_array)
+    plan = LampAStar.from_task(task).plan(poses[0], scene.robot_starts_array)
     assert plan.solved
     path = plan.object_path
     assert np.allclose(path[-1], scene.objects[0].goal, atol=1e-6)
@@ -117,7 +117,7 @@ def test_astar_gives_up_at_once_without_an_object_route(proposer):
     scene = scene_from_dict(small_scene(goal=(1.7, 1.0, 0.0), obstacles=[wall]))
     poses = scene.object_starts()
     task = ManipulationTask(scene, 0, poses, proposer, PlannerConfig(), seed=0)
-    assert LampAStar(task).plan(poses[0], scene.robot_starts_array).status is PlanStatus.NO_PATH
+    assert LampAStar.from_task(task).plan(poses[0], scene.robot_starts_array).status is PlanStatus.NO_PATH
     assert task.stats.verify_calls == 0
 
 

@@ -235,7 +235,7 @@ def test_recording_only_watches(scene, proposer):
         sim = Simulator(scene)
         task = ManipulationTask(scene, 0, scene.object_starts(), proposer,
                                 default_config("lazy"), seed=0)
-        res = run_object(task, LazyPlanner(task), LoopPolicy(True, True), sim, LoopRecord(),
+        res = run_object(task, LazyPlanner.from_task(task), LoopPolicy(True, True), sim, LoopRecord(),
                          observer=observer)
         outs.append((res.final_pose, res.segments, res.success, sim.robot_positions.tolist()))
     assert outs[0] == outs[1]

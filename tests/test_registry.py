@@ -31,7 +31,7 @@ SCENE = {
 def _lazy_factory(task):
     from lamp.planners.lazy import LazyPlanner
 
-    return LazyPlanner(task)
+    return LazyPlanner.from_task(task)
 
 
 DUMMY = registry.PlannerSpec(

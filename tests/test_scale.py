@@ -245,8 +245,6 @@ def test_lamp_lazy_on_a_map_larger_than_its_windows() -> None:
 def test_approach_grows_its_window_when_the_way_leaves_it() -> None:
     from types import SimpleNamespace
 
-    from lamp.planners.verify import approach
-
     wall = Obstacle(Rectangle((6.0, 0.1)), (6.0, 4.5, 0.0))  # x from 3 to 9
     obj = SceneObject(Rectangle((0.4, 0.3)), (6.0, 6.0, 0.0), (6.0, 10.0, 0.0))
     scene = Scene("detour", (12.0, 12.0), ((6.0, 3.5),), (obj,), (wall,), R)
@@ -256,7 +254,7 @@ def test_approach_grows_its_window_when_the_way_leaves_it() -> None:
     goals = np.array([[6.0, 5.75]])  # in contact below the box, beyond the wall
     first = task.robot_space_at(q_from, task.window(q_from, q_R))
     assert not plan_paths(scene, q_R, goals, space=first, time_limit=5.0).success
-    routed = approach(task, q_from, q_R, goals)
+    routed = task.verifier.approach(q_from, q_R, goals)
     assert routed is not None
     paths, goal_of = routed
     assert np.abs(paths[0, :, 0] - 6.0).max() > 3.0  # around an end of the wall

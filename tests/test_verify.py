@@ -12,7 +12,6 @@ from lamp.manip import GeometricProposer
 from lamp.planners.config import PlannerConfig
 from lamp.planners.task import ManipulationTask, pairwise_min_distance
 from lamp.planners.trajectory import MAX_STEP, densify
-from lamp.planners.verify import usable_mask
 from lamp.suites.registry import suite_scenes
 
 SCENE = suite_scenes("maze")[3]  # cluttered: many proposals collide somewhere
@@ -39,8 +38,8 @@ motions = st.tuples(st.floats(-0.2, 0.2), st.floats(-0.2, 0.2), st.floats(-0.5, 
        motion=motions, budget=st.integers(1, 3), attempt=st.integers(0, 2))
 def test_usable_mask_matches_collide(x, y, theta, motion, budget, attempt) -> None:
     q_from = np.array([x, y, theta])
-    cands = TASK.push_candidates(np.array(motion), budget, attempt)
-    mask = usable_mask(TASK, q_from, cands)
+    cands = TASK.verifier.push_candidates(np.array(motion), budget, attempt)
+    mask = TASK.verifier.usable_mask(q_from, cands)
     direct = np.array([not collide(TASK, q_from, p) for p in cands.pushes_local])
     assert mask.tolist() == direct.tolist()
 

@@ -1,7 +1,9 @@
 """Closed-loop execution (paper Alg. 2 lines 3-7): until the goal, plan, execute in MuJoCo, observe, replan.
 
 Every planner implements ``ObjectPlanner.plan(q_O, q_R, deadline) -> Plan`` for one
-object; ``run_object`` drives it with a policy that says when to replan:
+object; a :class:`ClosedLoop` (``run_object`` builds one from a task) drives it on an
+:class:`Executor` (the MuJoCo ``Simulator``, or any object with its ``execute``) with a
+policy that says when to replan:
 - ``replan_on_drift``: after a segment whose object pose misses the planned one by more
   than ``drift_position`` / ``drift_orientation`` (LAMP-Lazy, LAMP-A* replan);
 - ``replan_when_done``: when the plan is used up but the object is not at its goal
@@ -14,13 +16,13 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
 from lamp.geometry.se2 import pose_distance
 from lamp.planners.base import LoopPolicy, ObjectPlanner
-from lamp.planners.config import segment_limit
+from lamp.planners.config import PlannerConfig, segment_limit
 from lamp.planners.long_push import merge, take_long_push
 from lamp.planners.result import (
     SUCCESS_ORIENTATION_TOL,
@@ -32,7 +34,7 @@ from lamp.planners.result import (
 from lamp.planners.robots import robots_match
 from lamp.planners.task import ManipulationTask
 from lamp.planners.trajectory import concat, straight_moves
-from lamp.planners.verify import Transition, reroute
+from lamp.planners.verify import Transition
 
 
 @dataclass
@@ -83,14 +85,25 @@ ROBOT_SNAP = 0.01
 RENDER_EVERY = 40
 
 
-def _adapt_to_robots(task: ManipulationTask, trans: Transition, q_R: np.ndarray) -> Transition | None:
+class Reroute(Protocol):
+    """New approach paths for a verified push from robots at ``q_R`` (None: unreachable);
+    ``Verifier.reroute`` is one."""
+
+    def __call__(self, transition: Transition, q_R: np.ndarray) -> Transition | None: ...
+
+
+def adapt_to_robots(trans: Transition, q_R: np.ndarray, reroute: Reroute) -> Transition | None:
+    """``trans`` made to start from the robots at ``q_R``: unchanged when they stand at its
+    start, joined by a short straight move when every robot is within ``ROBOT_SNAP`` of it,
+    else re-routed: ``Reassign`` and Gspi anew (Alg. 2 lines 27-33; None when ``reroute``
+    finds no approach)."""
     if robots_match(trans.robot_start, q_R, 1e-9):
         return trans
     if robots_match(trans.robot_start, q_R, ROBOT_SNAP):
         move = concat(straight_moves(q_R, trans.robot_start), trans.move)
         return Transition(trans.q_from, trans.q_to, trans.contacts, trans.pushes_local, move,
                           trans.manip, trans.edge)
-    return reroute(task, trans, q_R)
+    return reroute(trans, q_R)
 
 
 #: A push achieving less than this share of its requested motion has stalled.
@@ -103,126 +116,237 @@ def _stalled(q_before: np.ndarray, q_after: np.ndarray, trans: Transition) -> bo
     return bool(got_t < STALL_FRACTION * want_t + 1e-3 and got_r < STALL_FRACTION * want_r + 2e-3)
 
 
-def run_object(task: ManipulationTask, planner: ObjectPlanner, policy: LoopPolicy, sim,
+class Execution(Protocol):
+    """What an executor reports after one segment (``lamp.sim.ExecutionResult`` is one)."""
+
+    object_poses: np.ndarray  # (K, 3) every object's pose after the segment
+    robot_positions: np.ndarray  # (N, 2)
+    left_workspace: bool  # an object left the map during the segment
+    trace: Any  # frames sampled every ``record_every`` physics steps, or None
+
+
+class Executor(Protocol):
+    """Runs synchronised robot paths and reports the state they led to (``lamp.sim.Simulator``)."""
+
+    @property
+    def object_poses(self) -> np.ndarray:
+        """(K, 3) the objects' poses now."""
+        ...
+
+    @property
+    def robot_positions(self) -> np.ndarray:
+        """(N, 2) the robots' centres now."""
+        ...
+
+    def execute(self, robot_paths: np.ndarray, record_every: int | None = None) -> Execution:
+        """Drive the robots along ``robot_paths`` (N, T, 2) and report the outcome."""
+        ...
+
+
+@dataclass
+class _Progress:
+    """The loop's state between two steps."""
+
+    q_O: np.ndarray
+    q_R: np.ndarray
+    pending: list[Transition] = field(default_factory=list)
+    plan: Any = None
+    planning_spent: float = 0.0
+    #: Planning time not yet charged to an executed segment.
+    pending_time: float = 0.0
+    replanned: bool = False
+    planned_once: bool = False
+    full_horizon: bool = False
+    segments: int = 0
+    iterations: int = 0
+    left: bool = False
+    reason: str = ""
+
+
+class ClosedLoop:
+    """Alg. 2 lines 2-7 for one object: plan, execute, observe, until the goal or a limit.
+
+    ``plan`` asks the planner when nothing is pending, ``execute`` runs the next transition
+    (joined to where the robots are, see :func:`adapt_to_robots`, and extended into a long
+    push) on the ``executor``, ``observe`` classifies the segment (``"continue"``,
+    ``"left"``, ``"stalled"``, ``"drift"``) under the ``policy``. Guarantees (tested with
+    fake executors): the loop stops as soon as the object is within the config's stop
+    tolerances of ``goal``, after an object left the map, or after the segment limit;
+    with ``replan_on_drift`` a segment missing its planned pose by more than the drift
+    tolerances drops the rest of the plan; with ``replan_on_stall`` a push that barely moved
+    the object is reported to the planner (``report_failure``); ``observer`` sees every
+    executed segment, in order, and does not change the run.
+    """
+
+    def __init__(self, planner: ObjectPlanner, policy: LoopPolicy, executor: Executor, *,
+                 index: int, goal: np.ndarray, config: PlannerConfig, reroute: Reroute,
+                 record: LoopRecord | None = None, time_limit: float | None = None,
+                 observer: Callable[[SegmentEvent], None] | None = None,
+                 frames: Callable[[Execution, Any], list[Any]] | None = None) -> None:
+        self.planner = planner
+        self.policy = policy
+        self.executor = executor
+        self.index = int(index)
+        self.goal = np.asarray(goal, float)
+        self.config = config
+        self.reroute = reroute
+        self.record = LoopRecord() if record is None else record
+        self.limit = config.planning_time_limit if time_limit is None else time_limit
+        self.observer = observer
+        self.frames = frames
+
+    def run(self) -> ObjectResult:
+        """Move the object to its goal; the :class:`ObjectResult` of the attempt."""
+        cfg, goal = self.config, self.goal
+        st = _Progress(np.asarray(self.executor.object_poses[self.index], float),
+                       np.asarray(self.executor.robot_positions, float))
+        max_segments = segment_limit(cfg.max_segments, float(np.hypot(*(goal[:2] - st.q_O[:2]))))
+        while st.iterations < max_segments:
+            if within_goal(st.q_O, goal, cfg.stop_position, cfg.stop_orientation):
+                break
+            if not st.pending:
+                step = self.plan(st)
+                if step == "stop":
+                    break
+                if step == "retry":
+                    continue
+            trans = st.pending.pop(0)
+            adapted = self._join(st, trans)
+            if adapted is None:
+                st.pending = []  # robots cannot reach this push from where they are: replan
+                if not self.policy.replan_when_done and not self.policy.replan_on_drift:
+                    st.reason = "robots cannot reach the next push (open loop)"
+                    break
+                continue
+            if self.observe(st, *self.execute(st, adapted)) == "left":
+                break
+        return self._result(st, max_segments)
+
+    def plan(self, st: _Progress) -> str:
+        """Call the planner: ``"go"`` (transitions pending), ``"retry"`` (a failed call that
+        costs one iteration) or ``"stop"`` (``st.reason`` says why)."""
+        if st.planned_once and not self.policy.replan_when_done:
+            st.reason = "plan finished away from the goal (open loop)"
+            return "stop"
+        remaining = self.limit - st.planning_spent
+        if remaining <= 0:
+            st.reason = "planning time limit"
+            return "stop"
+        t0 = time.perf_counter()
+        st.plan = self.planner.plan(st.q_O, st.q_R, deadline=t0 + remaining)
+        self._charge(st, time.perf_counter() - t0)
+        if st.planned_once:
+            self.record.replans += 1
+        else:
+            st.full_horizon = st.plan.solved and self.policy.full_horizon
+        st.planned_once = True
+        st.replanned = True
+        if not st.plan.solved:
+            if self.policy.failure_is_final:
+                st.reason = st.plan.reason
+                return "stop"
+            st.iterations += 1
+            return "retry"
+        st.pending = list(st.plan.transitions)
+        return "go"
+
+    def _join(self, st: _Progress, trans: Transition) -> Transition | None:
+        """``trans`` from where the robots stand (re-routing counts as planning time)."""
+        t0 = time.perf_counter()
+        adapted = adapt_to_robots(trans, st.q_R, self.reroute)
+        self._charge(st, time.perf_counter() - t0)
+        return adapted
+
+    @staticmethod
+    def _charge(st: _Progress, dt: float) -> None:
+        st.planning_spent += dt
+        st.pending_time += dt
+
+    def execute(self, st: _Progress, adapted: Transition) -> tuple[Transition, Execution, float, bool]:
+        """Run ``adapted`` (with the pushes that continue it) on the executor; returns the
+        executed transition, the execution, and the planning time and replan flag charged
+        to this segment."""
+        cfg = self.config
+        if cfg.long_push_length > 0:  # one approach, then every push that continues it
+            adapted = merge(take_long_push(adapted, st.pending, cfg.continuous_push_gap,
+                                           cfg.long_push_length))
+        paths = adapted.robot_paths
+        traced = self.frames is not None or self.observer is not None
+        out = self.executor.execute(paths, record_every=RENDER_EVERY if traced else None)
+        st.iterations += 1
+        st.segments += 1
+        self.record.planning_time_s.append(st.pending_time)
+        charged = (st.pending_time, st.replanned)
+        st.pending_time, st.replanned = 0.0, False
+        self.record.makespan += paths.shape[1] - 1
+        return adapted, out, *charged
+
+    def observe(self, st: _Progress, adapted: Transition, out: Execution, seg_time: float,
+                seg_replanned: bool) -> str:
+        """Read the executed segment's outcome and apply the policy; returns the outcome."""
+        q_before = st.q_O
+        st.q_O = np.asarray(out.object_poses[self.index], float)
+        st.q_R = np.asarray(out.robot_positions, float)
+        if self.frames is not None:
+            self.record.frames.extend(self.frames(out, st.plan))
+        dpos, drot = pose_distance(st.q_O, adapted.q_to)
+        cfg, policy = self.config, self.policy
+        outcome = "continue"
+        if out.left_workspace:
+            outcome = "left"
+        elif policy.replan_on_stall and _stalled(q_before, st.q_O, adapted):
+            outcome = "stalled"
+        elif policy.replan_on_drift and (dpos > cfg.drift_position or drot > cfg.drift_orientation):
+            outcome = "drift"
+        if self.observer is not None:
+            self.observer(SegmentEvent(self.index, st.segments - 1, adapted, out, st.plan,
+                                       seg_time, seg_replanned, (float(dpos), float(drot)),
+                                       outcome, self.record.replans))
+        if outcome == "left":
+            st.left = True
+            st.reason = "object left the workspace"
+        elif outcome == "stalled":
+            # The push executed but barely moved the object: the verified transition does
+            # not work in practice, so it is treated like a failed verification.
+            self.planner.report_failure(adapted)
+            st.pending = []
+        elif outcome == "drift":
+            st.pending = []  # line 6: drift -> replan from the observed state
+        return outcome
+
+    def _result(self, st: _Progress, max_segments: int) -> ObjectResult:
+        self.record.unexecuted_planning_s += st.pending_time
+        q_O, goal = st.q_O, self.goal
+        pos_err, rot_err = goal_errors(q_O, goal)
+        success = (not st.left) and within_goal(q_O, goal, SUCCESS_POSITION_TOL,
+                                                SUCCESS_ORIENTATION_TOL)
+        reason = st.reason
+        if not success and not reason:
+            reason = (f"segment limit reached ({max_segments})" if st.iterations >= max_segments
+                      else "stopped away from goal")
+        return ObjectResult(
+            success=bool(success), final_pose=[float(v) for v in q_O],
+            goal=[float(v) for v in goal], position_error=pos_err, orientation_error=rot_err,
+            left_workspace=bool(st.left), segments=st.segments,
+            full_horizon_plan=bool(st.full_horizon), failure_reason="" if success else reason,
+            replans=self.record.replans, planning_time_s=st.planning_spent,
+        )
+
+
+def run_object(task: ManipulationTask, planner: ObjectPlanner, policy: LoopPolicy, sim: Executor,
                record: LoopRecord, render: bool = False, time_limit: float | None = None,
                observer: Callable[[SegmentEvent], None] | None = None) -> ObjectResult:
-    """Move ``task``'s object to its goal in ``sim`` with ``planner`` (Alg. 2 lines 2-7).
+    """Move ``task``'s object to its goal in ``sim`` with ``planner`` (Alg. 2 lines 2-7):
+    a :class:`ClosedLoop` with the task's goal, config and ``Verifier.reroute``.
 
     ``observer``, when given, is called with a :class:`SegmentEvent` after every executed
     segment (in order); it only watches, the run is the same with or without it.
     """
-    cfg = task.config
-    limit = cfg.planning_time_limit if time_limit is None else time_limit
-    goal = task.goal
-    planning_spent = 0.0
-    pending: list[Transition] = []
-    plan_obj = None
-    pending_time = 0.0
-    segments = 0
-    iterations = 0
-    left = False
-    planned_once = False
-    full_horizon = False
-    reason = ""
-    replanned = False
-    q_O = np.asarray(sim.object_poses[task.index], float)
-    q_R = np.asarray(sim.robot_positions, float)
-    max_segments = segment_limit(cfg.max_segments, float(np.hypot(*(goal[:2] - q_O[:2]))))
-    while iterations < max_segments:
-        if within_goal(q_O, goal, cfg.stop_position, cfg.stop_orientation):
-            break
-        if not pending:
-            if planned_once and not policy.replan_when_done:
-                reason = "plan finished away from the goal (open loop)"
-                break
-            remaining = limit - planning_spent
-            if remaining <= 0:
-                reason = "planning time limit"
-                break
-            t0 = time.perf_counter()
-            plan_obj = planner.plan(q_O, q_R, deadline=t0 + remaining)
-            dt = time.perf_counter() - t0
-            planning_spent += dt
-            pending_time += dt
-            if planned_once:
-                record.replans += 1
-            if not planned_once:
-                full_horizon = plan_obj.solved and policy.full_horizon
-            planned_once = True
-            replanned = True
-            if not plan_obj.solved:
-                if policy.failure_is_final:
-                    reason = plan_obj.reason
-                    break
-                iterations += 1
-                continue
-            pending = list(plan_obj.transitions)
-        trans = pending.pop(0)
-        t0 = time.perf_counter()
-        adapted = _adapt_to_robots(task, trans, q_R)
-        dt = time.perf_counter() - t0
-        planning_spent += dt
-        pending_time += dt
-        if adapted is None:
-            pending = []  # robots cannot reach this push from where they are: replan
-            if not policy.replan_when_done and not policy.replan_on_drift:
-                reason = "robots cannot reach the next push (open loop)"
-                break
-            continue
-        if cfg.long_push_length > 0:  # one approach, then every push that continues it
-            adapted = merge(take_long_push(adapted, pending, cfg.continuous_push_gap,
-                                           cfg.long_push_length))
-        paths = adapted.robot_paths
-        q_before = q_O
-        traced = render or observer is not None
-        out = sim.execute(paths, record_every=RENDER_EVERY if traced else None)
-        iterations += 1
-        segments += 1
-        record.planning_time_s.append(pending_time)
-        seg_time, seg_replanned = pending_time, replanned
-        pending_time, replanned = 0.0, False
-        record.makespan += paths.shape[1] - 1
-        q_O = np.asarray(out.object_poses[task.index], float)
-        q_R = np.asarray(out.robot_positions, float)
-        if render:
-            record.frames.extend(_frames(task, out, plan_obj))
-        dpos, drot = pose_distance(q_O, adapted.q_to)
-        outcome = "continue"
-        if out.left_workspace:
-            outcome = "left"
-        elif policy.replan_on_stall and _stalled(q_before, q_O, adapted):
-            outcome = "stalled"
-        elif policy.replan_on_drift and (dpos > cfg.drift_position or drot > cfg.drift_orientation):
-            outcome = "drift"
-        if observer is not None:
-            observer(SegmentEvent(task.index, segments - 1, adapted, out, plan_obj, seg_time,
-                                  seg_replanned, (float(dpos), float(drot)), outcome,
-                                  record.replans))
-        if outcome == "left":
-            left = True
-            reason = "object left the workspace"
-            break
-        if outcome == "stalled":
-            # The push executed but barely moved the object: the verified transition does
-            # not work in practice, so it is treated like a failed verification.
-            planner.report_failure(adapted)
-            pending = []
-        elif outcome == "drift":
-            pending = []  # line 6: drift -> replan from the observed state
-    record.unexecuted_planning_s += pending_time
-    pos_err, rot_err = goal_errors(q_O, goal)
-    success = (not left) and within_goal(q_O, goal, SUCCESS_POSITION_TOL,
-                                         SUCCESS_ORIENTATION_TOL)
-    if not success and not reason:
-        reason = (f"segment limit reached ({max_segments})" if iterations >= max_segments
-                  else "stopped away from goal")
-    return ObjectResult(
-        success=bool(success), final_pose=[float(v) for v in q_O], goal=[float(v) for v in goal],
-        position_error=pos_err, orientation_error=rot_err, left_workspace=bool(left),
-        segments=segments, full_horizon_plan=bool(full_horizon),
-        failure_reason="" if success else reason, replans=record.replans,
-        planning_time_s=planning_spent,
-    )
+    frames = (lambda out, plan: _frames(task, out, plan)) if render else None
+    loop = ClosedLoop(planner, policy, sim, index=task.index, goal=task.goal, config=task.config,
+                      reroute=task.verifier.reroute, record=record, time_limit=time_limit,
+                      observer=observer, frames=frames)
+    return loop.run()
 
 
 def _frames(task: ManipulationTask, out, plan_obj) -> list[Any]:

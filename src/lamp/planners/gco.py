@@ -12,14 +12,21 @@ gap LAMP closes, and the baseline keeps it on purpose.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 
 import numpy as np
 
 from lamp.geometry import se2
 from lamp.planners.base import Plan, PlanStatus
+from lamp.planners.config import PlannerConfig
 from lamp.planners.task import ManipulationTask
-from lamp.planners.verify import Transition, route_push
+from lamp.planners.verifier import Verifier
+from lamp.planners.verify import Transition
 from lamp.search.gco_lattice import gco_object_path
+
+#: ``object_path(q_O, inflation, time_limit)``: GCo's object-only lattice path from
+#: ``q_O`` to the goal (an (M, 3) array, or None / empty when there is none).
+ObjectPathSearch = Callable[[np.ndarray, float, float | None], "np.ndarray | None"]
 
 LOOKAHEAD = 0.3  # m: the waypoint GCo steers towards
 MAX_STEP_XY = 0.2  # m: step clamp per axis
@@ -29,10 +36,25 @@ MAX_STEP_THETA = 0.3  # rad
 class GCoPlanner:
     """One GCo iteration per ``plan`` call: a single unverified push towards the goal."""
 
-    def __init__(self, task: ManipulationTask, inflation: float) -> None:
-        self.task = task
+    def __init__(self, object_path: ObjectPathSearch, verifier: Verifier, config: PlannerConfig,
+                 inflation: float, seed: int = 0) -> None:
+        self.object_path = object_path
+        self.verifier = verifier
+        self.config = config
         self.inflation = inflation
+        self.seed = int(seed)
         self.iteration = 0
+
+    @classmethod
+    def from_task(cls, task: ManipulationTask, inflation: float) -> GCoPlanner:
+        """GCo for ``task``'s object: its lattice search (the other objects where the task
+        has them), verifier, config and seed."""
+        scene, index, poses = task.scene, task.index, task.object_poses
+
+        def object_path(q_O: np.ndarray, inflation: float, time_limit: float | None):
+            return gco_object_path(scene, index, q_O, poses, inflation, time_limit=time_limit)
+
+        return cls(object_path, task.verifier, task.config, inflation, seed=task.seed)
 
     def _next_pose(self, q_O: np.ndarray, deadline: float | None) -> np.ndarray | None:
         remaining = None if deadline is None else max(1e-3, deadline - time.perf_counter())
@@ -41,8 +63,7 @@ class GCoPlanner:
         # band (about 1 cm) next to an obstacle; like LAMP's lattice join, a footprint
         # shrunk by up to 2 cm lets the search start from there.
         for shrink in (0.0, 0.02):
-            path = gco_object_path(self.task.scene, self.task.index, q_O, self.task.object_poses,
-                                   self.inflation - shrink, time_limit=remaining)
+            path = self.object_path(q_O, self.inflation - shrink, remaining)
             if path is not None and len(path) > 0:
                 break
         if path is None or len(path) == 0:
@@ -63,7 +84,6 @@ class GCoPlanner:
         self.iteration = 0
 
     def plan(self, q_O: np.ndarray, q_R: np.ndarray, deadline: float | None = None) -> Plan:
-        task = self.task
         self.iteration += 1
         q_O = np.asarray(q_O, float)
         q_R = np.asarray(q_R, float)
@@ -74,13 +94,10 @@ class GCoPlanner:
                 return Plan.failed(PlanStatus.TIME_LIMIT, limit="deadline")
             return Plan.failed(PlanStatus.NO_PATH)
         motion = se2.relative(q_O, q_to)
-        budget = min(task.n_robots, task.config.max_budget)
-        seed = (task.seed * 7919 + self.iteration) % (2**31 - 1)
-        task.stats.model_calls += 1
-        prop = task.model.propose(task.shape, motion=tuple(map(float, motion)), budget=budget,
-                                  k=1, seed=seed)[0]
-        pushes_local = np.asarray(prop.pushes, float)
-        trans = route_push(task, q_O, q_to, q_R, pushes_local, deadline=deadline)
+        budget = min(self.verifier.n_robots, self.config.max_budget)
+        seed = (self.seed * 7919 + self.iteration) % (2**31 - 1)
+        pushes_local = self.verifier.sample(motion, budget, seed)  # one sample, no Collide
+        trans = self.verifier.route_push(q_O, q_to, q_R, pushes_local, deadline=deadline)
         if trans is None:
             return Plan.failed(PlanStatus.PUSH_UNREACHABLE)
         return Plan(PlanStatus.SOLVED, [trans], [(q_O[:2].copy(), q_to[:2].copy())], [])

@@ -25,11 +25,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from lamp.planners.base import Plan, PlanStatus
+from lamp.planners.config import PlannerConfig
 from lamp.planners.lazy import goal_lattice, join_lattice
 from lamp.planners.robots import robot_state_key
 from lamp.planners.task import ManipulationTask
 from lamp.planners.trajectory import MAX_STEP
-from lamp.planners.verify import Transition, verify
+from lamp.planners.verifier import Verifier
+from lamp.planners.verify import Transition
+from lamp.search.lattice import ObjectLattice
 from lamp.search.reverse_distance import ReverseDistance
 
 
@@ -54,16 +57,22 @@ def edge_cost(trans: Transition) -> float:
 class LampAStar:
     """LAMP-A* for one object. ``plan`` searches from scratch from the current state."""
 
-    def __init__(self, task: ManipulationTask) -> None:
-        self.task = task
-        self.lattice = goal_lattice(task)
+    def __init__(self, lattice: ObjectLattice, verifier: Verifier, config: PlannerConfig) -> None:
+        self.lattice = lattice
+        self.verifier = verifier
+        self.config = config
         self.to_goal = ReverseDistance(self.lattice, self.lattice.goal_node)
         self.clear()
+
+    @classmethod
+    def from_task(cls, task: ManipulationTask) -> LampAStar:
+        """The planner for ``task``'s object: its goal lattice, verifier and config."""
+        return cls(goal_lattice(task), task.verifier, task.config)
 
     def _robot_key(self, q_R: np.ndarray) -> tuple:
         """Explored-state key for robots: positions on a ``robot_match_tolerance`` grid, sorted
         (robots are anonymous, so permutations of one configuration are the same state)."""
-        return robot_state_key(q_R, self.task.config.robot_match_tolerance)
+        return robot_state_key(q_R, self.config.robot_match_tolerance)
 
     def _successors(self, state: SearchState) -> list[tuple[object, np.ndarray]]:
         if not self.lattice.is_node(state.node):  # the continuous start joins the lattice
@@ -74,7 +83,7 @@ class LampAStar:
 
     def _h(self, state: SearchState) -> float:
         """Weighted object-only cost to the goal from the state's node (``inf``: no way)."""
-        w = self.task.config.astar_heuristic_weight
+        w = self.config.astar_heuristic_weight
         if self.lattice.is_node(state.node):
             return w * self.to_goal.distance(state.node)
         return w * min((c + self.to_goal.distance(v) for v, c in self._start_edges), default=math.inf)
@@ -94,7 +103,7 @@ class LampAStar:
         states together (``BUDGET_EXHAUSTED``; a count, like the cumulative limit it stands
         for, so the result does not depend on the machine's speed) and ``deadline``
         (``TIME_LIMIT``) is only an outer cap."""
-        cfg = self.task.config
+        cfg = self.config
         goal = self.lattice.goal_node
         start_node, self._start_edges = join_lattice(self.lattice, np.asarray(q_O, float))
         if self._start_edges == []:
@@ -126,7 +135,7 @@ class LampAStar:
             for v, q_next in self._successors(s):  # line 7: each motion primitive
                 if deadline is not None and time.perf_counter() > deadline:
                     return Plan.failed(PlanStatus.TIME_LIMIT, limit="deadline")
-                trans = verify(self.task, s.q_O, q_next, s.q_R, attempt=s.expansions)  # line 8: Verify
+                trans = self.verifier.verify(s.q_O, q_next, s.q_R, attempt=s.expansions)  # line 8: Verify
                 if trans is None:  # line 9: no C_R, continue
                     continue
                 child = SearchState(v, q_next, trans.robot_end, s, s.cost + edge_cost(trans), trans)

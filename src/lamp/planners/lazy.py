@@ -19,9 +19,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from lamp.planners.base import Plan, PlanStatus
+from lamp.planners.config import PlannerConfig
 from lamp.planners.robots import robots_match
 from lamp.planners.task import ManipulationTask
-from lamp.planners.verify import Transition, reroute, verify
+from lamp.planners.verifier import Verifier
+from lamp.planners.verify import Transition
 from lamp.search.dstar_lite import DStarLite
 from lamp.search.lattice import ObjectLattice
 
@@ -76,10 +78,16 @@ def join_lattice(lattice: ObjectLattice, q_O: np.ndarray) -> tuple[Node, list | 
 class LazyPlanner:
     """LAMP-Lazy for one object (Alg. 2). ``plan`` is called first and after every drift."""
 
-    def __init__(self, task: ManipulationTask) -> None:
-        self.task = task
-        self.lattice = goal_lattice(task)
+    def __init__(self, lattice: ObjectLattice, verifier: Verifier, config: PlannerConfig) -> None:
+        self.lattice = lattice
+        self.verifier = verifier
+        self.config = config
         self.clear()
+
+    @classmethod
+    def from_task(cls, task: ManipulationTask) -> LazyPlanner:
+        """The planner for ``task``'s object: its goal lattice, verifier and config."""
+        return cls(goal_lattice(task), task.verifier, task.config)
 
     def clear(self) -> None:
         """A fresh D* Lite search, an empty Tree_eval and no penalties."""
@@ -93,7 +101,7 @@ class LazyPlanner:
         """``UpdateChange`` (lines 18 and 31): raise the cost of an edge whose verification failed."""
         n = self.failures.get((u, v), 0) + 1
         self.failures[(u, v)] = n
-        self.dstar.penalize(u, v, self.task.config.edge_penalty)
+        self.dstar.penalize(u, v, self.config.edge_penalty)
         self.penalised.append((self.lattice.pose(u)[:2].copy(), self.lattice.pose(v)[:2].copy()))
 
     def report_failure(self, trans: Transition) -> None:
@@ -118,10 +126,10 @@ class LazyPlanner:
         the result does not depend on the machine's speed; ``deadline`` (``TIME_LIMIT``) is
         only an outer cap.
         """
-        cfg = self.task.config
+        cfg = self.config
         tol = cfg.robot_match_tolerance
         goal = self.lattice.goal_node
-        stats = self.task.stats
+        stats = self.verifier.stats
         verify_cap = stats.verify_calls + cfg.max_verify_calls
         for _ in range(cfg.max_plan_iterations):
             if stats.verify_calls >= verify_cap:
@@ -146,7 +154,7 @@ class LazyPlanner:
                     return Plan.failed(PlanStatus.BUDGET_EXHAUSTED, self.penalised,
                                        "max_verify_calls")
                 attempt = self.failures.get((curr, nxt), 0)
-                trans = verify(self.task, self.lattice.pose(curr), self.lattice.pose(nxt), q_R, attempt)
+                trans = self.verifier.verify(self.lattice.pose(curr), self.lattice.pose(nxt), q_R, attempt)
                 if trans is None:  # lines 17-20: no C_R, UpdateChange
                     self._penalise(curr, nxt)
                     failed = True
@@ -165,14 +173,14 @@ class LazyPlanner:
                     entry = self.tree_eval[curr]
                     trans = entry.lookup(q_R, tol)  # line 38: reuse cached
                     if trans is None:  # lines 27-35: Reassign, Gspi: new T_move for these robots
-                        trans = reroute(self.task, entry.transition, q_R)
+                        trans = self.verifier.reroute(entry.transition, q_R)
                         if trans is None:
                             self._penalise(curr, entry.next_node)
                             ok = False
                             break
                         entry.cache.append((q_R.copy(), trans))  # line 35: cache
                     else:
-                        self.task.stats.cache_hits += 1
+                        self.verifier.stats.cache_hits += 1
                     transitions.append(trans)
                     curr, q_R = entry.next_node, trans.robot_end
                 if not ok:

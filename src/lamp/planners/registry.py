@@ -218,20 +218,20 @@ def lamp_planners() -> tuple[str, ...]:
 def _lazy(task: ManipulationTask) -> ObjectPlanner:
     from lamp.planners.lazy import LazyPlanner
 
-    return LazyPlanner(task)
+    return LazyPlanner.from_task(task)
 
 
 def _astar(task: ManipulationTask) -> ObjectPlanner:
     from lamp.planners.lamp_astar import LampAStar
 
-    return LampAStar(task)
+    return LampAStar.from_task(task)
 
 
 def _gco(inflation: float) -> Callable[[ManipulationTask], ObjectPlanner]:
     def factory(task: ManipulationTask) -> ObjectPlanner:
         from lamp.planners.gco import GCoPlanner
 
-        return GCoPlanner(task, inflation=inflation)
+        return GCoPlanner.from_task(task, inflation=inflation)
 
     return factory
 

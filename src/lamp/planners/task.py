@@ -1,8 +1,11 @@
 """One manipulation task: move object ``index`` of a scene while the others stand still.
 
-A ``ManipulationTask`` bundles what every planner asks repeatedly while moving one object,
-and caches it: the object's collision space, the robots' configuration spaces (without the
-object, and with the object at a given pose), and model proposals per requested motion.
+A ``ManipulationTask`` builds the pieces a planner is given for one object, and caches
+what they ask repeatedly: the object's collision space (for the lattice), the robots'
+configuration spaces (without the object, and with the object at a given pose: the task
+is the ``RobotValidity`` of its ``Verifier``) and the :class:`Verifier` itself, which owns
+the model proposals per requested motion and the counters. Planners hold the lattice, the
+verifier and the config, never the task.
 
 Robot spaces are built over a *window* of the map around the object and the robots
 (:meth:`ManipulationTask.window`): approach paths, waiting spots and ``Collide`` are local
@@ -15,16 +18,22 @@ from __future__ import annotations
 
 import math
 from collections import OrderedDict
-from dataclasses import dataclass, field
-from typing import Any
+from dataclasses import dataclass
+from typing import Any, ClassVar
 
 import numpy as np
 
 from lamp.geometry.object_space import ObjectSpace
 from lamp.geometry.robot_space import RobotSpace
-from lamp.geometry.shapes import signed_distance
 from lamp.planners.config import PlannerConfig
-from lamp.planners.trajectory import MAX_STEP, densify
+from lamp.planners.verifier import (  # noqa: F401  (re-exported: their old home)
+    GspiRouter,
+    PushCandidates,
+    TaskStats,
+    Verifier,
+    VerifierParams,
+    pairwise_min_distance,
+)
 from lamp.scene.model import Scene, Shape
 
 #: Margin (m) of a robot-space window around the object and the robots; more than the
@@ -41,53 +50,6 @@ _SPACES_KEPT = 64
 _SPACES_BYTES = 96 * 2**20
 
 
-@dataclass(frozen=True)
-class PushCandidates:
-    """The K proposals for one (motion, budget, attempt), prepared for fast ``Collide`` checks.
-
-    A proposal lives in the object frame, and rigid motions preserve distances and linear
-    interpolation, so two of ``Collide``'s three tests do not depend on where the object
-    is: a contact inside the object and two pushing robots closer than 2r. They are done
-    once here (``intrinsic_ok``). The third, push paths in the robots' free space, is
-    done per pose on ``dense_points``: every push path densified to ``MAX_STEP / 2`` in
-    the object frame and stacked, proposal ``i`` owning rows ``starts[i]:starts[i + 1]``.
-    """
-
-    pushes_local: list[np.ndarray]  # K arrays (B, H, 2), object frame
-    intrinsic_ok: np.ndarray  # (K,) bool
-    dense_points: np.ndarray  # (P, 2) stacked densified push points, object frame
-    starts: np.ndarray  # (K + 1,) row offsets into dense_points
-
-
-def pairwise_min_distance(paths: np.ndarray) -> float:
-    """Smallest distance between any two of the (B, T, 2) synchronised paths."""
-    b = paths.shape[0]
-    if b < 2:
-        return np.inf
-    i, j = np.triu_indices(b, 1)
-    d = paths[i] - paths[j]
-    return float(np.sqrt(np.min(d[..., 0] ** 2 + d[..., 1] ** 2)))
-
-
-@dataclass
-class TaskStats:
-    """Counters reported in result.json's ``stats``."""
-
-    verify_calls: int = 0
-    verify_success: int = 0
-    model_calls: int = 0
-    gspi_calls: int = 0
-    gspi_success: int = 0
-    #: Gspi calls ended by the wall-clock cap ``gspi_time_limit`` (0 on an unloaded
-    #: machine: then no result depended on the clock).
-    gspi_timeouts: int = 0
-    cache_hits: int = 0
-
-    def add(self, other: TaskStats) -> None:
-        for k, v in vars(other).items():
-            setattr(self, k, getattr(self, k) + v)
-
-
 @dataclass
 class ManipulationTask:
     """Moving ``scene.objects[index]`` from ``object_poses[index]`` to its goal."""
@@ -98,14 +60,26 @@ class ManipulationTask:
     model: Any  # a proposer: .propose(shape, motion, budget, k, seed)
     config: PlannerConfig
     seed: int = 0
-    stats: TaskStats = field(default_factory=TaskStats)
+    #: The largest window side ``Verifier.approach`` may grow a window to (``RobotValidity``).
+    max_window_side: ClassVar[float] = WINDOW_MAX_SIDE
 
     def __post_init__(self) -> None:
         self.object_poses = np.array(self.object_poses, dtype=float).reshape(-1, 3)
         self.object_space = ObjectSpace.from_scene(self.scene, self.index, self.object_poses)
         self._spaces: OrderedDict[tuple, RobotSpace] = OrderedDict()
-        self._proposals: dict[tuple, list] = {}
-        self._candidates: dict[tuple, PushCandidates] = {}
+        #: This object's ``Verifier``: the model, this task as its ``RobotValidity``, Gspi
+        #: over this scene, and the config's Verify parameters. It owns the proposal cache
+        #: and the counters (``stats``).
+        self.verifier = Verifier(
+            self.model, self.shape, self.scene.robot_radius, self.scene.n_robots, self,
+            GspiRouter(self.scene, self.index, self.object_poses.copy(), seed=self.seed,
+                       goal_tolerance=self.config.contact_tolerance),
+            VerifierParams.from_config(self.config), seed=self.seed)
+
+    @property
+    def stats(self) -> TaskStats:
+        """The counters of this object's ``verifier``."""
+        return self.verifier.stats
 
     @property
     def shape(self) -> Shape:
@@ -196,61 +170,3 @@ class ManipulationTask:
         return RobotSpace.from_scene(self.scene, object_poses=self.object_poses,
                                      exclude_objects=(self.index,),
                                      window=self.window(q_object))
-
-    def proposals(self, motion: np.ndarray, budget: int, attempt: int) -> list:
-        """K model proposals for ``motion`` (object frame) with ``budget`` robots.
-
-        Cached per (motion, budget, attempt): the object frame makes proposals independent
-        of where the object is, so lattice primitives are answered once; a repeated
-        verification of the same edge (``attempt`` > 0) draws fresh samples, as the paper
-        relies on (Sec. III-A-1: "a different sampling in a future call may yield valid
-        manipulation trajectories").
-        """
-        key = _proposal_key(motion, budget, attempt)
-        props = self._proposals.get(key)
-        if props is None:
-            seed = _stable_seed(self.seed, key)
-            props = self.model.propose(self.shape, motion=tuple(map(float, motion)), budget=budget,
-                                       k=self.config.k, seed=seed)
-            self.stats.model_calls += 1
-            self._proposals[key] = props
-        else:
-            self.stats.cache_hits += 1
-        return props
-
-
-    def push_candidates(self, motion: np.ndarray, budget: int, attempt: int) -> PushCandidates:
-        """``proposals`` prepared for ``Collide`` (see ``PushCandidates``), cached alike."""
-        key = _proposal_key(motion, budget, attempt)
-        cands = self._candidates.get(key)
-        if cands is None:
-            cands = self._prepare(self.proposals(motion, budget, attempt))
-            self._candidates[key] = cands
-        else:
-            self.stats.cache_hits += 1
-        return cands
-
-    def _prepare(self, props: list) -> PushCandidates:
-        r = self.robot_radius
-        pushes = [np.asarray(p.pushes, float) for p in props]
-        dense = [densify(p, MAX_STEP / 2) for p in pushes]
-        ok = np.array([
-            bool(np.all(signed_distance(self.shape, p[:, 0]) >= r - self.config.contact_tolerance))
-            and pairwise_min_distance(d) >= 2 * r - 1e-9
-            for p, d in zip(pushes, dense, strict=True)
-        ], dtype=bool)
-        sizes = [d.shape[0] * d.shape[1] for d in dense]
-        points = np.concatenate([d.reshape(-1, 2) for d in dense]) if dense else np.zeros((0, 2))
-        return PushCandidates(pushes, ok, points, np.concatenate([[0], np.cumsum(sizes)]).astype(int))
-
-
-def _proposal_key(motion: np.ndarray, budget: int, attempt: int) -> tuple:
-    """Cache key of a proposal request: the motion rounded to 0.1 mm / 0.1 mrad."""
-    return tuple(np.round(np.asarray(motion, float), 4)), int(budget), int(attempt)
-
-
-def _stable_seed(seed: int, key: tuple) -> int:
-    """A deterministic 31-bit seed from a run seed and a hashable key (no Python hash())."""
-    motion, budget, attempt = key
-    words = [seed, budget, attempt, *[int(round(m * 1e4)) + 10**6 for m in motion]]
-    return int(np.random.default_rng([abs(int(w)) for w in words]).integers(2**31 - 1))

@@ -1,0 +1,473 @@
+"""Verify, as a ``Verifier``: can the robots realise one object transition? (Alg. 1 lines 17-25)
+
+A :class:`Verifier` is built from three narrow pieces and a few numbers:
+
+- a manipulation model (``lamp.manip.proposals.ProposalModel``): motion -> K proposals;
+- a :class:`RobotValidity`: the robots' free space with the manipulated object at a
+  given pose (free points, free segments, nearest free spot) over a window of the map,
+  and without the object around it;
+- a :class:`MultiRobotPlanner`: paths for all robots to goals in such a space (Gspi,
+  :class:`GspiRouter`);
+- :class:`VerifierParams` (from ``PlannerConfig``).
+
+It owns its proposal cache and its counters (:class:`TaskStats`). Planners hold a
+``Verifier`` and never the task that built it (``ManipulationTask.verifier``).
+
+``verify`` follows the algorithm (paper Sec. III-A-1): for each budget B = min(N,
+max_budget) down to 1 (line 19), draw K proposals from the manipulation model (line 20),
+drop those whose contacts or push paths collide with the obstacles, the border, the object
+or each other (line 21, ``Collide``), pair robots with contacts by shortest distance and
+send unpaired robots to waiting spots out of the push's way (line 22, ``Reassign``), and
+ask the multi-robot planner (Gspi) for approach paths T_move (line 23). The first success
+returns the transition T_R = T_move (+) T_manip (line 24); otherwise ``verify``
+returns None (line 25, failure). ``sample`` is the unverified path the GCo baselines take: one
+fresh model sample, no ``Collide``.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+import numpy as np
+
+from lamp.geometry import se2
+from lamp.geometry.shapes import signed_distance
+from lamp.mrmp.gspi import GspiStatus
+from lamp.planners.trajectory import MAX_STEP, concat, densify, straight_moves
+from lamp.planners.verify import Transition, assign_to_contacts, push_paths
+from lamp.scene.model import Scene, Shape
+
+__all__ = ["FreeSpace", "GspiRouter", "MultiRobotPlanner", "PushCandidates", "RobotValidity",
+           "TaskStats", "Verifier", "VerifierParams", "pairwise_min_distance"]
+
+#: How far (m) the breadth-first search for a robot's waiting spot may go.
+WAIT_SEARCH_RADIUS = 1.0
+#: Multi-robot planner failures that a larger robot-space window may fix.
+_WINDOW_BOUND = frozenset({GspiStatus.UNREACHABLE, GspiStatus.STALLED, GspiStatus.STEP_BUDGET})
+
+Window = tuple[float, float, float, float]
+
+
+class FreeSpace(Protocol):
+    """What ``Verify`` asks of a robot configuration space (``RobotSpace`` is one)."""
+
+    @property
+    def covers_workspace(self) -> bool:
+        """Whether the space spans the whole map (a larger window cannot help)."""
+        ...
+
+    def is_free(self, points: np.ndarray) -> np.ndarray:
+        """(P,) whether a robot centred at each of the (P, 2) points is collision-free."""
+        ...
+
+    def segment_free(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """Whether a robot moving straight from each ``a`` to each ``b`` stays free."""
+        ...
+
+    def nearest_free(self, point: np.ndarray, accept: Callable[[np.ndarray], np.ndarray] | None
+                     = None, max_distance: float | None = None) -> np.ndarray | None:
+        """The nearest free (and accepted) spot to ``point``, or None."""
+        ...
+
+
+class RobotValidity(Protocol):
+    """The robots' free space around the manipulated object, at a given object pose."""
+
+    #: The largest window side (m) ``approach`` may grow a window to.
+    max_window_side: float
+
+    def window(self, q_object: np.ndarray, points: np.ndarray | None = None,
+               scale: float = 1.0) -> Window:
+        """(x0, y0, x1, y1) around the object at ``q_object`` and ``points``."""
+        ...
+
+    def robot_space_at(self, q_object: np.ndarray, window: Window | None = None) -> FreeSpace:
+        """Robot space with the manipulated object at ``q_object``, over ``window``."""
+        ...
+
+    def static_space_near(self, q_object: np.ndarray) -> FreeSpace:
+        """Robot space without the manipulated object, around ``q_object``."""
+        ...
+
+
+class MultiRobotPlanner(Protocol):
+    """Paths for all robots from ``starts`` to ``goals`` (anonymous goals), with the object
+    at ``q_object``, in ``space``; the answer has ``success``, ``status`` (a
+    ``GspiStatus``), ``paths`` (N, T, 2) and ``goal_of`` (N,)."""
+
+    def __call__(self, q_object: np.ndarray, starts: np.ndarray, goals: np.ndarray,
+                 space: Any, time_limit: float) -> Any: ...
+
+
+@dataclass(frozen=True, eq=False)
+class GspiRouter:
+    """Gspi (``lamp.mrmp.plan_paths``) for one object of ``scene``, the others at
+    ``object_poses``; ``seed`` and ``goal_tolerance`` are passed on unchanged."""
+
+    scene: Scene
+    index: int
+    object_poses: np.ndarray
+    seed: int = 0
+    goal_tolerance: float = 0.006
+
+    def __call__(self, q_object: np.ndarray, starts: np.ndarray, goals: np.ndarray,
+                 space: Any, time_limit: float) -> Any:
+        from lamp.mrmp import plan_paths
+
+        poses = np.array(self.object_poses, float).reshape(-1, 3)
+        poses[self.index] = q_object
+        return plan_paths(self.scene, starts, goals, object_poses=poses, time_limit=time_limit,
+                          space=space, seed=self.seed, goal_tolerance=self.goal_tolerance)
+
+
+@dataclass(frozen=True)
+class VerifierParams:
+    """The ``PlannerConfig`` numbers ``Verify`` reads. Validated: positive counts and times,
+    a non-negative tolerance (``ValueError`` naming the field)."""
+
+    k: int = 16
+    max_budget: int = 3
+    gspi_attempts_per_budget: int = 3
+    contact_tolerance: float = 0.006
+    gspi_time_limit: float = 10.0
+
+    def __post_init__(self) -> None:
+        for name in ("k", "max_budget", "gspi_attempts_per_budget"):
+            v = getattr(self, name)
+            if not (isinstance(v, int) and not isinstance(v, bool) and v >= 1):
+                raise ValueError(f"{name}: a positive integer, got {v!r}")
+        if not self.gspi_time_limit > 0:
+            raise ValueError(f"gspi_time_limit: positive seconds, got {self.gspi_time_limit!r}")
+        if not self.contact_tolerance >= 0:
+            raise ValueError(f"contact_tolerance: >= 0, got {self.contact_tolerance!r}")
+
+    @classmethod
+    def from_config(cls, cfg: Any) -> VerifierParams:
+        return cls(k=cfg.k, max_budget=cfg.max_budget,
+                   gspi_attempts_per_budget=cfg.gspi_attempts_per_budget,
+                   contact_tolerance=cfg.contact_tolerance, gspi_time_limit=cfg.gspi_time_limit)
+
+
+@dataclass
+class TaskStats:
+    """Counters reported in result.json's ``stats``."""
+
+    verify_calls: int = 0
+    verify_success: int = 0
+    model_calls: int = 0
+    gspi_calls: int = 0
+    gspi_success: int = 0
+    #: Gspi calls ended by the wall-clock cap ``gspi_time_limit`` (0 on an unloaded
+    #: machine: then no result depended on the clock).
+    gspi_timeouts: int = 0
+    cache_hits: int = 0
+
+    def add(self, other: TaskStats) -> None:
+        for k, v in vars(other).items():
+            setattr(self, k, getattr(self, k) + v)
+
+
+@dataclass(frozen=True)
+class PushCandidates:
+    """The K proposals for one (motion, budget, attempt), prepared for fast ``Collide`` checks.
+
+    A proposal lives in the object frame, and rigid motions preserve distances and linear
+    interpolation, so two of ``Collide``'s three tests do not depend on where the object
+    is: a contact inside the object and two pushing robots closer than 2r. They are done
+    once here (``intrinsic_ok``). The third, push paths in the robots' free space, is
+    done per pose on ``dense_points``: every push path densified to ``MAX_STEP / 2`` in
+    the object frame and stacked, proposal ``i`` owning rows ``starts[i]:starts[i + 1]``.
+    """
+
+    pushes_local: list[np.ndarray]  # K arrays (B, H, 2), object frame
+    intrinsic_ok: np.ndarray  # (K,) bool
+    dense_points: np.ndarray  # (P, 2) stacked densified push points, object frame
+    starts: np.ndarray  # (K + 1,) row offsets into dense_points
+
+
+def pairwise_min_distance(paths: np.ndarray) -> float:
+    """Smallest distance between any two of the (B, T, 2) synchronised paths."""
+    b = paths.shape[0]
+    if b < 2:
+        return np.inf
+    i, j = np.triu_indices(b, 1)
+    d = paths[i] - paths[j]
+    return float(np.sqrt(np.min(d[..., 0] ** 2 + d[..., 1] ** 2)))
+
+
+def proposal_key(motion: np.ndarray, budget: int, attempt: int) -> tuple:
+    """Cache key of a proposal request: the motion rounded to 0.1 mm / 0.1 mrad."""
+    return tuple(np.round(np.asarray(motion, float), 4)), int(budget), int(attempt)
+
+
+def stable_seed(seed: int, key: tuple) -> int:
+    """A deterministic 31-bit seed from a run seed and a hashable key (no Python hash())."""
+    motion, budget, attempt = key
+    words = [seed, budget, attempt, *[int(round(m * 1e4)) + 10**6 for m in motion]]
+    return int(np.random.default_rng([abs(int(w)) for w in words]).integers(2**31 - 1))
+
+
+class Verifier:
+    """``Verify``, ``Reassign``, the approach and the re-route for one object, with its
+    proposal cache and counters (``stats``)."""
+
+    def __init__(self, model: Any, shape: Shape, robot_radius: float, n_robots: int,
+                 robots: RobotValidity, route: MultiRobotPlanner, params: VerifierParams,
+                 seed: int = 0) -> None:
+        self.model = model
+        self.shape = shape
+        self.robot_radius = float(robot_radius)
+        self.n_robots = int(n_robots)
+        self.robots = robots
+        self.route = route
+        self.params = params
+        self.seed = int(seed)
+        self.stats = TaskStats()
+        self._proposals: dict[tuple, list] = {}
+        self._candidates: dict[tuple, PushCandidates] = {}
+
+    # ------------------------------------------------------------------ proposals
+    def proposals(self, motion: np.ndarray, budget: int, attempt: int) -> list:
+        """K model proposals for ``motion`` (object frame) with ``budget`` robots.
+
+        Cached per (motion, budget, attempt): the object frame makes proposals independent
+        of where the object is, so lattice primitives are answered once (a repeat counts
+        in ``stats.cache_hits``, a model call in ``stats.model_calls``); a repeated
+        verification of the same edge (``attempt`` > 0) draws fresh samples, as the paper
+        relies on (Sec. III-A-1: "a different sampling in a future call may yield valid
+        manipulation trajectories").
+        """
+        key = proposal_key(motion, budget, attempt)
+        props = self._proposals.get(key)
+        if props is None:
+            props = self.model.propose(self.shape, motion=tuple(map(float, motion)),
+                                       budget=budget, k=self.params.k,
+                                       seed=stable_seed(self.seed, key))
+            self.stats.model_calls += 1
+            self._proposals[key] = props
+        else:
+            self.stats.cache_hits += 1
+        return props
+
+    def sample(self, motion: np.ndarray, budget: int, seed: int) -> np.ndarray:
+        """One fresh model sample's push paths (B, H, 2, object frame) for ``motion``:
+        never cached, never checked (``Collide`` is not applied); one ``model_calls``."""
+        self.stats.model_calls += 1
+        prop = self.model.propose(self.shape, motion=tuple(map(float, motion)), budget=budget,
+                                  k=1, seed=seed)[0]
+        return np.asarray(prop.pushes, float)
+
+    def push_candidates(self, motion: np.ndarray, budget: int, attempt: int) -> PushCandidates:
+        """``proposals`` prepared for ``Collide`` (see ``PushCandidates``), cached alike."""
+        key = proposal_key(motion, budget, attempt)
+        cands = self._candidates.get(key)
+        if cands is None:
+            cands = self._prepare(self.proposals(motion, budget, attempt))
+            self._candidates[key] = cands
+        else:
+            self.stats.cache_hits += 1
+        return cands
+
+    def _prepare(self, props: list) -> PushCandidates:
+        r = self.robot_radius
+        pushes = [np.asarray(p.pushes, float) for p in props]
+        dense = [densify(p, MAX_STEP / 2) for p in pushes]
+        ok = np.array([
+            bool(np.all(signed_distance(self.shape, p[:, 0]) >= r - self.params.contact_tolerance))
+            and pairwise_min_distance(d) >= 2 * r - 1e-9
+            for p, d in zip(pushes, dense, strict=True)
+        ], dtype=bool)
+        sizes = [d.shape[0] * d.shape[1] for d in dense]
+        points = np.concatenate([d.reshape(-1, 2) for d in dense]) if dense else np.zeros((0, 2))
+        return PushCandidates(pushes, ok, points,
+                              np.concatenate([[0], np.cumsum(sizes)]).astype(int))
+
+    # ------------------------------------------------------------------ Collide
+    def usable_mask(self, q_from: np.ndarray, cands: PushCandidates) -> np.ndarray:
+        """``Collide`` (Alg. 1 line 21) for all K candidates at once: which are usable at ``q_from``?
+
+        A proposal is rejected when a contact or any point of a push path leaves the robots'
+        free space (obstacles, other objects, border), when a contact lies inside the object
+        (deeper than ``contact_tolerance``), or when two pushing robots come closer than 2r.
+        The pose-independent tests come precomputed (``PushCandidates.intrinsic_ok``); the
+        free-space test is one query for all the candidates' points, in the robots' space
+        around ``q_from`` (a point beyond its window counts as not free).
+        """
+        ok = cands.intrinsic_ok.copy()
+        if not ok.any():
+            return ok
+        free = self.robots.static_space_near(q_from).is_free(
+            se2.transform_points(q_from, cands.dense_points))
+        ok &= np.logical_and.reduceat(free, cands.starts[:-1])
+        return ok
+
+    def _usable_proposals(self, q_from: np.ndarray, q_R: np.ndarray, motion: np.ndarray,
+                          budget: int, attempt: int) -> list[np.ndarray]:
+        """Lines 20-21: the K proposals (C_R, T_manip) that pass ``Collide``, nearest to the robots first.
+
+        Ordering by the optimal robot-to-contact distance is our addition: Gspi is tried on
+        the candidates that need the shortest approach first, which shortens the makespan and
+        keeps consecutive pushes in the same direction from reshuffling the robots.
+        """
+        cands = self.push_candidates(motion, budget, attempt)
+        kept: list[tuple[float, int, np.ndarray]] = []
+        for idx in np.flatnonzero(self.usable_mask(q_from, cands)):
+            pushes_local = cands.pushes_local[idx]
+            contacts = se2.transform_points(q_from, pushes_local[:, 0])
+            kept.append((assign_to_contacts(q_R, contacts)[1], int(idx), pushes_local))
+        kept.sort(key=lambda item: (item[0], item[1]))
+        return [p for _, _, p in kept]
+
+    # ------------------------------------------------------------------ Reassign
+    def reassign(self, q_from: np.ndarray, q_to: np.ndarray, q_R: np.ndarray,
+                 contacts: np.ndarray, pushes_world: np.ndarray) -> np.ndarray:
+        """``Reassign`` (Alg. 1 line 22): goals for all N robots.
+
+        Robots are paired with contacts by shortest distance (an optimal assignment); every
+        unpaired robot gets a waiting spot: the nearest collision-free place, found by a
+        breadth-first search from where it stands, that keeps clear of the object's swept
+        motion and of the push paths. Returns (N, 2) goals; rows 0..B-1 are the contacts.
+        """
+        n, b = q_R.shape[0], contacts.shape[0]
+        goals = np.empty((n, 2))
+        goals[:b] = contacts
+        if b == n:
+            return goals
+        rows, _ = assign_to_contacts(q_R, contacts)
+        unpaired = [i for i in range(n) if i not in set(rows.tolist())]
+        space = self.robots.robot_space_at(q_from, self.robots.window(q_from, q_R))
+        r = self.robot_radius
+        swept = se2.interpolate(q_from, q_to, np.linspace(0.0, 1.0, 5))
+        keep_out = [pushes_world.reshape(-1, 2)]
+        chosen: list[np.ndarray] = []
+
+        def clear_of_push(points: np.ndarray) -> np.ndarray:
+            ok = np.ones(points.shape[0], dtype=bool)
+            for pose in swept:
+                local = se2.inverse_transform_points(pose, points)
+                ok &= signed_distance(self.shape, local) >= 2 * r
+            for pts in keep_out + chosen:
+                d = np.linalg.norm(points[:, None, :] - np.asarray(pts).reshape(-1, 2)[None],
+                                   axis=2)
+                ok &= d.min(axis=1) >= 3 * r
+            return ok
+
+        for slot, i in enumerate(unpaired):
+            spot = space.nearest_free(q_R[i], accept=clear_of_push,
+                                      max_distance=WAIT_SEARCH_RADIUS)
+            if spot is None:
+                spot = q_R[i]
+            goals[b + slot] = spot
+            chosen.append(np.asarray(spot).reshape(1, 2))
+        return goals
+
+    def leave_contact(self, q_from: np.ndarray, q_R: np.ndarray) -> np.ndarray:
+        """Short straight moves that take robots out of collision before they are routed.
+
+        After a push the robots stand touching the object; drift can leave one a few mm
+        inside its configuration-space obstacle. Such a robot first backs off to the nearest
+        free configuration (a move of at most a few centimetres, away from the object).
+        """
+        space = self.robots.robot_space_at(q_from, self.robots.window(q_from, q_R))
+        free = space.is_free(q_R)
+        if np.all(free):
+            return q_R[:, None, :].copy()
+        ends = q_R.copy()
+        for i in np.flatnonzero(~free):
+            spot = space.nearest_free(q_R[i])
+            if spot is not None:
+                ends[i] = spot
+        return straight_moves(q_R, ends)
+
+    # ------------------------------------------------------------------ approach
+    def approach(self, q_from: np.ndarray, q_R: np.ndarray,
+                 goals: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        """Gspi (Alg. 1 line 23): paths for all robots to ``goals``; (paths, goal_of) or None.
+
+        The planner works in the robot space over ``robots.window(q_from, q_R)``; when it
+        fails in a way a larger window may fix (a goal unreachable, a stall, the step budget;
+        not the time limit nor an invalid start or goal) and the window does not hold the
+        whole map, the window's margin and least side are doubled (up to
+        ``robots.max_window_side``) and it tries again. Gspi ends on its step and stall
+        counts; ``gspi_time_limit`` caps all the windows' calls together, as an outer
+        wall-clock cap."""
+        robots = self.robots
+        backoff = self.leave_contact(q_from, q_R)
+        starts = backoff[:, -1]
+        self.stats.gspi_calls += 1
+        t_end = time.perf_counter() + self.params.gspi_time_limit
+        scale = 1.0
+        while True:
+            space = robots.robot_space_at(q_from, robots.window(q_from, q_R, scale))
+            # Contacts deeper than the tolerance or robots left overlapping come back as a
+            # failed plan (status INVALID_GOAL / INVALID_START), like any other infeasible
+            # approach.
+            plan = self.route(q_from, starts, goals, space,
+                              max(1e-3, t_end - time.perf_counter()))
+            if plan.success:
+                break
+            if plan.status is GspiStatus.TIME_LIMIT:
+                self.stats.gspi_timeouts += 1
+            wider = robots.window(q_from, q_R, 2.0 * scale)
+            if (space.covers_workspace or plan.status not in _WINDOW_BOUND
+                    or max(wider[2] - wider[0], wider[3] - wider[1]) > robots.max_window_side
+                    or time.perf_counter() >= t_end):
+                return None
+            scale *= 2.0
+        self.stats.gspi_success += 1
+        return concat(backoff, plan.paths), np.asarray(plan.goal_of)
+
+    def route_push(self, q_from: np.ndarray, q_to: np.ndarray, q_R: np.ndarray,
+                   pushes_local: np.ndarray, *, edge: tuple | None = None,
+                   deadline: float | None = None) -> Transition | None:
+        """Robot trajectories for one chosen push (``Reassign`` and Gspi, lines 22-23), or None.
+
+        The push paths ``pushes_local`` (object frame at ``q_from``) are placed in the world,
+        the robots are paired with their contacts or sent to waiting spots (``Reassign``) and
+        routed there (``approach``); the push itself follows. Shared by ``verify``,
+        ``reroute`` and the GCo baselines. With a ``deadline`` (``time.perf_counter``
+        seconds) that has passed after ``Reassign``, no route is planned and the answer is
+        None.
+        """
+        pushes_world = se2.transform_points(q_from, pushes_local)
+        contacts = pushes_world[:, 0]
+        goals = self.reassign(q_from, q_to, q_R, contacts, pushes_world)
+        if deadline is not None and time.perf_counter() > deadline:
+            return None
+        routed = self.approach(q_from, q_R, goals)
+        if routed is None:
+            return None
+        move, goal_of = routed
+        return Transition(
+            q_from=q_from, q_to=q_to, contacts=contacts, pushes_local=pushes_local,
+            move=move, manip=push_paths(move[:, -1], goal_of, pushes_world), edge=edge,
+        )
+
+    # ------------------------------------------------------------------ Verify
+    def verify(self, q_from: np.ndarray, q_to: np.ndarray, q_R: np.ndarray,
+               attempt: int = 0) -> Transition | None:
+        """``Verify`` (Alg. 1 lines 17-25): robot trajectories that move the object
+        ``q_from -> q_to``; counts ``stats.verify_calls`` and, on success, ``verify_success``."""
+        self.stats.verify_calls += 1
+        q_from = np.asarray(q_from, float)
+        q_to = np.asarray(q_to, float)
+        q_R = np.asarray(q_R, float)
+        motion = se2.relative(q_from, q_to)
+        top = min(self.n_robots, self.params.max_budget)
+        for budget in range(top, 0, -1):  # line 19: budgets N down to 1
+            candidates = self._usable_proposals(q_from, q_R, motion, budget, attempt)
+            for pushes_local in candidates[: self.params.gspi_attempts_per_budget]:
+                trans = self.route_push(q_from, q_to, q_R, pushes_local)  # lines 22-23: Reassign, Gspi
+                if trans is not None:  # line 24: T_move found, return it
+                    self.stats.verify_success += 1
+                    return trans
+        return None  # line 25: return failure
+
+    def reroute(self, cached: Transition, q_R: np.ndarray) -> Transition | None:
+        """Alg. 2 lines 27-33: reuse a verified push from new robot positions (new T_move only)."""
+        q_R = np.asarray(q_R, float)
+        return self.route_push(cached.q_from, cached.q_to, q_R, cached.pushes_local,
+                               edge=cached.edge)
