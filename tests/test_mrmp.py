@@ -430,3 +430,15 @@ def test_checker_catches_violations() -> None:
         check_plan(scene, S, G, corrupted(goal_of=np.array([0, 0])))
     with pytest.raises(AssertionError, match="reason"):
         check_plan(scene, S, G, corrupted(success=False))
+
+
+def test_plan_paths_takes_the_space_it_plans_in() -> None:
+    scene, S, G = _random_instance(7, 3, 3, 4, 2.0)
+    space = RobotSpace.from_scene(scene)
+    a = plan_paths(scene, S, G, space=space)
+    b = plan_paths(space, S, G)
+    assert np.array_equal(a.paths, b.paths) and a.status == b.status
+    with pytest.raises(InputError, match="plans in that space"):
+        plan_paths(space, S, G, space=space)
+    with pytest.raises(InputError, match="Scene or a RobotSpace"):
+        plan_paths("scene.yaml", S, G)

@@ -99,7 +99,7 @@ def warmup() -> None:
 
 
 def plan_paths(
-    scene: Scene,
+    scene: Scene | RobotSpace,
     starts: ArrayLike,
     goals: ArrayLike,
     object_poses: ArrayLike | None = None,
@@ -122,7 +122,9 @@ def plan_paths(
 
     Parameters
     ----------
-    scene: the scene (workspace, obstacles, objects, robot radius).
+    scene: the scene (workspace, obstacles, objects, robot radius), or directly the
+        :class:`RobotSpace` to plan in (as ``space=``; then ``object_poses`` and
+        ``extra_obstacles`` do not apply and must be left out).
     starts: (N, 2) robot centres now.
     goals: (M, 2) goal centres, M <= N; any robot may take any goal.
     object_poses: (K, 3) current poses of the scene's objects (default: start poses); the
@@ -167,8 +169,14 @@ def plan_paths(
     if not _WARM:
         warmup()
     t_begin = time.perf_counter()
-    if not isinstance(scene, Scene):
-        raise InputError(f"scene must be a lamp Scene, got {type(scene).__name__}")
+    if isinstance(scene, RobotSpace):
+        if space is not None or object_poses is not None or len(extra_obstacles):
+            raise InputError("plan_paths(space, ...) plans in that space: pass no space=, "
+                             "object_poses= or extra_obstacles= beside it")
+        space = scene
+    elif not isinstance(scene, Scene):
+        raise InputError(f"scene must be a lamp Scene or a RobotSpace, got "
+                         f"{type(scene).__name__}")
     S = as_points(starts, "starts")
     G = as_points(goals, "goals")
     N, M = len(S), len(G)

@@ -117,10 +117,13 @@ class GspiRouter:
                  space: Any, time_limit: float) -> Any:
         from lamp.mrmp import plan_paths
 
+        if space is not None:  # the robot space Verify checked the push in
+            return plan_paths(space, starts, goals, time_limit=time_limit, seed=self.seed,
+                              goal_tolerance=self.goal_tolerance)
         poses = np.array(self.object_poses, float).reshape(-1, 3)
         poses[self.index] = q_object
         return plan_paths(self.scene, starts, goals, object_poses=poses, time_limit=time_limit,
-                          space=space, seed=self.seed, goal_tolerance=self.goal_tolerance)
+                          seed=self.seed, goal_tolerance=self.goal_tolerance)
 
 
 @dataclass(frozen=True)
