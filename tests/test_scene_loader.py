@@ -704,3 +704,15 @@ def test_yaml_text_corruption(fuzz_dir: Path, d: Any, data: st.DataObject) -> No
     path = fuzz_dir / "t.yaml"
     path.write_text(text, encoding="utf-8", errors="surrogatepass")
     assert_only_scene_error(lambda: load_scene(path), str(path))
+
+
+def test_a_workspace_too_large_is_refused_by_name():
+    from lamp.scene.loader import MAX_WORKSPACE_SIDE
+
+    d = json.loads((DATA / "minimal.json").read_text())
+    d["workspace"] = [1e6, 1e6]
+    with pytest.raises(SceneError, match=r"huge.json: workspace: sides up to 200 m") as err:
+        scene_from_dict(d, source="huge.json")
+    assert err.value.field == "workspace"
+    d["workspace"] = [MAX_WORKSPACE_SIDE, 2.0]
+    assert scene_from_dict(d).workspace == (MAX_WORKSPACE_SIDE, 2.0)

@@ -53,10 +53,14 @@ from lamp.scene.errors import Ctx, SceneError, fmt_xy, is_number, show, value_ki
 from lamp.scene.geometry_checks import check_geometry
 from lamp.scene.model import Circle, Obstacle, Polygon, Rectangle, Scene, SceneObject, Shape
 
-__all__ = ["DEFAULT_ROBOT_RADIUS", "FORMAT", "SceneError", "load_scene", "scene_from_dict"]
+__all__ = ["DEFAULT_ROBOT_RADIUS", "FORMAT", "MAX_WORKSPACE_SIDE", "SceneError", "load_scene", "scene_from_dict"]
 
 FORMAT = "lamp-scene/1"
 DEFAULT_ROBOT_RADIUS = DEFAULT_TEAM.radius
+#: Largest workspace side (m) the planners' grids serve: the object lattice (0.1 m, 16
+#: headings) keeps one validity byte per pose, 64 M poses at 200 m x 200 m, filled only
+#: where a search goes; beyond that a scene is refused rather than run out of memory.
+MAX_WORKSPACE_SIDE = 200.0
 SHAPE_TYPES = ("circle", "rectangle", "polygon")
 
 # Allowed keys per mapping: (required, optional).
@@ -277,6 +281,9 @@ def _structure(ctx: Ctx, raw: Any, source: str | None) -> Scene:
         ctx.fail("format", f"must be exactly {FORMAT!r}, got {show(d['format'])}")
     name = _string(ctx, d["name"], "name")
     workspace = _vector(ctx, d["workspace"], "workspace", 2, "W, H", positive=True)
+    if max(workspace) > MAX_WORKSPACE_SIDE:
+        ctx.fail("workspace", f"sides up to {MAX_WORKSPACE_SIDE:g} m are supported (the "
+                 f"planners' 1 cm and 0.1 m grids), got {list(workspace)}")
     robots = _mapping(ctx, d["robots"], "robots", _ROBOT_KEYS)
     radius = (
         _number(ctx, robots["radius"], "robots.radius", positive=True)

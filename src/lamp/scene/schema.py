@@ -11,15 +11,18 @@ from __future__ import annotations
 
 from typing import Any
 
-from lamp.scene.loader import DEFAULT_ROBOT_RADIUS, FORMAT
+from lamp.scene.loader import DEFAULT_ROBOT_RADIUS, FORMAT, MAX_WORKSPACE_SIDE
 
 SCHEMA_ID = "urn:lamp:scene-format:1"
 
 
-def _numbers(n: int, description: str, *, positive: bool = False) -> dict[str, Any]:
+def _numbers(n: int, description: str, *, positive: bool = False,
+             maximum: float | None = None) -> dict[str, Any]:
     item: dict[str, Any] = {"type": "number"}
     if positive:
         item["exclusiveMinimum"] = 0
+    if maximum is not None:
+        item["maximum"] = maximum
     return {"type": "array", "items": item, "minItems": n, "maxItems": n,
             "description": description}
 
@@ -75,7 +78,8 @@ def scene_schema() -> dict[str, Any]:
         "properties": {
             "format": {"const": FORMAT},
             "name": {"type": "string"},
-            "workspace": _numbers(2, "[W, H] (m)", positive=True),
+            "workspace": _numbers(2, f"[W, H] (m), each at most {MAX_WORKSPACE_SIDE:g}",
+                                  positive=True, maximum=MAX_WORKSPACE_SIDE),
             "robots": {
                 "type": "object",
                 "properties": {
