@@ -78,12 +78,15 @@ def scene_name(index: int) -> str:
 
 @dataclass
 class XLLayout:
-    """A generated hall: workspace, obstacle dicts, crossing sites (x, y, heading)."""
+    """A generated hall: workspace, obstacle dicts, crossing sites (x, y, heading): the
+    dock band's crossings first (``info["cross_aisles"]`` of them), then the aisles'."""
 
     workspace: tuple[float, float]
     obstacles: list[dict[str, Any]]
     sites: np.ndarray
     info: dict[str, Any]
+    #: widths (m) of the aisles between shelf rows and of the cross-aisles
+    aisle_widths: tuple[float, ...] = ()
 
 
 def _aisle(rng: np.random.Generator, obj: ObjectSpec) -> float:
@@ -219,7 +222,8 @@ def layout_xl(rng: np.random.Generator, obj: ObjectSpec) -> XLLayout:
         "pallets_aside": narrowed,
         "transposed": transpose,
     }
-    return XLLayout((W, H), out, site_xy, info)
+    widths = tuple(b - a for a, b in [*aisles_v[1:], *cross])
+    return XLLayout((W, H), out, site_xy, info, widths)
 
 
 def _box(u0: float, u1: float, v0: float, v1: float) -> dict[str, Any]:
