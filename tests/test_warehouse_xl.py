@@ -140,3 +140,10 @@ def test_bench_uses_the_scaled_segment_limit_on_warehouse_xl():
     assert [(j.suite, j.max_segments) for j in jobs] == [
         (XL.NAME, None), ("maze", PAPER_MAX_SEGMENTS)
     ]
+
+
+def test_environments_resolve_warehouse_xl_scene_names():
+    from lamp.env.core import resolve_scene
+
+    assert resolve_scene("warehouse-xl-07").name == "warehouse-xl-07"
+    assert resolve_scene("maze-07").name == "maze-07"
