@@ -284,7 +284,8 @@ def _render_jobs(jobs: list[Job], pending: list[Job], out: Path, time_cap: float
 
 def bench_command(
     suite: str = typer.Option(DEFAULT_SUITES, "--suites", help="Comma-separated suites "
-                              "(random, maze, tilt, warehouse, iros) or folders of scene files."),
+                              "(random, maze, tilt, warehouse, iros, warehouse-xl) or "
+                              "folders of scene files."),
     suite_alias: str = typer.Option(None, "--suite", hidden=True,
                                     help="Old spelling of --suites."),
     planners: str = typer.Option(",".join(registry.bench_defaults()), "--planners",

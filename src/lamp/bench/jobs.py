@@ -95,7 +95,9 @@ class SuiteScene:
     suite: str
     scene: Scene
     scene_file: str
-    #: A scene of the built-in suites: the paper's settings hold (``PAPER_MAX_SEGMENTS``).
+    #: A scene of one of the paper's built-in suites (``SuiteInfo.paper``): the paper's
+    #: settings hold (``PAPER_MAX_SEGMENTS``). False for scene folders and for built-in
+    #: suites beyond the paper (``warehouse-xl``), whose limit scales with the task.
     builtin: bool = False
 
 
@@ -341,8 +343,9 @@ def load_suite(name: str) -> list[SuiteScene]:
         if not scenes:
             raise ValueError(f"built-in suite {name!r} has no scene files in this installation")
         # a portable name (suite/file), not the path inside this installation
+        paper = registry.suite_info(name).paper
         return [SuiteScene(name, sc, f"{name}/{Path(sc.source).name}" if sc.source
-                           else f"{name}/{sc.name}.yaml", builtin=True) for sc in scenes]
+                           else f"{name}/{sc.name}.yaml", builtin=paper) for sc in scenes]
     path = Path(name)
     if path.is_dir():
         from lamp.scene import load_scene

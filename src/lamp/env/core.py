@@ -67,7 +67,7 @@ from lamp.scene.model import Scene
 from lamp.sim.mjcf import ROBOT_KP, ROBOT_KV, build_model
 from lamp.sim.simulator import WORKSPACE_TOLERANCE, Simulator, footprint_outside
 
-_SUITE_SCENE = re.compile(r"^(?P<suite>[a-z]+)-(?P<index>\d+)$")
+_SUITE_SCENE = re.compile(r"^(?P<suite>[a-z][a-z-]*)-(?P<index>\d+)$")
 
 
 #: Axes of the common frame (``PushConfig.frame``).

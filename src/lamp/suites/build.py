@@ -17,6 +17,7 @@ from typing import Any
 from lamp.suites import checks as C
 from lamp.suites import generators as G
 from lamp.suites import iros
+from lamp.suites import warehouse_xl as XL
 from lamp.suites.registry import SUITES, scene_yaml
 
 log = logging.getLogger(__name__)
@@ -47,7 +48,19 @@ def manifest_json(manifest: dict[str, Any]) -> str:
     return json.dumps(manifest, indent=1, sort_keys=True) + "\n"
 
 
-def family_entry(gen: G.Generated, text: str) -> dict[str, Any]:
+def _xl_check_settings() -> dict[str, Any]:
+    return {
+        **_check_settings(),
+        "lattice_resolution": XL.RESOLUTION,
+        "headings_per_period": XL.N_HEADINGS,
+        "reach_resolution": XL.REACH_RESOLUTION,
+        "route_length_range": list(XL.ROUTE_RANGE),
+        "min_start_goal_distance": XL.MIN_SPAN,
+        "aisle_min_extra": XL.AISLE_MIN_EXTRA,
+    }
+
+
+def family_entry(gen: G.Generated | XL.GeneratedXL, text: str) -> dict[str, Any]:
     """Manifest entry of one generated family scene."""
     obj = {**_object_summary(gen.scene_dict["objects"][0]), **gen.report.to_dict()}
     return {
@@ -55,7 +68,7 @@ def family_entry(gen: G.Generated, text: str) -> dict[str, Any]:
         "file": f"{gen.scene_dict['name']}.yaml",
         "sha256": hashlib.sha256(text.encode()).hexdigest(),
         "n_obstacles": len(gen.scene_dict["obstacles"]),
-        "aimed_tight": gen.want_tight,
+        **({"aimed_tight": gen.want_tight} if isinstance(gen, G.Generated) else {}),
         "attempts": gen.attempts,
         "layout": gen.layout_info,
         "objects": [obj],
@@ -68,7 +81,27 @@ def build_suite(name: str, progress: Callable[[str], None] | None = None) -> dic
         raise ValueError(f"unknown suite {name!r}; valid names: {', '.join(SUITES)}")
     files: dict[str, str] = {}
     entries = []
-    if name == "iros":
+    checks = _check_settings()
+    if name == XL.NAME:
+        for k in range(XL.N_SCENES):
+            xg = XL.generate_scene(k)
+            text = scene_yaml(xg.scene_dict)
+            files[f"{xg.scene_dict['name']}.yaml"] = text
+            entries.append(family_entry(xg, text))
+            if progress is not None:
+                rep = xg.report.to_dict()
+                progress(
+                    f"{xg.scene_dict['name']}: {xg.layout_info['workspace']} m, attempts "
+                    f"{xg.attempts}, free route {rep['free_route']['length']:.2f} m, "
+                    f"robot-room route {rep['robot_route']['length']:.2f} m"
+                )
+        generator = {
+            "module": "lamp.suites.warehouse_xl",
+            "seed": G.SUITE_SEED,
+            "rng": f"numpy.random.default_rng([{G.SUITE_SEED}, {XL.STREAM}, index])",
+        }
+        checks = _xl_check_settings()
+    elif name == "iros":
         d, scene, steps = iros.build()
         bad = [s.piece for s in steps if not s.ok]
         if bad or not iros.goal_footprints_disjoint(scene):
@@ -114,7 +147,7 @@ def build_suite(name: str, progress: Callable[[str], None] | None = None) -> dic
         "suite": name,
         "description": SUITES[name].description,
         "generator": {"script": "scripts/generate_suites.py", **generator},
-        "checks": _check_settings(),
+        "checks": checks,
         "scenes": entries,
     }
     files["manifest.json"] = manifest_json(manifest)

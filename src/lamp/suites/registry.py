@@ -6,7 +6,7 @@ settings and the check results of every scene: routes, clearances, robot reachab
 
 >>> from lamp.suites import list_suites, suite_scenes
 >>> list_suites()
-['random', 'maze', 'tilt', 'warehouse', 'iros']
+['random', 'maze', 'tilt', 'warehouse', 'iros', 'warehouse-xl']
 >>> len(suite_scenes("maze"))
 25
 """
@@ -32,11 +32,18 @@ DATA_DIR = Path(str(resources.files("lamp.suites") / "data"))
 
 @dataclass(frozen=True)
 class SuiteInfo:
-    """Name, one-line description and expected number of scenes of a suite."""
+    """Name, one-line description and expected number of scenes of a suite.
+
+    ``paper``: the suite is one of the LAMP paper's benchmarks (the four families and
+    IROS), so the benchmark runs it under the paper's settings (``PAPER_MAX_SEGMENTS``
+    executed segments per object); the other built-in suites get the limit that scales
+    with the task, as user scenes do (``lamp.planners.config.segment_limit``).
+    """
 
     name: str
     description: str
     n_scenes: int
+    paper: bool = True
 
 
 SUITES: dict[str, SuiteInfo] = {
@@ -59,12 +66,18 @@ SUITES: dict[str, SuiteInfo] = {
             "9 objects moved one by one to spell I R O S (LAMP paper: long-horizon case study)",
             1,
         ),
+        SuiteInfo(
+            "warehouse-xl",
+            "20-50 m halls: shelf rows, aisles, cross-aisles and pallets; 20-70 m routes",
+            25,
+            paper=False,
+        ),
     )
 }
 
 
 def list_suites() -> list[str]:
-    """Names of the built-in suites, in the paper's order."""
+    """Names of the built-in suites: the paper's, in its order, then the others."""
     return list(SUITES)
 
 

@@ -56,7 +56,11 @@ def stats_markdown(manifests: dict[str, dict[str, Any]] | None = None) -> str:
         manifests = {name: suite_manifest(name) for name in SUITES}
     chk = manifests["random"]["checks"]
     # the single-object families, in suite order (the IROS scene has its own table)
-    families = {name: family_stats(manifests[name]) for name in SUITES if name != "iros"}
+    families = {
+        name: family_stats(manifests[name])
+        for name in SUITES
+        if name != "iros" and name in manifests
+    }
     lines = [
         "# Benchmark suite statistics",
         "",
@@ -71,6 +75,20 @@ def stats_markdown(manifests: dict[str, dict[str, Any]] | None = None) -> str:
         f"{chk['tight_min_extra']} m and by a factor >= "
         f"{chk['tight_min_ratio']} (the LAMP paper's Fig. 1 situation);",
         "- *min clearance*: exact minimum along the route, sampled every 5 mm of motion.",
+    ]
+    xl = manifests.get("warehouse-xl")
+    if xl is not None:
+        xc = xl["checks"]
+        lines.append(
+            f"- warehouse-xl's routes are searched on a {xc['lattice_resolution']} m lattice "
+            f"with {xc['headings_per_period']} headings per period (the others: "
+            f"{chk['lattice_resolution']} m, {chk['headings_per_period']}) and robot reach "
+            f"on a {xc['reach_resolution']} m grid; its lengths are upper bounds. Its maps "
+            "measure "
+            + _mmm([v for sc in xl["scenes"] for v in sc["layout"]["workspace"]], "{:.1f}")
+            + " m a side."
+        )
+    lines += [
         "",
         "| family | scenes | circles (radius) | rectangles (sides) | obstacles "
         "| free route length | free route min clearance | robot-room route length "
