@@ -63,7 +63,7 @@ from lamp.suites.layout_maze import layout_maze, layout_random
 
 __all__ = ["END_CLEARANCE", "FAMILIES", "SCENES_PER_FAMILY", "SUITE_SEED", "TIGHT_SHARE",
            "TIGHT_SLACK", "Generated", "circle", "generate_scene", "polygon", "rect",
-           "scene_name"]
+           "place_robots", "scene_name"]
 
 # --------------------------------------------------------------------------- scenes
 @dataclass
@@ -123,12 +123,13 @@ def _place(
     return None
 
 
-def _place_robots(
-    rng: np.random.Generator, world: C.World, obj_shape: Any, start: np.ndarray, reach: float
+def place_robots(
+    rng: np.random.Generator, world: C.World, obj_shape: Any, start: np.ndarray, reach: float,
+    workspace: tuple[float, float] = WORKSPACE,
 ) -> list[list[float]] | None:
     """Three robot positions 0.12-0.7 m outside the object's bounding circle, clear of
-    everything by >= 3 cm and of each other by >= 5 cm."""
-    obj_world = C.build_world(WORKSPACE, [Obstacle(obj_shape, tuple(float(v) for v in start))])
+    everything by >= 3 cm and of each other by >= 5 cm (``workspace``: the map's size)."""
+    obj_world = C.build_world(workspace, [Obstacle(obj_shape, tuple(float(v) for v in start))])
     out: list[np.ndarray] = []
     for _ in range(300):
         rad = reach + ROBOT_RADIUS + rng.uniform(0.12, 0.7)
@@ -208,7 +209,7 @@ def generate_scene(family: str, index: int, *, full_checks: bool = True) -> Gene
             continue
         if obj.is_circle:
             start[2] = goal[2] = 0.0
-        robots = _place_robots(rng, world, shape, start, obj.reach)
+        robots = place_robots(rng, world, shape, start, obj.reach)
         if robots is None:
             reject("no robot starts")
             continue

@@ -34,11 +34,11 @@ from typing import Any
 import numpy as np
 
 from lamp.scene.loader import SceneError, scene_from_dict
-from lamp.scene.model import Obstacle, Scene, shape_from_dict
+from lamp.scene.model import Scene, shape_from_dict
 from lamp.suites import checks as C
+from lamp.suites.generators import place_robots
 from lamp.suites.layout import (
     END_CLEARANCE,
-    N_ROBOTS,
     ROBOT_RADIUS,
     SUITE_SEED,
     ObjectSpec,
@@ -252,33 +252,6 @@ def _place(
     return None
 
 
-def _place_robots(
-    rng: np.random.Generator,
-    workspace: tuple[float, float],
-    world: C.World,
-    obj: ObjectSpec,
-    start: np.ndarray,
-) -> list[list[float]] | None:
-    """Three robot positions 0.12-0.7 m outside the object's bounding circle, clear of
-    everything by >= 3 cm and of each other by >= 5 cm."""
-    shape = shape_from_dict(obj.shape)
-    own = C.build_world(workspace, [Obstacle(shape, tuple(float(v) for v in start))])
-    out: list[np.ndarray] = []
-    for _ in range(300):
-        rad = obj.reach + ROBOT_RADIUS + rng.uniform(0.12, 0.7)
-        a = rng.uniform(-math.pi, math.pi)
-        p = np.array([rnd(start[0] + rad * math.cos(a)), rnd(start[1] + rad * math.sin(a))])
-        c = min(C.point_clearance(world, p), C.point_clearance(own, p))
-        if c < ROBOT_RADIUS + 0.03:
-            continue
-        if any(math.dist(p, q) < 2 * ROBOT_RADIUS + 0.05 for q in out):
-            continue
-        out.append(p)
-        if len(out) == N_ROBOTS:
-            return [[float(v) for v in q] for q in out]
-    return None
-
-
 @dataclass
 class GeneratedXL:
     """A generated warehouse-xl scene with its file dict, loaded Scene and check report."""
@@ -331,7 +304,8 @@ def generate_scene(index: int, *, full_checks: bool = True) -> GeneratedXL:
         if start is None or goal is None:
             reject("no start/goal pose")
             continue
-        robots = _place_robots(rng, lay.workspace, world, obj, start)
+        robots = place_robots(rng, world, shape_from_dict(obj.shape), start, obj.reach,
+                              lay.workspace)
         if robots is None:
             reject("no robot starts")
             continue
