@@ -261,10 +261,7 @@ def solve_mapush(scene: Scene, seed: int = 0, *, policy=None, render: bool = Fal
                          time_limit=time_limit)
         emit("object-done", index, segments=obj.segments, replans=obj.replans,
              success=obj.success)
-        result.objects.append(obj)
-        result.planning_time_s.extend(record.planning_time_s)
-        result.makespan += record.makespan
-        result.replans += obj.replans
+        result.add_object(obj, record.planning_time_s, record.makespan)
         frames.extend(record.frames)
         per_object.append({"mapush_success": record.mapush_success,
                            "mapush_time_s": record.mapush_time_s,

@@ -83,6 +83,14 @@ class RunResult:
     def segments(self) -> int:
         return len(self.planning_time_s)
 
+    def add_object(self, obj: ObjectResult, planning_time_s: list[float], makespan: int) -> None:
+        """Append the outcome of the next object: its result, the planning time of each of
+        its executed segments and its makespan (the run's replans grow by the object's)."""
+        self.objects.append(obj)
+        self.planning_time_s.extend(planning_time_s)
+        self.makespan += makespan
+        self.replans += obj.replans
+
     @property
     def total_planning_time_s(self) -> float:
         """All planning: before executed segments plus after the last one."""

@@ -168,10 +168,7 @@ def run_scene(scene: Scene, planner: str, seed: int, model: str | Path | Any, *,
                          render=render, time_limit=time_limit, observer=observe)
         emit("object-done", index, segments=obj.segments, replans=obj.replans,
              success=obj.success)
-        result.objects.append(obj)
-        result.planning_time_s.extend(record.planning_time_s)
-        result.makespan += record.makespan
-        result.replans += record.replans
+        result.add_object(obj, record.planning_time_s, record.makespan)
         totals.add(task.stats)
         unexecuted += record.unexecuted_planning_s
         frames.extend(record.frames)
