@@ -168,3 +168,23 @@ def test_lazy_handles_other_team_sizes(proposer, starts):
     scene = scene_from_dict(d)
     result = solve(scene, "lazy", seed=0, model=proposer).to_dict()
     assert result["success"], result
+
+
+def test_lazy_forgets_a_cached_push_it_cannot_route_to(proposer):
+    """A Tree_eval entry whose re-routing fails is dropped, not only penalised: the next
+    plan through that pose verifies the motion again instead of meeting the same push."""
+    scene = scene_from_dict(small_scene())
+    task = ManipulationTask(scene, 0, scene.object_starts(), proposer, PlannerConfig(), seed=0)
+    planner = LazyPlanner.from_task(task)
+    first = planner.plan(scene.object_starts()[0], scene.robot_starts_array)
+    assert first.solved and len(first.transitions) >= 3
+    mid = first.transitions[1]
+    u = mid.edge[0]
+    cached = planner.tree_eval[u].transition
+    planner.verifier.reroute = lambda trans, q_R: None  # every cached push is now unreachable
+    calls = task.stats.verify_calls
+    moved = mid.robot_start + np.array([0.0, 0.3])  # robots elsewhere: D_T has no entry
+    planner.plan(mid.q_from, moved)
+    assert u not in planner.tree_eval or planner.tree_eval[u].transition is not cached
+    assert planner.failures.get(mid.edge, 0) >= 1
+    assert task.stats.verify_calls > calls  # verified afresh

@@ -7,6 +7,12 @@ earlier full path to the goal); a failed edge is penalised in D* Lite (``UpdateC
 and the search repeats. The per-node caches D_T map robot configurations to complete robot
 trajectories, so replanning after drift mostly reuses verified pushes and only re-routes
 the robots (``Reassign`` and Gspi, lines 27-33).
+
+Departure: when re-routing a cached push fails (line 31), the paper only raises the edge's
+cost and keeps the ``Tree_eval`` entry, so every later plan through that pose meets the
+same unreachable push again (in a tight spot, until the plan iterations run out). Here the
+entry is dropped as well: the next plan through the pose verifies the motion afresh (with
+the next attempt's model samples, ``failures`` counts them) or goes another way.
 """
 
 from __future__ import annotations
@@ -175,6 +181,10 @@ class LazyPlanner:
                     if trans is None:  # lines 27-35: Reassign, Gspi: new T_move for these robots
                         trans = self.verifier.reroute(entry.transition, q_R)
                         if trans is None:
+                            # departure: the cached push cannot be reached from here, so
+                            # it is forgotten (not only penalised): the next iteration
+                            # verifies this motion afresh, with new model samples
+                            del self.tree_eval[curr]
                             self._penalise(curr, entry.next_node)
                             ok = False
                             break
