@@ -8,8 +8,8 @@ and the search repeats. The per-node caches D_T map robot configurations to comp
 trajectories, so replanning after drift mostly reuses verified pushes and only re-routes
 the robots (``Reassign`` and Gspi, lines 27-33).
 
-Departure: when re-routing a cached push fails (line 31), the paper only raises the edge's
-cost and keeps the ``Tree_eval`` entry, so every later plan through that pose meets the
+Departure: when re-routing a cached push fails, the paper only raises the edge's cost (line
+31: UpdateChange) and keeps the ``Tree_eval`` entry, so every later plan through that pose meets the
 same unreachable push again (in a tight spot, until the plan iterations run out). Here the
 entry is dropped as well: the next plan through the pose verifies the motion afresh (with
 the next attempt's model samples, ``failures`` counts them) or goes another way.
