@@ -32,6 +32,7 @@ from lamp.planners.verifier import Verifier
 from lamp.planners.verify import Transition
 from lamp.search.dstar_lite import DStarLite
 from lamp.search.lattice import ObjectLattice
+from lamp.search.refined_lattice import RefinedLattice
 
 Node = Hashable
 
@@ -63,7 +64,7 @@ def goal_lattice(task: ManipulationTask) -> ObjectLattice:
     """The object lattice both LAMP planners search: anchored at the object's goal, with
     the task's object space and the configured step and heading count."""
     cfg = task.config
-    return ObjectLattice(
+    return RefinedLattice(
         task.object_space, task.goal, step=cfg.lattice_step, n_headings=cfg.n_headings
     )
 
@@ -102,6 +103,22 @@ class LazyPlanner:
         self.tree_eval: dict[Node, TreeEntry] = {}
         self.failures: dict[tuple[Node, Node], int] = {}
         self.penalised: list[tuple[np.ndarray, np.ndarray]] = []
+
+    def _refine(self, q_O: np.ndarray) -> bool:
+        """Departure: when the lattice has no path (or no edge from the object's pose), add
+        off-lattice poses through the narrow passages around the object and its goal
+        (``RefinedLattice.refine``) and restart D* Lite on the refined graph, keeping the
+        penalties; False when nothing could be added."""
+        refine = getattr(self.lattice, "refine", None)
+        if refine is None or refine(np.asarray(q_O, float)) == 0:
+            return False
+        self.dstar = DStarLite(self.lattice)
+        self.dstar.initialize(self.lattice.goal_node)
+        for (u, v), n in self.failures.items():
+            if self.lattice.is_node(u):
+                with contextlib.suppress(ValueError):
+                    self.dstar.penalize(u, v, n * self.config.edge_penalty)
+        return True
 
     def _penalise(self, u: Node, v: Node) -> None:
         """``UpdateChange`` (lines 18 and 31): raise the cost of an edge whose verification failed."""
@@ -144,9 +161,13 @@ class LazyPlanner:
                 return Plan.failed(PlanStatus.TIME_LIMIT, self.penalised, "deadline")
             start, edges = join_lattice(self.lattice, np.asarray(q_O_now, float))
             if edges == []:
+                if self._refine(q_O_now):
+                    continue
                 return Plan.failed(PlanStatus.START_BLOCKED, self.penalised)
             path = self.dstar.plan_shortest_path(start, edges)  # line 11: PlanShortestPath
             if not path:
+                if self._refine(q_O_now):
+                    continue
                 return Plan.failed(PlanStatus.NO_PATH, self.penalised)
             transitions: list[Transition] = []
             tree_new: dict[Node, TreeEntry] = {}

@@ -1,0 +1,239 @@
+"""Object poses off the lattice for narrow passages: corridor centrelines, aligned headings.
+
+The object lattice (0.1 m, 16 headings) cannot pass a corridor only a few centimetres wider
+than the object unless the corridor happens to lie on it: the object must be centred to
+within a centimetre and aligned to within a degree or two. ``narrow_poses`` finds such
+passages and returns poses that pass them; ``RefinedLattice`` adds them to the search.
+
+1. **Clearance raster.** Over a window of the map, the obstacles (and everything outside
+   the workspace) are rasterised on ``raster`` cells and a Euclidean distance transform
+   gives each cell's clearance ``c``.
+2. **Ridges.** A cell lies on a ridge of the clearance (the medial axis) when it is a
+   local maximum of ``c`` along one of the four grid directions, strictly on at least one
+   side (so that the flat clearance along a wall is not a ridge). The ridge is *narrow*
+   where the object only just fits: ``r_in - raster <= c <= r_in + slack``, ``r_in`` the
+   radius of the largest disk about the object's origin inside its footprint (any free
+   pose has at least that clearance at its origin).
+3. **Samples.** Narrow ridge cells are thinned to points at least ``spacing`` apart (in
+   raster order, deterministic); the local corridor direction ``phi`` at a point is the
+   principal axis of the ridge cells around it.
+4. **Aligned poses.** For each point, each heading that lays an edge of the object's convex
+   hull along ``phi`` (a rectangle: 4 headings; a circle: ``phi``) gives a pose, shifted
+   across the corridor so that the object's extent across it is centred on the ridge and
+   nudged by up to one raster cell more if needed. A pose is kept when the exact checker
+   (``ExactSpace``) finds it free.
+5. **Extensions.** Where a chain of aligned poses ends (no pose of the same heading ahead
+   along ``phi``), poses continue straight along ``phi`` for up to the object's reach plus
+   ``extension`` while free, so that the object leaves the corridor before it turns.
+
+Guarantee: every returned pose is free by ``ExactSpace.pose_free``. Nothing is promised
+about completeness: the poses are candidates, connected by checked motions in
+``lamp.search.refined_lattice``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import shapely
+from scipy import ndimage
+from scipy.spatial import cKDTree
+
+from lamp.geometry.exact_space import ExactSpace
+from lamp.geometry.object_space import ObjectSpace
+from lamp.geometry.primitives import Circle
+from lamp.geometry.shapes import local_outline, obstacle_geometry
+
+
+@dataclass(frozen=True)
+class NarrowParams:
+    """Settings of :func:`narrow_poses` (metres)."""
+
+    raster: float = 0.01
+    #: ridge clearance above the object's inscribed radius still counted as narrow
+    slack: float = 0.08
+    spacing: float = 0.08
+    #: the raster is coarsened so that a window never has more cells than this
+    max_cells: int = 4_000_000
+    #: how far (beyond the object's reach) a chain of aligned poses is extended
+    extension: float = 0.3
+    #: radius of the ridge neighbourhood that gives a point's corridor direction
+    direction_radius: float = 0.12
+
+    def __post_init__(self) -> None:
+        for name in ("raster", "slack", "spacing", "extension", "direction_radius"):
+            v = getattr(self, name)
+            if not (v > 0 and math.isfinite(v)):
+                raise ValueError(f"NarrowParams.{name} must be finite and > 0, got {v!r}")
+        if self.max_cells < 1000:
+            raise ValueError(f"NarrowParams.max_cells must be >= 1000, got {self.max_cells!r}")
+
+
+def inscribed_radius(shape: object) -> float:
+    """Radius of the largest disk centred on the object's origin inside its footprint
+    (0 when the origin lies outside it)."""
+    if isinstance(shape, Circle):
+        return float(shape.radius)
+    poly = shapely.Polygon(local_outline(shape))
+    origin = shapely.Point(0.0, 0.0)
+    if not poly.contains(origin):
+        return 0.0
+    return float(poly.exterior.distance(origin))
+
+
+def aligned_headings(shape: object, phi: float) -> list[tuple[float, float, float]]:
+    """``(theta, shift, width)`` for each heading that lays a convex-hull edge of ``shape``
+    along direction ``phi``: ``width`` is the object's extent across ``phi`` and ``shift``
+    the offset (along the normal of ``phi``) that centres that extent on the object's
+    position line; narrowest first."""
+    if isinstance(shape, Circle):
+        return [(float(phi), 0.0, 2.0 * float(shape.radius))]
+    pts = local_outline(shape)
+    hull = np.asarray(shapely.MultiPoint(pts).convex_hull.exterior.coords)[:-1]
+    edges = np.roll(hull, -1, axis=0) - hull
+    alphas = np.arctan2(edges[:, 1], edges[:, 0])
+    out: list[tuple[float, float, float]] = []
+    n = np.array([-math.sin(phi), math.cos(phi)])
+    for alpha in alphas:
+        for flip in (0.0, math.pi):
+            theta = math.remainder(phi - alpha + flip, 2.0 * math.pi)
+            if any(abs(math.remainder(theta - t, 2.0 * math.pi)) < 1e-3 for t, _, _ in out):
+                continue
+            c, s = math.cos(theta), math.sin(theta)
+            world = pts @ np.array([[c, s], [-s, c]])
+            across = world @ n
+            lo, hi = float(across.min()), float(across.max())
+            out.append((theta, -0.5 * (lo + hi), hi - lo))
+    out.sort(key=lambda r: (round(r[2], 9), r[0]))
+    return out
+
+
+def clearance_raster(space: ObjectSpace, window: tuple[float, float, float, float],
+                     raster: float) -> tuple[np.ndarray, float, float]:
+    """(rows, cols) clearance of cell centres over ``window`` = (x0, y0, x1, y1), with the
+    window's lower-left corner: ``(c, x0, y0)``; cell (r, k) is centred at
+    ``(x0 + (k + 0.5) raster, y0 + (r + 0.5) raster)``."""
+    x0, y0, x1, y1 = window
+    nx = max(1, math.ceil((x1 - x0) / raster))
+    ny = max(1, math.ceil((y1 - y0) / raster))
+    xs = x0 + (np.arange(nx) + 0.5) * raster
+    ys = y0 + (np.arange(ny) + 0.5) * raster
+    gx, gy = np.meshgrid(xs, ys)
+    w, h = space.workspace
+    occ = (gx <= 0) | (gx >= w) | (gy <= 0) | (gy >= h)
+    box = shapely.box(x0 - raster, y0 - raster, x1 + raster, y1 + raster)
+    geoms = [g for g in (obstacle_geometry(o) for o in space.obstacles) if g.intersects(box)]
+    if geoms:
+        union = shapely.union_all(geoms).intersection(box)
+        shapely.prepare(union)
+        occ |= shapely.contains_xy(union, gx, gy)
+    # the workspace border outside the window still counts: pad with its cells
+    c = ndimage.distance_transform_edt(~occ) * raster
+    border = np.minimum(np.minimum(gx, w - gx), np.minimum(gy, h - gy))
+    return np.minimum(c, border), x0, y0
+
+
+def ridge_mask(c: np.ndarray, lo: float, hi: float) -> np.ndarray:
+    """Cells that are a local maximum of ``c`` along some grid direction (strictly on one
+    side at least) with ``lo <= c <= hi``."""
+    pad = np.pad(c, 1, mode="edge")
+    centre = pad[1:-1, 1:-1]
+    ridge = np.zeros(c.shape, dtype=bool)
+    for dr, dk in ((0, 1), (1, 0), (1, 1), (1, -1)):
+        a = pad[1 + dr: pad.shape[0] - 1 + dr, 1 + dk: pad.shape[1] - 1 + dk]
+        b = pad[1 - dr: pad.shape[0] - 1 - dr, 1 - dk: pad.shape[1] - 1 - dk]
+        ridge |= (centre >= a) & (centre >= b) & ((centre > a) | (centre > b))
+    return ridge & (c >= lo) & (c <= hi)
+
+
+def _thin(points: np.ndarray, spacing: float) -> np.ndarray:
+    """Indices of a subset of ``points`` at least ``spacing`` apart (greedy, in order)."""
+    cells: dict[tuple[int, int], list[int]] = {}
+    keep: list[int] = []
+    for i, (x, y) in enumerate(points):
+        cx, cy = int(math.floor(x / spacing)), int(math.floor(y / spacing))
+        near = False
+        for dx in (-1, 0, 1):
+            for dy in (-1, 0, 1):
+                for j in cells.get((cx + dx, cy + dy), ()):
+                    if (points[j, 0] - x) ** 2 + (points[j, 1] - y) ** 2 < spacing * spacing:
+                        near = True
+                        break
+                if near:
+                    break
+            if near:
+                break
+        if not near:
+            cells.setdefault((cx, cy), []).append(i)
+            keep.append(i)
+    return np.asarray(keep, dtype=np.int64)
+
+
+def narrow_poses(space: ObjectSpace, exact: ExactSpace,
+                 window: tuple[float, float, float, float],
+                 params: NarrowParams | None = None) -> np.ndarray:
+    """(M, 3) free poses through the narrow passages inside ``window`` (module docstring)."""
+    params = params or NarrowParams()
+    x0, y0, x1, y1 = window
+    area = max(x1 - x0, 1e-9) * max(y1 - y0, 1e-9)
+    raster = max(params.raster, math.sqrt(area / params.max_cells))
+    c, ox, oy = clearance_raster(space, window, raster)
+    r_in = inscribed_radius(space.shape) + space.inflation
+    mask = ridge_mask(c, r_in - raster, r_in + params.slack)
+    rows, cols = np.nonzero(mask)
+    if len(rows) == 0:
+        return np.zeros((0, 3))
+    cells = np.stack([ox + (cols + 0.5) * raster, oy + (rows + 0.5) * raster], axis=1)
+    tree = cKDTree(cells)
+    picked = cells[_thin(cells, params.spacing)]
+    poses: list[np.ndarray] = []
+    dirs: list[float] = []
+    nudges = raster * np.array([0.0, 0.5, -0.5, 1.0, -1.0])
+    for p in picked:
+        near = cells[tree.query_ball_point(p, params.direction_radius)]
+        if len(near) < 3:
+            continue
+        cov = np.cov((near - near.mean(axis=0)).T)
+        evals, evecs = np.linalg.eigh(cov)
+        u = evecs[:, 1]
+        phi = math.atan2(u[1], u[0])
+        n = np.array([-u[1], u[0]])
+        for theta, shift, _ in aligned_headings(space.shape, phi):
+            for nudge in nudges:
+                xy = p + (shift + nudge) * n
+                pose = np.array([xy[0], xy[1], theta])
+                if exact.pose_free(pose):
+                    poses.append(pose)
+                    dirs.append(phi)
+                    break
+    if not poses:
+        return np.zeros((0, 3))
+    base = np.array(poses)
+    return np.concatenate([base, _extensions(base, np.array(dirs), exact, params)])
+
+
+def _extensions(poses: np.ndarray, dirs: np.ndarray, exact: ExactSpace,
+                params: NarrowParams) -> np.ndarray:
+    """Straight continuations of the chains of aligned poses beyond their ends."""
+    out: list[np.ndarray] = []
+    tree = cKDTree(poses[:, :2])
+    reach = exact.reach + params.extension
+    steps = max(1, math.ceil(reach / params.spacing))
+    for i, (pose, phi) in enumerate(zip(poses, dirs, strict=True)):
+        u = np.array([math.cos(phi), math.sin(phi)])
+        near = [j for j in tree.query_ball_point(pose[:2], 1.5 * params.spacing) if j != i
+                and abs(math.remainder(poses[j, 2] - pose[2], 2.0 * math.pi)) < 0.05]
+        for sign in (1.0, -1.0):
+            ahead = [j for j in near if sign * float((poses[j, :2] - pose[:2]) @ u)
+                     > 0.3 * params.spacing]
+            if ahead:
+                continue
+            for k in range(1, steps + 1):
+                q = pose.copy()
+                q[:2] += sign * k * params.spacing * u
+                if not exact.pose_free(q):
+                    break
+                out.append(q)
+    return np.array(out).reshape(-1, 3)

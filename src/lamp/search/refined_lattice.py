@@ -1,0 +1,190 @@
+"""The object lattice refined off-grid in narrow passages (continuous refinement).
+
+``RefinedLattice`` is an :class:`~lamp.search.lattice.ObjectLattice` that can add extra
+vertices: poses off the lattice (``lamp.search.narrow.narrow_poses``: corridor centrelines
+with the object aligned to them) joined to each other and to nearby lattice nodes by
+checked straight motions within the model's range. The lattice stays coarse in the open;
+only where it cannot pass does the search get the finer poses. Until :meth:`refine` adds
+any, the refined lattice is exactly the lattice (same ids, edges, costs).
+
+Extra vertices get the ids ``n_nodes, n_nodes + 1, ...``; every method of the lattice
+(``pose``, ``successors``, ``heuristic``, ``start_connections``, ...) accepts them. An
+edge to or from an extra vertex is valid when ``ObjectSpace.motions_free`` or, where the
+grid's conservative answer is "not free", ``ExactSpace.motion_free`` says so; it costs the
+lattice's metric (``distance``) plus ``EDGE_OVERHEAD``, so the heuristic stays admissible
+and consistent, and chains of short refined edges are not preferred to the coarse lattice.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import ArrayLike
+from scipy.spatial import cKDTree
+
+from lamp.geometry.exact_space import ExactSpace
+from lamp.search.lattice import FREE, Node, ObjectLattice, VirtualNode
+from lamp.search.narrow import NarrowParams, narrow_poses
+
+#: Added to the metric cost of every edge that touches an extra vertex (m).
+EDGE_OVERHEAD = 0.01
+#: Margin (m) around the object's pose and its goal of the window searched for passages.
+REFINE_MARGIN = 3.0
+#: Lattice nodes an extra vertex is joined to, at most (the nearest).
+MAX_LATTICE_LINKS = 8
+
+
+class RefinedLattice(ObjectLattice):
+    """An object lattice with off-grid vertices added where passages are narrow."""
+
+    def __init__(self, *args: object, **kwargs: object) -> None:
+        super().__init__(*args, **kwargs)
+        self._extra = np.zeros((0, 3))
+        self._adj: dict[Node, list[tuple[Node, float]]] = {}
+        self._tree: cKDTree | None = None
+        self._exact: ExactSpace | None = None
+        self._windows: list[tuple[float, float, float, float]] = []
+        #: statistics: exact motion checks made for refined edges
+        self.n_exact_checks = 0
+
+    # -------------------------------------------------------------- extra ids
+    @property
+    def n_extra(self) -> int:
+        return len(self._extra)
+
+    @property
+    def exact(self) -> ExactSpace:
+        if self._exact is None:
+            self._exact = ExactSpace.from_space(self.space)
+        return self._exact
+
+    def is_node(self, u: object) -> bool:
+        return isinstance(u, (int, np.integer)) and 0 <= u < self.n_nodes + len(self._extra)
+
+    def pose(self, u: Node | VirtualNode) -> np.ndarray:
+        if isinstance(u, (int, np.integer)) and u >= self.n_nodes:
+            return self._extra[int(u) - self.n_nodes].copy()
+        return super().pose(u)
+
+    def poses(self, nodes: Sequence[Node] | np.ndarray) -> np.ndarray:
+        ids = np.asarray(nodes, dtype=np.int64)
+        extra = ids >= self.n_nodes
+        if not extra.any():
+            return super().poses(ids)
+        out = np.empty(ids.shape + (3,))
+        out[~extra] = super().poses(ids[~extra])
+        out[extra] = self._extra[ids[extra] - self.n_nodes]
+        return out
+
+    def _xyt(self, u: Node | VirtualNode) -> tuple[float, float, float]:
+        if isinstance(u, (int, np.integer)) and u >= self.n_nodes:
+            x, y, t = self._extra[int(u) - self.n_nodes]
+            return float(x), float(y), float(t)
+        return super()._xyt(u)
+
+    def successors(self, u: Node) -> list[tuple[Node, float]]:
+        if u >= self.n_nodes:
+            return self._adj.get(u, [])
+        base = super().successors(u)
+        more = self._adj.get(u)
+        return base + more if more else base
+
+    def nearest_nodes(self, pose: ArrayLike, max_dist: float,
+                      valid_only: bool = True) -> list[tuple[Node, float]]:
+        out = super().nearest_nodes(pose, max_dist, valid_only)
+        if self._tree is not None:
+            p = np.asarray(pose, dtype=float)
+            idx = self._tree.query_ball_point(p[:2], max_dist)
+            for i in idx:
+                d = float(self.distance(p, self._extra[i]))
+                if d <= max_dist:
+                    out.append((self.n_nodes + int(i), d))
+            out.sort(key=lambda r: r[1])
+        return out
+
+    def start_connections(self, pose: ArrayLike, tolerance: float = 0.0
+                          ) -> list[tuple[Node, float]]:
+        out = super().start_connections(pose, tolerance)
+        if self._tree is None:
+            return out
+        p = np.asarray(pose, dtype=float)
+        idx = [int(i) for i in self._tree.query_ball_point(p[:2], self.max_translation * math.sqrt(2.0))]
+        if not idx:
+            return out
+        targets = self._extra[idx]
+        ok = np.asarray(self.in_model_range(p, targets), dtype=bool).reshape(-1)
+        idx = [i for i, k in zip(idx, ok, strict=True) if k]
+        links = self._free_links(p, [self.n_nodes + i for i in idx], tolerance)
+        out.extend((v, float(self.distance(p, self.pose(v))) + EDGE_OVERHEAD) for v in links)
+        out.sort(key=lambda r: r[1])
+        return out
+
+    # -------------------------------------------------------------- refinement
+    def _free_links(self, p: np.ndarray, nodes: list[Node], tolerance: float = 0.0) -> list[Node]:
+        """The ``nodes`` reachable from pose ``p`` by a free straight motion: the grid's
+        answer first, the exact checker's where the grid says no (tolerance 0 only)."""
+        if not nodes:
+            return []
+        targets = self.poses(nodes)
+        space = self._tolerant_space(tolerance)
+        free = space.motions_free(np.broadcast_to(p, targets.shape), targets)
+        self.n_motion_checks += len(nodes)
+        out = []
+        for v, f, q in zip(nodes, free, targets, strict=True):
+            if not f and tolerance == 0.0:
+                self.n_exact_checks += 1
+                f = self.exact.motion_free(p, q)
+            if f:
+                out.append(v)
+        return out
+
+    def refine(self, around: ArrayLike, params: NarrowParams | None = None) -> int:
+        """Add the narrow-passage poses of the window around ``around`` and the goal (once
+        per window) with their edges; returns how many vertices were added."""
+        p = np.asarray(around, dtype=float)
+        w, h = self.space.workspace
+        g = self.anchor
+        window = (max(0.0, min(p[0], g[0]) - REFINE_MARGIN), max(0.0, min(p[1], g[1]) - REFINE_MARGIN),
+                  min(w, max(p[0], g[0]) + REFINE_MARGIN), min(h, max(p[1], g[1]) + REFINE_MARGIN))
+        if any(a[0] <= window[0] and a[1] <= window[1] and a[2] >= window[2] and a[3] >= window[3]
+               for a in self._windows):
+            return 0
+        self._windows.append(window)
+        new = narrow_poses(self.space, self.exact, window, params or NarrowParams())
+        if len(self._extra) and len(new):  # drop poses already present
+            d, _ = cKDTree(self._extra[:, :2]).query(new[:, :2])
+            new = new[d > 1e-6]
+        if len(new) == 0:
+            return 0
+        first = self.n_nodes + len(self._extra)
+        self._extra = np.concatenate([self._extra, new])
+        self._tree = cKDTree(self._extra[:, :2])
+        reach = self.max_translation * math.sqrt(2.0)
+        for i in range(len(new)):
+            u = first + i
+            q = self._extra[u - self.n_nodes]
+            # extra <-> extra (each pair once, from its lower id)
+            cand = [self.n_nodes + int(j) for j in self._tree.query_ball_point(q[:2], reach)
+                    if self.n_nodes + int(j) != u]
+            cand = [v for v in cand if v < first or v > u]
+            if cand:
+                ok = np.asarray(self.in_model_range(q, self.poses(cand)), dtype=bool).reshape(-1)
+                for v in self._free_links(q, [v for v, k in zip(cand, ok, strict=True) if k]):
+                    self._link(u, v)
+            # extra <-> lattice
+            nodes = self._candidates(q, reach, math.ceil(self.max_rotation / self.dtheta))
+            if len(nodes):
+                nodes = nodes[np.asarray(self.in_model_range(q, super().poses(nodes)), bool)]
+                self._ensure_nodes(nodes)
+                nodes = nodes[self._node_valid[nodes] == FREE]
+                order = np.argsort(self.distance(q, super().poses(nodes)), kind="stable")
+                for v in self._free_links(q, [int(n) for n in nodes[order][:MAX_LATTICE_LINKS]]):
+                    self._link(u, v)
+        return len(new)
+
+    def _link(self, u: Node, v: Node) -> None:
+        c = float(self.distance(self.pose(u), self.pose(v))) + EDGE_OVERHEAD
+        self._adj.setdefault(u, []).append((v, c))
+        self._adj.setdefault(v, []).append((u, c))
