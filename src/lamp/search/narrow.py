@@ -8,15 +8,16 @@ passages and returns poses that pass them; ``RefinedLattice`` adds them to the s
 1. **Clearance raster.** Over a window of the map, the obstacles (and everything outside
    the workspace) are rasterised on ``raster`` cells and a Euclidean distance transform
    gives each cell's clearance ``c``.
-2. **Ridges.** A cell lies on a ridge of the clearance (the medial axis) when it is a
-   local maximum of ``c`` along one of the four grid directions, strictly on at least one
-   side (so that the flat clearance along a wall is not a ridge). The ridge is *narrow*
+2. **Ridges.** A cell lies on a ridge of the clearance (the medial axis) where the
+   gradient of ``c`` is short: a distance field's gradient has length 1 except where two
+   walls are equally near (``ridge_mask``). The ridge is *narrow*
    where the object only just fits: ``r_in - raster <= c <= r_in + slack``, ``r_in`` the
    radius of the largest disk about the object's origin inside its footprint (any free
    pose has at least that clearance at its origin).
 3. **Samples.** Narrow ridge cells are thinned to points at least ``spacing`` apart (in
    raster order, deterministic); the local corridor direction ``phi`` at a point is the
-   principal axis of the ridge cells around it.
+   weakest axis of the clearance gradients' structure tensor around it (the gradients
+   point away from the walls on both sides, across the corridor).
 4. **Aligned poses.** For each point, each heading that lays an edge of the object's convex
    hull along ``phi`` (a rectangle: 4 headings; a circle: ``phi``) gives a pose, shifted
    across the corridor so that the object's extent across it is centred on the ridge and
@@ -135,17 +136,16 @@ def clearance_raster(space: ObjectSpace, window: tuple[float, float, float, floa
     return np.minimum(c, border), x0, y0
 
 
-def ridge_mask(c: np.ndarray, lo: float, hi: float) -> np.ndarray:
-    """Cells that are a local maximum of ``c`` along some grid direction (strictly on one
-    side at least) with ``lo <= c <= hi``."""
-    pad = np.pad(c, 1, mode="edge")
-    centre = pad[1:-1, 1:-1]
-    ridge = np.zeros(c.shape, dtype=bool)
-    for dr, dk in ((0, 1), (1, 0), (1, 1), (1, -1)):
-        a = pad[1 + dr: pad.shape[0] - 1 + dr, 1 + dk: pad.shape[1] - 1 + dk]
-        b = pad[1 - dr: pad.shape[0] - 1 - dr, 1 - dk: pad.shape[1] - 1 - dk]
-        ridge |= (centre >= a) & (centre >= b) & ((centre > a) | (centre > b))
-    return ridge & (c >= lo) & (c <= hi)
+#: A clearance gradient shorter than this marks the medial axis (it is 1 elsewhere).
+RIDGE_GRADIENT = 0.75
+
+
+def ridge_mask(c: np.ndarray, lo: float, hi: float, raster: float) -> np.ndarray:
+    """Cells on the medial axis of the free space with ``lo <= c <= hi``: where the
+    clearance's central-difference gradient is shorter than ``RIDGE_GRADIENT`` (a distance
+    field has gradient length 1 except where two walls are equally near)."""
+    gy, gx = np.gradient(c, raster)
+    return (np.hypot(gx, gy) < RIDGE_GRADIENT) & (c >= lo) & (c <= hi)
 
 
 def _thin(points: np.ndarray, spacing: float) -> np.ndarray:
@@ -181,7 +181,7 @@ def narrow_poses(space: ObjectSpace, exact: ExactSpace,
     raster = max(params.raster, math.sqrt(area / params.max_cells))
     c, ox, oy = clearance_raster(space, window, raster)
     r_in = inscribed_radius(space.shape) + space.inflation
-    mask = ridge_mask(c, r_in - raster, r_in + params.slack)
+    mask = ridge_mask(c, r_in - raster, r_in + params.slack, raster)
     rows, cols = np.nonzero(mask)
     if len(rows) == 0:
         return np.zeros((0, 3))
@@ -191,13 +191,21 @@ def narrow_poses(space: ObjectSpace, exact: ExactSpace,
     poses: list[np.ndarray] = []
     dirs: list[float] = []
     nudges = raster * np.array([0.0, 0.5, -0.5, 1.0, -1.0])
+    radius = max(params.direction_radius, 0.5 * exact.reach)
+    gy, gx = np.gradient(c, raster)
+    half = max(1, int(round(radius / raster)))
     for p in picked:
-        near = cells[tree.query_ball_point(p, params.direction_radius)]
-        if len(near) < 3:
+        # the corridor runs across the clearance gradient (walls on both sides): the
+        # direction is the structure tensor's weakest axis over the neighbourhood
+        k0 = int((p[0] - ox) / raster)
+        r0 = int((p[1] - oy) / raster)
+        win = (slice(max(0, r0 - half), r0 + half + 1), slice(max(0, k0 - half), k0 + half + 1))
+        ax, ay = gx[win].ravel(), gy[win].ravel()
+        tensor = np.array([[ax @ ax, ax @ ay], [ax @ ay, ay @ ay]])
+        evals, evecs = np.linalg.eigh(tensor)
+        if evals[1] <= 0.0:
             continue
-        cov = np.cov((near - near.mean(axis=0)).T)
-        evals, evecs = np.linalg.eigh(cov)
-        u = evecs[:, 1]
+        u = evecs[:, 0]
         phi = math.atan2(u[1], u[0])
         n = np.array([-u[1], u[0]])
         for theta, shift, _ in aligned_headings(space.shape, phi):
@@ -205,13 +213,45 @@ def narrow_poses(space: ObjectSpace, exact: ExactSpace,
                 xy = p + (shift + nudge) * n
                 pose = np.array([xy[0], xy[1], theta])
                 if exact.pose_free(pose):
-                    poses.append(pose)
+                    poses.append(_centre(exact, pose, n, raster))
                     dirs.append(phi)
                     break
     if not poses:
         return np.zeros((0, 3))
     base = np.array(poses)
     return np.concatenate([base, _extensions(base, np.array(dirs), exact, params)])
+
+
+#: Heading offsets (rad) and cross-corridor offsets (in raster cells) tried by ``_centre``.
+_CENTRE_TURNS = np.deg2rad([-1.5, -1.0, -0.5, 0.5, 1.0, 1.5])
+_CENTRE_SHIFTS = np.array([-1.0, -0.75, -0.5, -0.25, 0.25, 0.5, 0.75, 1.0])
+#: Poses with at least this clearance (m) are not centred any further.
+_CENTRED_ENOUGH = 0.02
+
+
+def _centre(exact: ExactSpace, pose: np.ndarray, n: np.ndarray, raster: float) -> np.ndarray:
+    """The free ``pose`` turned (within 1.5 degrees), then moved across the corridor
+    (within one raster cell along ``n``), to the largest exact clearance found: a free
+    pose stays free, and neighbouring poses end up aligned, so the motions between them
+    keep clearance too."""
+    best, c = pose, exact.clearance(pose)
+    if c >= _CENTRED_ENOUGH:
+        return best
+    for turn in _CENTRE_TURNS:
+        q = best.copy()
+        q[2] = math.remainder(q[2] + turn, 2.0 * math.pi)
+        cq = exact.clearance(q)
+        if cq > c:
+            c, cand = cq, q
+            best = cand
+    base = best
+    for k in _CENTRE_SHIFTS:
+        q = base.copy()
+        q[:2] += k * raster * n
+        cq = exact.clearance(q)
+        if cq > c:
+            c, best = cq, q
+    return best
 
 
 def _extensions(poses: np.ndarray, dirs: np.ndarray, exact: ExactSpace,
