@@ -186,7 +186,6 @@ def narrow_poses(space: ObjectSpace, exact: ExactSpace,
     if len(rows) == 0:
         return np.zeros((0, 3))
     cells = np.stack([ox + (cols + 0.5) * raster, oy + (rows + 0.5) * raster], axis=1)
-    tree = cKDTree(cells)
     picked = cells[_thin(cells, params.spacing)]
     poses: list[np.ndarray] = []
     dirs: list[float] = []
