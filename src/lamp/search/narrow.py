@@ -218,60 +218,70 @@ def narrow_poses(space: ObjectSpace, exact: ExactSpace,
     if not poses:
         return np.zeros((0, 3))
     base = np.array(poses)
-    return np.concatenate([base, _extensions(base, np.array(dirs), exact, params)])
+    return np.concatenate([base, _extensions(base, np.array(dirs), exact, params, raster)])
 
 
-#: Heading offsets (rad) and cross-corridor offsets (in raster cells) tried by ``_centre``.
-_CENTRE_TURNS = np.deg2rad([-1.5, -1.0, -0.5, 0.5, 1.0, 1.5])
-_CENTRE_SHIFTS = np.array([-1.0, -0.75, -0.5, -0.25, 0.25, 0.5, 0.75, 1.0])
+#: Heading steps (rad) of ``_centre``'s coordinate ascent, coarse to fine; the lateral
+#: steps are these fractions of a raster cell.
+_CENTRE_TURNS = np.deg2rad([1.0, 0.5, 0.25, 0.1, 0.05])
+_CENTRE_SHIFTS = np.array([1.0, 0.5, 0.25, 0.12, 0.06])
 #: Poses with at least this clearance (m) are not centred any further.
 _CENTRED_ENOUGH = 0.02
 
 
 def _centre(exact: ExactSpace, pose: np.ndarray, n: np.ndarray, raster: float) -> np.ndarray:
-    """The free ``pose`` turned (within 1.5 degrees), then moved across the corridor
-    (within one raster cell along ``n``), to the largest exact clearance found: a free
-    pose stays free, and neighbouring poses end up aligned, so the motions between them
-    keep clearance too."""
-    best, c = pose, exact.clearance(pose)
+    """``pose`` turned and moved across the corridor (along ``n``) to a local maximum of
+    the exact clearance (coordinate ascent, coarse to fine steps), unless it already has
+    ``_CENTRED_ENOUGH``: a free pose stays free, and neighbouring poses end up aligned and
+    centred, so the motions between them keep clearance too."""
+    best, c = pose.copy(), exact.clearance(pose)
     if c >= _CENTRED_ENOUGH:
         return best
-    for turn in _CENTRE_TURNS:
-        q = best.copy()
-        q[2] = math.remainder(q[2] + turn, 2.0 * math.pi)
-        cq = exact.clearance(q)
-        if cq > c:
-            c, cand = cq, q
-            best = cand
-    base = best
-    for k in _CENTRE_SHIFTS:
-        q = base.copy()
-        q[:2] += k * raster * n
-        cq = exact.clearance(q)
-        if cq > c:
-            c, best = cq, q
+    for turn, shift in zip(_CENTRE_TURNS, _CENTRE_SHIFTS, strict=True):
+        for sign in (1.0, -1.0):
+            q = best.copy()
+            q[2] = math.remainder(q[2] + sign * turn, 2.0 * math.pi)
+            cq = exact.clearance(q)
+            if cq > c:
+                c, best = cq, q
+                break
+        for sign in (1.0, -1.0):
+            q = best.copy()
+            q[:2] += sign * shift * raster * n
+            cq = exact.clearance(q)
+            if cq > c:
+                c, best = cq, q
+                break
     return best
 
 
 def _extensions(poses: np.ndarray, dirs: np.ndarray, exact: ExactSpace,
-                params: NarrowParams) -> np.ndarray:
-    """Straight continuations of the chains of aligned poses beyond their ends."""
+                params: NarrowParams, raster: float) -> np.ndarray:
+    """Straight continuations of the chains of aligned poses beyond their ends, along the
+    chain's own axis (the line through its last poses), re-centred at every step."""
     out: list[np.ndarray] = []
     tree = cKDTree(poses[:, :2])
     reach = exact.reach + params.extension
     steps = max(1, math.ceil(reach / params.spacing))
     for i, (pose, phi) in enumerate(zip(poses, dirs, strict=True)):
+        same = [j for j in tree.query_ball_point(pose[:2], 0.5) if
+                abs(math.remainder(poses[j, 2] - pose[2], 2.0 * math.pi)) < 0.05]
         u = np.array([math.cos(phi), math.sin(phi)])
-        near = [j for j in tree.query_ball_point(pose[:2], 1.5 * params.spacing) if j != i
-                and abs(math.remainder(poses[j, 2] - pose[2], 2.0 * math.pi)) < 0.05]
+        if len(same) >= 3:
+            pts = poses[same, :2]
+            axis = np.linalg.eigh(np.cov((pts - pts.mean(axis=0)).T))[1][:, 1]
+            u = axis if axis @ u >= 0 else -axis
+        n = np.array([-u[1], u[0]])
         for sign in (1.0, -1.0):
-            ahead = [j for j in near if sign * float((poses[j, :2] - pose[:2]) @ u)
-                     > 0.3 * params.spacing]
+            ahead = [j for j in same if j != i and 0.3 * params.spacing
+                     < sign * float((poses[j, :2] - pose[:2]) @ u) < 1.5 * params.spacing]
             if ahead:
                 continue
-            for k in range(1, steps + 1):
-                q = pose.copy()
-                q[:2] += sign * k * params.spacing * u
+            q = pose.copy()
+            for _ in range(steps):
+                q = q.copy()
+                q[:2] += sign * params.spacing * u
+                q = _centre(exact, q, n, raster)
                 if not exact.pose_free(q):
                     break
                 out.append(q)
