@@ -10,10 +10,9 @@ passages and returns poses that pass them; ``RefinedLattice`` adds them to the s
    gives each cell's clearance ``c``.
 2. **Ridges.** A cell lies on a ridge of the clearance (the medial axis) where the
    gradient of ``c`` is short: a distance field's gradient has length 1 except where two
-   walls are equally near (``ridge_mask``). The ridge is *narrow*
-   where the object only just fits: ``r_in - raster <= c <= r_in + slack``, ``r_in`` the
-   radius of the largest disk about the object's origin inside its footprint (any free
-   pose has at least that clearance at its origin).
+   walls are equally near (``ridge_mask``). The ridge is *narrow* where the object only
+   just fits: half the passage's width ``c`` lies between half the object's narrowest extent (less a cell) and
+   half its widest hull-aligned extent plus ``slack``.
 3. **Samples.** Narrow ridge cells are thinned to points at least ``spacing`` apart (in
    raster order, deterministic); the local corridor direction ``phi`` at a point is the
    weakest axis of the clearance gradients' structure tensor around it (the gradients
@@ -180,8 +179,9 @@ def narrow_poses(space: ObjectSpace, exact: ExactSpace,
     area = max(x1 - x0, 1e-9) * max(y1 - y0, 1e-9)
     raster = max(params.raster, math.sqrt(area / params.max_cells))
     c, ox, oy = clearance_raster(space, window, raster)
-    r_in = inscribed_radius(space.shape) + space.inflation
-    mask = ridge_mask(c, r_in - raster, r_in + params.slack, raster)
+    widths = [w for _, _, w in aligned_headings(space.shape, 0.0)]
+    lo = 0.5 * min(widths) + space.inflation
+    mask = ridge_mask(c, lo - raster, 0.5 * max(widths) + space.inflation + params.slack, raster)
     rows, cols = np.nonzero(mask)
     if len(rows) == 0:
         return np.zeros((0, 3))
