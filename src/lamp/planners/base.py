@@ -70,6 +70,9 @@ class Plan:
     #: ``PlannerConfig`` count that ran out (``max_plan_iterations``, ``max_verify_calls``,
     #: ``astar_max_expansions``) or ``"deadline"`` (wall clock); "" otherwise.
     limit: str = ""
+    #: The transitions do not reach the goal (a recovery push): the loop plans again
+    #: after them, and the object's plan does not count as full-horizon.
+    partial: bool = False
 
     def __post_init__(self) -> None:
         if (self.status is PlanStatus.SOLVED) != bool(self.transitions):

@@ -238,7 +238,7 @@ class ClosedLoop:
         if st.planned_once:
             self.record.replans += 1
         else:
-            st.full_horizon = st.plan.solved and self.policy.full_horizon
+            st.full_horizon = st.plan.solved and self.policy.full_horizon and not st.plan.partial
         st.planned_once = True
         st.replanned = True
         if not st.plan.solved:

@@ -26,6 +26,7 @@ import numpy as np
 
 from lamp.planners.base import Plan, PlanStatus
 from lamp.planners.config import PlannerConfig
+from lamp.planners.recovery import recovery_push
 from lamp.planners.robots import robots_match
 from lamp.planners.task import ManipulationTask
 from lamp.planners.verifier import Verifier
@@ -55,6 +56,10 @@ class TreeEntry:
 
 #: A continuous pose this close to a lattice node (heuristic metric) is that node.
 SNAP_DISTANCE = 1e-3
+#: Failed plan iterations in one ``plan`` call after which a recovery push is tried.
+RECOVER_AFTER = 40
+#: Recovery pushes one planner makes at most (an infeasible task must not wander).
+MAX_RECOVERIES = 8
 #: Footprint shrinkage tried, in order, when a drifted pose touches an obstacle so that no
 #: connecting motion is free at zero tolerance (the object may always move away from it).
 JOIN_TOLERANCES = (0.0, 0.01, 0.02)
@@ -103,6 +108,22 @@ class LazyPlanner:
         self.tree_eval: dict[Node, TreeEntry] = {}
         self.failures: dict[tuple[Node, Node], int] = {}
         self.penalised: list[tuple[np.ndarray, np.ndarray]] = []
+        self.recoveries = 0
+        self.calls = 0
+
+    def _recover(self, q_O: np.ndarray, q_R: np.ndarray, failed: Plan) -> Plan:
+        """Departure: before giving up (or after ``RECOVER_AFTER`` failed iterations), try
+        one recovery push (``lamp.planners.recovery``) that frees a pinned or wedged
+        object; the loop executes it and plans again. ``failed`` is returned otherwise."""
+        if self.recoveries >= MAX_RECOVERIES:
+            return failed
+        trans = recovery_push(self.lattice, self.verifier, np.asarray(q_O, float),
+                              np.asarray(q_R, float), attempt=self.recoveries)
+        if trans is None:
+            return failed
+        self.recoveries += 1
+        return Plan(PlanStatus.SOLVED, [trans], [(trans.q_from[:2].copy(), trans.q_to[:2].copy())],
+                    list(self.penalised), partial=True)
 
     def _refine(self, q_O: np.ndarray) -> bool:
         """Departure: when the lattice has no path (or no edge from the object's pose), add
@@ -150,25 +171,33 @@ class LazyPlanner:
         only an outer cap.
         """
         cfg = self.config
+        self.calls += 1
         tol = cfg.robot_match_tolerance
         goal = self.lattice.goal_node
         stats = self.verifier.stats
         verify_cap = stats.verify_calls + cfg.max_verify_calls
-        for _ in range(cfg.max_plan_iterations):
+        for iteration in range(cfg.max_plan_iterations):
+            if iteration == RECOVER_AFTER and self.calls > 1:  # a replan that keeps failing
+                rescue = self._recover(q_O_now, q_R_now, Plan.failed(PlanStatus.NO_PATH))
+                if rescue.solved:
+                    return rescue
             if stats.verify_calls >= verify_cap:
-                return Plan.failed(PlanStatus.BUDGET_EXHAUSTED, self.penalised, "max_verify_calls")
+                return self._recover(q_O_now, q_R_now, Plan.failed(
+                    PlanStatus.BUDGET_EXHAUSTED, self.penalised, "max_verify_calls"))
             if deadline is not None and time.perf_counter() > deadline:
                 return Plan.failed(PlanStatus.TIME_LIMIT, self.penalised, "deadline")
             start, edges = join_lattice(self.lattice, np.asarray(q_O_now, float))
             if edges == []:
                 if self._refine(q_O_now):
                     continue
-                return Plan.failed(PlanStatus.START_BLOCKED, self.penalised)
+                return self._recover(q_O_now, q_R_now,
+                                     Plan.failed(PlanStatus.START_BLOCKED, self.penalised))
             path = self.dstar.plan_shortest_path(start, edges)  # line 11: PlanShortestPath
             if not path:
                 if self._refine(q_O_now):
                     continue
-                return Plan.failed(PlanStatus.NO_PATH, self.penalised)
+                return self._recover(q_O_now, q_R_now,
+                                     Plan.failed(PlanStatus.NO_PATH, self.penalised))
             transitions: list[Transition] = []
             tree_new: dict[Node, TreeEntry] = {}
             q_R = np.asarray(q_R_now, float)
@@ -178,8 +207,8 @@ class LazyPlanner:
                 if self.lattice.is_node(curr) and curr in self.tree_eval:  # line 14: in Tree_eval, break
                     break
                 if stats.verify_calls >= verify_cap:
-                    return Plan.failed(PlanStatus.BUDGET_EXHAUSTED, self.penalised,
-                                       "max_verify_calls")
+                    return self._recover(q_O_now, q_R_now, Plan.failed(
+                        PlanStatus.BUDGET_EXHAUSTED, self.penalised, "max_verify_calls"))
                 attempt = self.failures.get((curr, nxt), 0)
                 trans = self.verifier.verify(self.lattice.pose(curr), self.lattice.pose(nxt), q_R, attempt)
                 if trans is None:  # lines 17-20: no C_R, UpdateChange
@@ -221,4 +250,5 @@ class LazyPlanner:
             if not transitions:  # already at the goal node
                 return Plan.failed(PlanStatus.NO_PATH, self.penalised)
             return Plan(PlanStatus.SOLVED, transitions, verified, list(self.penalised))
-        return Plan.failed(PlanStatus.BUDGET_EXHAUSTED, self.penalised, "max_plan_iterations")
+        return self._recover(q_O_now, q_R_now, Plan.failed(
+            PlanStatus.BUDGET_EXHAUSTED, self.penalised, "max_plan_iterations"))
