@@ -274,7 +274,8 @@ def witness_poses(lay: CorridorLayout, obj: CorridorObject, start: np.ndarray,
     """The witness route's poses (straight SE(2) motions between them, theta unwrapped):
     start, turned to leg 0, on the centreline, each bay's centre before and after
     turning, on the last leg's centreline in the goal room, beside the goal, the goal
-    (the goal's heading up to the footprint's period). Rounded to 0.1 mm / 1e-4 rad."""
+    (the goal's heading up to the footprint's period). The poses between the start and
+    the goal are rounded to 0.1 mm / 1e-4 rad."""
     ch = lay.chain
     v = ch.vertices
     heads = [a - obj.axis for a in ch.angles]
@@ -291,9 +292,10 @@ def witness_poses(lay: CorridorLayout, obj: CorridorObject, start: np.ndarray,
         out.append([*v[k], th])
     out.append([*(v[-1] + lay.goal_depth * CL.unit(ch.angles[-1])), th])
     out.append([goal[0], goal[1], th])
-    out.append([goal[0], goal[1], turned(float(goal[2]), th)])
+    end = turned(float(goal[2]), th)
+    out.append([goal[0], goal[1], end])
     arr = np.round(np.array(out, dtype=float), 4)
-    arr[0], arr[-1, :2] = start, goal[:2]
+    arr[0], arr[-1] = start, (goal[0], goal[1], end)
     return arr
 
 

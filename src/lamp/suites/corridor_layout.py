@@ -67,13 +67,27 @@ def room(mouth: np.ndarray, angle: float, u: tuple[float, float],
 
 def bay_radius(rotate_radius: float, width: float, turn: float, wall: float) -> float:
     """Radius of a bay: room to rotate (``rotate_radius``), and at least ``wall`` of wall
-    between the two legs where they leave the bay. The legs' inner edges meet at
-    ``(width / 2) / sin(a / 2)`` from the vertex (``a = pi - |turn|`` the angle between
-    the legs); the wedge of wall between them is ``2 t tan(a / 2)`` thick at ``t`` past
-    that point."""
+    between the two legs where they leave the bay.
+
+    The legs' inner edges leave a bay of radius R at the angle ``asin(width / 2R)`` from
+    their axes; the two exit corners are the closest points of the legs' narrow parts, a
+    chord ``2 R sin(a / 2 - asin(width / 2R))`` apart (``a = pi - |turn|`` the angle
+    between the legs). It is >= ``wall`` when ``asin(width / 2R) + asin(wall / 2R) <=
+    a / 2``; the left side decreases with R, so bisection finds the least such R (to
+    0.1 mm, rounded up)."""
     half = 0.5 * (math.pi - abs(turn))
-    need = 0.5 * width / math.sin(half) + 0.5 * wall / math.tan(half)
-    return max(rotate_radius, need)
+
+    def ok(r: float) -> bool:
+        return math.asin(min(1.0, 0.5 * width / r)) + math.asin(min(1.0, 0.5 * wall / r)) \
+            <= half
+
+    lo, hi = 0.5 * max(width, wall), 100.0
+    if ok(lo):
+        return max(rotate_radius, lo)
+    while hi - lo > 1e-4:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (lo, mid) if ok(mid) else (mid, hi)
+    return max(rotate_radius, hi)
 
 
 @dataclass(frozen=True)
