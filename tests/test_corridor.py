@@ -157,6 +157,34 @@ def test_corridor_geometry_matches_the_brief(manifest, scenes):
     assert turn_counts == {1, 2, 3, 4}
 
 
+def test_witness_keeps_the_short_side_across_and_rotates_at_every_turn(manifest, scenes):
+    """Along each leg the witness holds the object with its short extent across the leg;
+    at every bay it turns by the bay's turn (>= 30 degrees, modulo the half-turn
+    symmetry), and start and goal are 25-90 degrees off their legs' headings."""
+    for entry, sc in zip(manifest["scenes"], scenes, strict=True):
+        shape = sc.objects[0].shape
+        if isinstance(shape, Circle):
+            continue
+        lay = entry["layout"]
+        poses = np.array(entry["objects"][0]["witness"]["poses"])
+        n = lay["turns"]
+        assert len(poses) == 6 + 2 * n
+        on_leg = [poses[2], *(poses[4 + 2 * k] for k in range(n))]
+        for leg, p in zip(lay["legs"], on_leg, strict=True):
+            outline = to_shapely(shape, p).exterior.coords
+            normal = CL.unit(leg["angle"] + 0.5 * math.pi)
+            across = np.ptp(np.asarray(outline) @ normal)
+            assert across == pytest.approx(lay["object_across"], abs=1e-3), sc.name
+        for k, bay in enumerate(lay["bays"]):
+            before, after = poses[3 + 2 * k], poses[4 + 2 * k]
+            assert np.allclose(before[:2], after[:2]) and np.allclose(before[:2], bay["center"])
+            turned = after[2] - before[2]
+            assert math.remainder(turned - bay["turn"], math.pi) == pytest.approx(0, abs=1e-3)
+            assert abs(turned) >= 30 * DEG - 1e-3
+        for a, b in ((poses[0], poses[1]), (poses[-2], poses[-1])):
+            assert 25 * DEG - 1e-3 <= abs(b[2] - a[2]) <= 90 * DEG + 1e-3, sc.name
+
+
 def test_corridor_width_measured_on_the_walls(manifest, scenes, walls):
     """Across the middle of every leg, the walls stand at half the recorded width from
     the centreline on both sides (within the 1 mm snapping of the scene files)."""
