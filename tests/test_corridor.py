@@ -355,3 +355,33 @@ def test_witness_samples_are_dense(poses):
     assert np.all(np.abs(step[:, 2]) <= CO.WITNESS_ROT_STEP + 1e-9)
     for p in arr:  # every given pose is a sample
         assert np.min(np.abs(d - p).sum(axis=1)) <= 1e-9
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 10_000), direction=st.floats(-math.pi, math.pi),
+       half=st.floats(0.1, 1.2))
+def test_place_robots_keeps_to_its_sector(seed, direction, half):
+    from lamp.suites.generators import place_robots
+
+    world = C.build_world((4.0, 4.0), [])
+    shape = Rectangle((0.4, 0.2))
+    start = np.array([2.0, 2.0, 0.3])
+    robots = place_robots(np.random.default_rng(seed), world, shape, start, 0.224,
+                          sector=(direction, half))
+    assert robots is not None and len(robots) == 3
+    for p in robots:
+        seen = math.atan2(p[1] - start[1], p[0] - start[0])
+        # positions are rounded to the millimetre, >= 0.39 m from the centre
+        assert abs(math.remainder(seen - direction, 2 * math.pi)) <= half + 0.003
+
+
+def test_records_are_validated():
+    with pytest.raises(ValueError, match="kind"):
+        CO.CorridorObject({"type": "circle", "radius": 0.1}, "disk", 0.2, 0.2, 0.1, 0.0, 0.0)
+    with pytest.raises(ValueError, match="across"):
+        CO.CorridorObject({"type": "rectangle", "size": [0.2, 0.4]}, "rectangle", 0.4, 0.2,
+                          0.224, 0.0, math.pi)
+    with pytest.raises(ValueError, match="min_clearance"):
+        CO.Witness(np.zeros((2, 3)), 0.005, 0.0, 0.0, 0.001, 2)
+    with pytest.raises(ValueError, match="radii"):
+        CL.Chain(np.zeros((3, 2)), (0.1, 0.2), (1.0, 1.0), ())

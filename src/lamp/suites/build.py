@@ -77,6 +77,7 @@ def _corridor_check_settings() -> dict[str, Any]:
         "bay_margin": CO.BAY_MARGIN,
         "robot_room": C.ROBOT_ROOM,
         "reach_resolution": CO.REACH_RESOLUTION,
+        "reach_ring_width": CO.REACH_RING_WIDTH,
     }
 
 

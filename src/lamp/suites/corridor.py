@@ -92,8 +92,9 @@ ROBOT_SECTOR = math.radians(60.0)
 WITNESS_STEP = 0.01
 WITNESS_ROT_STEP = 0.01
 WITNESS_MIN_CLEARANCE = 0.005
-#: robot reachability grid (m)
+#: robot reachability grid (m) and width of the contact ring (m) the robots must reach
 REACH_RESOLUTION = 0.025
+REACH_RING_WIDTH = 0.06
 MAX_ATTEMPTS = 20
 #: layout draws per attempt (geometry only: fitting the map, not running into itself)
 MAX_DRAWS = 400
@@ -118,14 +119,30 @@ class CorridorObject:
     axis: float
     period: float
 
+    def __post_init__(self) -> None:
+        if self.kind not in KINDS:
+            raise ValueError(f"kind must be one of {', '.join(KINDS)}, got {self.kind!r}")
+        if not 0.0 < self.across <= self.along <= 2.0 * self.reach + 1e-9:
+            raise ValueError(
+                f"need 0 < across <= along <= 2 reach, got across={self.across!r}, "
+                f"along={self.along!r}, reach={self.reach!r}"
+            )
+        if self.period not in (0.0, math.pi):
+            raise ValueError(f"period must be 0 or pi, got {self.period!r}")
+
     @property
     def rotate_radius(self) -> float:
         """Radius of the disk the object rotates in with robots around it."""
         return self.reach + 2.0 * ROBOT_RADIUS + 0.5 * BAY_MARGIN
 
 
+#: the object kinds, and the kind of scene ``k``: ``KIND_CYCLE[k % 4]``
+KINDS = ("bar", "rectangle", "circle")
+KIND_CYCLE = ("bar", "rectangle", "circle", "rectangle")
+
+
 def object_kind(index: int) -> str:
-    return ("bar", "rectangle", "circle", "rectangle")[index % 4]
+    return KIND_CYCLE[index % len(KIND_CYCLE)]
 
 
 def sample_object(rng: np.random.Generator, index: int) -> CorridorObject:
@@ -323,6 +340,14 @@ class Witness:
     min_clearance: float
     samples: int
 
+    def __post_init__(self) -> None:
+        if self.poses.ndim != 2 or self.poses.shape[1] != 3 or len(self.poses) < 2:
+            raise ValueError(f"poses must have shape (n >= 2, 3), got {self.poses.shape}")
+        if not self.min_clearance >= self.tau:
+            raise ValueError(
+                f"min_clearance {self.min_clearance!r} is below the required {self.tau!r}"
+            )
+
     def to_dict(self) -> dict[str, Any]:
         return {
             "required_clearance": self.tau,
@@ -455,7 +480,8 @@ def generate_scene(index: int) -> GeneratedCorridor:
         if witness is None:
             reject("witness not certified")
             continue
-        reach = C.robot_reach(scene, 0, resolution=REACH_RESOLUTION, ring_width=0.06)
+        reach = C.robot_reach(scene, 0, resolution=REACH_RESOLUTION,
+                              ring_width=REACH_RING_WIDTH)
         if not reach.all_reach or reach.ring_fraction < 0.5:
             reject("robots cannot reach the object")
             continue

@@ -101,6 +101,18 @@ class Chain:
     lengths: tuple[float, ...]
     radii: tuple[float, ...]
 
+    def __post_init__(self) -> None:
+        n = len(self.angles)
+        if n < 1 or len(self.lengths) != n or len(self.radii) != n - 1:
+            raise ValueError(
+                f"need n >= 1 angles, n lengths and n - 1 radii, got {n}, "
+                f"{len(self.lengths)}, {len(self.radii)}"
+            )
+        if self.vertices.shape != (n + 1, 2):
+            raise ValueError(f"vertices must have shape ({n + 1}, 2), got {self.vertices.shape}")
+        if min(self.lengths) <= 0 or (self.radii and min(self.radii) <= 0):
+            raise ValueError("leg lengths and bay radii must be > 0")
+
     @property
     def turns(self) -> tuple[float, ...]:
         return tuple(b - a for a, b in zip(self.angles[:-1], self.angles[1:], strict=True))
