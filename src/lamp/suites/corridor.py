@@ -11,7 +11,8 @@ sides together), and at least a robot wide (``checks.ROBOT_ROOM``). The object k
 long axis along the corridor, so it has to rotate at every turn: each turn has a bay of
 diameter at least the object's diagonal + 4 robot radii + ``BAY_MARGIN`` (larger at
 sharp turns, to leave ``WALL_NEAR`` of wall between the legs). The walls fill the rest
-of the workspace as simple polygons.
+of the workspace as simple polygons on the scene files' millimetre grid; snapping them
+there leaves each wall 0.1-1.5 mm farther out than drawn, never nearer.
 
 Objects, by index ``k``: ``k % 4 == 0`` a bar 1.0-1.5 m long and 0.15-0.30 m wide
 (a polygon for even ``k // 4``, a rectangle otherwise; 7 of the 25 scenes), ``k % 4 ==
