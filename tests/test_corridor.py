@@ -385,3 +385,21 @@ def test_records_are_validated():
         CO.Witness(np.zeros((2, 3)), 0.005, 0.0, 0.0, 0.001, 2)
     with pytest.raises(ValueError, match="radii"):
         CL.Chain(np.zeros((3, 2)), (0.1, 0.2), (1.0, 1.0), ())
+
+
+def test_stats_table_of_the_committed_suite(manifest):
+    """STATS.md is what the committed manifests give, and its corridor table counts the
+    object kinds and turns of the manifest."""
+    from lamp.suites.registry import DATA_DIR
+    from lamp.suites.stats import stats_markdown
+
+    text = stats_markdown()
+    assert text == (DATA_DIR / "STATS.md").read_text(encoding="utf-8")
+    kinds = [sc["layout"]["object_kind"] for sc in manifest["scenes"]]
+    turns = [sc["layout"]["turns"] for sc in manifest["scenes"]]
+    assert (f"## corridor (25 scenes: {kinds.count('bar')} bars, "
+            f"{kinds.count('rectangle')} rectangles, {kinds.count('circle')} circles)") in text
+    section = text.split("## corridor")[1].split("\n## ")[0]
+    header, _, row = [ln for ln in section.splitlines() if ln.startswith("|")]
+    assert "turns (1 / 2 / 3 / 4)" in header
+    assert " / ".join(str(turns.count(n)) for n in (1, 2, 3, 4)) in row
