@@ -82,7 +82,9 @@ def _densify(poses: np.ndarray, step: float) -> np.ndarray:
 
 # --------------------------------------------------------------------------- committed files
 def test_suite_names_and_counts():
-    assert list_suites() == ["random", "maze", "tilt", "warehouse", "iros", "warehouse-xl"]
+    assert list_suites() == [
+        "random", "maze", "tilt", "warehouse", "iros", "warehouse-xl", "corridor"
+    ]
     for fam in FAMILIES:
         names = [p.name for p in suite_files(fam)]
         assert names == [f"{fam}-{k:02d}.yaml" for k in range(1, 26)]
@@ -415,6 +417,7 @@ def test_cli_list():
     assert [ln.split()[0] for ln in lines] == list_suites()
     counts = {ln.split()[0]: ln.split()[1] for ln in lines}
     assert counts["maze"] == "25" and counts["iros"] == "1" and counts["warehouse-xl"] == "25"
+    assert counts["corridor"] == "25"
 
 
 def test_cli_export(tmp_path):

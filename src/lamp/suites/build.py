@@ -15,6 +15,7 @@ from collections.abc import Callable
 from typing import Any
 
 from lamp.suites import checks as C
+from lamp.suites import corridor as CO
 from lamp.suites import generators as G
 from lamp.suites import iros
 from lamp.suites import warehouse_xl as XL
@@ -60,7 +61,29 @@ def _xl_check_settings() -> dict[str, Any]:
     }
 
 
-def family_entry(gen: G.Generated | XL.GeneratedXL, text: str) -> dict[str, Any]:
+def _corridor_check_settings() -> dict[str, Any]:
+    return {
+        "witness_step": CO.WITNESS_STEP,
+        "witness_rotation_step": CO.WITNESS_ROT_STEP,
+        "witness_min_clearance": CO.WITNESS_MIN_CLEARANCE,
+        "clearance_range": list(CO.CLEARANCE_RANGE),
+        "leg_length_range": list(CO.LEG_RANGE),
+        "turns_range": list(CO.TURNS_RANGE),
+        "turn_angle_range": [round(v, 6) for v in CO.TURN_RANGE],
+        "min_heading_bin_offset": round(CO.MIN_BIN_OFFSET, 6),
+        "heading_bin": round(CO.HEADING_BIN, 6),
+        "min_grid_offset": CO.MIN_GRID_OFFSET,
+        "grid": CO.GRID,
+        "bay_margin": CO.BAY_MARGIN,
+        "robot_room": C.ROBOT_ROOM,
+        "reach_resolution": CO.REACH_RESOLUTION,
+        "reach_ring_width": CO.REACH_RING_WIDTH,
+    }
+
+
+def family_entry(
+    gen: G.Generated | XL.GeneratedXL | CO.GeneratedCorridor, text: str
+) -> dict[str, Any]:
     """Manifest entry of one generated family scene."""
     obj = {**_object_summary(gen.scene_dict["objects"][0]), **gen.report.to_dict()}
     return {
@@ -101,6 +124,25 @@ def build_suite(name: str, progress: Callable[[str], None] | None = None) -> dic
             "rng": f"numpy.random.default_rng([{G.SUITE_SEED}, {XL.STREAM}, index])",
         }
         checks = _xl_check_settings()
+    elif name == CO.NAME:
+        for k in range(CO.N_SCENES):
+            cg = CO.generate_scene(k)
+            text = scene_yaml(cg.scene_dict)
+            files[f"{cg.scene_dict['name']}.yaml"] = text
+            entries.append(family_entry(cg, text))
+            if progress is not None:
+                w = cg.report.witness
+                progress(
+                    f"{cg.scene_dict['name']}: {cg.layout_info['workspace']} m, "
+                    f"{cg.layout_info['turns']} turn(s), attempts {cg.attempts}, witness "
+                    f"{w.length:.2f} m, min clearance {w.min_clearance:.4f} m"
+                )
+        generator = {
+            "module": "lamp.suites.corridor",
+            "seed": G.SUITE_SEED,
+            "rng": f"numpy.random.default_rng([{G.SUITE_SEED}, {CO.STREAM}, index])",
+        }
+        checks = _corridor_check_settings()
     elif name == "iros":
         d, scene, steps = iros.build()
         bad = [s.piece for s in steps if not s.ok]

@@ -126,14 +126,21 @@ def _place(
 def place_robots(
     rng: np.random.Generator, world: C.World, obj_shape: Any, start: np.ndarray, reach: float,
     workspace: tuple[float, float] = WORKSPACE,
+    sector: tuple[float, float] | None = None,
 ) -> list[list[float]] | None:
     """Three robot positions 0.12-0.7 m outside the object's bounding circle, clear of
-    everything by >= 3 cm and of each other by >= 5 cm (``workspace``: the map's size)."""
+    everything by >= 3 cm and of each other by >= 5 cm (``workspace``: the map's size).
+    ``sector = (direction, half_width)`` (rad) keeps them within ``half_width`` of the
+    ``direction`` seen from the object (default: all around, drawn as before)."""
     obj_world = C.build_world(workspace, [Obstacle(obj_shape, tuple(float(v) for v in start))])
     out: list[np.ndarray] = []
     for _ in range(300):
         rad = reach + ROBOT_RADIUS + rng.uniform(0.12, 0.7)
-        a = rng.uniform(-math.pi, math.pi)
+        a = (
+            rng.uniform(-math.pi, math.pi)
+            if sector is None
+            else rng.uniform(sector[0] - sector[1], sector[0] + sector[1])
+        )
         p = np.array([rnd(start[0] + rad * math.cos(a)), rnd(start[1] + rad * math.sin(a))])
         c = min(C.point_clearance(world, p), C.point_clearance(obj_world, p))
         if c < ROBOT_RADIUS + 0.03:

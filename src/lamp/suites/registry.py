@@ -6,7 +6,7 @@ settings and the check results of every scene: routes, clearances, robot reachab
 
 >>> from lamp.suites import list_suites, suite_scenes
 >>> list_suites()
-['random', 'maze', 'tilt', 'warehouse', 'iros', 'warehouse-xl']
+['random', 'maze', 'tilt', 'warehouse', 'iros', 'warehouse-xl', 'corridor']
 >>> len(suite_scenes("maze"))
 25
 """
@@ -69,6 +69,13 @@ SUITES: dict[str, SuiteInfo] = {
         SuiteInfo(
             "warehouse-xl",
             "20-50 m halls: shelf rows, aisles, cross-aisles and pallets; 20-70 m routes",
+            25,
+            paper=False,
+        ),
+        SuiteInfo(
+            "corridor",
+            "6-14 m maps: one corridor 2-6 cm wider than the load, 1-4 oblique turns "
+            "with turning bays",
             25,
             paper=False,
         ),

@@ -50,6 +50,46 @@ def family_stats(manifest: dict[str, Any]) -> dict[str, Any]:
     }
 
 
+#: suites with a table of their own (not the route-search tables)
+_OWN_TABLES = ("iros", "corridor")
+
+
+def corridor_lines(manifest: dict[str, Any]) -> list[str]:
+    """The ``corridor`` suite's table: its routes are certified witnesses, not searches."""
+    scenes = manifest["scenes"]
+    lay = [sc["layout"] for sc in scenes]
+    wit = [sc["objects"][0]["witness"] for sc in scenes]
+    kinds = [la["object_kind"] for la in lay]
+    turns = [la["turns"] for la in lay]
+    return [
+        "",
+        f"## corridor ({len(scenes)} scenes: {kinds.count('bar')} bars, "
+        f"{kinds.count('rectangle')} rectangles, {kinds.count('circle')} circles)",
+        "",
+        "One corridor per map; *clearance*: corridor width minus the object's extent across "
+        "it (both sides together); the *witness* is the generator's certified route "
+        "(exact clearance, sampled every "
+        f"{manifest['checks']['witness_step']} m and "
+        f"{manifest['checks']['witness_rotation_step']} rad).",
+        "",
+        "| map side (m) | turns (1 / 2 / 3 / 4) | leg length | clearance | corridor width "
+        "| object across | object along | obstacles | witness length | witness rotation (rad) "
+        "| witness min clearance | contact ring reachable by robots |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
+        f"| {_mmm([v for la in lay for v in la['workspace']])} | "
+        + " / ".join(str(turns.count(n)) for n in (1, 2, 3, 4))
+        + f" | {_mmm([leg['length'] for la in lay for leg in la['legs']])}"
+        f" | {_mmm([la['clearance'] for la in lay], '{:.3f}')}"
+        f" | {_mmm([la['corridor_width'] for la in lay], '{:.3f}')}"
+        f" | {_mmm([la['object_across'] for la in lay])}"
+        f" | {_mmm([la['object_along'] for la in lay])}"
+        f" | {_mmm([sc['n_obstacles'] for sc in scenes], '{:.0f}')}"
+        f" | {_mmm([w['length'] for w in wit])} | {_mmm([w['rotation'] for w in wit])}"
+        f" | {_mmm([w['min_clearance'] for w in wit], '{:.4f}')}"
+        f" | {_mmm([sc['objects'][0]['robots']['ring_reachable_fraction'] for sc in scenes])} |",
+    ]
+
+
 def stats_markdown(manifests: dict[str, dict[str, Any]] | None = None) -> str:
     """The text of ``data/STATS.md`` (from the committed manifests unless given)."""
     if manifests is None:
@@ -59,7 +99,7 @@ def stats_markdown(manifests: dict[str, dict[str, Any]] | None = None) -> str:
     families = {
         name: family_stats(manifests[name])
         for name in SUITES
-        if name != "iros" and name in manifests
+        if name not in _OWN_TABLES and name in manifests
     }
     lines = [
         "# Benchmark suite statistics",
@@ -119,6 +159,8 @@ def stats_markdown(manifests: dict[str, dict[str, Any]] | None = None) -> str:
             + f" | {s['narrow']} / {s['scenes']}"
             + f" | {_mmm(s['start_clearance'], '{:.3f}')} | {_mmm(s['ring'])} |"
         )
+    if "corridor" in manifests:
+        lines += corridor_lines(manifests["corridor"])
     if "iros" in manifests:
         sc = manifests["iros"]["scenes"][0]
         lines += [
