@@ -6,7 +6,7 @@ a doorway with every robot behind it. The search's first motions then never veri
 each failure only raises a penalty. ``recovery_push`` looks past the path instead: it
 tries the small motions around the object's pose (``RECOVERY_MOTIONS``, object frame)
 whose end pose is free (the start may touch an obstacle: the swept motion is checked for
-the footprint shrunk by up to ``RECOVERY_TOLERANCE``), most clearance gained first and,
+the footprint shrunk by the least of ``RECOVERY_TOLERANCES`` that lets any through), most clearance gained first and,
 among equals, nearest to the goal, and returns the first that ``Verify`` accepts. The
 closed loop executes it and plans again from the freed pose.
 
@@ -34,8 +34,9 @@ RECOVERY_MOTIONS: tuple[tuple[float, float, float], ...] = tuple(
                                          (0.0, 0.2, -0.2, 0.4, -0.4))
     if (dx, dy, dth) != (0.0, 0.0, 0.0)
 )
-#: Footprint shrinkage (m) allowed for the swept motion out of a pose that touches walls.
-RECOVERY_TOLERANCE = 0.03
+#: Footprint shrinkages (m) tried in turn for the swept motion out of a pose that touches
+#: or (in simulation, pressed by the robots) slightly penetrates the walls.
+RECOVERY_TOLERANCES = (0.01, 0.02, 0.03, 0.05)
 #: Verify calls one recovery may spend.
 RECOVERY_VERIFY_CALLS = 12
 #: Clearances above this (m) count as fully free when ranking candidates.
@@ -59,10 +60,16 @@ def recovery_push(lattice: object, verifier: object, q_O: np.ndarray, q_R: np.nd
     idx = np.flatnonzero(free_end)
     if len(idx) == 0:
         return None
-    swept = lattice._tolerant_space(RECOVERY_TOLERANCE).motions_free(
-        np.broadcast_to(q, targets[idx].shape), targets[idx])
-    idx = idx[swept]
-    if len(idx) == 0:
+    for tol in RECOVERY_TOLERANCES:
+        try:
+            shrunk = lattice._tolerant_space(tol)
+        except ValueError:  # a thin object would vanish
+            break
+        swept = shrunk.motions_free(np.broadcast_to(q, targets[idx].shape), targets[idx])
+        if swept.any():
+            idx = idx[swept]
+            break
+    else:
         return None
     clearance = np.minimum(space.clearance(targets[idx]), _CLEARANCE_CAP)
     goal = lattice.pose(lattice.goal_node)
