@@ -203,3 +203,28 @@ def test_large_shape_draws_the_documented_sizes():
     assert all(1.0 <= max(b.size) <= 1.5 for b in bars_)
     assert all(0.8 - 1e-9 <= shape_extent(s) <= 1.2 + 1e-9 for s in others)
     assert all(model_scale(s) < 1 for s in shapes)
+
+
+# --------------------------------------------------------------------------- evaluation
+def test_model_eval_reports_the_large_object_set(tmp_path):
+    import json
+
+    from typer.testing import CliRunner
+
+    from lamp.cli import app
+
+    out = tmp_path / "eval.json"
+    res = CliRunner().invoke(app, ["model", "eval", "--cases", "2", "--proposals", "2",
+                                   "--large", "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    assert "held-out large objects" in res.output
+    large = json.loads(out.read_text())["large_report"]
+    assert large["large"] is True
+    assert set(large["results"]) == {"flow", "flow-noscale", "geometric"}
+    for per_budget in large["results"].values():
+        assert set(per_budget) == {"1", "2", "3"}
+        for st_ in per_budget.values():
+            assert st_["pushes"] == 4
+            assert 0.0 <= st_["within_0.05m_0.1rad"] <= st_["within_0.1m_0.2rad"] <= 1.0
+            assert st_["contact_validity"] == 1.0
+            assert st_["median_propose_ms"] > 0
