@@ -1,6 +1,6 @@
 """Large objects in the proposers: the scale-aware learned model and the geometric proposer.
 
-Objects wider than the training data (``TRAINED_EXTENT``) are proposed for scaled down by
+Objects wider than the training data (``trained_extent``) are proposed for scaled down by
 the learned model and mapped back; these tests check the mapping exactly (against the
 network run on the scaled object directly), the guarantees of every proposal on bars of
 0.2-1.6 m and L/T shapes up to 1.2 m, and that objects that fit are untouched.
@@ -24,10 +24,16 @@ from lamp.manip.contacts import (
     rigid_pushes,
     signed_distance,
 )
-from lamp.manip.dataset import TRAINED_EXTENT, sample_shape
+from lamp.manip.dataset import TRAINED_CIRCLE_EXTENT, TRAINED_EXTENT, sample_shape
 from lamp.manip.evaluate import l_shape, large_shape, t_shape
 from lamp.manip.network import FlowProposer
-from lamp.manip.scaling import model_scale, scale_motions, scale_shape, shape_extent
+from lamp.manip.scaling import (
+    model_scale,
+    scale_motions,
+    scale_shape,
+    shape_extent,
+    trained_extent,
+)
 from lamp.scene.model import Circle, Rectangle
 
 RING_TOL = 1e-4 + 1e-9  # _finish replaces any contact further than 1e-4 m off the ring
@@ -71,10 +77,14 @@ def _check_guarantees(props, shape, budget, k):
 
 # --------------------------------------------------------------------------- geometry
 def test_trained_extent_bounds_every_training_object():
+    """No training object is ever scaled, and the bound of each kind is tight."""
     rng = np.random.default_rng(0)
-    ext = [shape_extent(sample_shape(rng)) for _ in range(2000)]
-    assert max(ext) <= TRAINED_EXTENT
-    assert max(ext) > 0.97 * TRAINED_EXTENT  # and is not loose
+    shapes = [sample_shape(rng) for _ in range(2000)]
+    assert all(model_scale(s) == 1.0 for s in shapes)
+    for kind, bound in ((Circle, TRAINED_CIRCLE_EXTENT), (Rectangle, TRAINED_EXTENT)):
+        ext = [shape_extent(s) for s in shapes if isinstance(s, kind)]
+        assert all(trained_extent(s) == bound for s in shapes if isinstance(s, kind))
+        assert bound * 0.97 < max(ext) <= bound
 
 
 @given(big_shapes, st.floats(0.2, 1.0))
@@ -89,11 +99,11 @@ def test_scale_shape_scales_distances(shape, s):
 @given(big_shapes)
 def test_model_scale_brings_objects_to_the_trained_extent(shape):
     s = model_scale(shape)
-    if shape_extent(shape) <= TRAINED_EXTENT:
+    if shape_extent(shape) <= trained_extent(shape):
         assert s == 1.0
     else:
         assert 0 < s < 1
-        assert shape_extent(scale_shape(shape, s)) == pytest.approx(TRAINED_EXTENT)
+        assert shape_extent(scale_shape(shape, s)) == pytest.approx(trained_extent(shape))
 
 
 def test_scale_motions_keeps_the_rotation():
@@ -104,7 +114,7 @@ def test_scale_motions_keeps_the_rotation():
 
 
 # --------------------------------------------------------------------------- learned model
-@pytest.mark.parametrize("shape", [Rectangle((0.4, 0.3)), Rectangle((0.6, 0.2)), Circle(0.3),
+@pytest.mark.parametrize("shape", [Rectangle((0.4, 0.3)), Rectangle((0.5, 0.5)), Circle(0.3),
                                    l_shape(0.5, 0.4, 0.15)], ids=str)
 def test_objects_that_fit_are_proposed_exactly_as_without_scaling(shipped, unscaled, shape):
     assert model_scale(shape) == 1.0
@@ -115,8 +125,11 @@ def test_objects_that_fit_are_proposed_exactly_as_without_scaling(shipped, unsca
         np.testing.assert_array_equal(pa.pushes, pb.pushes)
 
 
-def test_large_objects_are_not_proposed_as_before(shipped, unscaled):
-    bar = Rectangle((1.2, 0.1))
+@pytest.mark.parametrize("shape", [Rectangle((1.2, 0.1)), Rectangle((0.55, 0.3)),
+                                   Circle(0.35)], ids=str)
+def test_larger_objects_are_not_proposed_as_before(shipped, unscaled, shape):
+    bar = shape
+    assert model_scale(shape) < 1
     a = shipped.propose(bar, (0.15, 0.0, 0.3), 3, k=8, seed=3)
     b = unscaled.propose(bar, (0.15, 0.0, 0.3), 3, k=8, seed=3)
     assert any(pa.contacts.shape != pb.contacts.shape or not np.array_equal(pa.contacts, pb.contacts)

@@ -47,11 +47,13 @@ CIRCLE_RADII = (0.10, 0.30)
 """Range of the training circles' radii (m)."""
 RECTANGLE_SIDES = (0.15, 0.50)
 """Range of the training rectangles' side lengths (m)."""
-TRAINED_EXTENT = max(2.0 * CIRCLE_RADII[1], RECTANGLE_SIDES[1])
-"""The largest object the training data covers (m), measured as ``scaling.shape_extent``
-does (the side of the smallest origin-centred square, aligned with the object's axes, that
-holds it): circles up to 0.6 m across, rectangles up to 0.5 m a side. The learned model
-sees larger objects scaled down to this (``lamp.manip.scaling``)."""
+TRAINED_EXTENT = RECTANGLE_SIDES[1]
+"""The largest rectangle the training data covers (m), measured as
+``lamp.manip.scaling.shape_extent`` does (the side of the smallest origin-centred square,
+aligned with the object's axes, that holds it): the learned model sees larger rectangles
+and polygons scaled down to this (``lamp.manip.scaling``)."""
+TRAINED_CIRCLE_EXTENT = 2.0 * CIRCLE_RADII[1]
+"""The same bound for circles (m): the largest training circle's diameter."""
 
 # strategy weights per budget (GCo's strategies; 'random' are the randomised variants)
 _STRATEGY_WEIGHTS = {

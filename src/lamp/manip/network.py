@@ -11,7 +11,7 @@ caching the image embedding per shape, under ``torch.inference_mode``. Contacts 
 grid cells; they are snapped onto the contact ring (robot radius + 5 mm outside the object)
 a robot that would overlap an earlier one slides along the ring to the nearest free spot
 within ``REPAIR_SHIFT`` or, failing that, is dropped (so b may be < budget, never 0).
-Objects larger than the training data (``max_extent``, default ``TRAINED_EXTENT``) are
+Objects larger than the training data (``lamp.manip.scaling.trained_extent``) are
 proposed for scaled down and mapped back (``FlowProposer.sample``, ``lamp.manip.scaling``).
 """
 
@@ -55,7 +55,7 @@ from lamp.manip.flow import (
 from lamp.manip.geometric import contact_ring, wrench_residual
 from lamp.manip.image import IMAGE_SIZE, object_image
 from lamp.manip.proposals import Proposal, ShapeLike, check_k, make_rng
-from lamp.manip.scaling import TRAINED_EXTENT, model_scale, scale_motions, scale_shape
+from lamp.manip.scaling import model_scale, scale_motions, scale_shape
 from lamp.scene.model import Shape
 
 MOTION_SCALE = MOTION_RANGE
@@ -218,7 +218,8 @@ class FlowProposer:
     """The trained discrete-continuous flow-matching proposer (``ProposalModel``).
 
     ``max_extent``: objects wider than this (``lamp.manip.scaling.shape_extent``) are
-    proposed for scaled down to it (see ``sample``); ``math.inf`` turns scaling off.
+    proposed for scaled down to it (see ``sample``); default (None): the training data's
+    bound for the object's kind (``trained_extent``); ``math.inf`` turns scaling off.
     """
 
     horizon: int = HORIZON
@@ -230,11 +231,11 @@ class FlowProposer:
         sampler: SamplerConfig | None = None,
         meta: dict[str, Any] | None = None,
         cache_size: int = 256,
-        max_extent: float = TRAINED_EXTENT,
+        max_extent: float | None = None,
     ) -> None:
-        if not max_extent > 0:
-            raise ValueError(f"max_extent must be > 0, got {max_extent!r}")
-        self.max_extent = float(max_extent)
+        if max_extent is not None and not max_extent > 0:
+            raise ValueError(f"max_extent must be > 0 or None, got {max_extent!r}")
+        self.max_extent = None if max_extent is None else float(max_extent)
         self.net = net.eval()
         self.traj_scale = float(traj_scale)
         self.sampler = sampler or SamplerConfig()

@@ -2,9 +2,9 @@
 
 The learned model sees an object through a fixed window (``lamp.manip.image``: an
 ``IMAGE_EXTENT`` square centred on the object) and places contacts on a grid of the same
-size (``lamp.manip.flow``), and it was trained on objects up to ``TRAINED_EXTENT`` across
-(``lamp.manip.dataset``). A larger object (a 1.5 m bar, a 1.2 m L) would be clipped and
-its ends unreachable, so ``FlowProposer`` proposes for the object scaled down about its
+size (``lamp.manip.flow``), and it was trained on rectangles up to ``TRAINED_EXTENT`` and
+circles up to ``TRAINED_CIRCLE_EXTENT`` across (``lamp.manip.dataset``; ``trained_extent``).
+A larger object (a 1.5 m bar, a 1.2 m L) would be clipped and its ends unreachable, so ``FlowProposer`` proposes for the object scaled down about its
 origin by ``s = model_scale(shape) < 1``, with the requested translation scaled by the same
 ``s`` (the rotation is scale-free), and maps the result back (contacts and generated
 residuals divided by ``s``). These helpers are the geometry of that mapping; the mapping
@@ -21,10 +21,10 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from lamp.geometry.shapes import local_outline
-from lamp.manip.dataset import TRAINED_EXTENT
+from lamp.manip.dataset import TRAINED_CIRCLE_EXTENT, TRAINED_EXTENT
 from lamp.scene.model import Circle, Polygon, Rectangle, Shape
 
-__all__ = ["TRAINED_EXTENT", "model_scale", "scale_motions", "scale_shape", "shape_extent"]
+__all__ = ["model_scale", "scale_motions", "scale_shape", "shape_extent", "trained_extent"]
 
 
 def shape_extent(shape: Shape) -> float:
@@ -38,10 +38,19 @@ def shape_extent(shape: Shape) -> float:
     return 2.0 * float(np.max(np.abs(local_outline(shape))))
 
 
-def model_scale(shape: Shape, max_extent: float = TRAINED_EXTENT) -> float:
+def trained_extent(shape: Shape) -> float:
+    """The largest extent (m) of the training objects of ``shape``'s kind: circles
+    ``TRAINED_CIRCLE_EXTENT``, rectangles ``TRAINED_EXTENT`` (polygons, which training
+    never had, are held to the rectangles' bound)."""
+    return TRAINED_CIRCLE_EXTENT if isinstance(shape, Circle) else TRAINED_EXTENT
+
+
+def model_scale(shape: Shape, max_extent: float | None = None) -> float:
     """The factor ``s`` in (0, 1] the model sees ``shape`` scaled by: exactly 1.0 when the
-    object's extent is at most ``max_extent``, else ``max_extent / extent`` (the scaled
-    object is then exactly ``max_extent`` across)."""
+    object's extent is at most ``max_extent`` (default: ``trained_extent(shape)``), else
+    ``max_extent / extent`` (the scaled object is then exactly ``max_extent`` across)."""
+    if max_extent is None:
+        max_extent = trained_extent(shape)
     if not max_extent > 0:
         raise ValueError(f"max_extent must be > 0, got {max_extent!r}")
     extent = shape_extent(shape)
