@@ -97,6 +97,23 @@ def test_scale_shape_scales_distances(shape, s):
 
 
 @given(big_shapes)
+def test_shape_extent_is_the_origin_centred_bounding_square(shape):
+    from lamp.geometry.shapes import to_shapely
+
+    assert shape_extent(shape) == pytest.approx(2 * max(map(abs, to_shapely(shape).bounds)))
+    assert shape_extent(Circle(0.3)) == pytest.approx(0.6)
+
+
+def test_bad_scaling_arguments_are_refused(shipped):
+    with pytest.raises(ValueError, match="max_extent"):
+        model_scale(Rectangle((1.0, 0.1)), 0.0)
+    with pytest.raises(ValueError, match="scale"):
+        scale_shape(Rectangle((1.0, 0.1)), -0.5)
+    with pytest.raises(ValueError, match="max_extent"):
+        FlowProposer(shipped.net, shipped.traj_scale, max_extent=-1.0)
+
+
+@given(big_shapes)
 def test_model_scale_brings_objects_to_the_trained_extent(shape):
     s = model_scale(shape)
     if shape_extent(shape) <= trained_extent(shape):
