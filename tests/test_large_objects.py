@@ -147,3 +147,16 @@ def test_object_space_motions_of_large_objects_are_conservative(shape, ox, oy, d
         foot = to_shapely(shape, se2.interpolate(a, b, s))
         assert not foot.intersects(blocked)
         assert walls.buffer(1e-9).contains(foot)
+
+
+def test_lattice_keeps_every_primitive_of_a_long_bar_in_the_open():
+    """Nothing in the lattice rejects a 1.5 m bar's primitives (a 0.39 rad turn sweeps its
+    ends ~0.29 m); a turn costs the arc its farthest point travels."""
+    from lamp.search.lattice import PRIMITIVES, ObjectLattice
+
+    bar = Rectangle((1.5, 0.1))
+    lat = ObjectLattice(ObjectSpace(bar, (4.0, 4.0), ()), (2.0, 2.0, 0.0))
+    succ = lat.successors(lat.anchor_node)
+    assert len(succ) == len(PRIMITIVES)
+    turns = [c for v, c in succ if lat.ijk(v)[:2] == (0, 0)]
+    assert turns == pytest.approx([bar.bounding_radius * 2 * math.pi / 16] * 2)
