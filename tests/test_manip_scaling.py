@@ -258,3 +258,43 @@ def test_model_eval_reports_the_large_object_set(tmp_path):
             assert 0.0 <= st_["within_0.05m_0.1rad"] <= st_["within_0.1m_0.2rad"] <= 1.0
             assert st_["contact_validity"] == 1.0
             assert st_["median_propose_ms"] > 0
+
+
+def test_displacement_checkpoints_are_mapped_back_as_residuals(monkeypatch):
+    """A network that generates raw displacements (older checkpoints): the scaled path turns
+    them into residuals from the scaled rigid motion before mapping them back."""
+    import torch
+
+    from lamp.manip.contacts import project_to_contacts
+    from lamp.manip.network import FlowNet, NetConfig
+
+    torch.manual_seed(0)
+    cfg = NetConfig(image_size=32, channels=(4, 8), image_dim=16, token_dim=8, traj_dim=32,
+                    cond_dim=16, time_dim=16, hidden=64, blocks=1, trajectory="displacement")
+    net = FlowNet(cfg)
+    model = FlowProposer(net, traj_scale=0.07)
+    ref = FlowProposer(net, traj_scale=0.07, max_extent=math.inf)
+    bar, m = Rectangle((1.4, 0.2)), np.array([0.15, 0.05, -0.3])
+    s = model_scale(bar)
+    _check_guarantees(model.propose(bar, m, 3, k=8, seed=2), bar, 3, 8)
+    seen = []
+    real_finish = FlowProposer._finish
+
+    def spy(self, shp, contacts, disp, motions, residual=None):
+        seen.append(contacts.copy())
+        return real_finish(self, shp, contacts, disp, motions, residual)
+
+    monkeypatch.setattr(FlowProposer, "_finish", spy)
+    big = model.sample(bar, m[None], 3, 8, seed=4)
+    small_shape, m_s = scale_shape(bar, s), scale_motions(m, s)
+    small = ref.sample(small_shape, m_s[None], 3, 8, seed=4)
+    cells = seen[1]
+    reps = np.repeat(m[None], 8, axis=0), np.repeat(m_s[None], 8, axis=0)
+    res_big = big.pushes - big.contacts[:, :, None] - rigid_displacements(big.contacts, reps[0])
+    res_small = small.pushes - small.contacts[:, :, None] - rigid_displacements(small.contacts,
+                                                                                reps[1])
+    unmoved = ~np.isnan(big.contacts[..., 0]) & ~np.isnan(small.contacts[..., 0])
+    unmoved &= np.all(np.isclose(project_to_contacts(small_shape, np.nan_to_num(cells)),
+                                 small.contacts, atol=1e-12), axis=-1)
+    assert unmoved.sum() >= 8
+    np.testing.assert_allclose(res_big[unmoved], res_small[unmoved] / s, atol=1e-12)
