@@ -4,7 +4,8 @@ Run: ``python benchmarks/bench_manip.py [--threads 1] [--repeats 60]``.
 Targets (issue #4): learned model, median k=16 <= 50 ms and k=64 <= 150 ms on 2 cores.
 Calls cycle over a few shapes (so the per-shape image cache is warm, as in a planner that
 asks about the same object many times) and random motions; the first call per shape (cold
-cache: rasterise + CNN) is timed separately.
+cache: rasterise + CNN) is timed separately. The last lines time a 1.5 m bar and a 1.2 m L
+(beyond the training sizes: the learned model proposes for them scaled down).
 """
 
 from __future__ import annotations
@@ -70,6 +71,22 @@ def main() -> None:
         model.propose_batch(shapes[0], motions, 3, k=16, seed=i)
         ts.append(time.perf_counter() - t0)
     print(f"flow      propose_batch 8 motions x k=16: {_stats(ts)}")
+    # objects beyond the training sizes, which the learned model proposes for scaled down
+    large = [
+        {"type": "rectangle", "size": [1.5, 0.12]},
+        {"type": "polygon", "points": [[-0.6, -0.45], [0.6, -0.45], [0.6, -0.25],
+                                       [-0.4, -0.25], [-0.4, 0.45], [-0.6, 0.45]]},
+    ]
+    for s in large:
+        model.propose(s, (0.1, 0.0, 0.0), 3, k=16, seed=0)
+    for name, prop in (("flow", model), ("geometric", geo)):
+        ts = []
+        for i in range(args.repeats):
+            m = rng.uniform([-0.2, -0.2, -0.5], [0.2, 0.2, 0.5])
+            t0 = time.perf_counter()
+            prop.propose(large[i % len(large)], m, 1 + i % 3, k=16, seed=i)
+            ts.append(time.perf_counter() - t0)
+        print(f"{name:<9} propose k=16  1.5 m bar / 1.2 m L: {_stats(ts)}")
 
 
 if __name__ == "__main__":

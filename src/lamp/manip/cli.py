@@ -120,6 +120,10 @@ def eval_cmd(
     record: bool = typer.Option(False, help="Add the figures to the checkpoint's .json."),
     polygons: bool = typer.Option(False, help="Also evaluate on random convex polygons "
                                   "(out of the training distribution)."),
+    large: bool = typer.Option(False, help="Also evaluate on large objects (bars 1.0-1.5 m, "
+                               "L/T shapes 0.8-1.2 m), which the learned model proposes for "
+                               "scaled down; with the learned model unscaled beside it "
+                               "(flow-noscale)."),
 ) -> None:
     """Execute proposals for held-out shapes and motions in the simulator; report accuracy."""
     from lamp.cli_support import check_model_option, check_writable_file, fail_input
@@ -148,6 +152,19 @@ def eval_cmd(
         report_poly = evaluate(proposers, cases_per_budget=cases, k=k, seed=seed, polygons=True)
         typer.echo(format_report(report_poly))
         report = {**report, "polygons_report": report_poly}
+    if large:
+        import math
+
+        from lamp.manip.network import FlowProposer
+
+        flow = proposers["flow"]
+        large_props = {"flow": flow, "flow-noscale": FlowProposer(
+            flow.net, flow.traj_scale, flow.sampler, flow.meta, max_extent=math.inf)}
+        if geometric:
+            large_props["geometric"] = proposers["geometric"]
+        report_large = evaluate(large_props, cases_per_budget=cases, k=k, seed=seed, large=True)
+        typer.echo(format_report(report_large))
+        report = {**report, "large_report": report_large}
     if out is not None:
         out.parent.mkdir(parents=True, exist_ok=True)
         out.write_text(json.dumps(report, indent=1))

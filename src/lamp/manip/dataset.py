@@ -43,6 +43,17 @@ SIM_STEP = round(0.9 * DEFAULT_TEAM.row_step, 12)
 MOTION_LIMITS = np.array(MOTION_RANGE)
 """Bounds of the requested motions (|dx|, |dy| in m, |dtheta| in rad)."""
 SHAPE_CIRCLE, SHAPE_RECTANGLE = 0, 1
+CIRCLE_RADII = (0.10, 0.30)
+"""Range of the training circles' radii (m)."""
+RECTANGLE_SIDES = (0.15, 0.50)
+"""Range of the training rectangles' side lengths (m)."""
+TRAINED_EXTENT = RECTANGLE_SIDES[1]
+"""The largest rectangle the training data covers (m), measured as
+``lamp.manip.scaling.shape_extent`` does (the side of the smallest origin-centred square,
+aligned with the object's axes, that holds it): the learned model sees larger rectangles
+and polygons scaled down to this (``lamp.manip.scaling``)."""
+TRAINED_CIRCLE_EXTENT = 2.0 * CIRCLE_RADII[1]
+"""The same bound for circles (m): the largest training circle's diameter."""
 
 # strategy weights per budget (GCo's strategies; 'random' are the randomised variants)
 _STRATEGY_WEIGHTS = {
@@ -120,10 +131,11 @@ def execute_push(
 
 # --------------------------------------------------------------------------- sampling
 def sample_shape(rng: np.random.Generator) -> Shape:
-    """A training object: circle r in [0.10, 0.30] m or rectangle sides in [0.15, 0.50] m."""
+    """A training object: circle of radius in ``CIRCLE_RADII`` or rectangle with sides in
+    ``RECTANGLE_SIDES``."""
     if rng.random() < 0.4:
-        return Circle(float(rng.uniform(0.10, 0.30)))
-    return Rectangle((float(rng.uniform(0.15, 0.50)), float(rng.uniform(0.15, 0.50))))
+        return Circle(float(rng.uniform(*CIRCLE_RADII)))
+    return Rectangle((float(rng.uniform(*RECTANGLE_SIDES)), float(rng.uniform(*RECTANGLE_SIDES))))
 
 
 def sample_motion(rng: np.random.Generator) -> np.ndarray:

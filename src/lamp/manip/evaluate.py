@@ -10,6 +10,11 @@ request, mean and median translation and rotation errors (also restricted to pus
 most 0.2 m), contact validity (no robot penetrating the object, robots at least 2r apart)
 and the proposer's median ``propose`` time; once over all k proposals and once over the
 first proposal of each case (the one a planner tries first).
+
+Three case sets: circles and rectangles as in training, random convex polygons
+(``polygons``), and large objects (``large``: bars 1.0-1.5 m long, L and T shapes
+0.8-1.2 m across, beyond the model's 1 m window, which the learned model proposes for
+scaled down, ``lamp.manip.scaling``).
 """
 
 from __future__ import annotations
@@ -23,11 +28,17 @@ from lamp.geometry.se2 import relative, transform_points, wrap_angle
 from lamp.manip.contacts import closest_boundary, contacts_valid
 from lamp.manip.dataset import WORKSPACE, densify, object_scene, sample_motion, sample_shape
 from lamp.manip.proposals import Proposal, ProposalModel
-from lamp.scene.model import Polygon, Shape
+from lamp.scene.model import Polygon, Rectangle, Shape
 
 APPROACH = 0.1
 """How far out along the contact normal the robots start before the approach (m)."""
 TOLERANCES = ((0.05, 0.1), (0.1, 0.2))
+BAR_LENGTHS = (1.0, 1.5)
+"""Length range of the large-object set's bars (m); widths are ``LARGE_THICKNESS``."""
+LT_SPANS = (0.8, 1.2)
+"""Range of the large-object set's L and T shapes' longer side (m)."""
+LARGE_THICKNESS = (0.1, 0.25)
+"""Range of the bars' widths and of the L and T shapes' arm widths (m)."""
 
 
 def execute_proposal(shape: Shape, proposal: Proposal, motion: np.ndarray) -> dict[str, float]:
@@ -63,11 +74,44 @@ def random_polygon(rng: np.random.Generator) -> Polygon:
     return Polygon(tuple((float(x), float(y)) for x, y in pts))
 
 
-def held_out_cases(n: int, seed: int, polygons: bool = False) -> list[tuple[Shape, np.ndarray]]:
+def l_shape(width: float, height: float, thickness: float) -> Polygon:
+    """An L: a ``width`` x ``thickness`` foot and a ``thickness`` x ``height`` upright
+    sharing the bottom-left corner; the origin at the centre of its bounding box."""
+    w, h, t = float(width), float(height), float(thickness)
+    pts = [(0.0, 0.0), (w, 0.0), (w, t), (t, t), (t, h), (0.0, h)]
+    return Polygon(tuple((x - 0.5 * w, y - 0.5 * h) for x, y in pts))
+
+
+def t_shape(width: float, height: float, thickness: float) -> Polygon:
+    """A T: a ``width`` x ``thickness`` top bar on a centred stem, ``height`` tall in all;
+    the origin at the centre of its bounding box."""
+    w, h, t = float(width), float(height), float(thickness)
+    pts = [(-0.5 * t, 0.0), (0.5 * t, 0.0), (0.5 * t, h - t), (0.5 * w, h - t), (0.5 * w, h),
+           (-0.5 * w, h), (-0.5 * w, h - t), (-0.5 * t, h - t)]
+    return Polygon(tuple((x, y - 0.5 * h) for x, y in pts))
+
+
+def large_shape(rng: np.random.Generator) -> Shape:
+    """A large object: half the time a bar (length in ``BAR_LENGTHS``, width in
+    ``LARGE_THICKNESS``), else an L or a T whose longer side is in ``LT_SPANS`` (the other
+    60-100% of it, arms ``LARGE_THICKNESS`` wide)."""
+    u = rng.random()
+    if u < 0.5:
+        return Rectangle((float(rng.uniform(*BAR_LENGTHS)), float(rng.uniform(*LARGE_THICKNESS))))
+    w = float(rng.uniform(*LT_SPANS))
+    h = w * float(rng.uniform(0.6, 1.0))
+    t = float(rng.uniform(*LARGE_THICKNESS))
+    return l_shape(w, h, t) if u < 0.75 else t_shape(w, h, t)
+
+
+def held_out_cases(
+    n: int, seed: int, polygons: bool = False, large: bool = False
+) -> list[tuple[Shape, np.ndarray]]:
     """``n`` (shape, motion) cases drawn like the training data but from a separate seed
-    (``polygons``: random convex polygons instead of circles and rectangles)."""
+    (``polygons``: random convex polygons instead of circles and rectangles; ``large``:
+    ``large_shape`` objects)."""
     rng = np.random.default_rng([seed, 7919])
-    make = random_polygon if polygons else sample_shape
+    make = large_shape if large else random_polygon if polygons else sample_shape
     return [(make(rng), sample_motion(rng)) for _ in range(n)]
 
 
@@ -97,21 +141,24 @@ def evaluate(
     budgets: tuple[int, ...] = (1, 2, 3),
     progress: bool = True,
     polygons: bool = False,
+    large: bool = False,
 ) -> dict[str, Any]:
     """Run every proposer on the same held-out cases; returns a JSON-ready report.
 
-    ``polygons``: evaluate on random convex polygons (out of distribution) instead.
+    ``polygons``: evaluate on random convex polygons (out of distribution) instead;
+    ``large``: on large objects (``large_shape``).
     """
     from tqdm import tqdm
 
     report: dict[str, Any] = {"seed": seed, "cases_per_budget": cases_per_budget, "k": k,
-                              "approach_m": APPROACH, "polygons": polygons, "results": {}}
+                              "approach_m": APPROACH, "polygons": polygons, "large": large,
+                              "results": {}}
     total = len(proposers) * len(budgets) * cases_per_budget
     bar = tqdm(total=total, unit="case", disable=not progress)
     for name, prop in proposers.items():
         per_budget: dict[str, Any] = {}
         for b in budgets:
-            cases = held_out_cases(cases_per_budget, seed + b, polygons)
+            cases = held_out_cases(cases_per_budget, seed + b, polygons, large)
             rows, motions, times, first = [], [], [], []
             for i, (shape, motion) in enumerate(cases):
                 t0 = time.perf_counter()
@@ -139,17 +186,20 @@ def format_report(report: dict[str, Any]) -> str:
             ("mean_err_r", "mean_r", "{:.3f}"), ("median_err_r", "med_r", "{:.3f}"),
             ("contact_validity", "valid", "{:.0%}"), ("mean_robots", "robots", "{:.2f}"),
             ("median_propose_ms", "ms", "{:.1f}")]
-    kind = "random convex polygons" if report.get("polygons") else "circles and rectangles"
+    kind = ("large objects (bars 1.0-1.5 m, L/T shapes 0.8-1.2 m)" if report.get("large")
+            else "random convex polygons" if report.get("polygons")
+            else "circles and rectangles")
+    w = max(10, *(len(name) for name in report["results"]))
     lines = [f"held-out {kind}, cases per budget: {report['cases_per_budget']}, proposals per "
              f"case: {report['k']}, seed {report['seed']}",
-             f"{'proposer':<10} {'b':>2} " + " ".join(f"{h:>9}" for _, h, _ in cols)]
+             f"{'proposer':<{w}} {'b':>2} " + " ".join(f"{h:>9}" for _, h, _ in cols)]
     for name, per in report["results"].items():
         for b, st in per.items():
-            lines.append(f"{name:<10} {b:>2} " + " ".join(
+            lines.append(f"{name:<{w}} {b:>2} " + " ".join(
                 f"{fmt.format(st[key]):>9}" for key, _, fmt in cols))
     lines.append("first proposal of each case only (the one a planner tries first):")
     for name, per in report["results"].items():
         for b, st in per.items():
-            lines.append(f"{name:<10} {b:>2} " + " ".join(
+            lines.append(f"{name:<{w}} {b:>2} " + " ".join(
                 f"{fmt.format(st['first'].get(key, st[key])):>9}" for key, _, fmt in cols))
     return "\n".join(lines)

@@ -7,7 +7,8 @@ column j) covers the square centred at ``x = -E/2 + (j + 0.5) E/S``,
 ``y = -E/2 + (i + 0.5) E/S``: rows grow with +y (no display flip). Each pixel holds the
 fraction of ``SUPERSAMPLE**2`` sub-pixel samples inside the shape, so edges are
 anti-aliased and sizes are resolved below one pixel; the interior is 1, the outside 0.
-Parts of a shape beyond the image are cut off (objects wider than 1 m are out of scope).
+Parts of a shape beyond the image are cut off; the learned model therefore sees objects
+wider than its training data scaled down (``lamp.manip.scaling``).
 """
 
 from __future__ import annotations

@@ -11,6 +11,8 @@ caching the image embedding per shape, under ``torch.inference_mode``. Contacts 
 grid cells; they are snapped onto the contact ring (robot radius + 5 mm outside the object)
 a robot that would overlap an earlier one slides along the ring to the nearest free spot
 within ``REPAIR_SHIFT`` or, failing that, is dropped (so b may be < budget, never 0).
+Objects larger than the training data (``lamp.manip.scaling.trained_extent``) are
+proposed for scaled down and mapped back (``FlowProposer.sample``, ``lamp.manip.scaling``).
 """
 
 from __future__ import annotations
@@ -53,6 +55,7 @@ from lamp.manip.flow import (
 from lamp.manip.geometric import contact_ring, wrench_residual
 from lamp.manip.image import IMAGE_SIZE, object_image
 from lamp.manip.proposals import Proposal, ShapeLike, check_k, make_rng
+from lamp.manip.scaling import model_scale, scale_motions, scale_shape
 from lamp.scene.model import Shape
 
 MOTION_SCALE = MOTION_RANGE
@@ -212,7 +215,12 @@ class RawSamples:
 
 
 class FlowProposer:
-    """The trained discrete-continuous flow-matching proposer (``ProposalModel``)."""
+    """The trained discrete-continuous flow-matching proposer (``ProposalModel``).
+
+    ``max_extent``: objects wider than this (``lamp.manip.scaling.shape_extent``) are
+    proposed for scaled down to it (see ``sample``); default (None): the training data's
+    bound for the object's kind (``trained_extent``); ``math.inf`` turns scaling off.
+    """
 
     horizon: int = HORIZON
 
@@ -223,7 +231,11 @@ class FlowProposer:
         sampler: SamplerConfig | None = None,
         meta: dict[str, Any] | None = None,
         cache_size: int = 256,
+        max_extent: float | None = None,
     ) -> None:
+        if max_extent is not None and not max_extent > 0:
+            raise ValueError(f"max_extent must be > 0 or None, got {max_extent!r}")
+        self.max_extent = None if max_extent is None else float(max_extent)
         self.net = net.eval()
         self.traj_scale = float(traj_scale)
         self.sampler = sampler or SamplerConfig()
@@ -265,7 +277,19 @@ class FlowProposer:
         k: int,
         seed: int | np.random.Generator | None = None,
     ) -> RawSamples:
-        """k candidates for each of M motions (M, 3): arrays of M * k rows, motion-major."""
+        """k candidates for each of M motions (M, 3): arrays of M * k rows, motion-major.
+
+        Objects that fit (``model_scale(shape, max_extent) == 1``) go through the network
+        as they are. A larger object is proposed for scaled down by ``s = model_scale``
+        about its origin, with the motions' translations scaled by ``s`` (rotations as
+        they are); the generated contacts and the generated residual pushes (the
+        deviation from carrying the contact rigidly with the object) are divided by ``s``
+        and handed to ``_finish`` with the real shape and the real motions. So in both
+        cases every used contact lies on the real object's contact ring (snapped as
+        ``_finish`` does, overlapping robots repaired or dropped), ``pushes[:, :, 0]`` are
+        the contacts, and the pushes are in the real object's frame: the rigid motion of
+        the real contacts along the real requested motion plus the residual.
+        """
         shp = as_shape(shape)
         b = check_budget(budget)
         k = check_k(k)
@@ -274,14 +298,18 @@ class FlowProposer:
             check_motion(row)
         rng = make_rng(seed)
         gen = torch.Generator().manual_seed(int(rng.integers(0, 2**63 - 1)))
+        scale = model_scale(shp, self.max_extent)
+        net_shape, net_m = (shp, m) if scale == 1.0 else (scale_shape(shp, scale),
+                                                          scale_motions(m, scale))
         cfg = self.net.cfg
         n = len(m) * k
         s = cfg.slots
         used = torch.arange(s) < b  # (S,)
         tok_used = used.repeat_interleave(2)  # (2S,)
         with torch.inference_mode():
-            emb = self.image_embedding(shp).expand(n, -1)
-            motion = torch.from_numpy(np.repeat(m / np.array(MOTION_SCALE), k, axis=0)).float()
+            emb = self.image_embedding(net_shape).expand(n, -1)
+            motion = torch.from_numpy(np.repeat(net_m / np.array(MOTION_SCALE), k,
+                                                axis=0)).float()
             bud = torch.full((n,), b, dtype=torch.long)
             tokens = torch.full((n, 2 * s), NOISE, dtype=torch.long)
             tokens[:, ~tok_used] = NONE
@@ -308,15 +336,25 @@ class FlowProposer:
                     tokens = torch.where(jump, draw, tokens)
         contacts = detokenize(tokens.numpy())  # (n, S, 2), NaN beyond the budget
         disp = x.numpy().astype(float) * self.traj_scale
-        return self._finish(shp, contacts, disp, np.repeat(m, k, axis=0))
+        if scale == 1.0:
+            return self._finish(shp, contacts, disp, np.repeat(m, k, axis=0))
+        if not cfg.residual:  # the generated part as a residual from the scaled rigid motion
+            rigid = rigid_displacements(project_to_contacts(net_shape, np.nan_to_num(contacts)),
+                                        np.repeat(net_m, k, axis=0), cfg.horizon)
+            disp = disp - rigid[:, :, 1:]
+        return self._finish(shp, contacts / scale, disp / scale, np.repeat(m, k, axis=0),
+                            residual=True)
 
     def _finish(
-        self, shape: Shape, contacts: np.ndarray, disp: np.ndarray, motions: np.ndarray
+        self, shape: Shape, contacts: np.ndarray, disp: np.ndarray, motions: np.ndarray,
+        residual: bool | None = None,
     ) -> RawSamples:
         """Snap contacts onto the contact ring, build pushes, drop overlapping robots.
 
         contacts (n, S, 2) cell centres (NaN: unused), disp (n, S, H-1, 2) the generated
-        continuous part in metres, motions (n, 3) the requested motions.
+        continuous part in metres, motions (n, 3) the requested motions; ``residual``: disp
+        is a residual from the rigid motion of the contacts (default: as the network's
+        configuration says).
         """
         n, s, _ = contacts.shape
         used = ~np.isnan(contacts[..., 0])
@@ -350,7 +388,7 @@ class FlowProposer:
                     used[r, j] = False
         snapped[~used] = np.nan
         pushes = np.concatenate([np.zeros((n, s, 1, 2)), disp], axis=2) + snapped[:, :, None, :]
-        if self.net.cfg.residual:
+        if self.net.cfg.residual if residual is None else residual:
             pushes = pushes + rigid_displacements(snapped, motions, pushes.shape[2])
         return RawSamples(snapped, pushes)
 
