@@ -60,6 +60,8 @@ SNAP_DISTANCE = 1e-3
 RECOVER_AFTER = 40
 #: Recovery pushes one planner makes at most (an infeasible task must not wander).
 MAX_RECOVERIES = 8
+#: Only an object closer than this (m) to an obstacle counts as pinned.
+RECOVERY_CLEARANCE = 0.02
 #: Footprint shrinkage tried, in order, when a drifted pose touches an obstacle so that no
 #: connecting motion is free at zero tolerance (the object may always move away from it).
 JOIN_TOLERANCES = (0.0, 0.01, 0.02)
@@ -112,11 +114,12 @@ class LazyPlanner:
         self.calls = 0
 
     def _recover(self, q_O: np.ndarray, q_R: np.ndarray, failed: Plan) -> Plan:
-        """Departure: before giving up (or after ``RECOVER_AFTER`` failed iterations), try
-        one recovery push (``lamp.planners.recovery``) that frees a pinned or wedged
+        """Departure: before giving up (or after ``RECOVER_AFTER`` failed iterations), when
+        the object is pinned (clearance below ``RECOVERY_CLEARANCE``), try one recovery push (``lamp.planners.recovery``) that frees a pinned or wedged
         object; the loop executes it and plans again. ``failed`` is returned otherwise."""
-        if self.recoveries >= MAX_RECOVERIES:
-            return failed
+        if (self.recoveries >= MAX_RECOVERIES
+                or float(self.lattice.space.clearance(np.asarray(q_O, float))) >= RECOVERY_CLEARANCE):
+            return failed  # not pinned: a push away from the walls would only wander
         trans = recovery_push(self.lattice, self.verifier, np.asarray(q_O, float),
                               np.asarray(q_R, float), attempt=self.recoveries)
         if trans is None:

@@ -56,7 +56,7 @@ class NarrowParams:
     slack: float = 0.08
     spacing: float = 0.08
     #: the raster is coarsened so that a window never has more cells than this
-    max_cells: int = 4_000_000
+    max_cells: int = 2_000_000
     #: how far (beyond the object's reach) a chain of aligned poses is extended
     extension: float = 0.3
     #: radius of the ridge neighbourhood that gives a point's corridor direction

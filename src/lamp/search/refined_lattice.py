@@ -141,13 +141,18 @@ class RefinedLattice(ObjectLattice):
         return out
 
     def refine(self, around: ArrayLike, params: NarrowParams | None = None) -> int:
-        """Add the narrow-passage poses of the window around ``around`` and the goal (once
-        per window) with their edges; returns how many vertices were added."""
+        """Add the narrow-passage poses of a window around ``around`` and the goal with
+        their edges; returns how many vertices were added (0 when the window is already
+        covered). The window's margin is ``REFINE_MARGIN`` and doubles with every call,
+        so repeated calls end up covering the whole map."""
         p = np.asarray(around, dtype=float)
         w, h = self.space.workspace
         g = self.anchor
-        window = (max(0.0, min(p[0], g[0]) - REFINE_MARGIN), max(0.0, min(p[1], g[1]) - REFINE_MARGIN),
-                  min(w, max(p[0], g[0]) + REFINE_MARGIN), min(h, max(p[1], g[1]) + REFINE_MARGIN))
+        # each call searches a larger window (the route may leave the first one), until
+        # one covers the whole map
+        m = REFINE_MARGIN * 2.0 ** len(self._windows)
+        window = (max(0.0, min(p[0], g[0]) - m), max(0.0, min(p[1], g[1]) - m),
+                  min(w, max(p[0], g[0]) + m), min(h, max(p[1], g[1]) + m))
         if any(a[0] <= window[0] and a[1] <= window[1] and a[2] >= window[2] and a[3] >= window[3]
                for a in self._windows):
             return 0
