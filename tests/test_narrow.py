@@ -64,6 +64,9 @@ def test_aligned_headings_lay_the_narrow_side_across():
         ys = [s * x + c * y + shift for x, y in tri.points]
         assert max(ys) + min(ys) == pytest.approx(0.0, abs=1e-9)
         assert max(ys) - min(ys) == pytest.approx(width)
+    circle = aligned_headings(Circle(0.2), 0.1)  # any heading within 22.5 degrees of one
+    gaps = np.diff(np.sort(np.remainder([t for t, _, _ in circle], 2 * math.pi)))
+    assert len(circle) == 8 and np.allclose(gaps, math.pi / 4)
     assert inscribed_radius(Rectangle((0.4, 0.3))) == pytest.approx(0.15)
     assert inscribed_radius(Circle(0.2)) == pytest.approx(0.2)
 

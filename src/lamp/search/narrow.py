@@ -18,7 +18,8 @@ passages and returns poses that pass them; ``RefinedLattice`` adds them to the s
    weakest axis of the clearance gradients' structure tensor around it (the gradients
    point away from the walls on both sides, across the corridor).
 4. **Aligned poses.** For each point, each heading that lays an edge of the object's convex
-   hull along ``phi`` (a rectangle: 4 headings; a circle: ``phi``) gives a pose, shifted
+   hull along ``phi`` (a rectangle: 4 headings; a circle: ``CIRCLE_HEADINGS``, ``phi`` and
+   every 45 degrees from it) gives a pose, shifted
    across the corridor so that the object's extent across it is centred on the ridge and
    nudged by up to one raster cell more if needed. A pose is kept when the exact checker
    (``ExactSpace``) finds it free.
@@ -45,6 +46,10 @@ from lamp.geometry.exact_space import ExactSpace
 from lamp.geometry.object_space import ObjectSpace
 from lamp.geometry.primitives import Circle
 from lamp.geometry.shapes import local_outline, obstacle_geometry
+
+
+#: Headings (evenly spaced) given to a circle's poses.
+CIRCLE_HEADINGS = 8
 
 
 @dataclass(frozen=True)
@@ -88,8 +93,11 @@ def aligned_headings(shape: object, phi: float) -> list[tuple[float, float, floa
     along direction ``phi``: ``width`` is the object's extent across ``phi`` and ``shift``
     the offset (along the normal of ``phi``) that centres that extent on the object's
     position line; narrowest first."""
-    if isinstance(shape, Circle):
-        return [(float(phi), 0.0, 2.0 * float(shape.radius))]
+    if isinstance(shape, Circle):  # any heading fits: eight, so that every heading is
+        # within the model's rotation range of one of them
+        w = 2.0 * float(shape.radius)
+        return [(math.remainder(phi + k * 2.0 * math.pi / CIRCLE_HEADINGS, 2.0 * math.pi), 0.0, w)
+                for k in range(CIRCLE_HEADINGS)]
     pts = local_outline(shape)
     hull = np.asarray(shapely.MultiPoint(pts).convex_hull.exterior.coords)[:-1]
     edges = np.roll(hull, -1, axis=0) - hull
