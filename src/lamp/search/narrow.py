@@ -47,7 +47,6 @@ from lamp.geometry.object_space import ObjectSpace
 from lamp.geometry.primitives import Circle
 from lamp.geometry.shapes import local_outline, obstacle_geometry
 
-
 #: Headings (evenly spaced) given to a circle's poses.
 CIRCLE_HEADINGS = 8
 
