@@ -298,3 +298,14 @@ def test_displacement_checkpoints_are_mapped_back_as_residuals(monkeypatch):
                                  small.contacts, atol=1e-12), axis=-1)
     assert unmoved.sum() >= 8
     np.testing.assert_allclose(res_big[unmoved], res_small[unmoved] / s, atol=1e-12)
+
+
+def test_geometric_strategies_join_in_beyond_the_training_data(shipped):
+    """A 1.5 m bar: of k proposals the last k // 2 are the geometric proposer's; an object
+    the model was trained on gets only the network's."""
+    bar = Rectangle((1.5, 0.12))
+    props = shipped.propose(bar, (0.1, 0.0, 0.2), 3, k=6, seed=0)
+    assert len(props) == 6
+    assert [p.source == "flow" for p in props] == [True] * 3 + [False] * 3
+    small = shipped.propose(Rectangle((0.4, 0.3)), (0.1, 0.0, 0.2), 3, k=6, seed=0)
+    assert all(p.source == "flow" for p in small)

@@ -52,7 +52,7 @@ from lamp.manip.flow import (
     smoothness_grad,
     time_embedding,
 )
-from lamp.manip.geometric import contact_ring, wrench_residual
+from lamp.manip.geometric import GeometricProposer, contact_ring, wrench_residual
 from lamp.manip.image import IMAGE_SIZE, object_image
 from lamp.manip.proposals import Proposal, ShapeLike, check_k, make_rng
 from lamp.manip.scaling import model_scale, scale_motions, scale_shape
@@ -220,7 +220,14 @@ class FlowProposer:
     ``max_extent``: objects wider than this (``lamp.manip.scaling.shape_extent``) are
     proposed for scaled down to it (see ``sample``); default (None): the training data's
     bound for the object's kind (``trained_extent``); ``math.inf`` turns scaling off.
+    For such a scaled object the last ``k // 2`` of the ``k`` proposals are the
+    ``GeometricProposer``'s instead of the network's lowest-ranked ones (``mix_geometric``;
+    on large objects the geometric strategies are the more accurate, see the README's
+    large-object table).
     """
+
+    #: Add geometric proposals for objects beyond the training data (see the class doc).
+    mix_geometric: bool = True
 
     horizon: int = HORIZON
 
@@ -425,13 +432,21 @@ class FlowProposer:
         k = check_k(k)
         m = np.asarray(motions, dtype=float).reshape(-1, 3)
         draw = max(k, int(np.ceil(k * self.sampler.oversample))) if self.sampler.rank else k
-        raw = self.sample(shp, m, budget, draw, seed)
+        rng = make_rng(seed)
+        raw = self.sample(shp, m, budget, draw, rng)
         out = []
         for i in range(len(m)):
             rows = np.arange(i * draw, (i + 1) * draw)
             if self.sampler.rank:
                 rows = rows[self._rank(shp, raw.contacts[rows], m[i])[:k]]
             out.append(self._to_proposals(raw, rows))
+        if self.mix_geometric and model_scale(shp, self.max_extent) < 1.0:
+            # beyond the training data the network is out of its depth (a scaled-down
+            # bar is thinner than a robot): the hand-made strategies join in
+            g = k // 2
+            if g:
+                extra = GeometricProposer().propose_batch(shp, m, budget, g, rng)
+                out = [a[: k - g] + b for a, b in zip(out, extra, strict=True)]
         return out
 
     @staticmethod
