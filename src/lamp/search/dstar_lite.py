@@ -22,9 +22,9 @@ Departures from the pseudocode, each for a reason:
 * Termination {10'} uses ``rhs(s_start) != g(s_start)`` (the basic version's test) rather
   than ``>``, so the start is always locally consistent when the path is read off; and it
   keeps expanding vertices whose first key component is within a relative ``1e-9`` of the
-  start's. On a lattice with a Euclidean heuristic every vertex of a straight shortest
-  path has exactly the start's first key component, so floating-point rounding alone
-  decides whether it is expanded; an inconsistent one left behind breaks the path read
+  start's. On a lattice whose heuristic is exact along straight paths (the octile metric
+  of ``ObjectLattice``) every vertex of a straight shortest path has exactly the start's
+  first key component, so floating-point rounding alone decides whether it is expanded; an inconsistent one left behind breaks the path read
   off by {34'} (found by ``benchmarks/bench_search.py``, now a regression test).
 * ``UpdateVertex`` ({21'}, {28'}) is called only for vertices whose ``rhs`` changed: for
   the others g, rhs and queue membership are unchanged and a queued key, being a lower
