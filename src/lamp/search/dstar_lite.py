@@ -19,6 +19,14 @@ Departures from the pseudocode, each for a reason:
   virtual vertex with the out-edges given to ``plan_shortest_path(start_edges=...)``. It
   has no in-edges, so replacing it by the next virtual start never invalidates another
   vertex's ``rhs``. ``graph.heuristic`` must accept it (``ObjectLattice`` takes poses).
+* Start edges cheaper than the heuristic: an edge (s_start, v) may cost less than
+  ``h(s_start, v)`` (a lattice's joining motion costs its true length, its heuristic is the
+  lattice metric). With ``slack = max(0, max_v h(s_start, v) - c(s_start, v))`` the keys
+  use ``h'(s) = max(0, h(s_start, s) - slack)``: a constant shift keeps {01'}'s keys
+  monotone along graph edges, and ``h'(v) <= c(s_start, v)`` on the start's edges, so h'
+  is consistent. Moving the start adds ``h(s_last, s_start) + slack`` to k_m (the new
+  start's slack; then every old key stays a lower bound), and an ``update_change`` that
+  lowers a start edge below ``h - slack`` raises the slack and k_m by the same amount.
 * Termination {10'} uses ``rhs(s_start) != g(s_start)`` (the basic version's test) rather
   than ``>``, so the start is always locally consistent when the path is read off; and it
   keeps expanding vertices whose first key component is within a relative ``1e-9`` of the
@@ -129,6 +137,7 @@ class DStarLite:
         self._seq = itertools.count()
         self.start: Hashable | None = None
         self._hcache: dict[Hashable, float] = {}
+        self._hslack = 0.0
         self._last: Hashable | None = None
         self._vstart: Hashable | None = None
         self._vedges: dict[Hashable, float] = {}
@@ -173,11 +182,17 @@ class DStarLite:
 
     # ----------------------------------------------------------- queue
     def _h(self, s: Hashable) -> float:
-        """h(s_start, s), memoised for the current start."""
+        """h'(s) = max(0, h(s_start, s) - slack), memoised for the current start."""
         h = self._hcache.get(s)
         if h is None:
-            h = self._hcache[s] = self.graph.heuristic(self.start, s)
+            h = self.graph.heuristic(self.start, s) - self._hslack
+            h = self._hcache[s] = h if h > 0.0 else 0.0
         return h
+
+    def _start_slack(self, start: Hashable, edges: dict[Hashable, float]) -> float:
+        """max(0, max_v h(start, v) - c(start, v)) over the virtual start's edges."""
+        h = self.graph.heuristic
+        return max((h(start, v) - c for v, c in edges.items()), default=0.0) if edges else 0.0
 
     def calculate_key(self, s: Hashable) -> Key:
         """{01'} [min(g, rhs) + h(s_start, s) + k_m; min(g, rhs)]."""
@@ -225,13 +240,22 @@ class DStarLite:
         self, start: Hashable, start_edges: Sequence[tuple[Hashable, float]] | None
     ) -> None:
         """Move the start, update k_m ({38'}-{39'}) and the virtual start's edges."""
+        edges: dict[Hashable, float] = {}
+        for v, c in start_edges or ():
+            if not (c >= 0):
+                raise ValueError(f"start edge cost must be >= 0, got {c!r} to {v!r}")
+            edges[v] = min(float(c), edges.get(v, INF))
+        slack = max(0.0, self._start_slack(start, edges))
         if self._last is None:
             self._last = start  # {29'}
         elif start != self._last:
-            self.km += self.graph.heuristic(self._last, start)  # {38'}
+            self.km += self.graph.heuristic(self._last, start) + slack  # {38'}
             self._last = start  # {39'}
-        if start != self.start:
+        elif slack > self._hslack:  # same start, cheaper edges: see the departures
+            self.km += slack - self._hslack
+        if start != self.start or slack != self._hslack:
             self._hcache = {}
+        self._hslack = slack
         self.start = start
         old_v = self._vstart
         if old_v is not None and (start_edges is None or old_v != start):
@@ -249,11 +273,6 @@ class DStarLite:
             return
         if start == self.goal:
             raise ValueError("a virtual start must not be the goal vertex")
-        edges: dict[Hashable, float] = {}
-        for v, c in start_edges:
-            if not (c >= 0):
-                raise ValueError(f"start edge cost must be >= 0, got {c!r} to {v!r}")
-            edges[v] = min(float(c), edges.get(v, INF))
         self._vstart, self._vedges = start, edges
         # rhs of the virtual start from its (possibly new) out-edges, {27'}-style
         self.rhs[start] = min((c + self.g.get(v, INF) for v, c in self._succ(start)), default=INF)
@@ -386,6 +405,12 @@ class DStarLite:
         self._over_out.setdefault(u, {})[v] = new_cost  # {42'}
         self._over_in.setdefault(v, {})[u] = new_cost
         self.stats.edge_updates += 1
+        if self._vstart is not None and u == self._vstart:
+            need = self.graph.heuristic(u, v) - new_cost  # keep h' <= c on the start's edges
+            if need > self._hslack:
+                self.km += need - self._hslack
+                self._hslack = need
+                self._hcache = {}
         if u == self.goal:
             return
         g_v = self.g.get(v, INF)

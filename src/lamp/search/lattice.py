@@ -23,19 +23,28 @@ linearly), which is the object motion the manipulation model is asked for. With 
 defaults (0.1 m, 16 headings = 0.39 rad) every primitive lies in the model's trained range
 (|dx|, |dy| <= 0.2 m in the object frame, |dtheta| <= 0.5 rad); the constructor checks it.
 
-Edge cost = translation length + ``w_rot * |dtheta|``. The default ``w_rot`` is the
-object's bounding radius (m/rad), so a rotation costs the arc length travelled by the
-object's farthest point: rotating a large object is as expensive as the sweep it causes.
+Edge cost = translation length + ``w_rot * |dtheta|`` (:func:`motion_cost`, the cost of any
+straight motion: lattice primitives and the motions that join a continuous pose to the
+lattice alike). The default ``w_rot`` is the object's bounding radius (m/rad), so a
+rotation costs the arc length travelled by the object's farthest point: rotating a large
+object is as expensive as the sweep it causes.
 
 One metric (:func:`lattice_metric`) is the heuristic, :meth:`ObjectLattice.distance` and the
 cost of the straight motions that join a continuous pose to the lattice: the octile norm of
 the translation in the lattice's (world) axes, ``max(|dx|, |dy|) + (sqrt(2) - 1) *
-min(|dx|, |dy|)``, plus ``w_rot * |wrap(dtheta)|``. Every primitive's cost equals the metric
-between its ends (an axis step costs ``step``, a diagonal ``step * sqrt(2)``, both the
-octile norm), and the metric is a sum of two norms-on-their-own-space, so it obeys the
-triangle inequality between any poses, lattice nodes or continuous ones. Hence it is a
-lower bound of every path cost (admissible), consistent on every edge, virtual start edges
-included, and D* Lite's key modifier may add it between successive starts. In free space
+min(|dx|, |dy|)``, plus ``w_rot * |wrap(dtheta)|``. With a ``landmark``, the translation
+term is ``max(octile, |D(a) - D(b)|)`` for the landmark potential ``D`` of
+:mod:`lamp.search.landmark` (2D geodesic distances from the landmark, 1-Lipschitz along
+every lattice edge), which accounts for the detours obstacles force. Every primitive's
+cost equals the metric between its ends (an axis step costs ``step``, a diagonal ``step *
+sqrt(2)``, both the octile norm, never below ``|D(u) - D(v)|``), and the metric is a max
+and a sum of pseudometrics, so it obeys the triangle inequality between any poses, lattice
+nodes or continuous ones. Hence it is a lower bound of every lattice path cost
+(admissible), consistent on every lattice edge, and D* Lite's key modifier may add it
+between successive starts. A joining motion costs its true length, which the metric may
+exceed (the octile norm by at most ``sqrt(4 - 2 sqrt(2)) - 1``, 8.2 %, of the
+translation): D* Lite lowers its heuristic from a virtual start by the largest such excess
+over the start's edges, which keeps it consistent there (``dstar_lite``). In free space
 it is exact between nodes ``(i, j, k)`` and ``(i', j', k')`` whose heading bins differ by
 at most ``max(|i - i'|, |j - j'|)`` (an octile path can turn one bin per step), which the
 Euclidean norm is not off the axes and diagonals: a search guided by it expands far fewer
@@ -48,7 +57,7 @@ computed lazily, in batches of one node's 26 primitives, and cached (``int8`` ar
 motion is checked once, from the lower node id, and both directions are filled in.
 
 Continuous poses join the lattice through :meth:`start_connections` (one free straight
-motion to a node within the model's range, costed by the metric); the goal node is among
+motion to a node within the model's range, costed by :func:`motion_cost`); the goal node is among
 them whenever it is within range, which gives the final approach to the exact goal pose
 for free.
 """
@@ -67,13 +76,12 @@ from lamp.geometry.object_kernels import motion_free_kernel, pose_free_kernel
 from lamp.geometry.object_space import ObjectSpace
 from lamp.manip.contacts import MOTION_RANGE
 from lamp.scene.model import Scene
+from lamp.search.landmark import OCTILE_MINOR, LandmarkPotential
 
 Node = int
 VirtualNode = tuple[float, float, float]
 
 TWO_PI = 2.0 * math.pi
-#: weight of the smaller axis displacement in the octile norm
-OCTILE_MINOR = math.sqrt(2.0) - 1.0
 
 #: Cached validity of nodes and edges: not checked yet, checked and blocked, checked and free.
 UNKNOWN, BLOCKED, FREE = 0, 1, 2
@@ -96,21 +104,28 @@ MODEL_MAX_TRANSLATION = MOTION_RANGE[0]
 MODEL_MAX_ROTATION = MOTION_RANGE[2]
 
 
+def motion_cost(a: ArrayLike, b: ArrayLike, w_rot: float) -> np.ndarray | float:
+    """Cost of the straight SE(2) motion between (..., 3) poses: ``hypot(dx, dy) + w_rot *
+    |wrap(dtheta)|`` (vectorised). Every primitive costs this, and it never exceeds
+    :func:`lattice_metric` (equal on primitives)."""
+    dt, dr = se2.pose_distance(a, b)
+    out = dt + w_rot * dr
+    return float(out) if np.ndim(out) == 0 else out
+
+
 def lattice_metric(
-    dx: ArrayLike, dy: ArrayLike, dtheta: ArrayLike, w_rot: float
+    dx: ArrayLike, dy: ArrayLike, dtheta: ArrayLike, w_rot: float, dpot: ArrayLike = 0.0
 ) -> np.ndarray | float:
-    """The lattice's metric for a displacement ``(dx, dy)`` (world axes) and a heading
-    change ``dtheta`` (any real, wrapped here): ``octile(dx, dy) + w_rot * |wrap(dtheta)|``
-    with ``octile = max(|dx|, |dy|) + (sqrt(2) - 1) * min(|dx|, |dy|)``. Vectorised; a
-    float for scalar arguments. Equals every primitive's cost, obeys the triangle
-    inequality, and is symmetric."""
+    """The lattice's metric for a displacement ``(dx, dy)`` (world axes), a heading change
+    ``dtheta`` (any real, wrapped here) and a landmark potential difference ``dpot``:
+    ``max(octile(dx, dy), |dpot|) + w_rot * |wrap(dtheta)|`` with ``octile = max(|dx|,
+    |dy|) + (sqrt(2) - 1) * min(|dx|, |dy|)``. Vectorised; a float for scalar arguments.
+    Equals every primitive's cost (``|dpot|`` never exceeds it along an edge), obeys the
+    triangle inequality, and is symmetric."""
     ax, ay = np.abs(dx), np.abs(dy)
     d = np.abs(dtheta) % TWO_PI
-    out = (
-        np.maximum(ax, ay)
-        + OCTILE_MINOR * np.minimum(ax, ay)
-        + w_rot * np.minimum(d, TWO_PI - d)
-    )
+    trans = np.maximum(np.maximum(ax, ay) + OCTILE_MINOR * np.minimum(ax, ay), np.abs(dpot))
+    out = trans + w_rot * np.minimum(d, TWO_PI - d)
     return float(out) if np.ndim(out) == 0 else out
 
 
@@ -210,6 +225,9 @@ class ObjectLattice:
         max_translation, max_rotation: the model's range; primitives and start
             connections stay within it (|dx|, |dy| <= max_translation in the object frame,
             |dtheta| <= max_rotation).
+        landmark: (x, y) of a landmark (LAMP: the object's start); the metric then also
+            bounds the translation by the landmark potential (:mod:`lamp.search.landmark`),
+            which sees the detours obstacles force. None: the octile metric alone.
     """
 
     def __init__(
@@ -221,6 +239,7 @@ class ObjectLattice:
         w_rot: float | None = None,
         max_translation: float = MODEL_MAX_TRANSLATION,
         max_rotation: float = MODEL_MAX_ROTATION,
+        landmark: ArrayLike | None = None,
     ) -> None:
         anchor = np.asarray(anchor, dtype=float)
         if anchor.shape != (3,) or not np.all(np.isfinite(anchor)):
@@ -290,6 +309,13 @@ class ObjectLattice:
         #: statistics: poses and motions checked so far
         self.n_pose_checks = 0
         self.n_motion_checks = 0
+        if landmark is not None:
+            landmark = np.asarray(landmark, dtype=float).reshape(-1)[:2]
+            if landmark.shape != (2,) or not np.all(np.isfinite(landmark)):
+                raise ValueError(f"landmark must be a finite (x, y), got {landmark!r}")
+        self.landmark = None if landmark is None else (float(landmark[0]), float(landmark[1]))
+        self._potential: LandmarkPotential | None = None
+        self._pot_values: list[float] | None = None
 
     @classmethod
     def from_scene(
@@ -442,6 +468,35 @@ class ObjectLattice:
         return se2.relative(self.pose(u), self.pose(v))
 
     # ----------------------------------------------------------- heuristic
+    @property
+    def potential(self) -> LandmarkPotential | None:
+        """The landmark potential (:mod:`lamp.search.landmark`) over this lattice's
+        positions, built on first use; None without a landmark."""
+        if self._potential is None and self.landmark is not None:
+            self._potential = LandmarkPotential(
+                self.space,
+                (self.anchor[0] + self.i_min * self.step, self.anchor[1] + self.j_min * self.step),
+                self.step, (self.n_i, self.n_j), self.landmark,
+                radius=self.max_translation * math.sqrt(2.0),
+            )
+            self._pot_values = self._potential.values.tolist()
+        return self._potential
+
+    def _pot(self, u: Node | VirtualNode, x: float, y: float) -> float:
+        """The landmark potential of a node (its position's value) or of a pose."""
+        if isinstance(u, (int, np.integer)):
+            return self._pot_values[int(u) // self.n_headings]  # type: ignore[index]
+        return self.potential.at(x, y)  # type: ignore[union-attr]
+
+    def potentials(self, poses: ArrayLike) -> np.ndarray:
+        """(...,) landmark potentials of (..., 3) poses (zeros without a landmark)."""
+        p = np.asarray(poses, dtype=float)
+        if self.potential is None:
+            return np.zeros(p.shape[:-1])
+        flat = p.reshape(-1, 3)
+        at = self.potential.at
+        return np.array([at(float(x), float(y)) for x, y in flat[:, :2]]).reshape(p.shape[:-1])
+
     def heuristic(self, u: Node | VirtualNode, v: Node | VirtualNode) -> float:
         """:func:`lattice_metric` between nodes or poses: a lower bound of every path cost
         from ``u`` to ``v``, consistent on every edge, with the triangle inequality (scalar
@@ -452,14 +507,22 @@ class ObjectLattice:
         d = abs(at - bt) % TWO_PI
         if dx < dy:
             dx, dy = dy, dx
-        return dx + OCTILE_MINOR * dy + self.w_rot * min(d, TWO_PI - d)
+        t = dx + OCTILE_MINOR * dy
+        if self.landmark is not None:
+            if self._pot_values is None:
+                self.potential  # noqa: B018 (builds it)
+            dp = abs(self._pot(u, ax, ay) - self._pot(v, bx, by))
+            if dp > t:
+                t = dp
+        return t + self.w_rot * min(d, TWO_PI - d)
 
     def distance(self, a: ArrayLike, b: ArrayLike) -> np.ndarray | float:
         """:func:`lattice_metric` between (..., 3) poses (vectorised)."""
         a = np.asarray(a, dtype=float)
         b = np.asarray(b, dtype=float)
+        dpot = 0.0 if self.landmark is None else self.potentials(a) - self.potentials(b)
         return lattice_metric(
-            a[..., 0] - b[..., 0], a[..., 1] - b[..., 1], a[..., 2] - b[..., 2], self.w_rot
+            a[..., 0] - b[..., 0], a[..., 1] - b[..., 1], a[..., 2] - b[..., 2], self.w_rot, dpot
         )
 
     # ---------------------------------------------------- continuous poses
@@ -551,7 +614,7 @@ class ObjectLattice:
         free = space.motions_free(np.broadcast_to(pose, targets.shape), targets)
         self.n_motion_checks += len(free)
         cand, targets = cand[free], targets[free]
-        cost = self.distance(pose, targets)
+        cost = motion_cost(pose, targets, self.w_rot)
         order = np.argsort(cost, kind="stable")
         return [(int(cand[o]), float(cost[o])) for o in order]
 
@@ -564,7 +627,7 @@ class ObjectLattice:
             return None
         if not self._tolerant_space(tolerance).motion_free(a, b):
             return None
-        return float(self.distance(a, b))
+        return float(motion_cost(a, b, self.w_rot))
 
     def _tolerant_space(self, tolerance: float) -> ObjectSpace:
         if tolerance == 0.0:
