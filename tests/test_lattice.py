@@ -15,7 +15,8 @@ from scipy.sparse.csgraph import dijkstra
 from lamp.geometry import se2
 from lamp.geometry.object_space import ObjectSpace
 from lamp.scene.model import Circle, Obstacle, Rectangle, Scene, SceneObject
-from lamp.search.lattice import PRIMITIVES, ObjectLattice, lattice_metric, motion_cost
+from lamp.search.lattice import PRIMITIVES, ObjectLattice
+from lamp.search.metric import lattice_metric, motion_cost
 
 OBSTACLES = (
     Obstacle(Circle(0.15), (0.7, 0.6, 0.0)),

@@ -43,9 +43,8 @@ import shapely
 
 from lamp.geometry.object_space import ObjectSpace, inflated_geometry
 from lamp.geometry.shapes import obstacle_geometry
+from lamp.search.metric import OCTILE_MINOR
 
-#: weight of the smaller axis displacement in the octile norm
-OCTILE_MINOR = math.sqrt(2.0) - 1.0
 #: shrinks the inscribed disk a little so that rounding never blocks a free position
 _RADIUS_SLACK = 1e-6
 

@@ -29,26 +29,12 @@ lattice alike). The default ``w_rot`` is the object's bounding radius (m/rad), s
 rotation costs the arc length travelled by the object's farthest point: rotating a large
 object is as expensive as the sweep it causes.
 
-One metric (:func:`lattice_metric`) is the heuristic, :meth:`ObjectLattice.distance` and the
-cost of the straight motions that join a continuous pose to the lattice: the octile norm of
-the translation in the lattice's (world) axes, ``max(|dx|, |dy|) + (sqrt(2) - 1) *
-min(|dx|, |dy|)``, plus ``w_rot * |wrap(dtheta)|``. With a ``landmark``, the translation
-term is ``max(octile, |D(a) - D(b)|)`` for the landmark potential ``D`` of
-:mod:`lamp.search.landmark` (2D geodesic distances from the landmark, 1-Lipschitz along
-every lattice edge), which accounts for the detours obstacles force. Every primitive's
-cost equals the metric between its ends (an axis step costs ``step``, a diagonal ``step *
-sqrt(2)``, both the octile norm, never below ``|D(u) - D(v)|``), and the metric is a max
-and a sum of pseudometrics, so it obeys the triangle inequality between any poses, lattice
-nodes or continuous ones. Hence it is a lower bound of every lattice path cost
-(admissible), consistent on every lattice edge, and D* Lite's key modifier may add it
-between successive starts. A joining motion costs its true length, which the metric may
-exceed (the octile norm by at most ``sqrt(4 - 2 sqrt(2)) - 1``, 8.2 %, of the
-translation): D* Lite lowers its heuristic from a virtual start by the largest such excess
-over the start's edges, which keeps it consistent there (``dstar_lite``). In free space
-it is exact between nodes ``(i, j, k)`` and ``(i', j', k')`` whose heading bins differ by
-at most ``max(|i - i'|, |j - j'|)`` (an octile path can turn one bin per step), which the
-Euclidean norm is not off the axes and diagonals: a search guided by it expands far fewer
-vertices on long routes.
+The heuristic and :meth:`ObjectLattice.distance` are the lattice metric of
+:mod:`lamp.search.metric` (the octile norm of the translation, strengthened by a landmark
+potential when the lattice has a ``landmark``, plus ``w_rot * |wrap(dtheta)|``): equal to
+every primitive's cost, with the triangle inequality between any poses, hence admissible
+and consistent on every lattice edge; see that module for the guarantees and for how D*
+Lite stays consistent on the (cheaper) joining motions.
 
 A node is valid when its pose is free (``ObjectSpace.pose_free``); an edge is valid when
 both ends are valid and its swept motion is free (``ObjectSpace.motions_free``). Both are
@@ -76,12 +62,12 @@ from lamp.geometry.object_kernels import motion_free_kernel, pose_free_kernel
 from lamp.geometry.object_space import ObjectSpace
 from lamp.manip.contacts import MOTION_RANGE
 from lamp.scene.model import Scene
-from lamp.search.landmark import OCTILE_MINOR, LandmarkPotential
+from lamp.search.landmark import LandmarkPotential
+from lamp.search.metric import OCTILE_MINOR, TWO_PI, lattice_metric, motion_cost
 
 Node = int
 VirtualNode = tuple[float, float, float]
 
-TWO_PI = 2.0 * math.pi
 
 #: Cached validity of nodes and edges: not checked yet, checked and blocked, checked and free.
 UNKNOWN, BLOCKED, FREE = 0, 1, 2
@@ -102,31 +88,6 @@ _REVERSE = tuple(PRIMITIVES.index((-di, -dj, -dk)) for di, dj, dk in PRIMITIVES)
 #: the manipulation model's trained range (object frame): |dx|, |dy| and |dtheta|
 MODEL_MAX_TRANSLATION = MOTION_RANGE[0]
 MODEL_MAX_ROTATION = MOTION_RANGE[2]
-
-
-def motion_cost(a: ArrayLike, b: ArrayLike, w_rot: float) -> np.ndarray | float:
-    """Cost of the straight SE(2) motion between (..., 3) poses: ``hypot(dx, dy) + w_rot *
-    |wrap(dtheta)|`` (vectorised). Every primitive costs this, and it never exceeds
-    :func:`lattice_metric` (equal on primitives)."""
-    dt, dr = se2.pose_distance(a, b)
-    out = dt + w_rot * dr
-    return float(out) if np.ndim(out) == 0 else out
-
-
-def lattice_metric(
-    dx: ArrayLike, dy: ArrayLike, dtheta: ArrayLike, w_rot: float, dpot: ArrayLike = 0.0
-) -> np.ndarray | float:
-    """The lattice's metric for a displacement ``(dx, dy)`` (world axes), a heading change
-    ``dtheta`` (any real, wrapped here) and a landmark potential difference ``dpot``:
-    ``max(octile(dx, dy), |dpot|) + w_rot * |wrap(dtheta)|`` with ``octile = max(|dx|,
-    |dy|) + (sqrt(2) - 1) * min(|dx|, |dy|)``. Vectorised; a float for scalar arguments.
-    Equals every primitive's cost (``|dpot|`` never exceeds it along an edge), obeys the
-    triangle inequality, and is symmetric."""
-    ax, ay = np.abs(dx), np.abs(dy)
-    d = np.abs(dtheta) % TWO_PI
-    trans = np.maximum(np.maximum(ax, ay) + OCTILE_MINOR * np.minimum(ax, ay), np.abs(dpot))
-    out = trans + w_rot * np.minimum(d, TWO_PI - d)
-    return float(out) if np.ndim(out) == 0 else out
 
 
 @numba.njit(cache=True)
