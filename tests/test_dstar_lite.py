@@ -258,6 +258,27 @@ def test_replan_after_penalty_reuses_search():
     assert dstar.cost(10, 11) == pytest.approx(1e4 + 1.0)
 
 
+def test_start_edges_cheaper_than_the_heuristic():
+    """A virtual start's edge lowered below the heuristic: the heuristic from the start must
+    drop with it (and k_m rise), or the vertex behind that edge, queued with a key above the
+    start's, is never expanded and the old, dearer path is returned."""
+    pts = np.array([[1.0, 0.0], [9.5, 0.0], [10.0, 0.0]])  # A, C, goal
+    graph = RandomGraph(pts, {(0, 2): 9.0, (1, 2): 1.0})
+    vs = ("virtual", 0.0, 0.0)
+    dstar = DStarLite(graph)
+    dstar.initialize(2)
+    assert dstar.plan_shortest_path(vs, [(0, 1.0), (1, 9.5)]) == [vs, 0, 2]
+    assert dstar.path_cost() == pytest.approx(10.0)
+    dstar.update_change(vs, 1, 0.5)  # h(vs, C) = 9.5
+    assert dstar.plan_shortest_path(vs, [(0, 1.0), (1, 9.5)]) == [vs, 1, 2]
+    assert dstar.path_cost() == pytest.approx(1.5)
+    # the same from the start: edges given cheaper than the heuristic
+    fresh = DStarLite(graph)
+    fresh.initialize(2)
+    assert fresh.plan_shortest_path(vs, [(0, 1.0), (1, 0.5)]) == [vs, 1, 2]
+    assert fresh.path_cost() == pytest.approx(1.5)
+
+
 def test_bad_calls():
     graph = chain_graph(3)
     dstar = DStarLite(graph)

@@ -25,15 +25,17 @@ Departures from the pseudocode, each for a reason:
   use ``h'(s) = max(0, h(s_start, s) - slack)``: a constant shift keeps {01'}'s keys
   monotone along graph edges, and ``h'(v) <= c(s_start, v)`` on the start's edges, so h'
   is consistent. Moving the start adds ``h(s_last, s_start) + slack`` to k_m (the new
-  start's slack; then every old key stays a lower bound), and an ``update_change`` that
-  lowers a start edge below ``h - slack`` raises the slack and k_m by the same amount.
+  start's slack; then every old key stays a lower bound). Replanning from the same start
+  recomputes the slack with the costs ``update_change`` gave its edges; when it grows,
+  k_m grows by as much.
 * Termination {10'} uses ``rhs(s_start) != g(s_start)`` (the basic version's test) rather
   than ``>``, so the start is always locally consistent when the path is read off; and it
   keeps expanding vertices whose first key component is within a relative ``1e-9`` of the
   start's. On a lattice whose heuristic is exact along straight paths (the octile metric
   of ``ObjectLattice``) every vertex of a straight shortest path has exactly the start's
-  first key component, so floating-point rounding alone decides whether it is expanded; an inconsistent one left behind breaks the path read
-  off by {34'} (found by ``benchmarks/bench_search.py``, now a regression test).
+  first key component, so floating-point rounding alone decides whether it is expanded;
+  an inconsistent one left behind breaks the path read off by {34'} (found by
+  ``benchmarks/bench_search.py``, now a regression test).
 * ``UpdateVertex`` ({21'}, {28'}) is called only for vertices whose ``rhs`` changed: for
   the others g, rhs and queue membership are unchanged and a queued key, being a lower
   bound, stays valid ({14'} refreshes it). This saves most calls on a 26-connected lattice.
@@ -68,7 +70,8 @@ class Graph(Protocol):
 
     ``successors(u)`` / ``predecessors(v)`` list the finite-cost edges ``(u -> v)`` as
     ``(v, cost)`` / ``(u, cost)`` pairs; ``cost(u, v)`` is ``inf`` when there is no edge;
-    ``heuristic(a, b)`` is a consistent lower bound of the cost from ``a`` to ``b``.
+    ``heuristic(a, b)`` is a consistent lower bound of the cost from ``a`` to ``b`` with the
+    triangle inequality (a virtual start's edges may cost less: see the departures).
     """
 
     def successors(self, u: Hashable) -> Iterable[tuple[Hashable, float]]: ...
@@ -190,7 +193,7 @@ class DStarLite:
         return h
 
     def _start_slack(self, start: Hashable, edges: dict[Hashable, float]) -> float:
-        """max(0, max_v h(start, v) - c(start, v)) over the virtual start's edges."""
+        """max_v h(start, v) - c(start, v) over the virtual start's edges ``{v: c}``."""
         h = self.graph.heuristic
         return max((h(start, v) - c for v, c in edges.items()), default=0.0) if edges else 0.0
 
@@ -245,7 +248,9 @@ class DStarLite:
             if not (c >= 0):
                 raise ValueError(f"start edge cost must be >= 0, got {c!r} to {v!r}")
             edges[v] = min(float(c), edges.get(v, INF))
-        slack = max(0.0, self._start_slack(start, edges))
+        # the same virtual start keeps the costs update_change gave its edges
+        kept = self._over_out.get(start, {}) if edges and start == self._vstart else {}
+        slack = max(0.0, self._start_slack(start, {v: kept.get(v, c) for v, c in edges.items()}))
         if self._last is None:
             self._last = start  # {29'}
         elif start != self._last:
@@ -405,12 +410,6 @@ class DStarLite:
         self._over_out.setdefault(u, {})[v] = new_cost  # {42'}
         self._over_in.setdefault(v, {})[u] = new_cost
         self.stats.edge_updates += 1
-        if self._vstart is not None and u == self._vstart:
-            need = self.graph.heuristic(u, v) - new_cost  # keep h' <= c on the start's edges
-            if need > self._hslack:
-                self.km += need - self._hslack
-                self._hslack = need
-                self._hcache = {}
         if u == self.goal:
             return
         g_v = self.g.get(v, INF)
