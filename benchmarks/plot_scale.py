@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 
 import matplotlib
@@ -24,12 +25,18 @@ AXES = {"size_m": "map side (m)", "robots": "robots", "objects": "objects",
         "density": "pillars per m²"}
 
 
+def fail(message: str) -> None:
+    """Bad input: the message on stderr, exit status 2, nothing written."""
+    print(f"error: {message}", file=sys.stderr)
+    raise SystemExit(2)
+
+
 def swept(rows: list[dict], path: Path) -> str:
     """The one parameter that varies across ``rows``."""
     varying = [k for k in AXES if len({r.get(k) for r in rows}) > 1]
     if len(varying) != 1:
-        raise SystemExit(f"{path}: expected one varying parameter of {list(AXES)}, "
-                         f"got {varying or 'none'}")
+        fail(f"{path}: expected one varying parameter of {list(AXES)}, "
+             f"got {varying or 'none'}")
     return varying[0]
 
 
@@ -47,9 +54,12 @@ def main() -> None:
     args = ap.parse_args()
     data = []
     for path in args.sweeps:
-        rows = json.loads(path.read_text())
-        if not rows:
-            raise SystemExit(f"{path}: no points")
+        try:
+            rows = json.loads(path.read_text())
+        except (OSError, ValueError) as exc:
+            fail(f"{path}: {exc}")
+        if not isinstance(rows, list) or not rows:
+            fail(f"{path}: expected a non-empty list of bench_scale.py points")
         key = swept(rows, path)
         data.append((path, key, sorted(rows, key=lambda r: r[key])))
     fig, axes = plt.subplots(2, len(data), figsize=(3.6 * len(data), 5.4), squeeze=False)
