@@ -50,6 +50,7 @@ for free.
 
 from __future__ import annotations
 
+import array
 import math
 from collections.abc import Sequence
 
@@ -276,7 +277,7 @@ class ObjectLattice:
                 raise ValueError(f"landmark must be a finite (x, y), got {landmark!r}")
         self.landmark = None if landmark is None else (float(landmark[0]), float(landmark[1]))
         self._potential: LandmarkPotential | None = None
-        self._pot_values: list[float] | None = None
+        self._pot_values: array.array | None = None
 
     @classmethod
     def from_scene(
@@ -440,7 +441,8 @@ class ObjectLattice:
                 self.step, (self.n_i, self.n_j), self.landmark,
                 radius=self.max_translation * math.sqrt(2.0),
             )
-            self._pot_values = self._potential.values.tolist()
+            # indexed per heuristic call: plain floats, 8 bytes each
+            self._pot_values = array.array("d", self._potential.values)
         return self._potential
 
     def _pot(self, u: Node | VirtualNode, x: float, y: float) -> float:
