@@ -43,9 +43,9 @@ computed lazily, in batches of one node's 26 primitives, and cached (``int8`` ar
 motion is checked once, from the lower node id, and both directions are filled in.
 
 Continuous poses join the lattice through :meth:`start_connections` (one free straight
-motion to a node within the model's range, costed by :func:`motion_cost`); the goal node is among
-them whenever it is within range, which gives the final approach to the exact goal pose
-for free.
+motion to a node within the model's range, costed by :func:`motion_cost`); the goal node
+is among them whenever it is within range, which gives the final approach to the exact
+goal pose for free.
 """
 
 from __future__ import annotations
@@ -68,7 +68,6 @@ from lamp.search.metric import OCTILE_MINOR, TWO_PI, lattice_metric, motion_cost
 
 Node = int
 VirtualNode = tuple[float, float, float]
-
 
 #: Cached validity of nodes and edges: not checked yet, checked and blocked, checked and free.
 UNKNOWN, BLOCKED, FREE = 0, 1, 2
