@@ -93,8 +93,9 @@ def test_random_graphs_match_dijkstra(data, n_ops):
     dstar = DStarLite(graph)
     dstar.initialize(goal)
     start = int(rng.integers(n))
+    virtual = None  # the current virtual start: (vertex, its edges, {target: current cost})
     for _ in range(n_ops):
-        op = rng.integers(5)
+        op = rng.integers(6)
         if op == 0 and costs:  # change a cost (increase or decrease, keep >= base length)
             u, v = list(costs)[rng.integers(len(costs))]
             new = graph.edges[(u, v)] * float(rng.choice([0.5, 1.0, 2.0, 10.0])) + 0.01
@@ -112,18 +113,35 @@ def test_random_graphs_match_dijkstra(data, n_ops):
         elif op == 3:  # start moves to another vertex
             start = int(rng.integers(n))
         dist = distances_to_goal(n, costs, goal)
-        if op == 4:  # a virtual start (a point) with out-edges to some vertices
+        if op == 5 and virtual is not None and virtual[2]:
+            # lower one edge of the same virtual start below the heuristic, then replan
+            vstart, base_vedges, current = virtual
+            t = list(current)[rng.integers(len(current))]
+            current[t] = 0.2 * graph.heuristic(vstart, t)
+            dstar.update_change(vstart, t, current[t])
+            path = dstar.plan_shortest_path(vstart, list(base_vedges))
+            expected = min((c + dist[v] for v, c in current.items()), default=INF)
+            s = vstart
+        elif op in (4, 5):  # a virtual start (a point) with out-edges to some vertices,
+            # some costing more than the heuristic, some less (the heuristic is then
+            # lowered by the largest shortfall)
             p = rng.uniform(0, 10, size=2)
             vstart = ("virtual", float(p[0]), float(p[1]))
             targets = rng.choice(n, size=int(rng.integers(0, min(n, 4) + 1)), replace=False)
-            vedges = [(int(t), float(np.hypot(*(p - graph.pts[t]))) * 1.2 + 0.01) for t in targets]
-            path = dstar.plan_shortest_path(vstart, vedges)
-            expected = min((c + dist[t] for t, c in vedges), default=INF)
+            base_vedges = [
+                (int(t), float(np.hypot(*(p - graph.pts[t]))) * float(rng.choice([0.3, 0.9, 1.2]))
+                 + 0.01)
+                for t in targets
+            ]
+            path = dstar.plan_shortest_path(vstart, base_vedges)
+            expected = min((c + dist[t] for t, c in base_vedges), default=INF)
+            virtual = (vstart, base_vedges, dict(base_vedges))
             s = vstart
         else:
             path = dstar.plan_shortest_path(start)
             expected = dist[start]
             s = start
+            virtual = None
         if expected == INF:
             assert path == [] and dstar.status is SearchStatus.NO_PATH
             assert dstar.path_cost() == INF
@@ -238,6 +256,27 @@ def test_replan_after_penalty_reuses_search():
     assert second[:7] == [5, 6, 7, 8, 9, 10, 30] and dstar.path_cost() == pytest.approx(27.0)
     assert dstar.stats.last_expansions < full
     assert dstar.cost(10, 11) == pytest.approx(1e4 + 1.0)
+
+
+def test_start_edges_cheaper_than_the_heuristic():
+    """A virtual start's edge lowered below the heuristic: the heuristic from the start must
+    drop with it (and k_m rise), or the vertex behind that edge, queued with a key above the
+    start's, is never expanded and the old, dearer path is returned."""
+    pts = np.array([[1.0, 0.0], [9.5, 0.0], [10.0, 0.0]])  # A, C, goal
+    graph = RandomGraph(pts, {(0, 2): 9.0, (1, 2): 1.0})
+    vs = ("virtual", 0.0, 0.0)
+    dstar = DStarLite(graph)
+    dstar.initialize(2)
+    assert dstar.plan_shortest_path(vs, [(0, 1.0), (1, 9.5)]) == [vs, 0, 2]
+    assert dstar.path_cost() == pytest.approx(10.0)
+    dstar.update_change(vs, 1, 0.5)  # h(vs, C) = 9.5
+    assert dstar.plan_shortest_path(vs, [(0, 1.0), (1, 9.5)]) == [vs, 1, 2]
+    assert dstar.path_cost() == pytest.approx(1.5)
+    # the same from the start: edges given cheaper than the heuristic
+    fresh = DStarLite(graph)
+    fresh.initialize(2)
+    assert fresh.plan_shortest_path(vs, [(0, 1.0), (1, 0.5)]) == [vs, 1, 2]
+    assert fresh.path_cost() == pytest.approx(1.5)
 
 
 def test_bad_calls():

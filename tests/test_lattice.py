@@ -16,6 +16,7 @@ from lamp.geometry import se2
 from lamp.geometry.object_space import ObjectSpace
 from lamp.scene.model import Circle, Obstacle, Rectangle, Scene, SceneObject
 from lamp.search.lattice import PRIMITIVES, ObjectLattice
+from lamp.search.metric import lattice_metric, motion_cost
 
 OBSTACLES = (
     Obstacle(Circle(0.15), (0.7, 0.6, 0.0)),
@@ -104,17 +105,123 @@ def test_heuristic_admissible_and_consistent(lattice):
             assert h <= c + lattice.heuristic(v, lattice.goal_node) + 1e-9
 
 
-@settings(max_examples=200, deadline=None)
+def _all_pairs_reference(lat: ObjectLattice, sources: np.ndarray) -> np.ndarray:
+    """Plain Dijkstra over the whole lattice (scipy), from each of ``sources``."""
+    rows, cols, vals = [], [], []
+    for u in range(lat.n_nodes):
+        for v, c in lat.successors(u):
+            rows.append(u)
+            cols.append(v)
+            vals.append(c)
+    mat = csr_matrix((vals, (rows, cols)), shape=(lat.n_nodes, lat.n_nodes))
+    return dijkstra(mat, indices=sources)
+
+
+def _random_lattice(seed: int) -> ObjectLattice:
+    rng = np.random.default_rng(seed)
+    obstacles = [
+        Obstacle(Circle(float(rng.uniform(0.03, 0.12))), (*rng.uniform(0, 1.0, 2), 0.0))
+        for _ in range(int(rng.integers(0, 4)))
+    ]
+    space = ObjectSpace(Rectangle((0.16, 0.08)), (1.0, 0.8), obstacles)
+    anchor = (*rng.uniform(0.1, 0.7, 2), float(rng.uniform(-math.pi, math.pi)))
+    w_rot = float(rng.choice([0.0, 0.05, 0.3]))
+    landmark = rng.uniform([0.0, 0.0], [1.0, 0.8]) if rng.random() < 0.5 else None
+    return ObjectLattice(space, anchor, step=0.1, n_headings=8, max_rotation=0.8, w_rot=w_rot,
+                         landmark=landmark)
+
+
+@settings(max_examples=12, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1))
+def test_metric_is_a_consistent_lower_bound_on_random_maps(seed):
+    """Against a plain Dijkstra on small random maps (with and without a landmark): the
+    heuristic between any two nodes never exceeds the cheapest path cost; it is consistent
+    on every edge (h(u, t) <= c(u, v) + h(v, t)) and every edge costs exactly the metric
+    between its ends. A start connection costs its motion, at most the metric; lowered by
+    the start's slack (the largest excess over its connections, as D* Lite does) the
+    heuristic from a continuous pose is consistent on those edges and admissible."""
+    lat = _random_lattice(seed)
+    rng = np.random.default_rng(seed + 1)
+    valid = np.nonzero(lat.validate_all_nodes())[0]
+    if len(valid) == 0:
+        return
+    targets = rng.choice(valid, size=min(4, len(valid)), replace=False)
+    dist = _all_pairs_reference(lat, targets)  # edge costs are symmetric: dist[t, u] = d(u, t)
+    for row, t in enumerate(targets):
+        t = int(t)
+        reach = valid[np.isfinite(dist[row, valid])]
+        h = np.array([lat.heuristic(int(u), t) for u in reach])
+        assert np.all(h <= dist[row, reach] + 1e-9)
+        for u in reach[:: max(1, len(reach) // 60)]:
+            for v, c in lat.successors(int(u)):
+                assert c == pytest.approx(lat.heuristic(int(u), v), abs=1e-12)
+                assert lat.heuristic(int(u), t) <= c + lat.heuristic(v, t) + 1e-9
+        for _ in range(5):
+            p = rng.uniform([0.05, 0.05, -math.pi], [0.95, 0.75, math.pi])
+            pose = (float(p[0]), float(p[1]), float(p[2]))
+            conns = lat.start_connections(pose)
+            slack = max((lat.heuristic(pose, v) - c for v, c in conns), default=0.0)
+            for v, c in conns:
+                assert c == pytest.approx(motion_cost(pose, lat.pose(v), lat.w_rot), abs=1e-12)
+                assert c <= lat.heuristic(pose, v) + 1e-12
+                assert lat.heuristic(pose, t) - slack <= c + lat.heuristic(v, t) + 1e-9
+            best = min((c + dist[row, v] for v, c in conns), default=math.inf)
+            assert lat.heuristic(pose, t) - slack <= best + 1e-9
+            if lat.landmark is None:  # the octile norm's excess over the motion's length
+                assert slack <= (math.sqrt(4 - 2 * math.sqrt(2)) - 1) * 0.2 * math.sqrt(2) + 1e-9
+
+
+@settings(max_examples=8, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1))
+def test_metric_is_exact_in_free_space(seed):
+    """With no obstacles, the metric equals the cheapest lattice path between interior
+    nodes whose heading bins differ by at most max(|di|, |dj|) (the guarantee that makes
+    the search cheap on long routes; the Euclidean norm is below it off the diagonals)."""
+    rng = np.random.default_rng(seed)
+    space = ObjectSpace(Circle(0.05), (1.2, 1.0), [])
+    anchor = (*rng.uniform(0.1, 1.0, 2), float(rng.uniform(-math.pi, math.pi)))
+    lat = ObjectLattice(space, anchor, step=0.1, n_headings=8, max_rotation=0.8,
+                        w_rot=float(rng.uniform(0.0, 0.3)))
+    poses = lat.poses(np.arange(lat.n_nodes))
+    interior = np.nonzero((poses[:, 0] >= 0.06) & (poses[:, 0] <= 1.14)
+                          & (poses[:, 1] >= 0.06) & (poses[:, 1] <= 0.94))[0]
+    sources = rng.choice(interior, size=3, replace=False)
+    dist = _all_pairs_reference(lat, sources)
+    n_off_axis = 0
+    for row, s in enumerate(sources):
+        si, sj, sk = lat.ijk(int(s))
+        for u in interior:
+            i, j, k = lat.ijk(int(u))
+            dk = min((k - sk) % 8, (sk - k) % 8)
+            if dk <= max(abs(i - si), abs(j - sj)):
+                assert lat.heuristic(int(s), int(u)) == pytest.approx(dist[row, u], abs=1e-9)
+                n_off_axis += i != si and j != sj and abs(i - si) != abs(j - sj)
+    assert n_off_axis > 0
+
+
+@settings(max_examples=300, deadline=None)
 @given(
-    st.lists(st.tuples(st.floats(0, 2), st.floats(0, 2), st.floats(-7, 7)), min_size=3, max_size=3)
+    st.lists(st.tuples(st.floats(-3, 3), st.floats(-3, 3), st.floats(-7, 7)), min_size=3,
+             max_size=3),
+    st.floats(0.0, 1.0),
 )
-def test_heuristic_triangle_inequality_on_poses(poses):
+def test_metric_triangle_inequality_and_vectorised_agree(poses, w_rot):
+    """The metric obeys the triangle inequality and symmetry between continuous poses (D*
+    Lite's key modifier relies on it), and the scalar heuristic equals ``distance`` and
+    ``lattice_metric``."""
     space = ObjectSpace(Circle(0.1), (2.0, 2.0), [])
-    lat = ObjectLattice(space, (1.0, 1.0, 0.0))
+    lat = ObjectLattice(space, (1.0, 1.0, 0.0), w_rot=w_rot)
     a, b, c = poses
     assert lat.heuristic(a, c) <= lat.heuristic(a, b) + lat.heuristic(b, c) + 1e-9
-    assert lat.heuristic(a, b) == pytest.approx(lat.heuristic(b, a))
-    assert lat.heuristic(a, b) == pytest.approx(float(lat.distance(a, b)))
+    assert lat.heuristic(a, b) == pytest.approx(lat.heuristic(b, a), abs=1e-12)
+    assert lat.heuristic(a, b) == pytest.approx(float(lat.distance(a, b)), abs=1e-12)
+    d = np.subtract(a, b)
+    assert lat.heuristic(a, b) == pytest.approx(lattice_metric(d[0], d[1], d[2], w_rot),
+                                                abs=1e-12)
+    # never below the Euclidean SE(2) metric, at most sqrt(4 - 2 sqrt 2) above it
+    dt, dr = se2.pose_distance(a, b)
+    assert dt + w_rot * dr - 1e-9 <= lat.heuristic(a, b)
+    assert lat.heuristic(a, b) <= math.sqrt(4 - 2 * math.sqrt(2)) * dt + w_rot * dr + 1e-9
 
 
 def test_start_connections(lattice):
@@ -131,7 +238,7 @@ def test_start_connections(lattice):
             pv = lattice.pose(v)
             assert lattice.in_model_range(pose, pv)
             assert space.pose_free(pv) and space.motion_free(pose, pv)
-            assert c == pytest.approx(float(lattice.distance(pose, pv)))
+            assert c == pytest.approx(float(motion_cost(pose, pv, lattice.w_rot)))
         # completeness: every in-range node with a free motion is listed
         listed = {v for v, _ in conns}
         for v in lattice._candidates(pose, 0.3, 3):
@@ -147,7 +254,8 @@ def test_start_connections(lattice):
     goal = lattice.pose(lattice.goal_node)
     near = goal + np.array([0.03, -0.05, 0.1])
     assert lattice.goal_node in {v for v, _ in lattice.start_connections(near)}
-    assert lattice.connection_cost(near, goal) == pytest.approx(float(lattice.distance(near, goal)))
+    assert lattice.connection_cost(near, goal) == pytest.approx(
+        float(motion_cost(near, goal, lattice.w_rot)))
     assert lattice.connection_cost(near, goal + np.array([0.3, 0.0, 0.0])) is None
 
 

@@ -69,10 +69,12 @@ JOIN_TOLERANCES = (0.0, 0.01, 0.02)
 
 def goal_lattice(task: ManipulationTask) -> ObjectLattice:
     """The object lattice both LAMP planners search: anchored at the object's goal, with
-    the task's object space and the configured step and heading count."""
+    the task's object space and the configured step and heading count, and the object's
+    start as the heuristic's landmark."""
     cfg = task.config
     return RefinedLattice(
-        task.object_space, task.goal, step=cfg.lattice_step, n_headings=cfg.n_headings
+        task.object_space, task.goal, step=cfg.lattice_step, n_headings=cfg.n_headings,
+        landmark=task.object_poses[task.index][:2],
     )
 
 

@@ -19,13 +19,23 @@ Departures from the pseudocode, each for a reason:
   virtual vertex with the out-edges given to ``plan_shortest_path(start_edges=...)``. It
   has no in-edges, so replacing it by the next virtual start never invalidates another
   vertex's ``rhs``. ``graph.heuristic`` must accept it (``ObjectLattice`` takes poses).
+* Start edges cheaper than the heuristic: an edge (s_start, v) may cost less than
+  ``h(s_start, v)`` (a lattice's joining motion costs its true length, its heuristic is the
+  lattice metric). With ``slack = max(0, max_v h(s_start, v) - c(s_start, v))`` the keys
+  use ``h'(s) = max(0, h(s_start, s) - slack)``: a constant shift keeps {01'}'s keys
+  monotone along graph edges, and ``h'(v) <= c(s_start, v)`` on the start's edges, so h'
+  is consistent. Moving the start adds ``h(s_last, s_start) + slack`` to k_m (the new
+  start's slack; then every old key stays a lower bound). Replanning from the same start
+  recomputes the slack with the costs ``update_change`` gave its edges; when it grows,
+  k_m grows by as much.
 * Termination {10'} uses ``rhs(s_start) != g(s_start)`` (the basic version's test) rather
   than ``>``, so the start is always locally consistent when the path is read off; and it
   keeps expanding vertices whose first key component is within a relative ``1e-9`` of the
-  start's. On a lattice with a Euclidean heuristic every vertex of a straight shortest
-  path has exactly the start's first key component, so floating-point rounding alone
-  decides whether it is expanded; an inconsistent one left behind breaks the path read
-  off by {34'} (found by ``benchmarks/bench_search.py``, now a regression test).
+  start's. On a lattice whose heuristic is exact along straight paths (the octile metric
+  of ``ObjectLattice``) every vertex of a straight shortest path has exactly the start's
+  first key component, so floating-point rounding alone decides whether it is expanded;
+  an inconsistent one left behind breaks the path read off by {34'} (found by
+  ``benchmarks/bench_search.py``, now a regression test).
 * ``UpdateVertex`` ({21'}, {28'}) is called only for vertices whose ``rhs`` changed: for
   the others g, rhs and queue membership are unchanged and a queued key, being a lower
   bound, stays valid ({14'} refreshes it). This saves most calls on a 26-connected lattice.
@@ -60,7 +70,8 @@ class Graph(Protocol):
 
     ``successors(u)`` / ``predecessors(v)`` list the finite-cost edges ``(u -> v)`` as
     ``(v, cost)`` / ``(u, cost)`` pairs; ``cost(u, v)`` is ``inf`` when there is no edge;
-    ``heuristic(a, b)`` is a consistent lower bound of the cost from ``a`` to ``b``.
+    ``heuristic(a, b)`` is a consistent lower bound of the cost from ``a`` to ``b`` with the
+    triangle inequality (a virtual start's edges may cost less: see the departures).
     """
 
     def successors(self, u: Hashable) -> Iterable[tuple[Hashable, float]]: ...
@@ -129,6 +140,7 @@ class DStarLite:
         self._seq = itertools.count()
         self.start: Hashable | None = None
         self._hcache: dict[Hashable, float] = {}
+        self._hslack = 0.0
         self._last: Hashable | None = None
         self._vstart: Hashable | None = None
         self._vedges: dict[Hashable, float] = {}
@@ -173,11 +185,17 @@ class DStarLite:
 
     # ----------------------------------------------------------- queue
     def _h(self, s: Hashable) -> float:
-        """h(s_start, s), memoised for the current start."""
+        """h'(s) = max(0, h(s_start, s) - slack), memoised for the current start."""
         h = self._hcache.get(s)
         if h is None:
-            h = self._hcache[s] = self.graph.heuristic(self.start, s)
+            h = self.graph.heuristic(self.start, s) - self._hslack
+            h = self._hcache[s] = h if h > 0.0 else 0.0
         return h
+
+    def _start_slack(self, start: Hashable, edges: dict[Hashable, float]) -> float:
+        """max_v h(start, v) - c(start, v) over the virtual start's edges ``{v: c}``."""
+        h = self.graph.heuristic
+        return max((h(start, v) - c for v, c in edges.items()), default=0.0) if edges else 0.0
 
     def calculate_key(self, s: Hashable) -> Key:
         """{01'} [min(g, rhs) + h(s_start, s) + k_m; min(g, rhs)]."""
@@ -225,13 +243,24 @@ class DStarLite:
         self, start: Hashable, start_edges: Sequence[tuple[Hashable, float]] | None
     ) -> None:
         """Move the start, update k_m ({38'}-{39'}) and the virtual start's edges."""
+        edges: dict[Hashable, float] = {}
+        for v, c in start_edges or ():
+            if not (c >= 0):
+                raise ValueError(f"start edge cost must be >= 0, got {c!r} to {v!r}")
+            edges[v] = min(float(c), edges.get(v, INF))
+        # the same virtual start keeps the costs update_change gave its edges
+        kept = self._over_out.get(start, {}) if edges and start == self._vstart else {}
+        slack = max(0.0, self._start_slack(start, {v: kept.get(v, c) for v, c in edges.items()}))
         if self._last is None:
             self._last = start  # {29'}
         elif start != self._last:
-            self.km += self.graph.heuristic(self._last, start)  # {38'}
+            self.km += self.graph.heuristic(self._last, start) + slack  # {38'}
             self._last = start  # {39'}
-        if start != self.start:
+        elif slack > self._hslack:  # same start, cheaper edges: see the departures
+            self.km += slack - self._hslack
+        if start != self.start or slack != self._hslack:
             self._hcache = {}
+        self._hslack = slack
         self.start = start
         old_v = self._vstart
         if old_v is not None and (start_edges is None or old_v != start):
@@ -249,11 +278,6 @@ class DStarLite:
             return
         if start == self.goal:
             raise ValueError("a virtual start must not be the goal vertex")
-        edges: dict[Hashable, float] = {}
-        for v, c in start_edges:
-            if not (c >= 0):
-                raise ValueError(f"start edge cost must be >= 0, got {c!r} to {v!r}")
-            edges[v] = min(float(c), edges.get(v, INF))
         self._vstart, self._vedges = start, edges
         # rhs of the virtual start from its (possibly new) out-edges, {27'}-style
         self.rhs[start] = min((c + self.g.get(v, INF) for v, c in self._succ(start)), default=INF)

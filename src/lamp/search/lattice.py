@@ -23,12 +23,18 @@ linearly), which is the object motion the manipulation model is asked for. With 
 defaults (0.1 m, 16 headings = 0.39 rad) every primitive lies in the model's trained range
 (|dx|, |dy| <= 0.2 m in the object frame, |dtheta| <= 0.5 rad); the constructor checks it.
 
-Edge cost = translation length + ``w_rot * |dtheta|``. The default ``w_rot`` is the
-object's bounding radius (m/rad), so a rotation costs the arc length travelled by the
-object's farthest point: rotating a large object is as expensive as the sweep it causes.
-The heuristic ``hypot(dx, dy) + w_rot * |wrap(dtheta)|`` is a metric (triangle inequality),
-a lower bound of every path cost, hence admissible and consistent; it also satisfies the
-triangle inequality between continuous poses, which D* Lite's key modifier needs.
+Edge cost = translation length + ``w_rot * |dtheta|`` (:func:`motion_cost`, the cost of any
+straight motion: lattice primitives and the motions that join a continuous pose to the
+lattice alike). The default ``w_rot`` is the object's bounding radius (m/rad), so a
+rotation costs the arc length travelled by the object's farthest point: rotating a large
+object is as expensive as the sweep it causes.
+
+The heuristic and :meth:`ObjectLattice.distance` are the lattice metric of
+:mod:`lamp.search.metric` (the octile norm of the translation, strengthened by a landmark
+potential when the lattice has a ``landmark``, plus ``w_rot * |wrap(dtheta)|``): equal to
+every primitive's cost, with the triangle inequality between any poses, hence admissible
+and consistent on every lattice edge; see that module for the guarantees and for how D*
+Lite stays consistent on the (cheaper) joining motions.
 
 A node is valid when its pose is free (``ObjectSpace.pose_free``); an edge is valid when
 both ends are valid and its swept motion is free (``ObjectSpace.motions_free``). Both are
@@ -37,12 +43,14 @@ computed lazily, in batches of one node's 26 primitives, and cached (``int8`` ar
 motion is checked once, from the lower node id, and both directions are filled in.
 
 Continuous poses join the lattice through :meth:`start_connections` (one free straight
-motion to a node within the model's range); the goal node is among them whenever it is
-within range, which gives the final approach to the exact goal pose for free.
+motion to a node within the model's range, costed by :func:`motion_cost`); the goal node
+is among them whenever it is within range, which gives the final approach to the exact
+goal pose for free.
 """
 
 from __future__ import annotations
 
+import array
 import math
 from collections.abc import Sequence
 
@@ -55,11 +63,11 @@ from lamp.geometry.object_kernels import motion_free_kernel, pose_free_kernel
 from lamp.geometry.object_space import ObjectSpace
 from lamp.manip.contacts import MOTION_RANGE
 from lamp.scene.model import Scene
+from lamp.search.landmark import LandmarkPotential
+from lamp.search.metric import OCTILE_MINOR, TWO_PI, lattice_metric, motion_cost
 
 Node = int
 VirtualNode = tuple[float, float, float]
-
-TWO_PI = 2.0 * math.pi
 
 #: Cached validity of nodes and edges: not checked yet, checked and blocked, checked and free.
 UNKNOWN, BLOCKED, FREE = 0, 1, 2
@@ -178,6 +186,9 @@ class ObjectLattice:
         max_translation, max_rotation: the model's range; primitives and start
             connections stay within it (|dx|, |dy| <= max_translation in the object frame,
             |dtheta| <= max_rotation).
+        landmark: (x, y) of a landmark (LAMP: the object's start); the metric then also
+            bounds the translation by the landmark potential (:mod:`lamp.search.landmark`),
+            which sees the detours obstacles force. None: the octile metric alone.
     """
 
     def __init__(
@@ -189,6 +200,7 @@ class ObjectLattice:
         w_rot: float | None = None,
         max_translation: float = MODEL_MAX_TRANSLATION,
         max_rotation: float = MODEL_MAX_ROTATION,
+        landmark: ArrayLike | None = None,
     ) -> None:
         anchor = np.asarray(anchor, dtype=float)
         if anchor.shape != (3,) or not np.all(np.isfinite(anchor)):
@@ -258,6 +270,13 @@ class ObjectLattice:
         #: statistics: poses and motions checked so far
         self.n_pose_checks = 0
         self.n_motion_checks = 0
+        if landmark is not None:
+            landmark = np.asarray(landmark, dtype=float).reshape(-1)[:2]
+            if landmark.shape != (2,) or not np.all(np.isfinite(landmark)):
+                raise ValueError(f"landmark must be a finite (x, y), got {landmark!r}")
+        self.landmark = None if landmark is None else (float(landmark[0]), float(landmark[1]))
+        self._potential: LandmarkPotential | None = None
+        self._pot_values: array.array | None = None
 
     @classmethod
     def from_scene(
@@ -410,18 +429,63 @@ class ObjectLattice:
         return se2.relative(self.pose(u), self.pose(v))
 
     # ----------------------------------------------------------- heuristic
+    @property
+    def potential(self) -> LandmarkPotential | None:
+        """The landmark potential (:mod:`lamp.search.landmark`) over this lattice's
+        positions, built on first use; None without a landmark."""
+        if self._potential is None and self.landmark is not None:
+            self._potential = LandmarkPotential(
+                self.space,
+                (self.anchor[0] + self.i_min * self.step, self.anchor[1] + self.j_min * self.step),
+                self.step, (self.n_i, self.n_j), self.landmark,
+                radius=self.max_translation * math.sqrt(2.0),
+            )
+            # indexed per heuristic call: plain floats, 8 bytes each
+            self._pot_values = array.array("d", self._potential.values)
+        return self._potential
+
+    def _pot(self, u: Node | VirtualNode, x: float, y: float) -> float:
+        """The landmark potential of a node (its position's value) or of a pose."""
+        if isinstance(u, (int, np.integer)):
+            return self._pot_values[int(u) // self.n_headings]  # type: ignore[index]
+        return self.potential.at(x, y)  # type: ignore[union-attr]
+
+    def potentials(self, poses: ArrayLike) -> np.ndarray:
+        """(...,) landmark potentials of (..., 3) poses (zeros without a landmark)."""
+        p = np.asarray(poses, dtype=float)
+        if self.potential is None:
+            return np.zeros(p.shape[:-1])
+        flat = p.reshape(-1, 3)
+        at = self.potential.at
+        return np.array([at(float(x), float(y)) for x, y in flat[:, :2]]).reshape(p.shape[:-1])
+
     def heuristic(self, u: Node | VirtualNode, v: Node | VirtualNode) -> float:
-        """Admissible, consistent lower bound of the path cost between nodes or poses:
-        ``hypot(dx, dy) + w_rot * |wrap(dtheta)|``."""
+        """:func:`lattice_metric` between nodes or poses: a lower bound of every path cost
+        from ``u`` to ``v``, consistent on every edge, with the triangle inequality (scalar
+        fast path of the same formula; equal to :meth:`distance`)."""
         ax, ay, at = self._xyt(u)
         bx, by, bt = self._xyt(v)
+        dx, dy = abs(ax - bx), abs(ay - by)
         d = abs(at - bt) % TWO_PI
-        return math.hypot(ax - bx, ay - by) + self.w_rot * min(d, TWO_PI - d)
+        if dx < dy:
+            dx, dy = dy, dx
+        t = dx + OCTILE_MINOR * dy
+        if self.landmark is not None:
+            if self._pot_values is None:
+                self.potential  # noqa: B018 (builds it)
+            dp = abs(self._pot(u, ax, ay) - self._pot(v, bx, by))
+            if dp > t:
+                t = dp
+        return t + self.w_rot * min(d, TWO_PI - d)
 
     def distance(self, a: ArrayLike, b: ArrayLike) -> np.ndarray | float:
-        """The heuristic's metric between (..., 3) poses (vectorised)."""
-        dt, dr = se2.pose_distance(a, b)
-        return dt + self.w_rot * dr
+        """:func:`lattice_metric` between (..., 3) poses (vectorised)."""
+        a = np.asarray(a, dtype=float)
+        b = np.asarray(b, dtype=float)
+        dpot = 0.0 if self.landmark is None else self.potentials(a) - self.potentials(b)
+        return lattice_metric(
+            a[..., 0] - b[..., 0], a[..., 1] - b[..., 1], a[..., 2] - b[..., 2], self.w_rot, dpot
+        )
 
     # ---------------------------------------------------- continuous poses
     def _candidates(self, pose: np.ndarray, radius: float, max_dk: int) -> np.ndarray:
@@ -512,7 +576,7 @@ class ObjectLattice:
         free = space.motions_free(np.broadcast_to(pose, targets.shape), targets)
         self.n_motion_checks += len(free)
         cand, targets = cand[free], targets[free]
-        cost = self.distance(pose, targets)
+        cost = motion_cost(pose, targets, self.w_rot)
         order = np.argsort(cost, kind="stable")
         return [(int(cand[o]), float(cost[o])) for o in order]
 
@@ -525,7 +589,7 @@ class ObjectLattice:
             return None
         if not self._tolerant_space(tolerance).motion_free(a, b):
             return None
-        return float(self.distance(a, b))
+        return float(motion_cost(a, b, self.w_rot))
 
     def _tolerant_space(self, tolerance: float) -> ObjectSpace:
         if tolerance == 0.0:

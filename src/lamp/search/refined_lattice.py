@@ -84,6 +84,11 @@ class RefinedLattice(ObjectLattice):
             return float(x), float(y), float(t)
         return super()._xyt(u)
 
+    def _pot(self, u: Node | VirtualNode, x: float, y: float) -> float:
+        if isinstance(u, (int, np.integer)) and u >= self.n_nodes:  # off the grid: a pose
+            return self.potential.at(x, y)  # type: ignore[union-attr]
+        return super()._pot(u, x, y)
+
     def successors(self, u: Node) -> list[tuple[Node, float]]:
         if u >= self.n_nodes:
             return self._adj.get(u, [])
