@@ -228,7 +228,8 @@ def test_failed_plans(final: bool) -> None:
     out = run(FakeExecutor(exact), policy=policy, config=cfg, planner=Failing(GOAL))
     assert out.result.segments == 0 and not out.result.success
     assert len(out.planner.calls) == (1 if final else 3)
-    assert out.result.failure_reason == ("no plan found" if final else "segment limit reached (3)")
+    assert out.result.failure_reason == ("no plan found" if final else
+                                        "segment limit reached (0 segments and 3 failed steps of 3)")
 
 
 def test_robots_off_the_plan_are_joined_or_rerouted() -> None:

@@ -322,8 +322,11 @@ class ClosedLoop:
                                                 SUCCESS_ORIENTATION_TOL)
         reason = st.reason
         if not success and not reason:
-            reason = (f"segment limit reached ({max_segments})" if st.iterations >= max_segments
-                      else "stopped away from goal")
+            failed = st.iterations - st.segments  # GCo: a failed step counts like a segment
+            reason = ((f"segment limit reached ({max_segments})" if failed <= 0 else
+                       f"segment limit reached ({st.segments} segments and {failed} failed "
+                       f"steps of {max_segments})")
+                      if st.iterations >= max_segments else "stopped away from goal")
         return ObjectResult(
             success=bool(success), final_pose=[float(v) for v in q_O],
             goal=[float(v) for v in goal], position_error=pos_err, orientation_error=rot_err,
