@@ -25,22 +25,14 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
 import shapely  # noqa: E402
-from shapely.geometry import LineString, Point, box  # noqa: E402
+from shapely.geometry import LineString, Point  # noqa: E402
 
 
 def _walls(free: shapely.Geometry, w: float, h: float) -> list[dict]:
-    """The workspace minus ``free`` as simple polygons (cut along 1 m cells)."""
-    wall = box(0, 0, w, h).difference(free)
-    out = []
-    for i in range(math.ceil(w)):
-        for j in range(math.ceil(h)):
-            piece = wall.intersection(box(i, j, i + 1, j + 1))
-            for g in getattr(piece, "geoms", [piece]):
-                if g.geom_type == "Polygon" and g.area > 1e-6:
-                    pts = list(shapely.simplify(g, 1e-7).exterior.coords)[:-1]
-                    out.append({"type": "polygon",
-                                "points": [[float(x), float(y)] for x, y in pts]})
-    return out
+    """The workspace minus ``free`` as simple wall polygons (the corridor family's cutter)."""
+    from lamp.suites.corridor_layout import wall_polygons
+
+    return [{"type": "polygon", "points": pts.tolist()} for pts in wall_polygons((w, h), free)]
 
 
 def corridor_chain(points, across: float, clearance: float, size, name: str,

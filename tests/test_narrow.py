@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 import shapely
-from shapely.geometry import LineString, Point, box
+from shapely.geometry import LineString, Point
 
 from lamp.geometry.exact_space import ExactSpace
 from lamp.geometry.object_space import ObjectSpace
@@ -17,13 +17,14 @@ from lamp.scene.loader import scene_from_dict
 from lamp.scene.model import Circle, Polygon, Rectangle
 from lamp.search.dstar_lite import DStarLite
 from lamp.search.lattice import ObjectLattice
-from lamp.search.narrow import aligned_headings, inscribed_radius, narrow_poses
+from lamp.search.narrow import aligned_headings, narrow_poses
 from lamp.search.refined_lattice import RefinedLattice
+from lamp.suites.corridor_layout import wall_polygons
 
 
 def corridor_scene(angle_deg: float, clearance: float, size=(0.4, 0.3), length=2.6) -> dict:
     """Two round rooms joined by a straight corridor at ``angle_deg``, ``clearance`` wider
-    than the object's short side; walls cut into 1 m tiles (simple polygons)."""
+    than the object's short side; walls cut into simple polygons (the corridor family's)."""
     a = math.radians(angle_deg)
     s = np.array([0.9, 1.0 if angle_deg >= 0 else 2.0])
     g = s + length * np.array([math.cos(a), math.sin(a)])
@@ -31,16 +32,7 @@ def corridor_scene(angle_deg: float, clearance: float, size=(0.4, 0.3), length=2
     free = shapely.union_all([Point(*s).buffer(0.75), Point(*g).buffer(0.75),
                               LineString([s, g]).buffer((size[1] + clearance) / 2,
                                                         cap_style="flat")])
-    wall = box(0, 0, w, h).difference(free)
-    polys = []
-    for i in range(int(w)):
-        for j in range(int(h)):
-            piece = wall.intersection(box(i, j, i + 1, j + 1))
-            for gg in getattr(piece, "geoms", [piece]):
-                if gg.geom_type == "Polygon" and gg.area > 1e-6:
-                    pts = list(shapely.simplify(gg, 1e-7).exterior.coords)[:-1]
-                    polys.append({"type": "polygon",
-                                  "points": [[float(x), float(y)] for x, y in pts]})
+    polys = [{"type": "polygon", "points": pts.tolist()} for pts in wall_polygons((w, h), free)]
     return {"format": "lamp-scene/1", "name": "corridor", "workspace": [w, h],
             "robots": {"radius": 0.05,
                        "starts": [[float(s[0]) - 0.5, float(s[1]) + dy] for dy in (-0.2, 0, 0.2)]},
@@ -67,8 +59,6 @@ def test_aligned_headings_lay_the_narrow_side_across():
     circle = aligned_headings(Circle(0.2), 0.1)  # any heading within 22.5 degrees of one
     gaps = np.diff(np.sort(np.remainder([t for t, _, _ in circle], 2 * math.pi)))
     assert len(circle) == 8 and np.allclose(gaps, math.pi / 4)
-    assert inscribed_radius(Rectangle((0.4, 0.3))) == pytest.approx(0.15)
-    assert inscribed_radius(Circle(0.2)) == pytest.approx(0.2)
 
 
 @pytest.mark.parametrize("angle", [17.0, -38.5])

@@ -75,18 +75,6 @@ class NarrowParams:
             raise ValueError(f"NarrowParams.max_cells must be >= 1000, got {self.max_cells!r}")
 
 
-def inscribed_radius(shape: object) -> float:
-    """Radius of the largest disk centred on the object's origin inside its footprint
-    (0 when the origin lies outside it)."""
-    if isinstance(shape, Circle):
-        return float(shape.radius)
-    poly = shapely.Polygon(local_outline(shape))
-    origin = shapely.Point(0.0, 0.0)
-    if not poly.contains(origin):
-        return 0.0
-    return float(poly.exterior.distance(origin))
-
-
 def aligned_headings(shape: object, phi: float) -> list[tuple[float, float, float]]:
     """``(theta, shift, width)`` for each heading that lays a convex-hull edge of ``shape``
     along direction ``phi``: ``width`` is the object's extent across ``phi`` and ``shift``
