@@ -24,8 +24,9 @@ passages and returns poses that pass them; ``RefinedLattice`` adds them to the s
    nudged by up to one raster cell more if needed. A pose is kept when the exact checker
    (``ExactSpace``) finds it free.
 5. **Extensions.** Where a chain of aligned poses ends (no pose of the same heading ahead
-   along ``phi``), poses continue straight along ``phi`` for up to the object's reach plus
-   ``extension`` while free, so that the object leaves the corridor before it turns.
+   along ``phi``), poses continue straight along ``phi`` for up to twice the object's reach
+   plus ``extension`` while free, so that the whole object leaves the corridor before it
+   turns (the ridge may end well inside the corridor's mouth).
 
 Guarantee: every returned pose is free by ``ExactSpace.pose_free``. Nothing is promised
 about completeness: the poses are candidates, connected by checked motions in
@@ -61,7 +62,7 @@ class NarrowParams:
     spacing: float = 0.08
     #: the raster is coarsened so that a window never has more cells than this
     max_cells: int = 2_000_000
-    #: how far (beyond the object's reach) a chain of aligned poses is extended
+    #: how far beyond twice the object's reach a chain of aligned poses is extended
     extension: float = 0.3
     #: radius of the ridge neighbourhood that gives a point's corridor direction
     direction_radius: float = 0.12
@@ -256,7 +257,7 @@ def _extensions(poses: np.ndarray, dirs: np.ndarray, exact: ExactSpace,
     chain's own axis (the line through its last poses), re-centred at every step."""
     out: list[np.ndarray] = []
     tree = cKDTree(poses[:, :2])
-    reach = exact.reach + params.extension
+    reach = 2.0 * exact.reach + params.extension  # the whole object out of the corridor
     steps = max(1, math.ceil(reach / params.spacing))
     for i, (pose, phi) in enumerate(zip(poses, dirs, strict=True)):
         same = [j for j in tree.query_ball_point(pose[:2], 0.5) if
