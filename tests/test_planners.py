@@ -188,3 +188,22 @@ def test_lazy_forgets_a_cached_push_it_cannot_route_to(proposer):
     assert u not in planner.tree_eval or planner.tree_eval[u].transition is not cached
     assert planner.failures.get(mid.edge, 0) >= 1
     assert task.stats.verify_calls > calls  # verified afresh
+
+
+def test_lazy_reverifies_above_a_cut_in_the_cached_chain(proposer):
+    """Tree_eval entries are dropped when their pushes fail; a later plan that reaches the
+    chain above such a cut verifies that part again instead of following it into the gap."""
+    scene = scene_from_dict(small_scene())
+    task = ManipulationTask(scene, 0, scene.object_starts(), proposer, PlannerConfig(), seed=0)
+    planner = LazyPlanner.from_task(task)
+    first = planner.plan(scene.object_starts()[0], scene.robot_starts_array)
+    assert first.solved and len(first.transitions) >= 4
+    cut = first.transitions[-2].edge[0]
+    del planner.tree_eval[cut]  # as report_failure or a failed re-route does
+    calls = task.stats.verify_calls
+    mid = first.transitions[1]
+    again = planner.plan(mid.q_from, mid.robot_start)
+    assert again.solved and np.allclose(again.transitions[-1].q_to, task.goal)
+    assert task.stats.verify_calls > calls
+    assert all(np.allclose(a.q_to, b.q_from)
+               for a, b in zip(again.transitions[:-1], again.transitions[1:], strict=True))

@@ -230,8 +230,15 @@ class LazyPlanner:
                 continue
             if curr != goal and self.lattice.is_node(curr) and curr in self.tree_eval:  # lines 25-40: Tree_eval
                 ok = True
+                walked: list[Node] = []
                 while curr != goal:
-                    entry = self.tree_eval[curr]
+                    entry = self.tree_eval.get(curr)
+                    if entry is None:  # the chain was cut below (a forgotten push): the
+                        for n in walked:  # part above it is verified afresh next iteration
+                            self.tree_eval.pop(n, None)
+                        ok = False
+                        break
+                    walked.append(curr)
                     trans = entry.lookup(q_R, tol)  # line 38: reuse cached
                     if trans is None:  # lines 27-35: Reassign, Gspi: new T_move for these robots
                         trans = self.verifier.reroute(entry.transition, q_R)
