@@ -117,7 +117,8 @@ def stalled(seg: int, d: np.ndarray) -> np.ndarray:
     return np.zeros(2)
 
 
-def run(executor, policy=LAZY, config=CONFIG, planner=None, reroute=None, goal=GOAL):
+def run(executor, policy=LAZY, config=CONFIG, planner=None, reroute=None, goal=GOAL,
+        clearance=None, reach=0.0):
     planner = planner or StraightPlanner(goal)
     events: list[SegmentEvent] = []
     record = LoopRecord()
@@ -128,7 +129,8 @@ def run(executor, policy=LAZY, config=CONFIG, planner=None, reroute=None, goal=G
         return None
 
     loop = ClosedLoop(planner, policy, executor, index=0, goal=goal, config=config,
-                      reroute=reroute or default_reroute, record=record, observer=events.append)
+                      reroute=reroute or default_reroute, record=record, observer=events.append,
+                      clearance=clearance, reach=reach)
     result = loop.run()
     return SimpleNamespace(result=result, events=events, record=record, planner=planner,
                            reroutes=reroutes)
@@ -274,3 +276,26 @@ def test_drift_then_exact_always_arrives(dx, dy, step, side, n_drift) -> None:
     a, b = dataclasses.asdict(res), dataclasses.asdict(blind)
     a.pop("planning_time_s"), b.pop("planning_time_s")
     assert a == b
+
+
+def test_drift_limits_tighten_with_the_clearance() -> None:
+    """The config's limits in the open; in a tight place no point of the object may miss
+    its planned place by more than half the clearance (at least TIGHT_DRIFT_FLOOR)."""
+    from lamp.planners.closed_loop import TIGHT_DRIFT_FLOOR, drift_limits
+
+    cfg = CONFIG
+    assert drift_limits(cfg, None, 0.3) == (cfg.drift_position, cfg.drift_orientation)
+    assert drift_limits(cfg, 1.0, 0.3) == (cfg.drift_position, cfg.drift_orientation)
+    pos, rot = drift_limits(cfg, 0.04, 0.5)
+    assert pos == pytest.approx(0.02) and rot == pytest.approx(0.04)
+    assert drift_limits(cfg, 0.0, 0.5) == (TIGHT_DRIFT_FLOOR, TIGHT_DRIFT_FLOOR / 0.5)
+
+
+def test_a_small_drift_in_a_tight_place_replans() -> None:
+    """2 cm to the side: tolerated in the open (the 5 cm limit), a replan where the planned
+    poses have 1 cm of clearance."""
+    open_run = run(FakeExecutor(drifting(1, side=0.02)))
+    assert [e.outcome for e in open_run.events].count("drift") == 0
+    tight = run(FakeExecutor(drifting(1, side=0.02)), clearance=lambda q: 0.01, reach=0.2)
+    assert [e.outcome for e in tight.events][0] == "drift"
+    assert tight.result.success

@@ -20,6 +20,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from lamp.geometry.exact_space import ExactSpace
 from lamp.geometry.se2 import pose_distance
 from lamp.planners.base import LoopPolicy, ObjectPlanner
 from lamp.planners.config import PlannerConfig, segment_limit
@@ -182,8 +183,14 @@ class ClosedLoop:
                  index: int, goal: np.ndarray, config: PlannerConfig, reroute: Reroute,
                  record: LoopRecord | None = None, time_limit: float | None = None,
                  observer: Callable[[SegmentEvent], None] | None = None,
-                 frames: Callable[[Execution, Any], list[Any]] | None = None) -> None:
+                 frames: Callable[[Execution, Any], list[Any]] | None = None,
+                 clearance: Callable[[np.ndarray], float] | None = None,
+                 reach: float = 0.0) -> None:
         self.planner = planner
+        #: the object's clearance at a pose and its reach (farthest point from its origin),
+        #: for the drift limits in tight places (``drift_limits``); None: the config's
+        self.clearance = clearance
+        self.reach = float(reach)
         self.policy = policy
         self.executor = executor
         self.index = int(index)
@@ -291,12 +298,14 @@ class ClosedLoop:
             self.record.frames.extend(self.frames(out, st.plan))
         dpos, drot = pose_distance(st.q_O, adapted.q_to)
         cfg, policy = self.config, self.policy
+        max_pos, max_rot = drift_limits(cfg, None if self.clearance is None
+                                        else self.clearance(adapted.q_to), self.reach)
         outcome = "continue"
         if out.left_workspace:
             outcome = "left"
         elif policy.replan_on_stall and _stalled(q_before, st.q_O, adapted):
             outcome = "stalled"
-        elif policy.replan_on_drift and (dpos > cfg.drift_position or drot > cfg.drift_orientation):
+        elif policy.replan_on_drift and (dpos > max_pos or drot > max_rot):
             outcome = "drift"
         if self.observer is not None:
             self.observer(SegmentEvent(self.index, st.segments - 1, adapted, out, st.plan,
@@ -336,6 +345,26 @@ class ClosedLoop:
         )
 
 
+#: In tight places drift is tolerated up to this fraction of the planned pose's clearance,
+#: and never below ``TIGHT_DRIFT_FLOOR`` (m) (at the object's farthest point).
+TIGHT_DRIFT_FRACTION = 0.5
+TIGHT_DRIFT_FLOOR = 0.01
+
+
+def drift_limits(cfg: PlannerConfig, clearance: float | None, reach: float
+                 ) -> tuple[float, float]:
+    """(position, orientation) drift a segment may end with before the loop replans: the
+    config's ``drift_position`` / ``drift_orientation``, tightened where the planned pose's
+    ``clearance`` is small, so that no point of the object (``reach`` from its origin) has
+    missed its planned place by more than ``TIGHT_DRIFT_FRACTION`` of the clearance (at
+    least ``TIGHT_DRIFT_FLOOR``). Entering a corridor 2 cm wider than the object a few
+    degrees askew jams it; replanning from the askew pose first realigns it."""
+    if clearance is None or not reach > 0:
+        return cfg.drift_position, cfg.drift_orientation
+    allowed = max(TIGHT_DRIFT_FLOOR, TIGHT_DRIFT_FRACTION * float(clearance))
+    return min(cfg.drift_position, allowed), min(cfg.drift_orientation, allowed / reach)
+
+
 def run_object(task: ManipulationTask, planner: ObjectPlanner, policy: LoopPolicy, sim: Executor,
                record: LoopRecord, render: bool = False, time_limit: float | None = None,
                observer: Callable[[SegmentEvent], None] | None = None) -> ObjectResult:
@@ -346,9 +375,11 @@ def run_object(task: ManipulationTask, planner: ObjectPlanner, policy: LoopPolic
     segment (in order); it only watches, the run is the same with or without it.
     """
     frames = (lambda out, plan: _frames(task, out, plan)) if render else None
+    exact = ExactSpace.from_space(task.object_space)
     loop = ClosedLoop(planner, policy, sim, index=task.index, goal=task.goal, config=task.config,
                       reroute=task.verifier.reroute, record=record, time_limit=time_limit,
-                      observer=observer, frames=frames)
+                      observer=observer, frames=frames, clearance=exact.clearance,
+                      reach=exact.reach)
     return loop.run()
 
 
