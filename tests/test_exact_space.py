@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 import shapely
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
@@ -101,3 +102,11 @@ def test_a_corridor_one_centimetre_a_side_is_free_only_exactly():
     assert abs(exact.clearance(a) - 0.01) < 1e-9
     assert exact.motion_free(a, b)
     assert not exact.motion_free(a, b + np.array([0.0, 0.0, 0.1]))  # rotating jams it
+
+
+def test_a_large_disk_whose_centre_is_far_still_counts():
+    """A disk obstacle's edge within the cap while its centre lies beyond it."""
+    disk = Obstacle(Circle(0.25), (1.0, 1.6, 0.0))  # edge at y = 1.35
+    shape = Rectangle((0.4, 0.3))
+    pose = (1.0, 1.1, 0.0)  # top edge at y = 1.25: 0.1 m below the disk
+    assert ExactSpace(shape, (W, H), [disk]).clearance(pose) == pytest.approx(0.1)

@@ -87,6 +87,7 @@ class ExactSpace:
         others = [o for o in obstacles if not isinstance(o.shape, Circle)]
         self._disk_xy = np.array([o.pose[:2] for o in disks], dtype=float).reshape(-1, 2)
         self._disk_r = np.array([o.shape.radius for o in disks], dtype=float)
+        self._disk_pad = float(np.max(self._disk_r, initial=0.0))
         self._disk_geoms = shapely.points(self._disk_xy) if len(disks) else np.zeros(0, object)
         self._polys = np.array([obstacle_geometry(o) for o in others], dtype=object)
         self._disk_tree = shapely.STRtree(self._disk_geoms) if len(disks) else None
@@ -132,7 +133,9 @@ class ExactSpace:
                 d = shapely.distance(geom, self._polys[idx])
                 best = min(best, float(np.min(d)) - (self._radius or 0.0))
         if self._disk_tree is not None and best > 0:
-            idx = self._disk_tree.query(box)
+            r = self._disk_pad  # the tree holds centres: reach their disks' edges too
+            idx = self._disk_tree.query(shapely.box(x0 - pad - r, y0 - pad - r,
+                                                    x1 + pad + r, y1 + pad + r))
             if len(idx):
                 d = shapely.distance(geom, self._disk_geoms[idx]) - self._disk_r[idx]
                 best = min(best, float(np.min(d)) - (self._radius or 0.0))
