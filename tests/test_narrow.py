@@ -18,7 +18,7 @@ from lamp.scene.model import Circle, Polygon, Rectangle
 from lamp.search.dstar_lite import DStarLite
 from lamp.search.lattice import ObjectLattice
 from lamp.search.narrow import aligned_headings, narrow_poses
-from lamp.search.refined_lattice import RefinedLattice
+from lamp.search.refined_lattice import LINK_CLEARANCE, RefinedLattice
 from lamp.suites.corridor_layout import wall_polygons
 
 
@@ -96,11 +96,13 @@ def test_refined_lattice_is_the_lattice_until_refined_then_passes_the_corridor()
     assert not d.plan_shortest_path(*join_lattice(plain, start))  # the lattice cannot pass
     added = refined.refine(start)
     assert added > 0 and refined.refine(start) == 0  # once per window
-    # symmetric adjacency, every refined edge certified free
+    # symmetric adjacency, every refined edge certified free; lattice links only in the open
     for u in range(refined.n_nodes, refined.n_nodes + refined.n_extra):
         for v, c in refined.successors(u):
             assert (u, c) in refined.successors(v)
             assert c >= refined.heuristic(u, v)
+            if v < refined.n_nodes:
+                assert refined.exact.clearance(refined.pose(u)) >= LINK_CLEARANCE
     d = DStarLite(refined)
     d.initialize(refined.goal_node)
     path = d.plan_shortest_path(*join_lattice(refined, start))

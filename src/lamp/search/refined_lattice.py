@@ -34,6 +34,8 @@ EDGE_OVERHEAD = 0.01
 REFINE_MARGIN = 3.0
 #: Lattice nodes an extra vertex is joined to, at most (the nearest).
 MAX_LATTICE_LINKS = 8
+#: Only extra vertices with this much exact clearance (m) are joined to lattice nodes.
+LINK_CLEARANCE = 0.03
 
 
 class RefinedLattice(ObjectLattice):
@@ -183,9 +185,10 @@ class RefinedLattice(ObjectLattice):
                 ok = np.asarray(self.in_model_range(q, self.poses(cand)), dtype=bool).reshape(-1)
                 for v in self._free_links(q, [v for v, k in zip(cand, ok, strict=True) if k]):
                     self._link(u, v)
-            # extra <-> lattice
+            # extra <-> lattice, only where the object is clear of the passage: it turns
+            # onto (or off) the lattice in the open and enters the passage straight
             nodes = self._candidates(q, reach, math.ceil(self.max_rotation / self.dtheta))
-            if len(nodes):
+            if len(nodes) and self.exact.clearance(q) >= LINK_CLEARANCE:
                 nodes = nodes[np.asarray(self.in_model_range(q, super().poses(nodes)), bool)]
                 self._ensure_nodes(nodes)
                 nodes = nodes[self._node_valid[nodes] == FREE]
