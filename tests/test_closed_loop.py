@@ -299,3 +299,14 @@ def test_a_small_drift_in_a_tight_place_replans() -> None:
     tight = run(FakeExecutor(drifting(1, side=0.02)), clearance=lambda q: 0.01, reach=0.2)
     assert [e.outcome for e in tight.events][0] == "drift"
     assert tight.result.success
+
+
+def test_drift_before_a_tight_push_replans_at_once() -> None:
+    """The next push ends in a tight place (1 cm of clearance from x = 1.3 on): a 2 cm
+    drift of the segment before it, in the open, already replans."""
+    def clearance(q):
+        return 0.01 if q[0] > 1.3 else 1.0
+
+    out = run(FakeExecutor(drifting(1, side=0.02)), clearance=clearance, reach=0.2)
+    assert [e.outcome for e in out.events][0] == "drift"  # at x = 1.2, before entering
+    assert out.result.success

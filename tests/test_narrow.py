@@ -18,7 +18,7 @@ from lamp.scene.model import Circle, Polygon, Rectangle
 from lamp.search.dstar_lite import DStarLite
 from lamp.search.lattice import ObjectLattice
 from lamp.search.narrow import aligned_headings, narrow_poses
-from lamp.search.refined_lattice import LINK_CLEARANCE, RefinedLattice
+from lamp.search.refined_lattice import LINK_CLEARANCE, TIGHT_LINK_COST, RefinedLattice
 from lamp.suites.corridor_layout import wall_polygons
 
 
@@ -101,8 +101,9 @@ def test_refined_lattice_is_the_lattice_until_refined_then_passes_the_corridor()
         for v, c in refined.successors(u):
             assert (u, c) in refined.successors(v)
             assert c >= refined.heuristic(u, v)
-            if v < refined.n_nodes:
-                assert refined.exact.clearance(refined.pose(u)) >= LINK_CLEARANCE
+            if v < refined.n_nodes and refined.exact.clearance(refined.pose(u)) < LINK_CLEARANCE:
+                metric = float(refined.distance(refined.pose(u), refined.pose(v)))
+                assert c >= metric + TIGHT_LINK_COST  # turning in the passage costs more
     d = DStarLite(refined)
     d.initialize(refined.goal_node)
     path = d.plan_shortest_path(*join_lattice(refined, start))

@@ -298,8 +298,14 @@ class ClosedLoop:
             self.record.frames.extend(self.frames(out, st.plan))
         dpos, drot = pose_distance(st.q_O, adapted.q_to)
         cfg, policy = self.config, self.policy
-        max_pos, max_rot = drift_limits(cfg, None if self.clearance is None
-                                        else self.clearance(adapted.q_to), self.reach)
+        # the limits of the tighter of the pose reached and the next one planned (a push
+        # into a passage must start aligned)
+        tight = None
+        if self.clearance is not None:
+            tight = self.clearance(adapted.q_to)
+            if st.pending:
+                tight = min(tight, self.clearance(st.pending[0].q_to))
+        max_pos, max_rot = drift_limits(cfg, tight, self.reach)
         outcome = "continue"
         if out.left_workspace:
             outcome = "left"

@@ -34,8 +34,11 @@ EDGE_OVERHEAD = 0.01
 REFINE_MARGIN = 3.0
 #: Lattice nodes an extra vertex is joined to, at most (the nearest).
 MAX_LATTICE_LINKS = 8
-#: Only extra vertices with this much exact clearance (m) are joined to lattice nodes.
+#: An extra vertex with less exact clearance than this (m) is joined to lattice nodes at
+#: ``TIGHT_LINK_COST`` (m) more than the metric: turning onto the lattice in a passage is
+#: allowed, but the search prefers to do it in the open.
 LINK_CLEARANCE = 0.03
+TIGHT_LINK_COST = 1.0
 
 
 class RefinedLattice(ObjectLattice):
@@ -185,19 +188,21 @@ class RefinedLattice(ObjectLattice):
                 ok = np.asarray(self.in_model_range(q, self.poses(cand)), dtype=bool).reshape(-1)
                 for v in self._free_links(q, [v for v, k in zip(cand, ok, strict=True) if k]):
                     self._link(u, v)
-            # extra <-> lattice, only where the object is clear of the passage: it turns
-            # onto (or off) the lattice in the open and enters the passage straight
+            # extra <-> lattice; where the object is still in the passage such a link costs
+            # TIGHT_LINK_COST more, so that it turns onto (or off) the lattice in the open
+            # and enters the passage straight whenever it can
             nodes = self._candidates(q, reach, math.ceil(self.max_rotation / self.dtheta))
-            if len(nodes) and self.exact.clearance(q) >= LINK_CLEARANCE:
+            extra_cost = 0.0 if self.exact.clearance(q) >= LINK_CLEARANCE else TIGHT_LINK_COST
+            if len(nodes):
                 nodes = nodes[np.asarray(self.in_model_range(q, super().poses(nodes)), bool)]
                 self._ensure_nodes(nodes)
                 nodes = nodes[self._node_valid[nodes] == FREE]
                 order = np.argsort(self.distance(q, super().poses(nodes)), kind="stable")
                 for v in self._free_links(q, [int(n) for n in nodes[order][:MAX_LATTICE_LINKS]]):
-                    self._link(u, v)
+                    self._link(u, v, extra_cost)
         return len(new)
 
-    def _link(self, u: Node, v: Node) -> None:
-        c = float(self.distance(self.pose(u), self.pose(v))) + EDGE_OVERHEAD
+    def _link(self, u: Node, v: Node, extra: float = 0.0) -> None:
+        c = float(self.distance(self.pose(u), self.pose(v))) + EDGE_OVERHEAD + extra
         self._adj.setdefault(u, []).append((v, c))
         self._adj.setdefault(v, []).append((u, c))
