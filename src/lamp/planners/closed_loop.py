@@ -20,7 +20,6 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from lamp.geometry.exact_space import ExactSpace
 from lamp.geometry.se2 import pose_distance
 from lamp.planners.base import LoopPolicy, ObjectPlanner
 from lamp.planners.config import PlannerConfig, segment_limit
@@ -381,7 +380,7 @@ def run_object(task: ManipulationTask, planner: ObjectPlanner, policy: LoopPolic
     segment (in order); it only watches, the run is the same with or without it.
     """
     frames = (lambda out, plan: _frames(task, out, plan)) if render else None
-    exact = ExactSpace.from_space(task.object_space)
+    exact = task.exact_space
     loop = ClosedLoop(planner, policy, sim, index=task.index, goal=task.goal, config=task.config,
                       reroute=task.verifier.reroute, record=record, time_limit=time_limit,
                       observer=observer, frames=frames, clearance=exact.clearance,

@@ -74,7 +74,7 @@ def goal_lattice(task: ManipulationTask) -> ObjectLattice:
     cfg = task.config
     return RefinedLattice(
         task.object_space, task.goal, step=cfg.lattice_step, n_headings=cfg.n_headings,
-        landmark=task.object_poses[task.index][:2],
+        landmark=task.object_poses[task.index][:2], exact=task.exact_space,
     )
 
 

@@ -23,6 +23,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from lamp.geometry.exact_space import ExactSpace
 from lamp.geometry.object_space import ObjectSpace
 from lamp.geometry.robot_space import RobotSpace
 from lamp.planners.config import PlannerConfig
@@ -66,6 +67,7 @@ class ManipulationTask:
     def __post_init__(self) -> None:
         self.object_poses = np.array(self.object_poses, dtype=float).reshape(-1, 3)
         self.object_space = ObjectSpace.from_scene(self.scene, self.index, self.object_poses)
+        self._exact_space: ExactSpace | None = None
         self._spaces: OrderedDict[tuple, RobotSpace] = OrderedDict()
         #: This object's ``Verifier``: the model, this task as its ``RobotValidity``, Gspi
         #: over this scene, and the config's Verify parameters. It owns the proposal cache
@@ -75,6 +77,14 @@ class ManipulationTask:
             GspiRouter(self.scene, self.index, self.object_poses.copy(), seed=self.seed,
                        goal_tolerance=self.config.contact_tolerance),
             VerifierParams.from_config(self.config), seed=self.seed)
+
+    @property
+    def exact_space(self) -> ExactSpace:
+        """The exact twin of ``object_space`` (built on first use), the one shared by the
+        refined lattice and the closed loop's drift limits."""
+        if self._exact_space is None:
+            self._exact_space = ExactSpace.from_space(self.object_space)
+        return self._exact_space
 
     @property
     def stats(self) -> TaskStats:

@@ -44,12 +44,15 @@ TIGHT_LINK_COST = 1.0
 class RefinedLattice(ObjectLattice):
     """An object lattice with off-grid vertices added where passages are narrow."""
 
-    def __init__(self, *args: object, **kwargs: object) -> None:
+    def __init__(self, *args: object, exact: ExactSpace | None = None,
+                 **kwargs: object) -> None:
+        """The lattice's arguments, and optionally the exact twin of its space to use
+        (default: one built on first use)."""
         super().__init__(*args, **kwargs)
         self._extra = np.zeros((0, 3))
         self._adj: dict[Node, list[tuple[Node, float]]] = {}
         self._tree: cKDTree | None = None
-        self._exact: ExactSpace | None = None
+        self._exact = exact
         self._windows: list[tuple[float, float, float, float]] = []
         #: statistics: exact motion checks made for refined edges
         self.n_exact_checks = 0
