@@ -86,7 +86,7 @@ class FakeExecutor:
     def robot_positions(self) -> np.ndarray:
         return self.robots.copy()
 
-    def execute(self, robot_paths, record_every=None):
+    def execute(self, robot_paths, record_every=None, stop=None):
         paths = np.asarray(robot_paths, float)
         assert np.all(np.linalg.norm(np.diff(paths, axis=1), axis=2) <= MAX_STEP + 1e-9)
         seg = len(self.executed)

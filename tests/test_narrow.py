@@ -59,6 +59,9 @@ def test_aligned_headings_lay_the_narrow_side_across():
     circle = aligned_headings(Circle(0.2), 0.1)  # any heading within 22.5 degrees of one
     gaps = np.diff(np.sort(np.remainder([t for t, _, _ in circle], 2 * math.pi)))
     assert len(circle) == 8 and np.allclose(gaps, math.pi / 4)
+    given = aligned_headings(Circle(0.2), 0.1, circle_headings=[0.5, -3.0, 4.0])
+    assert [t for t, _, _ in given] == pytest.approx([0.5, -3.0, 4.0 - 2 * math.pi])
+    assert all(shift == 0.0 and width == pytest.approx(0.4) for _, shift, width in given)
 
 
 @pytest.mark.parametrize("angle", [17.0, -38.5])
@@ -112,6 +115,30 @@ def test_refined_lattice_is_the_lattice_until_refined_then_passes_the_corridor()
     exact = refined.exact
     assert all(exact.motion_free(a, b) or space.motion_free(a, b)
                for a, b in zip(poses[:-1], poses[1:], strict=True))
+
+
+def test_a_circle_passes_a_corridor_on_the_lattice_headings():
+    """A circle fits at any heading: its corridor poses take the lattice's own headings (the
+    goal's heading plus multiples of 2 pi / n), so the refined path never has to turn it."""
+    d = corridor_scene(17.0, 0.02)
+    d["objects"][0] = {"type": "circle", "radius": 0.15, "start": d["objects"][0]["start"][:2]
+                       + [0.0], "goal": d["objects"][0]["goal"][:2] + [0.0]}
+    scene = scene_from_dict(d)
+    space = ObjectSpace.from_scene(scene, 0)
+    refined = RefinedLattice(space, scene.objects[0].goal)
+    start = np.array(scene.objects[0].start)
+    assert refined.refine(start) > 0
+    extra = np.array([refined.pose(u) for u in
+                      range(refined.n_nodes, refined.n_nodes + refined.n_extra)])
+    steps = (extra[:, 2] - refined.anchor[2]) / refined.dtheta
+    assert np.allclose(steps, np.round(steps), atol=1e-9)
+    assert len(np.unique(np.round(steps) % refined.n_headings)) == refined.n_headings
+    dstar = DStarLite(refined)
+    dstar.initialize(refined.goal_node)
+    path = dstar.plan_shortest_path(*join_lattice(refined, start))
+    assert path and path[-1] == refined.goal_node
+    headings = refined.path_poses(path)[:, 2]
+    assert np.abs(np.remainder(headings + math.pi, 2 * math.pi) - math.pi).max() < 1e-9
 
 
 def test_lazy_pushes_a_box_through_a_tilted_corridor_two_centimetres_wider():

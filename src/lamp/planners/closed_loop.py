@@ -35,6 +35,7 @@ from lamp.planners.robots import robots_match
 from lamp.planners.task import ManipulationTask
 from lamp.planners.trajectory import concat, straight_moves
 from lamp.planners.verify import Transition
+from lamp.planners.watch import WATCH_FACTOR, PushWatch, watched
 
 
 @dataclass
@@ -138,8 +139,11 @@ class Executor(Protocol):
         """(N, 2) the robots' centres now."""
         ...
 
-    def execute(self, robot_paths: np.ndarray, record_every: int | None = None) -> Execution:
-        """Drive the robots along ``robot_paths`` (N, T, 2) and report the outcome."""
+    def execute(self, robot_paths: np.ndarray, record_every: int | None = None,
+                stop: Callable[[np.ndarray], bool] | None = None) -> Execution:
+        """Drive the robots along ``robot_paths`` (N, T, 2) and report the outcome; ``stop``
+        (given the (K, 3) object poses now and then) may end the paths early, the robots
+        then holding where they are (``Simulator.execute``)."""
         ...
 
 
@@ -273,12 +277,15 @@ class ClosedLoop:
         executed transition, the execution, and the planning time and replan flag charged
         to this segment."""
         cfg = self.config
+        chain = [adapted]
         if cfg.long_push_length > 0:  # one approach, then every push that continues it
-            adapted = merge(take_long_push(adapted, st.pending, cfg.continuous_push_gap,
-                                           cfg.long_push_length))
+            chain = take_long_push(adapted, st.pending, cfg.continuous_push_gap,
+                                   cfg.long_push_length)
+            adapted = merge(chain)
         paths = adapted.robot_paths
         traced = self.frames is not None or self.observer is not None
-        out = self.executor.execute(paths, record_every=RENDER_EVERY if traced else None)
+        out = self.executor.execute(paths, record_every=RENDER_EVERY if traced else None,
+                                    stop=self._watch(chain))
         st.iterations += 1
         st.segments += 1
         self.record.planning_time_s.append(st.pending_time)
@@ -286,6 +293,20 @@ class ClosedLoop:
         st.pending_time, st.replanned = 0.0, False
         self.record.makespan += paths.shape[1] - 1
         return adapted, out, *charged
+
+    def _watch(self, chain: list[Transition]) -> PushWatch | None:
+        """The ``stop`` condition of a straight push through a tight place
+        (``lamp.planners.watch``): ``WATCH_FACTOR`` times the drift limits of its tightest
+        planned pose; None for other pushes (``watch.watched``), without a clearance
+        function, or when the policy does not replan on drift."""
+        if self.clearance is None or not self.policy.replan_on_drift:
+            return None
+        poses = np.array([chain[0].q_from, *[t.q_to for t in chain]], dtype=float)
+        tight = min(float(self.clearance(p)) for p in poses)
+        if not watched(poses, tight):
+            return None
+        max_pos, max_rot = drift_limits(self.config, tight, self.reach)
+        return PushWatch(poses, self.index, WATCH_FACTOR * max_pos, WATCH_FACTOR * max_rot)
 
     def observe(self, st: _Progress, adapted: Transition, out: Execution, seg_time: float,
                 seg_replanned: bool) -> str:
@@ -310,7 +331,8 @@ class ClosedLoop:
             outcome = "left"
         elif policy.replan_on_stall and _stalled(q_before, st.q_O, adapted):
             outcome = "stalled"
-        elif policy.replan_on_drift and (dpos > max_pos or drot > max_rot):
+        elif policy.replan_on_drift and (dpos > max_pos or drot > max_rot
+                                         or getattr(out, "stopped_at", None) is not None):
             outcome = "drift"
         if self.observer is not None:
             self.observer(SegmentEvent(self.index, st.segments - 1, adapted, out, st.plan,
@@ -326,6 +348,10 @@ class ClosedLoop:
             st.pending = []
         elif outcome == "drift":
             st.pending = []  # line 6: drift -> replan from the observed state
+            if getattr(out, "stopped_at", None) is not None:
+                # the watch stopped a push that left its path in a tight place
+                # (``lamp.planners.watch``): it failed in practice, like a stall
+                self.planner.report_failure(adapted)
         return outcome
 
     def _result(self, st: _Progress, max_segments: int) -> ObjectResult:

@@ -18,8 +18,9 @@ passages and returns poses that pass them; ``RefinedLattice`` adds them to the s
    weakest axis of the clearance gradients' structure tensor around it (the gradients
    point away from the walls on both sides, across the corridor).
 4. **Aligned poses.** For each point, each heading that lays an edge of the object's convex
-   hull along ``phi`` (a rectangle: 4 headings; a circle: ``CIRCLE_HEADINGS``, ``phi`` and
-   every 45 degrees from it) gives a pose, shifted
+   hull along ``phi`` (a rectangle: 4 headings; a circle, which fits at any heading: the
+   lattice's own headings when given, so that it need not turn in the corridor, else
+   ``CIRCLE_HEADINGS``, ``phi`` and every 45 degrees from it) gives a pose, shifted
    across the corridor so that the object's extent across it is centred on the ridge and
    nudged by up to one raster cell more if needed. A pose is kept when the exact checker
    (``ExactSpace``) finds it free.
@@ -36,6 +37,7 @@ about completeness: the poses are candidates, connected by checked motions in
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -76,16 +78,23 @@ class NarrowParams:
             raise ValueError(f"NarrowParams.max_cells must be >= 1000, got {self.max_cells!r}")
 
 
-def aligned_headings(shape: object, phi: float) -> list[tuple[float, float, float]]:
+def aligned_headings(shape: object, phi: float,
+                     circle_headings: Sequence[float] | None = None,
+                     ) -> list[tuple[float, float, float]]:
     """``(theta, shift, width)`` for each heading that lays a convex-hull edge of ``shape``
     along direction ``phi``: ``width`` is the object's extent across ``phi`` and ``shift``
     the offset (along the normal of ``phi``) that centres that extent on the object's
-    position line; narrowest first."""
-    if isinstance(shape, Circle):  # any heading fits: eight, so that every heading is
-        # within the model's rotation range of one of them
+    position line; narrowest first.
+
+    A circle fits at every heading: it gets ``circle_headings`` (the lattice's own heading
+    set, so that it passes the corridor without turning), or else ``CIRCLE_HEADINGS``
+    headings evenly spaced from ``phi``."""
+    if isinstance(shape, Circle):
         w = 2.0 * float(shape.radius)
-        return [(math.remainder(phi + k * 2.0 * math.pi / CIRCLE_HEADINGS, 2.0 * math.pi), 0.0, w)
-                for k in range(CIRCLE_HEADINGS)]
+        if circle_headings is None:
+            circle_headings = [phi + k * 2.0 * math.pi / CIRCLE_HEADINGS
+                               for k in range(CIRCLE_HEADINGS)]
+        return [(math.remainder(float(t), 2.0 * math.pi), 0.0, w) for t in circle_headings]
     pts = local_outline(shape)
     hull = np.asarray(shapely.MultiPoint(pts).convex_hull.exterior.coords)[:-1]
     edges = np.roll(hull, -1, axis=0) - hull
@@ -168,8 +177,10 @@ def _thin(points: np.ndarray, spacing: float) -> np.ndarray:
 
 def narrow_poses(space: ObjectSpace, exact: ExactSpace,
                  window: tuple[float, float, float, float],
-                 params: NarrowParams | None = None) -> np.ndarray:
-    """(M, 3) free poses through the narrow passages inside ``window`` (module docstring)."""
+                 params: NarrowParams | None = None,
+                 circle_headings: Sequence[float] | None = None) -> np.ndarray:
+    """(M, 3) free poses through the narrow passages inside ``window`` (module docstring);
+    ``circle_headings`` as in ``aligned_headings``."""
     params = params or NarrowParams()
     x0, y0, x1, y1 = window
     area = max(x1 - x0, 1e-9) * max(y1 - y0, 1e-9)
@@ -203,7 +214,7 @@ def narrow_poses(space: ObjectSpace, exact: ExactSpace,
         u = evecs[:, 0]
         phi = math.atan2(u[1], u[0])
         n = np.array([-u[1], u[0]])
-        for theta, shift, _ in aligned_headings(space.shape, phi):
+        for theta, shift, _ in aligned_headings(space.shape, phi, circle_headings):
             for nudge in nudges:
                 xy = p + (shift + nudge) * n
                 pose = np.array([xy[0], xy[1], theta])

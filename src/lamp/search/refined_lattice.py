@@ -170,7 +170,8 @@ class RefinedLattice(ObjectLattice):
                for a in self._windows):
             return 0
         self._windows.append(window)
-        new = narrow_poses(self.space, self.exact, window, params or NarrowParams())
+        headings = self.anchor[2] + self.dtheta * np.arange(self.n_headings)
+        new = narrow_poses(self.space, self.exact, window, params or NarrowParams(), headings)
         if len(self._extra) and len(new):  # drop poses already present
             d, _ = cKDTree(self._extra[:, :2]).query(new[:, :2])
             new = new[d > 1e-6]

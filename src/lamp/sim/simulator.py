@@ -41,6 +41,7 @@ on a new simulator or on one reset with ``set_state`` (MuJoCo runs single-thread
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import mujoco
@@ -75,6 +76,8 @@ _STATE_SPEC = mujoco.mjtState.mjSTATE_INTEGRATION
 _ROLLOUT_SPEC = mujoco.mjtState.mjSTATE_FULLPHYSICS
 _STEP_SLACK = 1e-9  # tolerance on MAX_STEP / MAX_START_GAP comparisons
 _CHUNK = 4096  # physics steps per rollout call (bounds the memory of recorded states)
+#: Physics steps between two ``stop`` checks of a watched ``execute`` (50 ms).
+STOP_CHECK_STEPS = 25
 
 
 @dataclass(frozen=True)
@@ -101,6 +104,9 @@ class ExecutionResult:
     steps: int  # physics steps in this call
     robot_errors: np.ndarray  # (N,) final distance of each robot from its last waypoint
     trace: Trace | None = None
+    #: physics step at which ``stop`` ended the paths early (then the robots held where
+    #: they were for the settle time); None when the paths ran to their end
+    stopped_at: int | None = None
 
 
 @dataclass(frozen=True)
@@ -287,6 +293,7 @@ class Simulator:
         robot_paths: ArrayLike,
         record_every: int | None = None,
         settle_time: float = SETTLE_TIME,
+        stop: Callable[[np.ndarray], bool] | None = None,
     ) -> ExecutionResult:
         """Drive the robots along ``robot_paths`` (N, T, 2) and simulate.
 
@@ -295,6 +302,10 @@ class Simulator:
                 most ``MAX_STEP`` apart, row 0 within ``MAX_START_GAP`` of the robot.
             record_every: if given, record a ``Trace`` every that many physics steps.
             settle_time: how long the last row is held at the end [s].
+            stop: if given, called with the (K, 3) object poses every ``STOP_CHECK_STEPS``
+                physics steps; when it returns True the paths end there: every robot holds
+                the place it has reached for ``settle_time`` and ``stopped_at`` gives the
+                step. Until it fires the result is bit-identical to an unwatched call.
 
         Raises:
             ValueError: malformed paths (shape, non-finite values, a step too long, a start
@@ -312,6 +323,9 @@ class Simulator:
         pos, vel = self._schedule(paths, settle_time)
         n_steps = len(pos)
         ctrl = (pos + (ROBOT_KV / ROBOT_KP) * vel).reshape(n_steps, 1, 2 * self.n_robots)
+        chunk_size = _CHUNK if stop is None else STOP_CHECK_STEPS
+        n_settle = math.ceil(settle_time / float(self.model.opt.timestep) - 1e-9)
+        stopped_at: int | None = None
 
         start_time = self.data.time
         first = np.empty(self._nroll)
@@ -321,8 +335,9 @@ class Simulator:
         # roll out in chunks so that memory stays bounded on long paths; each chunk starts
         # from the full physics state and warm start the previous one ended in, so chunking
         # does not change the result
-        for lo in range(0, n_steps, _CHUNK):
-            chunk = ctrl[lo : lo + _CHUNK].reshape(1, -1, ctrl.shape[-1])
+        lo = 0
+        while lo < n_steps:
+            chunk = ctrl[lo : lo + chunk_size].reshape(1, -1, ctrl.shape[-1])
             init = np.empty(self._nroll)
             mujoco.mj_getState(self.model, self.data, init, _ROLLOUT_SPEC)
             states, _ = mj_rollout.rollout(
@@ -344,6 +359,15 @@ class Simulator:
                 steps = lo + 1 + np.arange(len(states))  # step index of each row
                 keep = (steps % record_every == 0) | (steps == n_steps)
                 rows.append(states[keep])
+            lo += len(states)
+            if (stop is not None and stopped_at is None and lo < n_steps - n_settle
+                    and stop(self.object_poses)):
+                # the paths end here: hold where the robots are, then settle
+                stopped_at = lo
+                hold = self.robot_positions.reshape(1, 2 * self.n_robots)
+                ctrl = np.concatenate([ctrl[:lo], np.repeat(hold, n_settle, axis=0)
+                                       .reshape(n_settle, 1, -1)])
+                n_steps = len(ctrl)
         if n_steps > 0:
             mujoco.mj_forward(self.model, self.data)
 
@@ -365,6 +389,7 @@ class Simulator:
             steps=n_steps,
             robot_errors=np.hypot(*(robot_final - paths[:, -1]).T),
             trace=trace,
+            stopped_at=stopped_at,
         )
 
     def _outside(self, states: np.ndarray) -> np.ndarray:
