@@ -310,3 +310,48 @@ def test_drift_before_a_tight_push_replans_at_once() -> None:
     out = run(FakeExecutor(drifting(1, side=0.02)), clearance=clearance, reach=0.2)
     assert [e.outcome for e in out.events][0] == "drift"  # at x = 1.2, before entering
     assert out.result.success
+
+
+class SwervingExecutor(FakeExecutor):
+    """Like ``FakeExecutor(exact)``, except that in segment 0 the object turns 0.3 rad half
+    way: a watched push (``stop`` given) is stopped there, an unwatched one ends turned."""
+
+    def __init__(self) -> None:
+        super().__init__(exact)
+        self.stops: list = []
+
+    def execute(self, robot_paths, record_every=None, stop=None):
+        self.stops.append(stop)
+        if len(self.executed) > 0:
+            return super().execute(robot_paths, record_every)
+        paths = np.asarray(robot_paths, float)
+        self.executed.append(paths)
+        d = paths[0, -1] - paths[0, 0]
+        self.poses[0, :2] += 0.5 * d
+        self.poses[0, 2] += 0.3
+        stopped = stop is not None and stop(self.poses.copy())
+        if not stopped:
+            self.poses[0, :2] += 0.5 * d
+        self.robots = paths[:, paths.shape[1] // 2 if stopped else -1].copy()
+        return SimpleNamespace(object_poses=self.poses.copy(), robot_positions=self.robots.copy(),
+                               left_workspace=False, trace=None,
+                               stopped_at=10 if stopped else None)
+
+
+def test_watch_stops_a_straight_push_in_a_tight_place_only() -> None:
+    """A straight push through a tight place (1 cm of clearance) runs watched: the turn
+    stops it half way, it is reported failed and the loop replans; in the open nothing is
+    watched, and the turned object simply drifts."""
+    open_ex = SwervingExecutor()
+    open_run = run(open_ex, clearance=lambda q: 1.0, reach=0.2)
+    assert all(s is None for s in open_ex.stops) and open_run.record.watch_stops == 0
+    assert open_run.events[0].outcome == "drift"
+    assert open_run.events[0].execution.object_poses[0, 0] == pytest.approx(1.2)
+    assert all(f.q_from[0] > START[0] for f in open_run.planner.failures)
+    tight_ex = SwervingExecutor()
+    tight = run(tight_ex, clearance=lambda q: 0.01, reach=0.2)
+    assert tight_ex.stops[0] is not None
+    assert tight.events[0].outcome == "drift" and tight.record.watch_stops == 1
+    assert tight.planner.failures[0].q_from[0] == pytest.approx(START[0])  # the push stopped
+    assert all(f.q_from[0] > START[0] for f in tight.planner.failures[1:])  # (later: stalls)
+    assert tight.events[0].execution.object_poses[0, 0] == pytest.approx(1.1)

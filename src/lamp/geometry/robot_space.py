@@ -291,6 +291,43 @@ class RobotSpace:
             self.derived["free_grid"] = g
         return g
 
+    def components(self, points: ArrayLike, snap: float = 0.02) -> np.ndarray:
+        """Id of the connected free region each point lies in: the region (8-connected free
+        grid nodes, labelled once per space) of the nearest free node within ``snap`` (m)
+        of the point, or 0 when there is none (outside the window, deep in an obstacle).
+
+        Two points with the same nonzero id are joined by free grid nodes, each within a
+        diagonal cell of the next; points with different ids are not (inside this window:
+        a path around through the rest of the map is not seen). A point touching an
+        obstacle (a robot on its contact) takes the region it touches from."""
+        from scipy import ndimage
+
+        labels = self.derived.get("components")
+        if labels is None:
+            labels, _ = ndimage.label(self.free_grid, structure=np.ones((3, 3), dtype=bool))
+            labels.setflags(write=False)
+            self.derived["components"] = labels
+        pts, shape = _points(points)
+        h = self.resolution
+        s = max(1, int(math.ceil(snap / h)))
+        ny, nx = labels.shape
+        out = np.zeros(len(pts), dtype=np.int64)
+        for k, (x, y) in enumerate(pts):
+            i = int(round(x / h)) - self.origin[0]
+            j = int(round(y / h)) - self.origin[1]
+            i0, i1, j0, j1 = max(0, i - s), min(nx, i + s + 1), max(0, j - s), min(ny, j + s + 1)
+            if i0 >= i1 or j0 >= j1:
+                continue
+            block = labels[j0:j1, i0:i1]
+            jj, ii = np.nonzero(block)
+            if len(jj) == 0:
+                continue
+            d = (ii + i0 - (x / h - self.origin[0])) ** 2 + (jj + j0 - (y / h - self.origin[1])) ** 2
+            best = int(np.argmin(d))
+            if d[best] <= (snap / h) ** 2 + 1e-9:
+                out[k] = int(block[jj[best], ii[best]])
+        return out.reshape(shape)
+
     # ---- point queries ------------------------------------------------------------
 
     def clearance(self, points: ArrayLike, exact: bool = False) -> np.ndarray:

@@ -48,6 +48,8 @@ class LoopRecord:
     #: Planning time after the last executed segment (a failed search, say): it belongs
     #: to no segment, so result.json reports it apart from ``planning_time_s``.
     unexecuted_planning_s: float = 0.0
+    #: Pushes the watch stopped early (``lamp.planners.watch``).
+    watch_stops: int = 0
     frames: list[Any] = field(default_factory=list)
 
 
@@ -351,6 +353,7 @@ class ClosedLoop:
             if getattr(out, "stopped_at", None) is not None:
                 # the watch stopped a push that left its path in a tight place
                 # (``lamp.planners.watch``): it failed in practice, like a stall
+                self.record.watch_stops += 1
                 self.planner.report_failure(adapted)
         return outcome
 

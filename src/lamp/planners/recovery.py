@@ -6,8 +6,11 @@ a doorway with every robot behind it. The search's first motions then never veri
 each failure only raises a penalty. ``recovery_push`` looks past the path instead: it
 tries the small motions around the object's pose (``RECOVERY_MOTIONS``, object frame)
 whose end pose is free (the start may touch an obstacle: the swept motion is checked for
-the footprint shrunk by the least of ``RECOVERY_TOLERANCES`` that lets any through), most clearance gained first and,
-among equals, nearest to the goal, and returns the first that ``Verify`` accepts. The
+the footprint shrunk by the least of ``RECOVERY_TOLERANCES`` that lets any through), most
+clearance gained first and, among equals, nearest to the goal, skips those whose proposals
+all need contacts the robots cannot reach (``Verifier.can_reach``: with every robot behind
+a wedged object, the motions that free it most are pushed from its far side), and returns
+the first that ``Verify`` accepts. The
 closed loop executes it and plans again from the freed pose.
 
 Guarantee (``tests/test_recovery.py``): a returned transition starts at the given pose,
@@ -62,7 +65,7 @@ def recovery_push(lattice: object, verifier: object, q_O: np.ndarray, q_R: np.nd
         return None
     for tol in RECOVERY_TOLERANCES:
         try:
-            shrunk = lattice._tolerant_space(tol)
+            shrunk = lattice.tolerant_space(tol)
         except ValueError:  # a thin object would vanish
             break
         swept = shrunk.motions_free(np.broadcast_to(q, targets[idx].shape), targets[idx])
@@ -75,10 +78,16 @@ def recovery_push(lattice: object, verifier: object, q_O: np.ndarray, q_R: np.nd
     goal = lattice.pose(lattice.goal_node)
     to_goal = np.asarray(lattice.distance(targets[idx], goal), dtype=float)
     order = np.lexsort((to_goal, -np.round(clearance, 3)))
-    for k in order[:RECOVERY_VERIFY_CALLS]:
+    calls = 0
+    for k in order:
+        if not verifier.can_reach(q, targets[idx[k]], q_R, attempt):
+            continue  # every proposal needs a contact the robots cannot get to
         trans = verifier.verify(q, targets[idx[k]], q_R, attempt)
         if trans is not None:
             return trans
+        calls += 1
+        if calls >= RECOVERY_VERIFY_CALLS:
+            break
     return None
 
 

@@ -147,6 +147,7 @@ def run_scene(scene: Scene, planner: str, seed: int, model: str | Path | Any, *,
     totals = TaskStats()
     frames: list[Any] = []
     unexecuted = 0.0
+    watch_stops = 0
     n = len(scene.objects)
     recorder = Recorder(scene, RENDER_EVERY * TIMESTEP)
 
@@ -171,10 +172,12 @@ def run_scene(scene: Scene, planner: str, seed: int, model: str | Path | Any, *,
         result.add_object(obj, record.planning_time_s, record.makespan)
         totals.add(task.stats)
         unexecuted += record.unexecuted_planning_s
+        watch_stops += record.watch_stops
         frames.extend(record.frames)
     result.wall_time_s = time.perf_counter() - t_start
     result.unexecuted_planning_time_s = unexecuted
     result.stats = {**vars(totals), "unexecuted_planning_time_s": round(unexecuted, 6),
+                    "watch_stops": watch_stops,
                     "failure_reasons": [o.failure_reason for o in result.objects]}
     result.recording = recorder.finish(planner, int(seed), result.to_dict())
     return Solution(result, frames, result.recording)

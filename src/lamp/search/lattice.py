@@ -572,7 +572,7 @@ class ObjectLattice:
         self._ensure_nodes(cand)
         ok = self._node_valid[cand] == FREE
         cand, targets = cand[ok], targets[ok]
-        space = self._tolerant_space(tolerance)
+        space = self.tolerant_space(tolerance)
         free = space.motions_free(np.broadcast_to(pose, targets.shape), targets)
         self.n_motion_checks += len(free)
         cand, targets = cand[free], targets[free]
@@ -587,11 +587,13 @@ class ObjectLattice:
         b = np.asarray(b, dtype=float)
         if not self.in_model_range(a, b):
             return None
-        if not self._tolerant_space(tolerance).motion_free(a, b):
+        if not self.tolerant_space(tolerance).motion_free(a, b):
             return None
         return float(motion_cost(a, b, self.w_rot))
 
-    def _tolerant_space(self, tolerance: float) -> ObjectSpace:
+    def tolerant_space(self, tolerance: float) -> ObjectSpace:
+        """The object space with the footprint shrunk by ``tolerance`` (m; cached per value;
+        ``ValueError`` when that would leave nothing of a thin object)."""
         if tolerance == 0.0:
             return self.space
         sp = self._tolerant.get(tolerance)

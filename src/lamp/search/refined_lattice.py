@@ -141,7 +141,7 @@ class RefinedLattice(ObjectLattice):
         if not nodes:
             return []
         targets = self.poses(nodes)
-        space = self._tolerant_space(tolerance)
+        space = self.tolerant_space(tolerance)
         free = space.motions_free(np.broadcast_to(p, targets.shape), targets)
         self.n_motion_checks += len(nodes)
         out = []
