@@ -219,3 +219,58 @@ def test_path_free_and_border() -> None:
     y = 0.75 + 0.2 + R + 1e-12
     assert space.path_free([[0.5, y], [1.5, y]])
     assert not space.path_free([[0.5, y - 1e-6], [1.5, y - 1e-6]])
+
+
+def _wall(gap: float) -> list[Obstacle]:
+    """A wall across the map at x = 1 with an opening of ``gap`` m at its top."""
+    h = H - gap
+    return [Obstacle(Rectangle((0.1, h)), (1.0, h / 2, 0.0))]
+
+
+def test_components_tell_the_two_sides_of_a_wall_apart():
+    closed = RobotSpace((W, H), _wall(0.0), radius=R)
+    left, right = np.array([[0.5, 0.7], [0.2, 0.2]]), np.array([[1.5, 0.7], [1.9, 1.4]])
+    a, b = closed.components(left), closed.components(right)
+    assert a[0] == a[1] != 0 and b[0] == b[1] != 0 and a[0] != b[0]
+    assert closed.components(np.array([1.0, 0.7])) == 0  # inside the wall
+    assert closed.components(np.array([[5.0, 0.5]]))[0] == 0  # off the map
+    # a robot touching the wall (its centre R from it) takes the side it stands on
+    assert closed.components(np.array([1.05 + R, 0.7])) == b[0]
+    wide = RobotSpace((W, H), _wall(2 * R + 0.03), radius=R)  # a robot fits through
+    assert len(set(wide.components(np.concatenate([left, right])).tolist())) == 1
+    narrow = RobotSpace((W, H), _wall(2 * R - 0.02), radius=R)  # it does not
+    assert len(set(narrow.components(np.concatenate([left, right])).tolist())) == 2
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(0, 10_000))
+def test_components_agree_with_a_flood_fill(seed):
+    """Reference: a breadth-first flood fill over the 8-connected free grid nodes."""
+    rng = np.random.default_rng(seed)
+    space = RobotSpace((W, H), _random_obstacles(rng, 6), radius=R, resolution=0.02)
+    free = space.free_grid
+    pts = rng.integers([0, 0], [int(W / 0.02) + 1, int(H / 0.02) + 1], size=(12, 2)) * 0.02
+    ids = space.components(pts, snap=0.0)  # points on nodes: exactly their node's region
+    nodes = [(int(round(y / 0.02)), int(round(x / 0.02))) for x, y in pts]
+    for k, (j, i) in enumerate(nodes):
+        assert (ids[k] != 0) == bool(free[j, i])
+    seen = -np.ones(free.shape, dtype=int)
+    for k, (j, i) in enumerate(nodes):
+        if not free[j, i] or seen[j, i] >= 0:
+            continue
+        stack = [(j, i)]
+        seen[j, i] = k
+        while stack:
+            y, x = stack.pop()
+            for dy in (-1, 0, 1):
+                for dx in (-1, 0, 1):
+                    v, u = y + dy, x + dx
+                    if (0 <= v < free.shape[0] and 0 <= u < free.shape[1] and free[v, u]
+                            and seen[v, u] < 0):
+                        seen[v, u] = k
+                        stack.append((v, u))
+    for a in range(len(pts)):
+        for b in range(len(pts)):
+            if ids[a] and ids[b]:
+                same = seen[nodes[a]] == seen[nodes[b]]
+                assert (ids[a] == ids[b]) == same

@@ -154,3 +154,38 @@ def test_params_are_validated() -> None:
                 {"contact_tolerance": -1.0}):
         with pytest.raises(ValueError, match=next(iter(bad))):
             VerifierParams(**bad)
+
+
+def _wedged_box_task():
+    """A 0.4 x 0.2 m box in a corridor 2 cm wider, every robot on its left."""
+    from lamp.planners.config import PlannerConfig
+    from lamp.planners.task import ManipulationTask
+    from lamp.scene.loader import scene_from_dict
+
+    scene = scene_from_dict({
+        "format": "lamp-scene/1", "name": "wedged", "workspace": [3.0, 1.0],
+        "robots": {"radius": 0.05, "starts": [[0.9, 0.44], [0.9, 0.56], [0.7, 0.5]]},
+        "obstacles": [{"type": "rectangle", "center": [1.5, 0.195], "size": [3.0, 0.39]},
+                      {"type": "rectangle", "center": [1.5, 0.805], "size": [3.0, 0.39]}],
+        "objects": [{"type": "rectangle", "size": [0.4, 0.2], "start": [1.5, 0.5, 0.0],
+                     "goal": [2.5, 0.5, 0.0]}]})
+    task = ManipulationTask(scene, 0, np.array([[1.5, 0.5, 0.0]]), GeometricProposer(),
+                            PlannerConfig(), seed=0)
+    return task, np.array(scene.robot_starts, float)
+
+
+def test_contacts_beyond_a_wedged_object_are_unreachable_and_tried_last():
+    task, robots = _wedged_box_task()
+    v = task.verifier
+    q = np.array([1.5, 0.5, 0.0])
+    forward, back = np.array([1.6, 0.5, 0.0]), np.array([1.4, 0.5, 0.0])
+    assert v.can_reach(q, forward, robots)
+    assert not v.can_reach(q, back, robots)  # pushed from the right, where no robot is
+    assert v.stats.gspi_calls == 0  # a test without Gspi
+    motion = se2.relative(q, back)
+    ranked = v._usable_proposals(q, robots, motion, 1, 0)
+    assert ranked and all(u for u, _ in ranked)
+    ranked = v._usable_proposals(q, robots, se2.relative(q, forward), 1, 0)
+    flags = [u for u, _ in ranked]
+    assert flags and flags == sorted(flags)  # reachable ones first
+    assert v.verify(q, forward, robots) is not None

@@ -35,7 +35,7 @@ from lamp.planners.robots import robots_match
 from lamp.planners.task import ManipulationTask
 from lamp.planners.trajectory import concat, straight_moves
 from lamp.planners.verify import Transition
-from lamp.planners.watch import WATCH_FACTOR, PushWatch, watched
+from lamp.planners.watch import WATCH_FACTOR, WATCH_ROTATION, PushWatch, watched
 
 
 @dataclass
@@ -298,17 +298,18 @@ class ClosedLoop:
 
     def _watch(self, chain: list[Transition]) -> PushWatch | None:
         """The ``stop`` condition of a straight push through a tight place
-        (``lamp.planners.watch``): ``WATCH_FACTOR`` times the drift limits of its tightest
-        planned pose; None for other pushes (``watch.watched``), without a clearance
-        function, or when the policy does not replan on drift."""
+        (``lamp.planners.watch``): ``WATCH_FACTOR`` times the position drift limit of its
+        tightest planned pose, ``WATCH_ROTATION`` of turn; None for other pushes
+        (``watch.watched``), without a clearance function, or when the policy does not
+        replan on drift."""
         if self.clearance is None or not self.policy.replan_on_drift:
             return None
         poses = np.array([chain[0].q_from, *[t.q_to for t in chain]], dtype=float)
         tight = min(float(self.clearance(p)) for p in poses)
         if not watched(poses, tight):
             return None
-        max_pos, max_rot = drift_limits(self.config, tight, self.reach)
-        return PushWatch(poses, self.index, WATCH_FACTOR * max_pos, WATCH_FACTOR * max_rot)
+        max_pos, _ = drift_limits(self.config, tight, self.reach)
+        return PushWatch(poses, self.index, WATCH_FACTOR * max_pos, WATCH_ROTATION)
 
     def observe(self, st: _Progress, adapted: Transition, out: Execution, seg_time: float,
                 seg_replanned: bool) -> str:

@@ -36,10 +36,16 @@ WATCH_CLEARANCE = 0.03
 #: turns the object lets it lag and swing on the way (corridor-04 lost its way when such
 #: pushes were stopped); one along a passage must not turn at all.
 WATCH_MAX_TURN = 0.05
-#: A watched push stops at this multiple of the drift limits of its tightest pose (the
-#: loop's end-of-segment check keeps the limits themselves: the watch catches a push that
-#: is going wrong, not the wobble of one pushed along a passage).
+#: A watched push stops when the object is off its path by this multiple of the position
+#: drift limit of its tightest pose (the loop's end-of-segment check keeps the limits
+#: themselves: the watch catches a push that is going wrong, not the wobble of one pushed
+#: along a passage) ...
 WATCH_FACTOR = 1.5
+#: ... or turned by more than this (rad) from it, whatever its length: a box turning
+#: about a caught corner turns fast and far (corridor-20: 0.34 rad in one push), while a
+#: long bar pushed along a passage wobbles by a few hundredths (1.36 m bars were stopped
+#: over and over at 1.5 times their drift limit, 0.02 rad).
+WATCH_ROTATION = 0.1
 
 
 def deviation(path: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

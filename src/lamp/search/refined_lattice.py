@@ -24,6 +24,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.spatial import cKDTree
 
+from lamp.geometry import se2
 from lamp.geometry.exact_space import ExactSpace
 from lamp.search.lattice import FREE, Node, ObjectLattice, VirtualNode
 from lamp.search.narrow import NarrowParams, narrow_poses
@@ -170,8 +171,8 @@ class RefinedLattice(ObjectLattice):
                for a in self._windows):
             return 0
         self._windows.append(window)
-        headings = self.anchor[2] + self.dtheta * np.arange(self.n_headings)
-        new = narrow_poses(self.space, self.exact, window, params or NarrowParams(), headings)
+        new = narrow_poses(self.space, self.exact, window, params or NarrowParams(),
+                           self._circle_headings(p))
         if len(self._extra) and len(new):  # drop poses already present
             d, _ = cKDTree(self._extra[:, :2]).query(new[:, :2])
             new = new[d > 1e-6]
@@ -205,6 +206,18 @@ class RefinedLattice(ObjectLattice):
                 for v in self._free_links(q, [int(n) for n in nodes[order][:MAX_LATTICE_LINKS]]):
                     self._link(u, v, extra_cost)
         return len(new)
+
+    def _circle_headings(self, around: np.ndarray) -> np.ndarray:
+        """The headings a circle's passage poses take (any heading fits a circle): the
+        lattice headings next to the goal's and, when ``around`` is a pose, next to its
+        heading, so that the circle passes at the heading it comes with and leaves at
+        the goal's, without turning in the passage (its pushes turn it only by drift)."""
+        steps = {-1, 0, 1}
+        if around.size == 3:
+            k = round(float(se2.wrap_angle(around[2] - self.anchor[2])) / self.dtheta)
+            steps |= {k - 1, k, k + 1}
+        ks = sorted({s % self.n_headings for s in steps})
+        return self.anchor[2] + self.dtheta * np.array(ks, dtype=float)
 
     def _link(self, u: Node, v: Node, extra: float = 0.0) -> None:
         c = float(self.distance(self.pose(u), self.pose(v))) + EDGE_OVERHEAD + extra
