@@ -174,7 +174,7 @@ def _wedged_box_task():
     return task, np.array(scene.robot_starts, float)
 
 
-def test_contacts_beyond_a_wedged_object_are_unreachable_and_tried_last():
+def test_contacts_beyond_a_wedged_object_are_unreachable():
     task, robots = _wedged_box_task()
     v = task.verifier
     q = np.array([1.5, 0.5, 0.0])
@@ -182,10 +182,30 @@ def test_contacts_beyond_a_wedged_object_are_unreachable_and_tried_last():
     assert v.can_reach(q, forward, robots)
     assert not v.can_reach(q, back, robots)  # pushed from the right, where no robot is
     assert v.stats.gspi_calls == 0  # a test without Gspi
-    motion = se2.relative(q, back)
-    ranked = v._usable_proposals(q, robots, motion, 1, 0)
-    assert ranked and all(u for u, _ in ranked)
-    ranked = v._usable_proposals(q, robots, se2.relative(q, forward), 1, 0)
-    flags = [u for u, _ in ranked]
-    assert flags and flags == sorted(flags)  # reachable ones first
+    unreachable = v._unreachable(q, robots)
+    back_props = v._usable_proposals(q, robots, se2.relative(q, back), 1, 0)
+    assert back_props and all(unreachable(p) for p in back_props)
+    fwd_props = v._usable_proposals(q, robots, se2.relative(q, forward), 1, 0)
+    assert any(not unreachable(p) for p in fwd_props)
     assert v.verify(q, forward, robots) is not None
+    calls = v.stats.gspi_calls
+    assert v.verify(q, back, robots) is None
+    assert v.stats.gspi_calls > calls  # still tried: a wider window might reach round
+
+
+def test_after_a_failed_approach_reachable_contacts_go_first():
+    """The nearest candidate is tried first; once an approach fails, the rest are tried
+    reachable first (nearest first within each group)."""
+    task, robots = _wedged_box_task()
+    v = task.verifier
+    q = np.array([1.5, 0.5, 0.0])
+    def push(x: float) -> np.ndarray:  # one robot's push path (object frame), from x
+        return np.array([[[x, 0.0], [x + 0.01, 0.0]]])
+
+    beyond, behind = 0.26, -0.26  # right of the box (no robot there) and left of it
+    order = [push(beyond), push(beyond), push(behind), push(behind)]  # "nearest" first
+    tried = []
+    v._usable_proposals = lambda *a, **k: [p.copy() for p in order]
+    v.route_push = lambda q_from, q_to, q_R, pushes: tried.append(pushes[0, 0, 0]) or None
+    assert v.verify(q, np.array([1.6, 0.5, 0.0]), robots) is None
+    assert tried[:3] == [beyond, behind, behind]

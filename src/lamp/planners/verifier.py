@@ -323,29 +323,37 @@ class Verifier:
         return unreachable
 
     def _usable_proposals(self, q_from: np.ndarray, q_R: np.ndarray, motion: np.ndarray,
-                          budget: int, attempt: int) -> list[tuple[bool, np.ndarray]]:
-        """Lines 20-21: the K proposals (C_R, T_manip) that pass ``Collide``, as
-        (unreachable, push paths), those whose contacts the robots can reach first, then
-        nearest to the robots first.
+                          budget: int, attempt: int) -> list[np.ndarray]:
+        """Lines 20-21: the K proposals (C_R, T_manip) that pass ``Collide``, nearest to the robots first.
 
-        The ordering is our addition. By the optimal robot-to-contact distance: Gspi is tried
-        on the candidates that need the shortest approach first, which shortens the makespan
-        and keeps consecutive pushes in the same direction from reshuffling the robots.
-        Reachable first (``_unreachable``): with every robot on one side of an object wedged
-        in a passage, contacts on the far side are near as the crow flies but cannot be
-        reached, and Gspi's attempts would all go to them.
+        Ordering by the optimal robot-to-contact distance is our addition: Gspi is tried on
+        the candidates that need the shortest approach first, which shortens the makespan and
+        keeps consecutive pushes in the same direction from reshuffling the robots.
         """
         cands = self.push_candidates(motion, budget, attempt)
-        kept: list[tuple[bool, float, int, np.ndarray]] = []
-        usable = np.flatnonzero(self.usable_mask(q_from, cands))
-        unreachable = self._unreachable(q_from, q_R) if len(usable) else None
-        for idx in usable:
+        kept: list[tuple[float, int, np.ndarray]] = []
+        for idx in np.flatnonzero(self.usable_mask(q_from, cands)):
             pushes_local = cands.pushes_local[idx]
             contacts = se2.transform_points(q_from, pushes_local[:, 0])
-            kept.append((unreachable(contacts), assign_to_contacts(q_R, contacts)[1], int(idx),
-                         pushes_local))
-        kept.sort(key=lambda item: (item[0], item[1], item[2]))
-        return [(u, p) for u, _, _, p in kept]
+            kept.append((assign_to_contacts(q_R, contacts)[1], int(idx), pushes_local))
+        kept.sort(key=lambda item: (item[0], item[1]))
+        return [p for _, _, p in kept]
+
+    def _unreachable(self, q_from: np.ndarray, q_R: np.ndarray) -> Callable[[np.ndarray], bool]:
+        """For push paths (B, H, 2, object frame at ``q_from``): whether some contact lies in
+        a free region of the robots' space (object at ``q_from``, the first window
+        ``approach`` plans in) that holds no robot, so that no approach inside that window
+        reaches it. Always False for a space that cannot tell its regions apart."""
+        space = self.robots.robot_space_at(q_from, self.robots.window(q_from, q_R))
+        components = getattr(space, "components", None)
+        if components is None:
+            return lambda pushes_local: False
+        held = set(components(q_R).tolist())
+
+        def unreachable(pushes_local: np.ndarray) -> bool:
+            contacts = se2.transform_points(q_from, np.asarray(pushes_local)[:, 0])
+            return any(c not in held for c in components(contacts).tolist())
+        return unreachable
 
     def can_reach(self, q_from: np.ndarray, q_to: np.ndarray, q_R: np.ndarray,
                   attempt: int = 0) -> bool:
@@ -353,11 +361,15 @@ class Verifier:
         contacts the robots at ``q_R`` can reach (``_unreachable``): a cheap test (model
         samples and grid lookups, no Gspi) before a ``verify`` that would otherwise fail."""
         q_from, q_to = np.asarray(q_from, float), np.asarray(q_to, float)
+        q_R = np.asarray(q_R, float)
         motion = se2.relative(q_from, q_to)
-        top = min(self.n_robots, self.params.max_budget)
-        return any(not u for budget in range(top, 0, -1)
-                   for u, _ in self._usable_proposals(q_from, np.asarray(q_R, float), motion,
-                                                      budget, attempt))
+        unreachable = None
+        for budget in range(min(self.n_robots, self.params.max_budget), 0, -1):
+            for pushes_local in self._usable_proposals(q_from, q_R, motion, budget, attempt):
+                unreachable = unreachable or self._unreachable(q_from, q_R)
+                if not unreachable(pushes_local):
+                    return True
+        return False
 
     # ------------------------------------------------------------------ Reassign
     def reassign(self, q_from: np.ndarray, q_to: np.ndarray, q_R: np.ndarray,
@@ -495,13 +507,23 @@ class Verifier:
         q_R = np.asarray(q_R, float)
         motion = se2.relative(q_from, q_to)
         top = min(self.n_robots, self.params.max_budget)
+        unreachable = None
         for budget in range(top, 0, -1):  # line 19: budgets N down to 1
-            candidates = self._usable_proposals(q_from, q_R, motion, budget, attempt)
-            for _, pushes_local in candidates[: self.params.gspi_attempts_per_budget]:
+            queue = self._usable_proposals(q_from, q_R, motion, budget, attempt)
+            for _ in range(min(len(queue), self.params.gspi_attempts_per_budget)):
+                pushes_local = queue.pop(0)
                 trans = self.route_push(q_from, q_to, q_R, pushes_local)  # lines 22-23: Reassign, Gspi
                 if trans is not None:  # line 24: T_move found, return it
                     self.stats.verify_success += 1
                     return trans
+                if unreachable is None and queue:
+                    # departure: after a failed approach, the candidates whose contacts
+                    # the robots can reach go first (a stable sort: nearest first within
+                    # each group); with every robot behind an object wedged in a passage,
+                    # contacts beyond it are near as the crow flies but out of reach
+                    unreachable = self._unreachable(q_from, q_R)
+                if unreachable is not None:
+                    queue.sort(key=unreachable)
         return None  # line 25: return failure
 
     def reroute(self, cached: Transition, q_R: np.ndarray) -> Transition | None:
