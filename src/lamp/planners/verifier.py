@@ -307,21 +307,6 @@ class Verifier:
         ok &= np.logical_and.reduceat(free, cands.starts[:-1])
         return ok
 
-    def _unreachable(self, q_from: np.ndarray, q_R: np.ndarray) -> Callable[[np.ndarray], bool]:
-        """Whether some of the (B, 2) contacts lie in a free region of the robots' space
-        (object at ``q_from``, the first window ``approach`` plans in) that holds no robot:
-        then no approach inside that window reaches them. Always False for a space that
-        cannot tell its regions apart."""
-        space = self.robots.robot_space_at(q_from, self.robots.window(q_from, q_R))
-        components = getattr(space, "components", None)
-        if components is None:
-            return lambda contacts: False
-        held = set(components(q_R).tolist())
-
-        def unreachable(contacts: np.ndarray) -> bool:
-            return any(c not in held for c in components(contacts).tolist())
-        return unreachable
-
     def _usable_proposals(self, q_from: np.ndarray, q_R: np.ndarray, motion: np.ndarray,
                           budget: int, attempt: int) -> list[np.ndarray]:
         """Lines 20-21: the K proposals (C_R, T_manip) that pass ``Collide``, nearest to the robots first.
