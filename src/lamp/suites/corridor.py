@@ -44,12 +44,11 @@ from typing import Any
 
 import numpy as np
 
-from lamp.scene.loader import SceneError, scene_from_dict
 from lamp.scene.model import Scene, shape_from_dict
 from lamp.suites import _kernels as K
 from lamp.suites import checks as C
 from lamp.suites import corridor_layout as CL
-from lamp.suites.generators import place_robots
+from lamp.suites.generators import parse_scene, place_robots, scene_dict
 from lamp.suites.layout import (
     ROBOT_RADIUS,
     SUITE_SEED,
@@ -462,19 +461,9 @@ def generate_scene(index: int) -> GeneratedCorridor:
         ):
             reject("no robot starts")
             continue
-        d = {
-            "format": "lamp-scene/1",
-            "name": name,
-            "workspace": [lay.workspace[0], lay.workspace[1]],
-            "robots": {"radius": ROBOT_RADIUS, "starts": robots},
-            "obstacles": lay.obstacles,
-            "objects": [
-                {**obj.shape, "start": [float(v) for v in start], "goal": [float(v) for v in goal]}
-            ],
-        }
-        try:
-            scene = scene_from_dict(d, source=name)
-        except SceneError:
+        d = scene_dict(name, lay.workspace, robots, lay.obstacles, obj.shape, start, goal)
+        scene = parse_scene(d)
+        if scene is None:
             reject("invalid scene")
             continue
         witness = certify_witness(scene, witness_poses(lay, obj, start, goal))

@@ -123,6 +123,31 @@ def _place(
     return None
 
 
+def scene_dict(name: str, workspace, robots: list, obstacles: list, shape: dict,
+               start, goal) -> dict[str, Any]:
+    """The ``lamp-scene/1`` dict of a suite scene with one object (``shape``, a scene-file
+    shape dict) from ``start`` to ``goal``: what every generator writes."""
+    return {
+        "format": "lamp-scene/1",
+        "name": name,
+        "workspace": [workspace[0], workspace[1]],
+        "robots": {"radius": ROBOT_RADIUS, "starts": robots},
+        "obstacles": obstacles,
+        "objects": [
+            {**shape, "start": [float(v) for v in start], "goal": [float(v) for v in goal]}
+        ],
+    }
+
+
+def parse_scene(d: dict[str, Any]) -> Scene | None:
+    """``d`` as a validated scene (``scene_from_dict``, its name as the source), or None when
+    the loader refuses it (a generator then rejects the draw)."""
+    try:
+        return scene_from_dict(d, source=d["name"])
+    except SceneError:
+        return None
+
+
 def place_robots(
     rng: np.random.Generator, world: C.World, obj_shape: Any, start: np.ndarray, reach: float,
     workspace: tuple[float, float] = WORKSPACE,
@@ -220,19 +245,9 @@ def generate_scene(family: str, index: int, *, full_checks: bool = True) -> Gene
         if robots is None:
             reject("no robot starts")
             continue
-        d = {
-            "format": "lamp-scene/1",
-            "name": name,
-            "workspace": [WORKSPACE[0], WORKSPACE[1]],
-            "robots": {"radius": ROBOT_RADIUS, "starts": robots},
-            "obstacles": layout.obstacles,
-            "objects": [
-                {**obj.shape, "start": [float(v) for v in start], "goal": [float(v) for v in goal]}
-            ],
-        }
-        try:
-            scene = scene_from_dict(d, source=name)
-        except SceneError:
+        d = scene_dict(name, WORKSPACE, robots, layout.obstacles, obj.shape, start, goal)
+        scene = parse_scene(d)
+        if scene is None:
             reject("invalid scene")
             continue
         finder = C.RouteFinder(shape, C.object_world(scene, 0))

@@ -33,10 +33,9 @@ from typing import Any
 
 import numpy as np
 
-from lamp.scene.loader import SceneError, scene_from_dict
 from lamp.scene.model import Scene, shape_from_dict
 from lamp.suites import checks as C
-from lamp.suites.generators import place_robots
+from lamp.suites.generators import parse_scene, place_robots, scene_dict
 from lamp.suites.layout import (
     END_CLEARANCE,
     ROBOT_RADIUS,
@@ -309,19 +308,9 @@ def generate_scene(index: int, *, full_checks: bool = True) -> GeneratedXL:
         if robots is None:
             reject("no robot starts")
             continue
-        d = {
-            "format": "lamp-scene/1",
-            "name": name,
-            "workspace": [lay.workspace[0], lay.workspace[1]],
-            "robots": {"radius": ROBOT_RADIUS, "starts": robots},
-            "obstacles": lay.obstacles,
-            "objects": [
-                {**obj.shape, "start": [float(v) for v in start], "goal": [float(v) for v in goal]}
-            ],
-        }
-        try:
-            scene = scene_from_dict(d, source=name)
-        except SceneError:
+        d = scene_dict(name, lay.workspace, robots, lay.obstacles, obj.shape, start, goal)
+        scene = parse_scene(d)
+        if scene is None:
             reject("invalid scene")
             continue
         finder = route_finder(scene)
