@@ -329,13 +329,13 @@ class ClosedLoop:
             if st.pending:
                 tight = min(tight, self.clearance(st.pending[0].q_to))
         max_pos, max_rot = drift_limits(cfg, tight, self.reach)
+        stopped = getattr(out, "stopped_at", None) is not None  # by the watch
         outcome = "continue"
         if out.left_workspace:
             outcome = "left"
         elif policy.replan_on_stall and _stalled(q_before, st.q_O, adapted):
             outcome = "stalled"
-        elif policy.replan_on_drift and (dpos > max_pos or drot > max_rot
-                                         or getattr(out, "stopped_at", None) is not None):
+        elif policy.replan_on_drift and (dpos > max_pos or drot > max_rot or stopped):
             outcome = "drift"
         if self.observer is not None:
             self.observer(SegmentEvent(self.index, st.segments - 1, adapted, out, st.plan,
@@ -351,7 +351,7 @@ class ClosedLoop:
             st.pending = []
         elif outcome == "drift":
             st.pending = []  # line 6: drift -> replan from the observed state
-            if getattr(out, "stopped_at", None) is not None:
+            if stopped:
                 # the watch stopped a push that left its path in a tight place
                 # (``lamp.planners.watch``): it failed in practice, like a stall
                 self.record.watch_stops += 1

@@ -5,10 +5,10 @@ few centimetres wider than the object that is too late: a box pushed straight in
 corridor's mouth that catches a corner turns about it while the robots keep pushing, and
 ends wedged across the mouth (corridor-20: planned heading 0.86 rad, reached 1.20 rad),
 where only pushes further into the wedge can be reached. ``PushWatch`` is the simulator's
-``stop`` condition for such a push (a straight one, through a tight place: ``watched``): the planned object path is the polyline of the
-transitions' poses, and the push stops (the robots hold where they are) as soon as the
-object's pose is explained by no piece of it, so the loop replans from a pose that is
-still nearly aligned.
+``stop`` condition for such a push (a straight one, through a tight place: ``watched``):
+the planned object path is the polyline of the transitions' poses, and the push stops
+(the robots hold where they are) as soon as the object's pose is explained by no piece of
+it, so the loop replans from a pose that is still nearly aligned.
 
 Deviation from a piece ``a -> b`` (``deviation``): the distance of the object's position
 from the segment ``a.xy -> b.xy``, and the angle from its heading to the nearest heading

@@ -324,7 +324,7 @@ class Simulator:
         n_steps = len(pos)
         ctrl = (pos + (ROBOT_KV / ROBOT_KP) * vel).reshape(n_steps, 1, 2 * self.n_robots)
         chunk_size = _CHUNK if stop is None else STOP_CHECK_STEPS
-        n_settle = math.ceil(settle_time / float(self.model.opt.timestep) - 1e-9)
+        n_settle = self._settle_steps(settle_time)
         stopped_at: int | None = None
 
         start_time = self.data.time
@@ -436,6 +436,10 @@ class Simulator:
             )
         return paths
 
+    def _settle_steps(self, settle_time: float) -> int:
+        """Physics steps the last row is held for ``settle_time`` seconds."""
+        return math.ceil(settle_time / float(self.model.opt.timestep) - 1e-9)
+
     def _schedule(self, paths: np.ndarray, settle_time: float) -> tuple[np.ndarray, np.ndarray]:
         """Per-step targets and target velocities, (S, N, 2) each (see module docstring)."""
         dt = float(self.model.opt.timestep)
@@ -445,7 +449,7 @@ class Simulator:
         way = way[:, keep]
         tau = np.concatenate([[0.0], np.cumsum(dur[dur > 1e-12])])
         n_move = math.ceil(tau[-1] / dt - 1e-9) if len(tau) > 1 else 0
-        n_settle = math.ceil(settle_time / dt - 1e-9)
+        n_settle = self._settle_steps(settle_time)
         n = self.n_robots
         pos = np.empty((n_move + n_settle, n, 2))
         vel = np.zeros((n_move + n_settle, n, 2))
