@@ -56,21 +56,18 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.optimize import linear_sum_assignment
 
 from lamp.errors import InputError
 from lamp.geometry.robot_space import RobotSpace
+from lamp.mrmp.assignment import ASSIGNMENTS, assign
 from lamp.mrmp.distance_field import Lattice, get_lattice
 from lamp.mrmp.endpoints import as_points, check_points
-from lamp.mrmp.gspi_kernels import EPS, GoalDistances, Graph, run_steps, seed_goal, start_costs
+from lamp.mrmp.goal_distances import GoalDistances
+from lamp.mrmp.gspi_kernels import Graph, run_steps
 from lamp.mrmp.result import GspiStatus, MRMPPlan
 from lamp.scene.model import Scene
 
 __all__ = ["GspiStatus", "MRMPPlan", "plan_paths", "warmup"]
-
-#: Finite stand-in for an infinite cost in the assignment problem.
-_BIG = 1e9
-
 
 _WARM = False
 
@@ -117,6 +114,8 @@ def plan_paths(
     max_steps: int | None = None,
     stall_steps: int | None = None,
     initial_goal_of: ArrayLike | None = None,
+    assignment: str = "bottleneck",
+    swap_radius: float | None = None,
 ) -> MRMPPlan:
     """Anonymous multi-robot motion planning (Gspi) for the disk robots of ``scene``.
 
@@ -157,6 +156,12 @@ def plan_paths(
         new best summed heuristic (defaults scale with the lattice).
     initial_goal_of: (N,) initial goal per robot (-1 none) instead of the optimal
         assignment (tests and experiments).
+    assignment: the initial assignment's objective (:mod:`lamp.mrmp.assignment`):
+        ``"bottleneck"`` (least longest distance, then least sum; TSWAP's) or ``"sum"``
+        (least summed distance).
+    swap_radius: goal swapping considers the robot pairs at most this far apart (metres;
+        default twice the distance within which two robots can conflict in one step,
+        ``2 * (2r + 2 * longest move)``); teams below 32 robots consider all pairs.
 
     Raises
     ------
@@ -190,6 +195,11 @@ def plan_paths(
         raise InputError(f"max_spacing must be positive, got {max_spacing!r}")
     if goal_tolerance < 0 or start_tolerance < 0:
         raise InputError("goal_tolerance and start_tolerance must be >= 0")
+    if assignment not in ASSIGNMENTS:
+        raise InputError(f"assignment must be one of {', '.join(ASSIGNMENTS)}, got "
+                         f"{assignment!r}")
+    if swap_radius is not None and not (np.isfinite(swap_radius) and swap_radius > 0):
+        raise InputError(f"swap_radius must be positive, got {swap_radius!r}")
     if space is None:
         space = RobotSpace.from_scene(scene, object_poses, extra_obstacles)
     elif not isinstance(space, RobotSpace):
@@ -216,7 +226,8 @@ def plan_paths(
         return MRMPPlan(True, S[:, None, :].copy(), np.full(N, -1, np.int64), "", 0,
                         time.perf_counter() - t_begin, {})
     opts = _Options(link_radius, goal_swapping, float(max_spacing), max_steps, stall_steps,
-                    seed, t_begin + float(time_limit), float(time_limit))
+                    seed, t_begin + float(time_limit), float(time_limit), assignment,
+                    swap_radius)
     stats: dict[str, Any] = {"attempts": []}
     reasons: list[str] = []
     out: _Attempt | None = None
@@ -252,6 +263,8 @@ class _Options:
     seed: int
     deadline: float  # time.perf_counter() seconds
     time_limit: float  # for messages
+    assignment: str
+    swap_radius: float | None
 
 
 @dataclass
@@ -277,6 +290,8 @@ class _Links:
     goal_links: list[tuple[np.ndarray, np.ndarray]]
     #: Candidate slots per robot and step: 8 neighbours, wait and the extra edges.
     max_candidates: int
+    #: The longest edge of the graph (a lattice diagonal or a link).
+    max_move: float
 
 
 def _link_special_vertices(space: RobotSpace, lat: Lattice, S: np.ndarray, G: np.ndarray,
@@ -322,39 +337,17 @@ def _link_special_vertices(space: RobotSpace, lat: Lattice, S: np.ndarray, G: np
     np.add.at(xptr, src_a + 1, 1)
     xptr = np.cumsum(xptr)
     graph = Graph(coords, lat.nbr, lat.dlen, xptr, np.ascontiguousarray(dst_a))
-    return _Links(graph, direct, g_links, 9 + int(np.max(np.diff(xptr))))
+    longest = float(np.hypot(*(coords[src_a] - coords[dst_a]).T).max()) if len(src_a) else 0.0
+    return _Links(graph, direct, g_links, 9 + int(np.max(np.diff(xptr))),
+                  max(longest, float(lat.dlen.max())))
 
 
-def _assign(C: np.ndarray, G: np.ndarray, links: _Links,
-            goal0: np.ndarray | None) -> tuple[np.ndarray | None, str]:
-    """The initial goal of each robot (-1 none): optimal on the heuristic distances ``C``
-    (N, M), or ``goal0``; (None, why) when some goal cannot be reached."""
-    reach_goal = np.isfinite(C).any(axis=0)
-    if not reach_goal.all():
-        why = [
-            f"goal {m} at {G[m].round(3).tolist()}"
-            + (" cannot be connected to the lattice" if len(links.goal_links[m][0]) == 0
-               and not links.direct[:, m].any() else " is unreachable from every start")
-            for m in np.nonzero(~reach_goal)[0].tolist()
-        ]
-        return None, "; ".join(why)
-    if goal0 is not None:
-        return goal0.copy(), ""
-    rows, cols = linear_sum_assignment(np.where(np.isfinite(C), C, _BIG))
-    if np.any(~np.isfinite(C[rows, cols])):
-        return None, ("no assignment of robots to goals reaches every goal "
-                      "(some goals are reachable only by the same robots)")
-    goal = np.full(len(C), -1, dtype=np.int64)
-    goal[rows] = cols
-    return goal, ""
-
-
-def _priorities(C: np.ndarray, goal: np.ndarray, seed: int) -> np.ndarray:
+def _priorities(cost: np.ndarray, goal: np.ndarray, seed: int) -> np.ndarray:
     """Initial priorities: farther robots first (PIBT's eps_i), ties by seeded noise;
     robots without a goal last."""
     N = len(goal)
     rng = np.random.default_rng(seed)
-    h0 = np.array([C[i, goal[i]] if goal[i] >= 0 else 0.0 for i in range(N)])
+    h0 = np.where(goal >= 0, cost, 0.0)
     h0 = np.where(np.isfinite(h0), h0, 1e3)
     prio = 0.5 * h0 / (h0.max() + 1.0) + 0.4 * rng.random(N) / (N + 1) + 0.05
     return np.where(goal >= 0, prio, 0.01 * rng.random(N))
@@ -374,15 +367,18 @@ class _Search:
 
 
 def _run(graph: Graph, V: int, gv0: int, hs: GoalDistances, goal: np.ndarray,
-         prio: np.ndarray, two_r: float, max_candidates: int, max_steps: int,
+         prio: np.ndarray, two_r: float, links: _Links, max_steps: int,
          stall_steps: int, opts: _Options) -> _Search:
     """Gspi steps in compiled chunks until every goal is held, the step budget is spent,
     the summed heuristic stalls for ``stall_steps`` or the deadline passes."""
     N = len(goal)
     cur = np.arange(V, V + N, dtype=np.int64)
-    out = _Search(np.empty((max_steps + 1, N), dtype=np.int64))
+    cap = min(max_steps, 512) + 1  # history rows, doubled as needed
+    out = _Search(np.empty((cap, N), dtype=np.int64))
     out.hist[0] = cur
-    hsum = np.zeros(max_steps + 1)
+    hsum = np.zeros(cap)
+    near = two_r + 2.0 * links.max_move + 1e-9
+    swap_r = 2.0 * near if opts.swap_radius is None else float(opts.swap_radius)
     best_h = np.inf
     best_t = 0
     chunk = 16
@@ -393,9 +389,13 @@ def _run(graph: Graph, V: int, gv0: int, hs: GoalDistances, goal: np.ndarray,
         # never past the step where a stall would be declared: where the search stops
         # then depends on the steps alone, not on how the clock cut them into chunks
         t1 = min(out.t + chunk, max_steps, best_t + stall_steps + 1)
+        if t1 + 1 > len(hsum):
+            cap = min(max_steps + 1, max(2 * len(hsum), t1 + 1))
+            out.hist = np.concatenate([out.hist, np.empty((cap - len(hsum), N), np.int64)])
+            hsum = np.concatenate([hsum, np.zeros(cap - len(hsum))])
         t_new, out.done = run_steps(graph, V, gv0, hs, cur, goal, prio, two_r, seed_i,
                                     opts.goal_swapping, out.hist, hsum, out.t, t1,
-                                    max_candidates)
+                                    links.max_candidates, near, swap_r)
         for k in range(out.t + 1, t_new + 1):
             if hsum[k] < best_h - 1e-9:
                 best_h = hsum[k]
@@ -462,27 +462,27 @@ def _attempt(space: RobotSpace, S: np.ndarray, G: np.ndarray, c_start: np.ndarra
     gv0 = V + N  # first goal vertex
     links = _link_special_vertices(space, lat, S, G, c_start, c_goal, R, stats)
 
-    # Heuristic: a lazy Dijkstra per goal, seeded with the goal's links; + EPS on every
-    # vertex but the goal itself (see gspi_kernels.EPS).
-    hs = GoalDistances.empty(M, V, N + M)
-    for m, (nodes, lens) in enumerate(links.goal_links):
-        seed_goal(m, nodes.astype(np.int64), lens + EPS, hs)
-    C = np.empty((N, M))
-    for m in range(M):  # one goal at a time, so that the time limit is kept
-        C[:, m] = start_costs(links.graph, V, gv0, hs, N, m)
-        if time.perf_counter() > opts.deadline:
-            return failure(f"time limit of {opts.time_limit:g} s reached while computing "
-                           "heuristic distances", GspiStatus.TIME_LIMIT)
-    goal, why = _assign(C, G, links, goal0)
-    if goal is None:
-        return failure(why, GspiStatus.UNREACHABLE, retry=True)
-    prio = _priorities(C, goal, opts.seed)
+    # Heuristic: a lazy windowed Dijkstra per goal, seeded with the goal's links; + EPS
+    # on every vertex but the goal itself (see goal_distances.EPS).
+    hs = GoalDistances.build(links.goal_links, G, lat, N + M)
+    no_link = np.array([len(n) == 0 for n, _ in links.goal_links], dtype=bool)
+    no_link &= ~links.direct.any(axis=0)
+    asg = assign(links.graph, V, hs, S, G, no_link, opts.assignment, goal0, opts.deadline)
+    if asg.timed_out:
+        return failure(f"time limit of {opts.time_limit:g} s reached while computing "
+                       "heuristic distances", GspiStatus.TIME_LIMIT)
+    if asg.goal is None:
+        return failure(asg.why, GspiStatus.UNREACHABLE, retry=True)
+    goal = asg.goal
+    stats["assignment_bound"] = asg.bound
+    prio = _priorities(asg.cost, goal, opts.seed)
 
     n_side = lat.ids.shape[0] + lat.ids.shape[1]
     max_steps = int(20 * n_side + 50 * N) if opts.max_steps is None else opts.max_steps
     stall = int(2 * n_side + 10 * N) if opts.stall_steps is None else opts.stall_steps
-    run = _run(links.graph, V, gv0, hs, goal, prio, 2.0 * space.radius, links.max_candidates,
+    run = _run(links.graph, V, gv0, hs, goal, prio, 2.0 * space.radius, links,
                max_steps, stall, opts)
+    stats["heuristic_settled"] = hs.settled()
 
     # Output: drop all-wait steps, densify.
     P = links.graph.coords[run.hist[: run.t + 1]]  # (t+1, N, 2)

@@ -1,15 +1,22 @@
-"""Gspi's compiled core (Numba): the lazy per-goal heuristic, PIBT steps and goal swaps.
+"""Gspi's compiled core (Numba): PIBT steps and goal swaps over neighbour lists.
 
-The driver, :mod:`lamp.mrmp.gspi`, builds the arrays and calls :func:`seed_goal`,
-:func:`start_costs` and :func:`run_steps`; everything else here is their machinery. Two
-bundles of arrays travel through every kernel, as named tuples (Numba compiles them as
-tuples, so the kernels may unpack them positionally):
+The driver, :mod:`lamp.mrmp.gspi`, builds the arrays and calls :func:`run_steps`;
+everything else here is its machinery. Two bundles of arrays travel through every kernel,
+as named tuples (Numba compiles them as tuples, so the kernels may unpack them
+positionally):
 
 - :class:`Graph` ``gr``: vertices ``0..V-1`` are lattice nodes, ``V..V+N-1`` the robots'
   start vertices and ``gv0 = V+N ..`` the goal vertices; ``coords`` holds every vertex's
   position, ``nbr``/``dlen`` the lattice's 8-neighbourhood and its step lengths, and
   ``xptr``/``xidx`` (CSR) the extra edges of the special vertices.
-- :class:`GoalDistances` ``hs``: one resumable Dijkstra per goal (see below).
+- :class:`~lamp.mrmp.goal_distances.GoalDistances` ``hs``: one lazy Dijkstra per goal.
+
+Robot-robot checks use *neighbour lists* built once per step from a spatial hash of the
+current positions: two robots whose centres are more than ``2r + 2 * maxmove`` apart
+(``maxmove``: the graph's longest edge) cannot come closer than ``2r`` within one step, so
+each robot checks only the robots within that distance, in index order, which gives
+exactly the decisions of an all-pairs scan. Goal swapping considers the pairs within
+``swap_radius`` (all pairs for teams below :data:`ALL_PAIRS_BELOW` robots).
 """
 
 from __future__ import annotations
@@ -21,12 +28,12 @@ import numba as nb
 import numpy as np
 
 from lamp.geometry.kernels import point_segment_distance
+from lamp.mrmp.goal_distances import hval
 
-__all__ = ["EPS", "GoalDistances", "Graph", "run_steps", "seed_goal", "start_costs"]
+__all__ = ["ALL_PAIRS_BELOW", "Graph", "neighbour_lists", "run_steps"]
 
-#: Added to every heuristic value but the goal vertex's own, so that a lattice node (or a
-#: start) that coincides with a goal never ties with the goal vertex.
-EPS = 1e-6
+#: Teams smaller than this swap goals over all pairs and check all pairs (no hashing).
+ALL_PAIRS_BELOW = 32
 _UNDECIDED, _TENTATIVE, _DECIDED = 0, 1, 2
 
 
@@ -38,31 +45,6 @@ class Graph(NamedTuple):
     dlen: np.ndarray  # (8,) length of each neighbour direction
     xptr: np.ndarray  # (V+N+M+1,) CSR offsets of the special vertices' extra edges
     xidx: np.ndarray  # targets of those edges
-
-
-class GoalDistances(NamedTuple):
-    """Lazy distance tables, one per goal m (pypibt's DistTable, resumable, compiled).
-
-    ``dist[m, v]`` lattice distance to goal m (seeded with the goal's links), ``pos[m, v]``
-    the node's place in goal m's indexed binary heap (-1 unseen, -2 settled), ``heap`` and
-    ``hsize`` that heap, and ``sdone``/``sval`` memoised values of the special vertices.
-    A value is computed only when asked for, so a 3-robot call near the object settles a
-    few hundred nodes instead of the whole map.
-    """
-
-    dist: np.ndarray  # (M, V)
-    pos: np.ndarray  # (M, V) int64
-    heap: np.ndarray  # (M, V) int64
-    hsize: np.ndarray  # (M,) int64
-    sdone: np.ndarray  # (M, N+M) bool
-    sval: np.ndarray  # (M, N+M)
-
-    @staticmethod
-    def empty(M: int, V: int, n_special: int) -> GoalDistances:
-        return GoalDistances(
-            np.full((M, V), np.inf), np.full((M, V), -1, dtype=np.int64),
-            np.empty((M, V), dtype=np.int64), np.zeros(M, dtype=np.int64),
-            np.zeros((M, n_special), dtype=np.bool_), np.zeros((M, n_special)))
 
 
 @nb.njit(cache=True, inline="always")
@@ -105,132 +87,12 @@ def _conflict(
     return point_segment_distance(0.0, 0.0, d0x, d0y, d1x, d1y) < thr - 1e-9
 
 
-# ---- lazy heuristic: one resumable Dijkstra per goal (GoalDistances) ------------------
-
-
-@nb.njit(cache=True)
-def _heap_up(m: int, i: int, dist: np.ndarray, pos: np.ndarray, heap: np.ndarray) -> None:
-    v = heap[m, i]
-    dv = dist[m, v]
-    while i > 0:
-        p = (i - 1) >> 1
-        u = heap[m, p]
-        if dist[m, u] <= dv:
-            break
-        heap[m, i] = u
-        pos[m, u] = i
-        i = p
-    heap[m, i] = v
-    pos[m, v] = i
-
-
-@nb.njit(cache=True)
-def _heap_pop(m: int, dist: np.ndarray, pos: np.ndarray, heap: np.ndarray,
-              hsize: np.ndarray) -> int:
-    top = heap[m, 0]
-    n = hsize[m] - 1
-    hsize[m] = n
-    pos[m, top] = -2
-    if n > 0:
-        v = heap[m, n]
-        dv = dist[m, v]
-        i = 0
-        while True:
-            c = 2 * i + 1
-            if c >= n:
-                break
-            if c + 1 < n and dist[m, heap[m, c + 1]] < dist[m, heap[m, c]]:
-                c += 1
-            u = heap[m, c]
-            if dist[m, u] >= dv:
-                break
-            heap[m, i] = u
-            pos[m, u] = i
-            i = c
-        heap[m, i] = v
-        pos[m, v] = i
-    return top
-
-
-@nb.njit(cache=True, inline="always")
-def _heap_lower(m: int, v: int, d: float, dist: np.ndarray, pos: np.ndarray, heap: np.ndarray,
-                hsize: np.ndarray) -> None:
-    """Set goal m's distance of vertex v to the smaller value d and restore the heap
-    (v is pushed first when it has never been queued, ``pos == -1``)."""
-    dist[m, v] = d
-    if pos[m, v] == -1:
-        heap[m, hsize[m]] = v
-        pos[m, v] = hsize[m]
-        hsize[m] += 1
-    _heap_up(m, pos[m, v], dist, pos, heap)
-
-
-@nb.njit(cache=True)
-def seed_goal(m: int, nodes: np.ndarray, cost: np.ndarray, hs: tuple) -> None:
-    dist, pos, heap, hsize, _, _ = hs
-    for k in range(nodes.shape[0]):
-        v = nodes[k]
-        if cost[k] < dist[m, v]:
-            _heap_lower(m, v, cost[k], dist, pos, heap, hsize)
-
-
-@nb.njit(cache=True)
-def _lattice_h(m: int, v: int, nbr: np.ndarray, dlen: np.ndarray, hs: tuple) -> float:
-    """Distance from lattice node v to goal m, running goal m's Dijkstra until v settles."""
-    dist, pos, heap, hsize, _, _ = hs
-    while pos[m, v] != -2 and hsize[m] > 0:
-        u = _heap_pop(m, dist, pos, heap, hsize)
-        du = dist[m, u]
-        for e in range(8):
-            w = nbr[u, e]
-            if w < 0 or pos[m, w] == -2:
-                continue
-            nd = du + dlen[e]
-            if nd < dist[m, w]:
-                _heap_lower(m, w, nd, dist, pos, heap, hsize)
-    if pos[m, v] == -2:
-        return dist[m, v]
-    return np.inf
-
-
-@nb.njit(cache=True)
-def _hval(m: int, v: int, gr: tuple, V: int, gv0: int, hs: tuple) -> float:
-    """Heuristic distance of vertex v (lattice or special) to goal m."""
-    coords, nbr, dlen, xptr, xidx = gr
-    if v < V:
-        return _lattice_h(m, v, nbr, dlen, hs)
-    _, _, _, _, sdone, sval = hs
-    k = v - V
-    if sdone[m, k]:
-        return sval[m, k]
-    best = np.inf
-    if v == gv0 + m:
-        best = 0.0
-    else:
-        for e in range(xptr[v], xptr[v + 1]):
-            n = xidx[e]
-            dx = coords[v, 0] - coords[n, 0]
-            dy = coords[v, 1] - coords[n, 1]
-            ln = math.sqrt(dx * dx + dy * dy)
-            if n < V:
-                c = ln + _lattice_h(m, n, nbr, dlen, hs)
-            elif n == gv0 + m:
-                c = ln + EPS
-            else:
-                continue
-            if c < best:
-                best = c
-    sdone[m, k] = True
-    sval[m, k] = best
-    return best
-
-
 @nb.njit(cache=True)
 def _h(goal: np.ndarray, i: int, v: int, gr: tuple, V: int, gv0: int, hs: tuple) -> float:
     g = goal[i]
     if g < 0:
         return 0.0
-    return _hval(g, v, gr, V, gv0, hs)
+    return hval(g, v, gr, V, gv0, hs)
 
 
 @nb.njit(cache=True)
@@ -285,7 +147,7 @@ def _pibt_step(
     gr: tuple, V: int, gv0: int, hs: tuple, cur: np.ndarray, goal: np.ndarray,
     prio: np.ndarray, two_r: float, seed: int, t: int, nxt: np.ndarray,
     cand: np.ndarray, ncand: np.ndarray, ci: np.ndarray, status: np.ndarray,
-    stack: np.ndarray, mode: np.ndarray,
+    stack: np.ndarray, mode: np.ndarray, nptr: np.ndarray, nidx: np.ndarray,
 ) -> None:
     """One PIBT step (priority inheritance with backtracking), iterative.
 
@@ -335,9 +197,8 @@ def _pibt_step(
             c_goal = c >= gv0
             bad = False
             blocker = -1
-            for k in range(N):
-                if k == i:
-                    continue
+            for q in range(nptr[i], nptr[i + 1]):
+                k = nidx[q]
                 sk = status[k]
                 px = coords[cur[k], 0]
                 py = coords[cur[k], 1]
@@ -381,12 +242,16 @@ def _pibt_step(
 
 @nb.njit(cache=True)
 def _swap_goals(gr: tuple, V: int, gv0: int, hs: tuple, cur: np.ndarray, goal: np.ndarray,
-                prio: np.ndarray) -> int:
-    """Pairwise goal swaps that lower the summed heuristic (priorities travel along)."""
+                prio: np.ndarray, sptr: np.ndarray, sidx: np.ndarray) -> int:
+    """Pairwise goal swaps that lower the summed heuristic (priorities travel along), over
+    the pairs (i, j > i) of the neighbour lists, in index order."""
     N = cur.shape[0]
     nswap = 0
     for i in range(N):
-        for j in range(i + 1, N):
+        for q in range(sptr[i], sptr[i + 1]):
+            j = sidx[q]
+            if j <= i:
+                continue
             gi = goal[i]
             gj = goal[j]
             if gi < 0 and gj < 0:
@@ -394,11 +259,11 @@ def _swap_goals(gr: tuple, V: int, gv0: int, hs: tuple, cur: np.ndarray, goal: n
             now = 0.0
             sw = 0.0
             if gi >= 0:
-                now += _hval(gi, cur[i], gr, V, gv0, hs)
-                sw += _hval(gi, cur[j], gr, V, gv0, hs)
+                now += hval(gi, cur[i], gr, V, gv0, hs)
+                sw += hval(gi, cur[j], gr, V, gv0, hs)
             if gj >= 0:
-                now += _hval(gj, cur[j], gr, V, gv0, hs)
-                sw += _hval(gj, cur[i], gr, V, gv0, hs)
+                now += hval(gj, cur[j], gr, V, gv0, hs)
+                sw += hval(gj, cur[i], gr, V, gv0, hs)
             if sw < now - 1e-9:
                 goal[i] = gj
                 goal[j] = gi
@@ -413,10 +278,12 @@ def _swap_goals(gr: tuple, V: int, gv0: int, hs: tuple, cur: np.ndarray, goal: n
 def run_steps(
     gr: tuple, V: int, gv0: int, hs: tuple, cur: np.ndarray, goal: np.ndarray,
     prio: np.ndarray, two_r: float, seed: int, swap: bool, hist: np.ndarray,
-    hsum: np.ndarray, t0: int, t1: int, maxc: int,
+    hsum: np.ndarray, t0: int, t1: int, maxc: int, near: float, swap_radius: float,
 ) -> tuple[int, bool]:
     """Run Gspi steps t0..t1-1; hist[t+1] receives the vertices after step t and
-    hsum[t+1] the summed heuristic. Returns (rows filled - 1, all goals reached)."""
+    hsum[t+1] the summed heuristic. Returns (rows filled - 1, all goals reached).
+    ``near``: the distance beyond which two robots cannot conflict within a step
+    (``2r + 2 * maxmove``); ``swap_radius``: the goal-swapping neighbourhood."""
     N = cur.shape[0]
     nxt = np.empty(N, dtype=np.int64)
     cand = np.empty((N, maxc), dtype=np.int64)
@@ -433,10 +300,14 @@ def run_steps(
                 break
         if done:
             return t, True
+        px = gr[0][cur, 0]
+        py = gr[0][cur, 1]
         if swap:
-            _swap_goals(gr, V, gv0, hs, cur, goal, prio)
+            sptr, sidx = neighbour_lists(px, py, swap_radius)
+            _swap_goals(gr, V, gv0, hs, cur, goal, prio, sptr, sidx)
+        nptr, nidx = neighbour_lists(px, py, near)
         _pibt_step(gr, V, gv0, hs, cur, goal, prio, two_r, seed, t, nxt, cand, ncand, ci,
-                   status, stack, mode)
+                   status, stack, mode, nptr, nidx)
         s = 0.0
         for i in range(N):
             cur[i] = nxt[i]
@@ -446,7 +317,7 @@ def run_steps(
                 prio[i] = prio[i] - math.floor(prio[i])
             else:
                 prio[i] += 1.0
-                s += min(_hval(g, cur[i], gr, V, gv0, hs), 1e6)
+                s += min(hval(g, cur[i], gr, V, gv0, hs), 1e6)
         hsum[t + 1] = s
     done = True
     for i in range(N):
@@ -457,9 +328,66 @@ def run_steps(
 
 
 @nb.njit(cache=True)
-def start_costs(gr: tuple, V: int, gv0: int, hs: tuple, N: int, m: int) -> np.ndarray:
-    """(N,) heuristic distance from each start vertex to goal m."""
-    C = np.empty(N)
+def neighbour_lists(px: np.ndarray, py: np.ndarray, radius: float
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """CSR lists (ptr, idx): for each point i, the other points within ``radius`` (all of
+    them when ``radius`` is inf or there are fewer than :data:`ALL_PAIRS_BELOW`), in
+    increasing index order. A spatial hash (cells of side ``radius``, points sorted by
+    cell, each of the 9 cells around a point found by binary search) keeps it
+    O(N log N + pairs)."""
+    N = px.shape[0]
+    ptr = np.zeros(N + 1, dtype=np.int64)
+    if N < ALL_PAIRS_BELOW or not radius < np.inf:
+        idx = np.empty(N * (N - 1), dtype=np.int64)
+        q = 0
+        for i in range(N):
+            for j in range(N):
+                if j != i:
+                    idx[q] = j
+                    q += 1
+            ptr[i + 1] = q
+        return ptr, idx
+    cs = max(radius, 1e-9)
+    x0 = px.min()
+    y0 = py.min()
+    ny = int((py.max() - y0) / cs) + 3
+    key = np.empty(N, dtype=np.int64)
     for i in range(N):
-        C[i] = _hval(m, V + i, gr, V, gv0, hs)
-    return C
+        key[i] = (int((px[i] - x0) / cs) + 1) * ny + int((py[i] - y0) / cs) + 1
+    order = np.argsort(key, kind="mergesort")
+    skey = key[order]
+    r2 = radius * radius
+    buf = np.empty(64, dtype=np.int64)
+    cnt = np.zeros(N, dtype=np.int64)
+    out = np.empty(max(16, 8 * N), dtype=np.int64)
+    q = 0
+    for i in range(N):
+        n = 0
+        for dx in range(-1, 2):
+            for dy in range(-1, 2):
+                kk = key[i] + dx * ny + dy
+                lo = np.searchsorted(skey, kk)
+                while lo < N and skey[lo] == kk:
+                    j = order[lo]
+                    lo += 1
+                    if j == i:
+                        continue
+                    ex = px[j] - px[i]
+                    ey = py[j] - py[i]
+                    if ex * ex + ey * ey <= r2:
+                        if n == buf.shape[0]:
+                            nb_ = np.empty(2 * n, dtype=np.int64)
+                            nb_[:n] = buf
+                            buf = nb_
+                        buf[n] = j
+                        n += 1
+        srt = np.sort(buf[:n])
+        if q + n > out.shape[0]:
+            grown = np.empty(2 * (q + n), dtype=np.int64)
+            grown[:q] = out[:q]
+            out = grown
+        out[q:q + n] = srt
+        q += n
+        cnt[i] = n
+        ptr[i + 1] = q
+    return ptr, out[:q]

@@ -1,0 +1,170 @@
+"""Gspi's initial assignment of robots to goals: bottleneck first, then sum (as TSWAP).
+
+``bottleneck`` (default): among the assignments that give every goal a robot, those whose
+longest heuristic distance is smallest (the *bottleneck* ``B*``), and among them one of
+least summed distance. ``sum``: least summed distance over all assignments (the
+Hungarian method on the whole cost matrix; the objective Gspi used before).
+
+Distances are exact lattice distances (:mod:`lamp.mrmp.goal_distances`) and are computed
+lazily: the straight-line distance is a lower bound, so only pairs closer than a growing
+bound ``B`` are evaluated, each goal's search expanding to ``B`` and no further. ``B``
+starts at the largest nearest-start straight-line distance over the goals and grows by
+half until the pairs below it admit a perfect matching (Hopcroft-Karp, ``scipy``); ``B*``
+is then found by bisection over the distances below ``B``, and the sum is minimised over
+the pairs within ``B*`` (``scipy.optimize.linear_sum_assignment``). On a 9.6 m map with 400
+robots each goal's search stops about 1.5 m out instead of covering the map.
+
+Guarantee (tested against brute force over all permutations on small instances): the
+returned assignment reaches every goal, its longest distance is the least possible, and
+its sum is the least among assignments with that longest distance.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+from scipy.sparse import csr_matrix
+from scipy.sparse.csgraph import maximum_bipartite_matching
+
+from lamp.mrmp.goal_distances import GoalDistances, hval, hval_below
+from lamp.mrmp.gspi_kernels import Graph
+
+__all__ = ["ASSIGNMENTS", "Assignment", "assign"]
+
+#: The objectives of the initial assignment (``plan_paths(assignment=...)``).
+ASSIGNMENTS = ("bottleneck", "sum")
+#: Finite stand-in for an infinite cost in the dense (``sum``) assignment problem.
+_BIG = 1e9
+#: Growth factor of the bound ``B`` between rounds.
+_GROWTH = 1.25
+
+
+@dataclass(frozen=True)
+class Assignment:
+    """``goal[i]``: robot i's goal (-1 none), ``cost[i]``: its heuristic distance (0
+    without a goal), ``why``: the reason when no assignment reaches every goal (then
+    ``goal`` is None), ``timed_out``: the deadline passed first; ``bound``: ``B*``."""
+
+    goal: np.ndarray | None
+    cost: np.ndarray
+    why: str = ""
+    timed_out: bool = False
+    bound: float = 0.0
+
+
+def _perfect(M: int, N: int, pm: np.ndarray, pi: np.ndarray) -> np.ndarray:
+    """Hopcroft-Karp on the goal x robot pairs: the matched robot of each goal or -1."""
+    if len(pm) == 0:
+        return np.full(M, -1, dtype=np.int64)
+    g = csr_matrix((np.ones(len(pm)), (pm, pi)), shape=(M, N))
+    return np.asarray(maximum_bipartite_matching(g, perm_type="column"), dtype=np.int64)
+
+
+def _unreached(G: np.ndarray, no_link: np.ndarray, unreachable: np.ndarray) -> str:
+    why = [f"goal {m} at {G[m].round(3).tolist()}"
+           + (" cannot be connected to the lattice" if no_link[m]
+              else " is unreachable from every start")
+           for m in np.nonzero(no_link | unreachable)[0].tolist()]
+    return "; ".join(why)
+
+
+def assign(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray, G: np.ndarray,
+           no_link: np.ndarray, objective: str, goal0: np.ndarray | None,
+           deadline: float) -> Assignment:
+    """The initial goal of each robot (see the module docstring); ``no_link[m]``: goal m
+    has no link to the lattice or to a start; ``goal0``: a given assignment (checked for
+    reachability only)."""
+    N, M = len(S), len(G)
+    gv0 = V + N
+    none = np.zeros(N)
+    if no_link.any():
+        return Assignment(None, none, _unreached(G, no_link, np.zeros(M, bool)))
+    if goal0 is not None:
+        cost = np.array([hval(int(g), V + i, gr, V, gv0, hs) if g >= 0 else 0.0
+                         for i, g in enumerate(goal0.tolist())])
+        bad = [m for m in range(M) if not np.isfinite(cost[goal0 == m]).all()]
+        if bad:
+            return Assignment(None, none, f"goal {bad[0]} at {G[bad[0]].round(3).tolist()} "
+                              "is unreachable from the robot given for it")
+        return Assignment(goal0.copy(), cost)
+    if objective == "sum":
+        return _sum(gr, V, hs, S, G, deadline)
+    return _bottleneck(gr, V, hs, S, G, deadline)
+
+
+def _sum(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray, G: np.ndarray,
+         deadline: float) -> Assignment:
+    N, M = len(S), len(G)
+    C = np.empty((N, M))
+    for m in range(M):
+        C[:, m] = [hval(m, V + i, gr, V, V + N, hs) for i in range(N)]
+        if time.perf_counter() > deadline:
+            return Assignment(None, np.zeros(N), timed_out=True)
+    reach = np.isfinite(C).any(axis=0)
+    if not reach.all():
+        return Assignment(None, np.zeros(N), _unreached(G, np.zeros(M, bool), ~reach))
+    rows, cols = linear_sum_assignment(np.where(np.isfinite(C), C, _BIG))
+    if np.any(~np.isfinite(C[rows, cols])):
+        return Assignment(None, np.zeros(N), "no assignment of robots to goals reaches every "
+                          "goal (some goals are reachable only by the same robots)")
+    goal = np.full(N, -1, dtype=np.int64)
+    goal[rows] = cols
+    cost = np.zeros(N)
+    cost[rows] = C[rows, cols]
+    return Assignment(goal, cost, bound=float(C[rows, cols].max()))
+
+
+def _bottleneck(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray, G: np.ndarray,
+                deadline: float) -> Assignment:
+    N, M = len(S), len(G)
+    E = np.hypot(G[:, None, 0] - S[None, :, 0], G[:, None, 1] - S[None, :, 1])  # (M, N)
+    bound = max(float(E.min(axis=1).max()) * 1.05, 4.0 * hs.step)
+    lo = 0.0  # no perfect matching among the pairs with distance < lo
+    while True:
+        pm, pi = np.nonzero(bound > E)  # grouped by goal
+        c = hval_below(pm, V + pi, bound, gr, V, V + N, hs)
+        ok = np.isfinite(c)
+        pm, pi, c = pm[ok], pi[ok], c[ok]
+        match = _perfect(M, N, pm, pi)
+        if (match >= 0).all():
+            break
+        if time.perf_counter() > deadline:
+            return Assignment(None, np.zeros(N), timed_out=True)
+        # searches that are complete (whole lattice, queue empty) know all they can reach
+        complete = np.isinf(hs.rad) & (hs.bcnt.sum(axis=1) == 0)
+        has_pair = np.zeros(M, bool)
+        has_pair[pm] = True
+        if (complete & ~has_pair).any():
+            return Assignment(None, np.zeros(N), _unreached(G, np.zeros(M, bool),
+                                                            complete & ~has_pair))
+        if complete.all():
+            return Assignment(None, np.zeros(N), "no assignment of robots to goals reaches "
+                              "every goal (some goals are reachable only by the same robots)")
+        lo = bound
+        bound *= _GROWTH
+    # B*: the least distance d such that the pairs with distance <= d match every goal
+    vals = np.unique(c[c >= lo])
+    a, b = 0, len(vals) - 1
+    while a < b:
+        mid = (a + b) // 2
+        keep = c <= vals[mid]
+        if (_perfect(M, N, pm[keep], pi[keep]) >= 0).all():
+            b = mid
+        else:
+            a = mid + 1
+    best = float(vals[a])
+    keep = c <= best
+    # least sum over the pairs within B* (a perfect matching exists among them, so the
+    # stand-in cost of the other pairs is never chosen); the dense solver is faster here
+    # than the sparse one, whose augmenting paths crawl on such tight graphs
+    W = np.full((M, N), _BIG)
+    W[pm[keep], pi[keep]] = c[keep]
+    rows, cols = linear_sum_assignment(W)
+    goal = np.full(N, -1, dtype=np.int64)
+    goal[cols] = rows
+    cost = np.zeros(N)
+    cost[cols] = W[rows, cols]
+    return Assignment(goal, cost, bound=best)

@@ -1,0 +1,420 @@
+"""Gspi's heuristic: one lazy, windowed Dijkstra per goal over the lattice (compiled).
+
+Goal m's search starts from the lattice nodes linked to the goal point (seeded with the
+link lengths) and is *resumed lazily*, only as far as the queries need (pypibt's lazy
+distance table). Each search lives in a square *window* of lattice indices centred on its
+goal, with an *exact radius* ``rad[m]``: the window holds every node within Euclidean
+distance ``rad[m]`` of the goal point, and the search never settles a node at distance
+``>= rad[m]``. When a query needs more, the window doubles and the search restarts in it
+(the work is a geometric series: at most about 4/3 of the last window's).
+
+Guarantee (tested against a full Dijkstra on the whole lattice): every value returned by
+:func:`lattice_h`/:func:`hval` is the exact shortest lattice distance to the goal (inf when
+there is none). Why the window does not change it: a node with distance ``d < rad`` has a
+shortest path of length ``d`` from the goal point, every point of which is within ``d``
+of the goal point, hence inside the window; a node settled in the window below ``rad``
+therefore has its true distance, and a node not settled when the window's queue reaches
+``rad`` has true distance ``>= rad``.
+
+Memory and time grow with the area the queries reach, not with the map: a 3-robot call
+near the object settles a few hundred nodes; 400 robots with goals about 1.5 m from
+their starts settle about 10,000 nodes per goal on a 3 cm lattice, where whole-map tables
+would hold 58,000 per goal (1.4 MB each).
+
+Vertices: ``0..V-1`` lattice nodes, ``V..V+N-1`` starts, ``V+N..`` goals (see
+:mod:`lamp.mrmp.gspi_kernels`); the special vertices' values are memoised in
+``sdone``/``sval`` (a start's value is the best of its links, a goal's own value 0).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, NamedTuple
+
+import numba as nb
+import numpy as np
+from numba.typed import List
+
+__all__ = ["EPS", "GoalDistances", "expand_to", "hval", "hval_below", "lattice_h"]
+
+#: Added to every heuristic value but the goal vertex's own, so that a lattice node (or a
+#: start) that coincides with a goal never ties with the goal vertex.
+EPS = 1e-6
+#: Radius of a goal's first window, in lattice steps.
+_FIRST_RADIUS_STEPS = 12
+#: Initial capacity of each bucket of a goal's queue (doubled when full).
+_BUCKET_CAP = 64
+
+
+class GoalDistances(NamedTuple):
+    """Lazy windowed distance tables, one per goal m (see the module docstring).
+
+    ``win[m] = (a0, b0, na, nb, k)``: window origin and size in lattice indices and the
+    bucket being processed; ``rad[m]`` the window's radius ``R`` (inf once the window is
+    the whole lattice, 0 before the first query); ``dist``/``done`` per goal, indexed by
+    the window-local index ``(b - b0) * na + (a - a0)``; ``bucket[m]`` (slots, cap) and
+    ``bcnt[m]`` the circular bucket queue. ``sptr``/``snode``/``scost``: goal m's seed
+    nodes and costs (CSR). ``va``/``vb``: lattice index of each node; ``ids``: node id per
+    lattice index (-1 none); ``da``/``db``: the lattice directions; ``centre[m]``: goal m
+    in lattice index units; ``step``: lattice step (m).
+    """
+
+    win: np.ndarray  # (M, 5) int64
+    rad: np.ndarray  # (M,)
+    dist: Any  # typed List of float64 arrays
+    done: Any  # typed List of uint8 arrays
+    bucket: Any  # typed List of (slots, cap) int32 arrays
+    bcnt: np.ndarray  # (M, slots) int64
+    sptr: np.ndarray  # (M+1,) int64
+    snode: np.ndarray  # int64
+    scost: np.ndarray  # float64
+    sdone: np.ndarray  # (M, N+M) bool
+    sval: np.ndarray  # (M, N+M)
+    va: np.ndarray  # (V,) int64
+    vb: np.ndarray  # (V,) int64
+    ids: np.ndarray  # (nb, na) int64
+    da: np.ndarray  # (8,) int64
+    db: np.ndarray  # (8,) int64
+    centre: np.ndarray  # (M, 2)
+    step: float
+
+    @staticmethod
+    def build(goal_links: list[tuple[np.ndarray, np.ndarray]], goals: np.ndarray,
+              lat: Any, n_special: int) -> GoalDistances:
+        """Empty tables for the goals at ``goals`` (M, 2), seeded with their lattice
+        links ``(nodes, lengths)`` (+ EPS), on the lattice ``lat`` (a ``Lattice``)."""
+        from lamp.mrmp.distance_field import DIRS
+
+        M = len(goal_links)
+        counts = np.array([len(n) for n, _ in goal_links], dtype=np.int64)
+        sptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+        snode = np.concatenate([np.zeros(0, np.int64)]
+                               + [n.astype(np.int64) for n, _ in goal_links])
+        scost = np.concatenate([np.zeros(0)] + [c.astype(float) + EPS for _, c in goal_links])
+        # slots: the longest edge is a diagonal (< 2 L), the seeds reach max(scost)
+        span = int(np.ceil(scost.max() / lat.step)) if len(scost) else 0
+        slots = 4
+        while slots < span + 4:
+            slots *= 2
+        oa, ob = lat.offset
+        va = np.rint(lat.coords[:, 0] / lat.step).astype(np.int64) - oa
+        vb = np.rint(lat.coords[:, 1] / lat.step).astype(np.int64) - ob
+        centre = np.asarray(goals, dtype=np.float64).reshape(-1, 2) / lat.step - [oa, ob]
+        dist = List.empty_list(nb.float64[::1])
+        done = List.empty_list(nb.uint8[::1])
+        bucket = List.empty_list(nb.int32[:, ::1])
+        for _ in range(M):
+            dist.append(np.zeros(0))
+            done.append(np.zeros(0, np.uint8))
+            bucket.append(np.zeros((slots, 0), np.int32))
+        return GoalDistances(
+            np.zeros((M, 5), dtype=np.int64), np.zeros(M), dist, done, bucket,
+            np.zeros((M, slots), dtype=np.int64), sptr, snode, scost,
+            np.zeros((M, n_special), dtype=np.bool_), np.zeros((M, n_special)), va, vb,
+            lat.ids, DIRS[:, 0].copy(), DIRS[:, 1].copy(), np.ascontiguousarray(centre),
+            float(lat.step))
+
+    def settled(self) -> int:
+        """Nodes settled over all goals so far (a cost figure for the statistics)."""
+        return int(sum(int(np.count_nonzero(d)) for d in self.done))
+
+    def window_nodes(self) -> int:
+        """Window entries allocated over all goals (9 bytes each, plus the queues)."""
+        return int(sum(len(d) for d in self.dist))
+
+
+# ---- one goal's bucket queue and window ----------------------------------------------
+
+
+@nb.njit(cache=True)
+def _push(m: int, v: int, d: float, hs: tuple) -> None:
+    """Queue lattice node v at distance d (in bucket floor(d / L), never below the bucket
+    being processed)."""
+    win, _, _, _, bucket_l, bcnt, _, _, _, _, _, _, _, _, _, _, _, step = hs
+    slots = bcnt.shape[1]
+    k = max(int(d / step), win[m, 4])
+    s = k & (slots - 1)
+    bk = bucket_l[m]
+    c = bcnt[m, s]
+    if c == bk.shape[1]:
+        grown = np.empty((slots, max(_BUCKET_CAP, 2 * c)), dtype=np.int32)
+        grown[:, :c] = bk
+        bucket_l[m] = grown
+        bk = grown
+    bk[s, c] = v
+    bcnt[m, s] = c + 1
+
+
+@nb.njit(cache=True)
+def _open_window(m: int, radius: float, nbr: np.ndarray, dlen: np.ndarray,
+                 hs: tuple) -> None:
+    """Give goal m the window of radius ``radius`` (metres), keeping what its search has
+    settled and queued; the first window is seeded with the goal's links."""
+    (win, rad, dist_l, done_l, bucket_l, bcnt, sptr, snode, scost, _, _, va, vb, ids, da, db,
+     centre, step) = hs
+    nbt, nat = ids.shape
+    k = int(math.ceil(radius / step)) + 2
+    ca = int(math.floor(centre[m, 0] + 0.5))
+    cb = int(math.floor(centre[m, 1] + 0.5))
+    a0 = max(0, ca - k)
+    b0 = max(0, cb - k)
+    a1 = min(nat - 1, ca + k)
+    b1 = min(nbt - 1, cb + k)
+    full = a0 == 0 and b0 == 0 and a1 == nat - 1 and b1 == nbt - 1
+    if a1 < a0 or b1 < b0:  # the goal lies far outside the lattice: an empty window
+        a0, b0, a1, b1 = 0, 0, -1, -1
+    na = a1 - a0 + 1
+    nb_ = b1 - b0 + 1
+    d = np.full(na * nb_, np.inf)
+    dn = np.zeros(na * nb_, dtype=np.uint8)
+    first = rad[m] == 0.0
+    oa0, ob0, ona, onb = win[m, 0], win[m, 1], win[m, 2], win[m, 3]
+    old_d = dist_l[m]
+    old_dn = done_l[m]
+    old_bk = bucket_l[m]
+    slots = bcnt.shape[1]
+    old_cnt = bcnt[m].copy()
+    for s in range(slots):
+        bcnt[m, s] = 0
+    bucket_l[m] = np.empty((slots, max(_BUCKET_CAP, old_bk.shape[1])), dtype=np.int32)
+    dist_l[m] = d
+    done_l[m] = dn
+    win[m, 0] = a0
+    win[m, 1] = b0
+    win[m, 2] = na
+    win[m, 3] = nb_
+    rad[m] = np.inf if full else radius
+    if first:
+        for s in range(sptr[m], sptr[m + 1]):
+            v = snode[s]
+            a = va[v] - a0
+            b = vb[v] - b0
+            if 0 <= a < na and 0 <= b < nb_:
+                j = b * na + a
+                if scost[s] < d[j]:
+                    d[j] = scost[s]
+                    _push(m, v, scost[s], hs)
+        return
+    # carry the old window over (it lies inside the new one)
+    for ob in range(onb):
+        for oa in range(ona):
+            oj = ob * ona + oa
+            j = (ob + ob0 - b0) * na + (oa + oa0 - a0)
+            d[j] = old_d[oj]
+            dn[j] = old_dn[oj]
+    for s in range(slots):
+        for c in range(old_cnt[s]):
+            v = old_bk[s, c]
+            j = (vb[v] - b0) * na + (va[v] - a0)
+            if dn[j] == 0:
+                _push(m, v, d[j], hs)
+    # settled nodes on the old border: relax their edges that leave the old window
+    for ob in range(onb):
+        for oa in range(ona):
+            if not (oa == 0 or ob == 0 or oa == ona - 1 or ob == onb - 1):
+                continue
+            oj = ob * ona + oa
+            if old_dn[oj] == 0:
+                continue
+            v = ids[ob + ob0, oa + oa0]
+            du = old_d[oj]
+            for e in range(8):
+                w = nbr[v, e]
+                if w < 0:
+                    continue
+                wa = oa + da[e]
+                wb = ob + db[e]
+                if 0 <= wa < ona and 0 <= wb < onb:
+                    continue
+                j = (wb + ob0 - b0) * na + (wa + oa0 - a0)
+                nd = du + dlen[e]
+                if nd < d[j]:
+                    d[j] = nd
+                    _push(m, w, nd, hs)
+
+
+@nb.njit(cache=True)
+def _settle(target: int, lim: float, k: int, nbr: np.ndarray, dlen: np.ndarray,
+            dist: np.ndarray, done: np.ndarray, bk: np.ndarray, cnt: np.ndarray,
+            a0: int, b0: int, na: int, nb_: int, va: np.ndarray, vb: np.ndarray,
+            da: np.ndarray, db: np.ndarray, step: float) -> tuple[int, int]:
+    """The search loop of one goal (Dial's buckets of width L: an edge is at least L
+    long, so every node in the lowest non-empty bucket is final). Returns (bucket,
+    status): 0 target settled or ``lim`` reached, 1 queue empty, 2 a bucket is full.
+    (Kept apart from the growth of the buckets: an array variable reassigned inside a
+    Numba loop costs a reference count on every access, three times the loop's time.)"""
+    slots = cnt.shape[0]
+    mask = slots - 1
+    cap = bk.shape[1] - 8
+    inv = 1.0 / step
+    while target < 0 or done[target] == 0:
+        s = k & mask
+        if cnt[s] == 0:
+            left = 0
+            for q in range(slots):
+                left += cnt[q]
+            if left == 0:
+                return k, 1
+            k += 1
+            continue
+        if k * step >= lim:
+            return k, 0
+        for q in range(slots):
+            if cnt[q] > cap:
+                return k, 2
+        c = cnt[s] - 1
+        cnt[s] = c
+        v = bk[s, c]
+        a = va[v] - a0
+        b = vb[v] - b0
+        j = b * na + a
+        if done[j]:
+            continue
+        done[j] = 1
+        du = dist[j]
+        for e in range(8):
+            w = nbr[v, e]
+            if w < 0:
+                continue
+            wa = a + da[e]
+            wb = b + db[e]
+            if wa < 0 or wa >= na or wb < 0 or wb >= nb_:
+                continue
+            jw = j + da[e] + db[e] * na
+            if done[jw]:
+                continue
+            nd = du + dlen[e]
+            if nd < dist[jw]:
+                dist[jw] = nd
+                q = max(int(nd * inv), k) & mask
+                bk[q, cnt[q]] = w
+                cnt[q] += 1
+    return k, 0
+
+
+@nb.njit(cache=True)
+def _run_until(m: int, target: int, bound: float, nbr: np.ndarray, dlen: np.ndarray,
+               hs: tuple) -> bool:
+    """Resume goal m's search until window entry ``target`` is settled (-1: none), or
+    every bucket below ``min(bound, R)`` is processed; False when the queue ran empty."""
+    (win, rad, dist_l, done_l, bucket_l, bcnt, _, _, _, _, _, va, vb, _, da, db, _,
+     step) = hs
+    lim = min(bound, rad[m])
+    while True:
+        k, status = _settle(target, lim, win[m, 4], nbr, dlen, dist_l[m], done_l[m],
+                            bucket_l[m], bcnt[m], win[m, 0], win[m, 1], win[m, 2],
+                            win[m, 3], va, vb, da, db, step)
+        win[m, 4] = k
+        if status != 2:
+            return status == 0
+        bk = bucket_l[m]
+        grown = np.empty((bk.shape[0], 2 * bk.shape[1]), dtype=np.int32)
+        grown[:, : bk.shape[1]] = bk
+        bucket_l[m] = grown
+
+
+@nb.njit(cache=True)
+def lattice_h(m: int, v: int, nbr: np.ndarray, dlen: np.ndarray, hs: tuple) -> float:
+    """Exact lattice distance from node v to goal m (inf when there is no path)."""
+    win, rad, dist_l, done_l = hs[0], hs[1], hs[2], hs[3]
+    va, vb, centre, step = hs[11], hs[12], hs[16], hs[17]
+    if rad[m] == 0.0:
+        _open_window(m, _FIRST_RADIUS_STEPS * step, nbr, dlen, hs)
+    while True:
+        a = va[v] - win[m, 0]
+        b = vb[v] - win[m, 1]
+        na = win[m, 2]
+        if 0 <= a < na and 0 <= b < win[m, 3]:
+            j = b * na + a
+            if done_l[m][j]:
+                return dist_l[m][j]
+            _run_until(m, j, np.inf, nbr, dlen, hs)
+            if done_l[m][j]:
+                return dist_l[m][j]
+        if rad[m] == np.inf:
+            return np.inf  # the whole lattice is searched and v was never reached
+        need = step * (math.hypot(va[v] - centre[m, 0], vb[v] - centre[m, 1]) + 2.0)
+        _open_window(m, max(2.0 * rad[m], need), nbr, dlen, hs)
+
+
+@nb.njit(cache=True)
+def expand_to(m: int, bound: float, nbr: np.ndarray, dlen: np.ndarray, hs: tuple) -> None:
+    """Settle every node of goal m's search closer than ``bound`` (metres)."""
+    rad, step = hs[1], hs[17]
+    if rad[m] == 0.0:
+        _open_window(m, max(bound, _FIRST_RADIUS_STEPS * step), nbr, dlen, hs)
+    elif rad[m] < bound:
+        _open_window(m, max(bound, 2.0 * rad[m]), nbr, dlen, hs)
+    _run_until(m, -1, bound, nbr, dlen, hs)
+
+
+@nb.njit(cache=True)
+def _special(m: int, v: int, gr: tuple, V: int, gv0: int, hs: tuple, below: float) -> float:
+    """Best link of special vertex v to goal m: each link's length plus its lattice node's
+    distance (only settled nodes when ``below`` is finite), or the direct link."""
+    coords, nbr, dlen, xptr, xidx = gr
+    if v == gv0 + m:
+        return 0.0
+    best = np.inf
+    for e in range(xptr[v], xptr[v + 1]):
+        n = xidx[e]
+        dx = coords[v, 0] - coords[n, 0]
+        dy = coords[v, 1] - coords[n, 1]
+        ln = math.sqrt(dx * dx + dy * dy)
+        if n < V:
+            c = ln + (_settled_value(m, n, hs) if below < np.inf
+                      else lattice_h(m, n, nbr, dlen, hs))
+        elif n == gv0 + m:
+            c = ln + EPS
+        else:
+            continue
+        if c < best:
+            best = c
+    return best
+
+
+@nb.njit(cache=True)
+def _settled_value(m: int, v: int, hs: tuple) -> float:
+    win, va, vb = hs[0], hs[11], hs[12]
+    a = va[v] - win[m, 0]
+    b = vb[v] - win[m, 1]
+    na = win[m, 2]
+    if 0 <= a < na and 0 <= b < win[m, 3]:
+        j = b * na + a
+        if hs[3][m][j]:
+            return hs[2][m][j]
+    return np.inf
+
+
+@nb.njit(cache=True)
+def hval(m: int, v: int, gr: tuple, V: int, gv0: int, hs: tuple) -> float:
+    """Exact heuristic distance of vertex v (lattice or special) to goal m."""
+    if v < V:
+        return lattice_h(m, v, gr[1], gr[2], hs)
+    sdone = hs[9]
+    sval = hs[10]
+    k = v - V
+    if sdone[m, k]:
+        return sval[m, k]
+    best = _special(m, v, gr, V, gv0, hs, np.inf)
+    sdone[m, k] = True
+    sval[m, k] = best
+    return best
+
+
+@nb.njit(cache=True)
+def hval_below(pm: np.ndarray, pv: np.ndarray, bound: float, gr: tuple, V: int, gv0: int,
+               hs: tuple) -> np.ndarray:
+    """For pairs (goal ``pm[k]``, special vertex ``pv[k]``): the exact distance when it is
+    below ``bound``, else inf (each goal's search is expanded to ``bound`` once; pairs are
+    best grouped by goal)."""
+    out = np.empty(pm.shape[0])
+    last = -1
+    for k in range(pm.shape[0]):
+        m = pm[k]
+        if m != last:
+            expand_to(m, bound, gr[1], gr[2], hs)
+            last = m
+        c = _special(m, pv[k], gr, V, gv0, hs, bound)
+        out[k] = c if c < bound else np.inf
+    return out
