@@ -77,10 +77,14 @@ def test_version_and_short_help() -> None:
 
 
 def test_shell_completion_is_available() -> None:
+    """In a fresh process (Typer's completion machinery keeps state between in-process
+    invocations, which made this test depend on what ran before it)."""
     assert "--install-completion" in help_text()
-    res = runner.invoke(app, ["--show-completion", "bash"], prog_name="lamp")
-    assert res.exit_code == 0
-    assert "complete" in res.output and "_LAMP_COMPLETE" in res.output
+    lamp_exe = Path(sys.executable).with_name("lamp")
+    res = subprocess.run([str(lamp_exe), "--show-completion", "bash"], capture_output=True,
+                         text=True, timeout=300)
+    assert res.returncode == 0, res.stderr
+    assert "complete" in res.stdout and "_LAMP_COMPLETE" in res.stdout, res.stdout
 
 
 def _visible_options(cmd: click.Command, path: str = "lamp"):

@@ -100,13 +100,7 @@ class GoalDistances(NamedTuple):
         va = np.rint(lat.coords[:, 0] / lat.step).astype(np.int64) - oa
         vb = np.rint(lat.coords[:, 1] / lat.step).astype(np.int64) - ob
         centre = np.asarray(goals, dtype=np.float64).reshape(-1, 2) / lat.step - [oa, ob]
-        dist = List.empty_list(nb.float64[::1])
-        done = List.empty_list(nb.uint8[::1])
-        bucket = List.empty_list(nb.int32[:, ::1])
-        for _ in range(M):
-            dist.append(np.zeros(0))
-            done.append(np.zeros(0, np.uint8))
-            bucket.append(np.zeros((slots, 0), np.int32))
+        dist, done, bucket = _new_lists(max(M, 1), slots)
         return GoalDistances(
             np.zeros((M, 5), dtype=np.int64), np.zeros(M), dist, done, bucket,
             np.zeros((M, slots), dtype=np.int64), sptr, snode, scost,
@@ -116,11 +110,35 @@ class GoalDistances(NamedTuple):
 
     def settled(self) -> int:
         """Nodes settled over all goals so far (a cost figure for the statistics)."""
-        return int(sum(int(np.count_nonzero(d)) for d in self.done))
+        return int(_count(self.done, True))
 
     def window_nodes(self) -> int:
         """Window entries allocated over all goals (9 bytes each, plus the queues)."""
-        return int(sum(len(d) for d in self.dist))
+        return int(_count(self.done, False))
+
+
+# The typed lists are made and read in compiled code only: Numba compiles its list
+# helpers anew in every process (about 1 s) when Python code builds or reads them.
+
+
+@nb.njit(cache=True)
+def _new_lists(M: int, slots: int) -> tuple[Any, Any, Any]:
+    dist = List()
+    done = List()
+    bucket = List()
+    for _ in range(M):
+        dist.append(np.zeros(0))
+        done.append(np.zeros(0, np.uint8))
+        bucket.append(np.zeros((slots, 0), np.int32))
+    return dist, done, bucket
+
+
+@nb.njit(cache=True)
+def _count(done: Any, settled: bool) -> int:
+    n = 0
+    for d in done:
+        n += int(d.sum()) if settled else d.shape[0]
+    return n
 
 
 # ---- one goal's bucket queue and window ----------------------------------------------
