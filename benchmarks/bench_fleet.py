@@ -93,6 +93,7 @@ def main() -> None:
     ap.add_argument("--robots", default="100,200,400,800")
     ap.add_argument("--seeds", type=int, default=3)
     ap.add_argument("--cell", type=float, default=0.15)
+    ap.add_argument("--map-dir", type=Path, default=MAP_DIR, help="folder of the .map files")
     ap.add_argument("--time-limit", type=float, default=60.0)
     ap.add_argument("--tswap", default=None, help="TSWAP adapter script (optional)")
     ap.add_argument("--no-check", action="store_true", help="skip the independent checker")
@@ -109,7 +110,7 @@ def main() -> None:
                                "makespan m / sum m / ms" if a.tswap else ""))
     summary: list[tuple] = []
     for name in maps:
-        path = MAP_DIR / f"{name}.map"
+        path = a.map_dir / f"{name}.map"
         gm = load_grid_map(path, a.cell, RADIUS)
         t0 = time.perf_counter()
         space = RobotSpace.from_scene(gm.scene)

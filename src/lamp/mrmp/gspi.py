@@ -8,9 +8,10 @@ lattice nodes within ``link_radius`` (and starts to goals directly when close).
 
 Each time step (GCo's Gspi, with the continuous-space changes of step 2):
 
-1. goal swapping: for every pair of robots, swap their goals (and priorities, which travel
-   with goals) when that lowers the sum of their heuristic distances; a robot without a
-   goal counts 0, so an idle robot closer to a goal takes it over;
+1. goal swapping: for every pair of robots (within ``swap_radius`` of each other in teams
+   of 32 or more), swap their goals (and priorities, which travel with goals) when that
+   lowers the sum of their heuristic distances; a robot without a goal counts 0, so an
+   idle robot closer to a goal takes it over;
 2. one PIBT step (Okumura et al., "Priority inheritance with backtracking", AIJ 2022,
    Algorithm 1, ``funcPIBT``), iterative with an explicit stack: robots in priority order pick
    the candidate (neighbours and *wait*) that most lowers their heuristic; when a chosen
@@ -26,13 +27,18 @@ Each time step (GCo's Gspi, with the continuous-space changes of step 2):
    part, the others grow by 1.
 
 Heuristic: one Dijkstra per goal over the lattice (8-connected, diagonal moves cost
-``L * sqrt(2)``), seeded with the goal's links and *resumed lazily* only as far as the
-queries need (pypibt's lazy distance table, in compiled code): a 3-robot call near the
-object settles a few hundred nodes. Initial assignment: ``linear_sum_assignment`` on
-these distances (unreachable pairs excluded; a goal no robot can reach is reported at
-once). Lattices: 5 cm first; when that fails in a way a finer lattice can fix (a goal or
+``L * sqrt(2)``), seeded with the goal's links, in a window around the goal that grows
+only as far as the queries need (:mod:`lamp.mrmp.goal_distances`: exact distances, Dial's
+buckets, memory and time growing with the area reached, not the map). Initial assignment
+(:mod:`lamp.mrmp.assignment`): least longest distance first, then least sum (TSWAP's
+bottleneck-then-sum), over distances computed only for the pairs that can matter;
+``assignment="sum"`` gives the least-sum assignment of earlier versions (with it the plans
+are bit for bit those of the all-pairs implementation on teams below 32 robots). A goal no
+robot can reach is reported at once. Robot-robot checks and goal swaps use neighbour
+lists from a spatial hash (:mod:`lamp.mrmp.gspi_kernels`): a step costs about O(N), not
+O(N^2). Lattices: 5 cm first; when that fails in a way a finer lattice can fix (a goal or
 start that cannot be linked, a passage narrower than the lattice, a stall) 3 cm and then
-2 cm are tried while time is left.
+2 cm are tried while time is left. Lattices are built once per space and reused.
 
 Output: the vertex sequence, all-wait steps dropped, each step cut into the fewest equal
 sub-steps that keep every robot's consecutive rows <= ``max_spacing`` apart (linear
