@@ -427,12 +427,23 @@ class RobotSpace:
         h = self.resolution
         ny, nx = self.shape
         oi, oj = self.origin
-        ok = self.field >= thr
+        si = int(np.clip(round(p[0] / h) - oi, 0, nx - 1))
+        sj = int(np.clip(round(p[1] / h) - oj, 0, ny - 1))
+        start_free = self.field[sj, si] >= self.threshold
+        limit = max(nx, ny) if max_distance is None else int(math.ceil(max_distance / h)) + 1
+        # the search never goes more than ``limit`` hops from the start node: work on that
+        # box of the grid only (a large space's whole grid costs more than the search)
+        bi0, bj0 = max(0, si - limit), max(0, sj - limit)
+        bi1, bj1 = min(nx - 1, si + limit), min(ny - 1, sj + limit)
+        box = (slice(bj0, bj1 + 1), slice(bi0, bi1 + 1))
+        si, sj, oi, oj = si - bi0, sj - bj0, oi + bi0, oj + bj0
+        ny, nx = bj1 - bj0 + 1, bi1 - bi0 + 1
+        ok = self.field[box] >= thr
         if avoid is not None:
             if isinstance(avoid, np.ndarray) and avoid.dtype == bool:
                 if avoid.shape != self.shape:
                     raise ValueError(f"avoid mask must have shape {self.shape}, got {avoid.shape}")
-                ok = ok & ~avoid
+                ok = ok & ~avoid[box]
             else:
                 disks = np.asarray(avoid, dtype=np.float64).reshape(-1, 3)
                 for x, y, rad in disks:
@@ -446,13 +457,15 @@ class RobotSpace:
                     ys = np.arange(oj + j0, oj + j1 + 1) * h - y
                     inside = xs[None, :] ** 2 + ys[:, None] ** 2 <= rad * rad
                     ok[j0:j1 + 1, i0:i1 + 1] &= ~inside
-        si = int(np.clip(round(p[0] / h) - oi, 0, nx - 1))
-        sj = int(np.clip(round(p[1] / h) - oj, 0, ny - 1))
-        if through_free and self.field[sj, si] >= self.threshold:
-            reach = self.free_grid
-        else:
-            reach = np.ones(self.shape, dtype=bool)
-        limit = max(nx, ny) if max_distance is None else int(math.ceil(max_distance / h)) + 1
+        reach = self.free_grid[box] if through_free and start_free else np.ones((ny, nx), bool)
+        if ok[sj, si]:
+            # the start node is the grid node nearest ``point`` and comes first in BFS
+            # order: when it is valid it is the answer (a robot already where it may wait
+            # costs one ``accept`` call)
+            here = np.array([[(si + oi) * h, (sj + oj) * h]], dtype=np.float64)
+            if accept is None or bool(np.asarray(accept(here), dtype=bool).reshape(-1)[0]):
+                if max_distance is None or math.hypot(*(here[0] - p)) <= max_distance:
+                    return here[0]
         depth_cap = min(16, limit)
         judged = np.full(ny * nx, -1, dtype=np.int8) if accept is not None else None
         while True:

@@ -245,6 +245,7 @@ def _swap_goals(gr: tuple, V: int, gv0: int, hs: tuple, cur: np.ndarray, goal: n
                 prio: np.ndarray, sptr: np.ndarray, sidx: np.ndarray) -> int:
     """Pairwise goal swaps that lower the summed heuristic (priorities travel along), over
     the pairs (i, j > i) of the neighbour lists, in index order."""
+    coords = gr[0]
     N = cur.shape[0]
     nswap = 0
     for i in range(N):
@@ -257,12 +258,25 @@ def _swap_goals(gr: tuple, V: int, gv0: int, hs: tuple, cur: np.ndarray, goal: n
             if gi < 0 and gj < 0:
                 continue
             now = 0.0
-            sw = 0.0
             if gi >= 0:
                 now += hval(gi, cur[i], gr, V, gv0, hs)
-                sw += hval(gi, cur[j], gr, V, gv0, hs)
             if gj >= 0:
                 now += hval(gj, cur[j], gr, V, gv0, hs)
+            # straight-line lower bound of the swapped sum: far pairs are skipped without
+            # expanding either goal's search to the other robot (the same decisions)
+            lb = 0.0
+            if gi >= 0:
+                lb += math.hypot(coords[cur[j], 0] - coords[gv0 + gi, 0],
+                                 coords[cur[j], 1] - coords[gv0 + gi, 1])
+            if gj >= 0:
+                lb += math.hypot(coords[cur[i], 0] - coords[gv0 + gj, 0],
+                                 coords[cur[i], 1] - coords[gv0 + gj, 1])
+            if lb >= now - 1e-9:
+                continue
+            sw = 0.0
+            if gi >= 0:
+                sw += hval(gi, cur[j], gr, V, gv0, hs)
+            if gj >= 0:
                 sw += hval(gj, cur[i], gr, V, gv0, hs)
             if sw < now - 1e-9:
                 goal[i] = gj
