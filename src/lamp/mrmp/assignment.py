@@ -29,7 +29,7 @@ from scipy.optimize import linear_sum_assignment
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import maximum_bipartite_matching
 
-from lamp.mrmp.goal_distances import GoalDistances, hval, hval_below
+from lamp.mrmp.goal_distances import GoalDistances, hval, hval_below, start_costs
 from lamp.mrmp.gspi_kernels import Graph
 
 __all__ = ["ASSIGNMENTS", "Assignment", "assign"]
@@ -38,6 +38,9 @@ __all__ = ["ASSIGNMENTS", "Assignment", "assign"]
 ASSIGNMENTS = ("bottleneck", "sum")
 #: Finite stand-in for an infinite cost in the dense (``sum``) assignment problem.
 _BIG = 1e9
+#: Up to this many robot-goal pairs every distance is computed at once (as the
+#: ``sum`` objective does): fewer calls into compiled code than the growing bound needs.
+DENSE_PAIRS = 64
 #: Growth factor of the bound ``B`` between rounds.
 _GROWTH = 1.25
 
@@ -92,17 +95,62 @@ def assign(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray, G: np.ndarray,
         return Assignment(goal0.copy(), cost)
     if objective == "sum":
         return _sum(gr, V, hs, S, G, deadline)
+    if N * M <= DENSE_PAIRS:
+        return _dense_bottleneck(gr, V, hs, S, G, deadline)
     return _bottleneck(gr, V, hs, S, G, deadline)
+
+
+def _costs(gr: Graph, V: int, hs: GoalDistances, N: int, M: int,
+           deadline: float) -> np.ndarray | None:
+    """The (N, M) exact distances of every start to every goal (None past the deadline);
+    in one compiled call for small problems, else goal by goal to keep the deadline."""
+    if N * M <= DENSE_PAIRS:
+        return start_costs(0, M, N, gr, V, hs)
+    C = np.empty((N, M))
+    for m in range(M):
+        C[:, m] = start_costs(m, m + 1, N, gr, V, hs)[:, 0]
+        if time.perf_counter() > deadline:
+            return None
+    return C
+
+
+def _dense_bottleneck(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray, G: np.ndarray,
+                      deadline: float) -> Assignment:
+    """The bottleneck-then-sum assignment on the whole cost matrix (small problems)."""
+    N, M = len(S), len(G)
+    C = _costs(gr, V, hs, N, M, deadline)
+    if C is None:
+        return Assignment(None, np.zeros(N), timed_out=True)
+    reach = np.isfinite(C).any(axis=0)
+    if not reach.all():
+        return Assignment(None, np.zeros(N), _unreached(G, np.zeros(M, bool), ~reach))
+    vals = np.unique(C[np.isfinite(C)])
+    a, b = 0, len(vals) - 1
+    while a < b:  # least t such that the pairs within t match every goal
+        mid = (a + b) // 2
+        rows, cols = linear_sum_assignment(vals[mid] < C)
+        if (C[rows, cols] > vals[mid]).any():
+            a = mid + 1
+        else:
+            b = mid
+    W = np.where(vals[a] >= C, C, _BIG)
+    rows, cols = linear_sum_assignment(W)
+    if np.any(W[rows, cols] >= _BIG):
+        return Assignment(None, np.zeros(N), "no assignment of robots to goals reaches every "
+                          "goal (some goals are reachable only by the same robots)")
+    goal = np.full(N, -1, dtype=np.int64)
+    goal[rows] = cols
+    cost = np.zeros(N)
+    cost[rows] = C[rows, cols]
+    return Assignment(goal, cost, bound=float(vals[a]))
 
 
 def _sum(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray, G: np.ndarray,
          deadline: float) -> Assignment:
     N, M = len(S), len(G)
-    C = np.empty((N, M))
-    for m in range(M):
-        C[:, m] = [hval(m, V + i, gr, V, V + N, hs) for i in range(N)]
-        if time.perf_counter() > deadline:
-            return Assignment(None, np.zeros(N), timed_out=True)
+    C = _costs(gr, V, hs, N, M, deadline)
+    if C is None:
+        return Assignment(None, np.zeros(N), timed_out=True)
     reach = np.isfinite(C).any(axis=0)
     if not reach.all():
         return Assignment(None, np.zeros(N), _unreached(G, np.zeros(M, bool), ~reach))

@@ -39,7 +39,8 @@ import numba as nb
 import numpy as np
 from numba.typed import List
 
-__all__ = ["EPS", "GoalDistances", "expand_to", "hval", "hval_below", "lattice_h"]
+__all__ = ["EPS", "GoalDistances", "expand_to", "hval", "hval_below", "lattice_h",
+           "start_costs"]
 
 #: Added to every heuristic value but the goal vertex's own, so that a lattice node (or a
 #: start) that coincides with a goal never ties with the goal vertex.
@@ -439,4 +440,14 @@ def hval_below(pm: np.ndarray, pv: np.ndarray, bound: float, gr: tuple, V: int, 
             last = m
         c = _special(m, pv[k], gr, V, gv0, hs, bound)
         out[k] = c if c < bound else np.inf
+    return out
+
+
+@nb.njit(cache=True)
+def start_costs(m0: int, m1: int, N: int, gr: tuple, V: int, hs: tuple) -> np.ndarray:
+    """(N, m1 - m0) exact distances of the start vertices to goals m0..m1-1."""
+    out = np.empty((N, m1 - m0))
+    for m in range(m0, m1):
+        for i in range(N):
+            out[i, m - m0] = hval(m, V + i, gr, V, V + N, hs)
     return out

@@ -387,7 +387,7 @@ def _run(graph: Graph, V: int, gv0: int, hs: GoalDistances, goal: np.ndarray,
     swap_r = 2.0 * near if opts.swap_radius is None else float(opts.swap_radius)
     best_h = np.inf
     best_t = 0
-    chunk = 16
+    chunk = max(1, min(64, 2048 // N))  # steps per compiled call, adapted to the clock
     seed_i = int(opts.seed) & 0x7FFFFFFF
     while True:
         t_chunk = time.perf_counter()
