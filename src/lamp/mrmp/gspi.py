@@ -99,6 +99,10 @@ def warmup() -> None:
     sp.clearance(np.array([[0.2, 0.2]]))
     sp.nearest_free(np.array([0.3, 0.3]))
     plan_paths(sc, sc.robot_starts_array, np.array([[0.5, 0.5], [0.1, 0.3]]), time_limit=1e6)
+    # a team of 36: the lazy bottleneck assignment and the spatial hash (large teams)
+    grid = np.stack(np.meshgrid(np.arange(6), np.arange(6)), -1).reshape(-1, 2) * 0.3 + 0.2
+    team = Scene("warmup-team", (2.2, 2.2), tuple(map(tuple, grid.tolist())), (), ())
+    plan_paths(team, grid, grid[::-1] + 0.05, time_limit=1e6)
 
 
 def plan_paths(
