@@ -24,7 +24,11 @@ Each time step (GCo's Gspi, with the continuous-space changes of step 2):
    child with no move compatible with its ancestors' motions may still *yield* (move
    clear of their positions) so that the way opens for the next step;
 3. priorities: robots at their goal (or without one) reset to their fractional tie-break
-   part, the others grow by 1.
+   part, the others grow by 1;
+4. deadlocks (TSWAP's rule, before step 2): a robot with no progress towards its goal for
+   10 steps trades goals with a neighbour that is stuck too or rests on its goal nearer
+   to the stuck robot's goal (``gspi_kernels._break_deadlocks``): two robots each
+   blocking the other's last move, as in a one-cell pocket, no longer stall the team.
 
 Heuristic: one Dijkstra per goal over the lattice (8-connected, diagonal moves cost
 ``L * sqrt(2)``), seeded with the goal's links, in a window around the goal that grows
@@ -388,6 +392,8 @@ def _run(graph: Graph, V: int, gv0: int, hs: GoalDistances, goal: np.ndarray,
     out.hist[0] = cur
     hsum = np.zeros(cap)
     near = two_r + 2.0 * links.max_move + 1e-9
+    stuck = np.zeros(N, dtype=np.int64)  # deadlock detection (gspi_kernels.run_steps)
+    besth = np.full(N, np.inf)
     swap_r = 2.0 * near if opts.swap_radius is None else float(opts.swap_radius)
     best_h = np.inf
     best_t = 0
@@ -405,7 +411,7 @@ def _run(graph: Graph, V: int, gv0: int, hs: GoalDistances, goal: np.ndarray,
             hsum = np.concatenate([hsum, np.zeros(cap - len(hsum))])
         t_new, out.done = run_steps(graph, V, gv0, hs, cur, goal, prio, two_r, seed_i,
                                     opts.goal_swapping, out.hist, hsum, out.t, t1,
-                                    links.max_candidates, near, swap_r)
+                                    links.max_candidates, near, swap_r, stuck, besth)
         for k in range(out.t + 1, t_new + 1):
             if hsum[k] < best_h - 1e-9:
                 best_h = hsum[k]

@@ -34,6 +34,9 @@ __all__ = ["ALL_PAIRS_BELOW", "Graph", "neighbour_lists", "run_steps"]
 
 #: Teams smaller than this swap goals over all pairs and check all pairs (no hashing).
 ALL_PAIRS_BELOW = 32
+#: Steps a robot may go without progress towards its goal before it trades goals with a
+#: neighbour that blocks it (``_break_deadlocks``).
+STUCK_STEPS = 10
 _UNDECIDED, _TENTATIVE, _DECIDED = 0, 1, 2
 
 
@@ -289,15 +292,58 @@ def _swap_goals(gr: tuple, V: int, gv0: int, hs: tuple, cur: np.ndarray, goal: n
 
 
 @nb.njit(cache=True)
+def _break_deadlocks(gr: tuple, V: int, gv0: int, hs: tuple, cur: np.ndarray,
+                     goal: np.ndarray, prio: np.ndarray, nptr: np.ndarray, nidx: np.ndarray,
+                     stuck: np.ndarray, besth: np.ndarray) -> int:
+    """TSWAP's deadlock rule in continuous space: a robot that has made no progress
+    towards its goal for :data:`STUCK_STEPS` steps trades goals (and priorities)
+    with the first robot within reach, in index order, that is stuck too, or that rests
+    on its goal nearer to the stuck robot's goal (it stands in the way). The summed
+    heuristic may grow; what it buys is that neither blocks the other any more (two
+    robots each blocking the other's last move are otherwise stuck for good)."""
+    N = cur.shape[0]
+    n = 0
+    for i in range(N):
+        gi = goal[i]
+        if stuck[i] < STUCK_STEPS or gi < 0:
+            continue
+        hi = hval(gi, cur[i], gr, V, gv0, hs)
+        for q in range(nptr[i], nptr[i + 1]):
+            j = nidx[q]
+            gj = goal[j]
+            if gj < 0:
+                continue
+            resting = cur[j] == gv0 + gj
+            if not (stuck[j] >= STUCK_STEPS
+                    or (resting and hval(gi, cur[j], gr, V, gv0, hs) < hi - 1e-9)):
+                continue
+            goal[i] = gj
+            goal[j] = gi
+            p = prio[i]
+            prio[i] = prio[j]
+            prio[j] = p
+            stuck[i] = 0
+            stuck[j] = 0
+            besth[i] = np.inf
+            besth[j] = np.inf
+            n += 1
+            break
+    return n
+
+
+@nb.njit(cache=True)
 def run_steps(
     gr: tuple, V: int, gv0: int, hs: tuple, cur: np.ndarray, goal: np.ndarray,
     prio: np.ndarray, two_r: float, seed: int, swap: bool, hist: np.ndarray,
     hsum: np.ndarray, t0: int, t1: int, maxc: int, near: float, swap_radius: float,
+    stuck: np.ndarray, besth: np.ndarray,
 ) -> tuple[int, bool]:
     """Run Gspi steps t0..t1-1; hist[t+1] receives the vertices after step t and
     hsum[t+1] the summed heuristic. Returns (rows filled - 1, all goals reached).
     ``near``: the distance beyond which two robots cannot conflict within a step
-    (``2r + 2 * maxmove``); ``swap_radius``: the goal-swapping neighbourhood."""
+    (``2r + 2 * maxmove``); ``swap_radius``: the goal-swapping neighbourhood; ``stuck``:
+    per robot, the steps since its heuristic last reached a new least value ``besth``
+    (both kept across calls; reset when its goal changes)."""
     N = cur.shape[0]
     nxt = np.empty(N, dtype=np.int64)
     cand = np.empty((N, maxc), dtype=np.int64)
@@ -320,6 +366,8 @@ def run_steps(
             sptr, sidx = neighbour_lists(px, py, swap_radius)
             _swap_goals(gr, V, gv0, hs, cur, goal, prio, sptr, sidx)
         nptr, nidx = neighbour_lists(px, py, near)
+        if swap:
+            _break_deadlocks(gr, V, gv0, hs, cur, goal, prio, nptr, nidx, stuck, besth)
         _pibt_step(gr, V, gv0, hs, cur, goal, prio, two_r, seed, t, nxt, cand, ncand, ci,
                    status, stack, mode, nptr, nidx)
         s = 0.0
@@ -329,9 +377,17 @@ def run_steps(
             g = goal[i]
             if g < 0 or cur[i] == gv0 + g:
                 prio[i] = prio[i] - math.floor(prio[i])
+                stuck[i] = 0
+                besth[i] = 0.0
             else:
                 prio[i] += 1.0
-                s += min(hval(g, cur[i], gr, V, gv0, hs), 1e6)
+                hv = hval(g, cur[i], gr, V, gv0, hs)
+                s += min(hv, 1e6)
+                if hv < besth[i] - 1e-9:
+                    besth[i] = hv
+                    stuck[i] = 0
+                else:
+                    stuck[i] += 1
         hsum[t + 1] = s
     done = True
     for i in range(N):
