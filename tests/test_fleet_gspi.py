@@ -172,3 +172,18 @@ def test_assignment_and_swap_radius_are_validated() -> None:
         plan_paths(gm.scene, S, G, assignment="greedy")
     with pytest.raises(InputError, match="swap_radius"):
         plan_paths(gm.scene, S, G, swap_radius=-1.0)
+
+
+def test_a_robot_resting_in_a_pocket_lets_the_other_in() -> None:
+    """A one-cell-wide pocket on random-64-64-20 (bottom row, columns 33-34): robot 0
+    rests on its goal at the pocket's mouth, robot 1 must pass it to reach the inner cell.
+    PIBT alone stalls (each blocks the other's last move); the deadlock rule trades their
+    goals and keeps the trade, so robot 0 moves in and robot 1 takes its place."""
+    gm = load_grid_map(MAPF / "random-64-64-20.map")
+    assert gm.blocked[63, 32] and gm.blocked[63, 35] and gm.blocked[62, 34]
+    G = np.array([[5.025, 0.075], [5.175, 0.075]])
+    for S in (np.array([[5.025, 0.075], [5.025, 0.375]]), np.array([[5.025, 0.375],
+                                                                      [5.025, 0.075]])):
+        plan = plan_paths(gm.scene, S, G, time_limit=600.0, lattice_step=0.03)
+        assert plan.success, plan.reason
+        assert check_fleet_plan(gm.scene.to_dict(), S, G, plan, 0.05) == []

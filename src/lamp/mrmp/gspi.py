@@ -392,7 +392,7 @@ def _run(graph: Graph, V: int, gv0: int, hs: GoalDistances, goal: np.ndarray,
     out.hist[0] = cur
     hsum = np.zeros(cap)
     near = two_r + 2.0 * links.max_move + 1e-9
-    stuck = np.zeros(N, dtype=np.int64)  # deadlock detection (gspi_kernels.run_steps)
+    stuck = np.zeros((2, N), dtype=np.int64)  # deadlock detection (gspi_kernels.run_steps)
     besth = np.full(N, np.inf)
     swap_r = 2.0 * near if opts.swap_radius is None else float(opts.swap_radius)
     best_h = np.inf

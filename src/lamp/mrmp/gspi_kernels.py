@@ -245,16 +245,17 @@ def _pibt_step(
 
 @nb.njit(cache=True)
 def _swap_goals(gr: tuple, V: int, gv0: int, hs: tuple, cur: np.ndarray, goal: np.ndarray,
-                prio: np.ndarray, sptr: np.ndarray, sidx: np.ndarray) -> int:
+                prio: np.ndarray, sptr: np.ndarray, sidx: np.ndarray, cool: np.ndarray) -> int:
     """Pairwise goal swaps that lower the summed heuristic (priorities travel along), over
-    the pairs (i, j > i) of the neighbour lists, in index order."""
+    the pairs (i, j > i) of the neighbour lists, in index order; robots with ``cool > 0``
+    (just traded goals to break a deadlock) take no part."""
     coords = gr[0]
     N = cur.shape[0]
     nswap = 0
     for i in range(N):
         for q in range(sptr[i], sptr[i + 1]):
             j = sidx[q]
-            if j <= i:
+            if j <= i or cool[i] > 0 or cool[j] > 0:
                 continue
             gi = goal[i]
             gj = goal[j]
@@ -305,7 +306,7 @@ def _break_deadlocks(gr: tuple, V: int, gv0: int, hs: tuple, cur: np.ndarray,
     n = 0
     for i in range(N):
         gi = goal[i]
-        if stuck[i] < STUCK_STEPS or gi < 0:
+        if stuck[0, i] < STUCK_STEPS or gi < 0:
             continue
         hi = hval(gi, cur[i], gr, V, gv0, hs)
         for q in range(nptr[i], nptr[i + 1]):
@@ -314,7 +315,7 @@ def _break_deadlocks(gr: tuple, V: int, gv0: int, hs: tuple, cur: np.ndarray,
             if gj < 0:
                 continue
             resting = cur[j] == gv0 + gj
-            if not (stuck[j] >= STUCK_STEPS
+            if not (stuck[0, j] >= STUCK_STEPS
                     or (resting and hval(gi, cur[j], gr, V, gv0, hs) < hi - 1e-9)):
                 continue
             goal[i] = gj
@@ -322,8 +323,11 @@ def _break_deadlocks(gr: tuple, V: int, gv0: int, hs: tuple, cur: np.ndarray,
             p = prio[i]
             prio[i] = prio[j]
             prio[j] = p
-            stuck[i] = 0
-            stuck[j] = 0
+            stuck[0, i] = 0
+            stuck[0, j] = 0
+            # no improving swap undoes the trade before either has moved on
+            stuck[1, i] = 2 * STUCK_STEPS
+            stuck[1, j] = 2 * STUCK_STEPS
             besth[i] = np.inf
             besth[j] = np.inf
             n += 1
@@ -341,9 +345,10 @@ def run_steps(
     """Run Gspi steps t0..t1-1; hist[t+1] receives the vertices after step t and
     hsum[t+1] the summed heuristic. Returns (rows filled - 1, all goals reached).
     ``near``: the distance beyond which two robots cannot conflict within a step
-    (``2r + 2 * maxmove``); ``swap_radius``: the goal-swapping neighbourhood; ``stuck``:
-    per robot, the steps since its heuristic last reached a new least value ``besth``
-    (both kept across calls; reset when its goal changes)."""
+    (``2r + 2 * maxmove``); ``swap_radius``: the goal-swapping neighbourhood; ``stuck[0]``:
+    per robot, the steps since its heuristic last reached a new least value ``besth``,
+    ``stuck[1]`` the steps it still sits out of goal swapping after a deadlock trade
+    (all kept across calls)."""
     N = cur.shape[0]
     nxt = np.empty(N, dtype=np.int64)
     cand = np.empty((N, maxc), dtype=np.int64)
@@ -364,7 +369,7 @@ def run_steps(
         py = gr[0][cur, 1]
         if swap:
             sptr, sidx = neighbour_lists(px, py, swap_radius)
-            _swap_goals(gr, V, gv0, hs, cur, goal, prio, sptr, sidx)
+            _swap_goals(gr, V, gv0, hs, cur, goal, prio, sptr, sidx, stuck[1])
         nptr, nidx = neighbour_lists(px, py, near)
         if swap:
             _break_deadlocks(gr, V, gv0, hs, cur, goal, prio, nptr, nidx, stuck, besth)
@@ -377,7 +382,7 @@ def run_steps(
             g = goal[i]
             if g < 0 or cur[i] == gv0 + g:
                 prio[i] = prio[i] - math.floor(prio[i])
-                stuck[i] = 0
+                stuck[0, i] = 0
                 besth[i] = 0.0
             else:
                 prio[i] += 1.0
@@ -385,9 +390,11 @@ def run_steps(
                 s += min(hv, 1e6)
                 if hv < besth[i] - 1e-9:
                     besth[i] = hv
-                    stuck[i] = 0
+                    stuck[0, i] = 0
                 else:
-                    stuck[i] += 1
+                    stuck[0, i] += 1
+            if stuck[1, i] > 0:
+                stuck[1, i] -= 1
         hsum[t + 1] = s
     done = True
     for i in range(N):
