@@ -318,8 +318,8 @@ def _link_special_vertices(space: RobotSpace, lat: Lattice, S: np.ndarray, G: np
     gv0 = V + N
     thr = space.threshold
     coords = np.concatenate([lat.coords, S, G]).astype(np.float64)
-    s_links = lat.links(S, R, np.minimum(thr, c_start))
-    g_links = lat.links(G, R, np.minimum(thr, c_goal))
+    s_links = lat.links(S, R, np.minimum(thr, c_start), c_start)
+    g_links = lat.links(G, R, np.minimum(thr, c_goal), c_goal)
     stats["start_links"] = [len(x[0]) for x in s_links]
     stats["goal_links"] = [len(x[0]) for x in g_links]
     src: list[np.ndarray] = []
