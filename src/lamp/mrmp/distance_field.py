@@ -164,6 +164,9 @@ class Lattice:
         ids[free] = np.arange(V)
         bb, aa = np.nonzero(free)
         self.ids = ids
+        #: lattice index (a, b) of each node, as in ``ids[b, a]``
+        self.va = aa.astype(np.int64)
+        self.vb = bb.astype(np.int64)
         #: exact clearance of each node (the field is exact at grid nodes)
         self.node_clearance = np.ascontiguousarray(Fl[free], dtype=float)
         self.coords = np.ascontiguousarray(

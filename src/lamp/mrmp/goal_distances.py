@@ -102,8 +102,7 @@ class GoalDistances(NamedTuple):
         while slots < span + 4:
             slots *= 2
         oa, ob = lat.offset
-        va = np.rint(lat.coords[:, 0] / lat.step).astype(np.int64) - oa
-        vb = np.rint(lat.coords[:, 1] / lat.step).astype(np.int64) - ob
+        va, vb = lat.va, lat.vb
         centre = np.asarray(goals, dtype=np.float64).reshape(-1, 2) / lat.step - [oa, ob]
         dist, done, bucket = _new_lists(max(M, 1), slots)
         return GoalDistances(
@@ -447,7 +446,15 @@ def hval_below(pm: np.ndarray, pv: np.ndarray, bound: float, gr: tuple, V: int, 
 def start_costs(m0: int, m1: int, N: int, gr: tuple, V: int, hs: tuple) -> np.ndarray:
     """(N, m1 - m0) exact distances of the start vertices to goals m0..m1-1."""
     out = np.empty((N, m1 - m0))
+    coords = gr[0]
+    rad = hs[1]
     for m in range(m0, m1):
+        if rad[m] == 0.0:  # first window: wide enough for the farthest start (no regrowth)
+            far = 0.0
+            for i in range(N):
+                far = max(far, math.hypot(coords[V + i, 0] - coords[V + N + m, 0],
+                                          coords[V + i, 1] - coords[V + N + m, 1]))
+            _open_window(m, max(1.25 * far, _FIRST_RADIUS_STEPS * hs[17]), gr[1], gr[2], hs)
         for i in range(N):
             out[i, m - m0] = hval(m, V + i, gr, V, V + N, hs)
     return out
