@@ -93,10 +93,8 @@ def assign(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray, G: np.ndarray,
             return Assignment(None, none, f"goal {bad[0]} at {G[bad[0]].round(3).tolist()} "
                               "is unreachable from the robot given for it")
         return Assignment(goal0.copy(), cost)
-    if objective == "sum":
-        return _sum(gr, V, hs, S, G, deadline)
-    if N * M <= DENSE_PAIRS:
-        return _dense_bottleneck(gr, V, hs, S, G, deadline)
+    if objective == "sum" or N * M <= DENSE_PAIRS:
+        return _dense(gr, V, hs, S, G, deadline, objective == "bottleneck")
     return _bottleneck(gr, V, hs, S, G, deadline)
 
 
@@ -114,9 +112,10 @@ def _costs(gr: Graph, V: int, hs: GoalDistances, N: int, M: int,
     return C
 
 
-def _dense_bottleneck(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray, G: np.ndarray,
-                      deadline: float) -> Assignment:
-    """The bottleneck-then-sum assignment on the whole cost matrix (small problems)."""
+def _dense(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray, G: np.ndarray,
+           deadline: float, bottleneck: bool) -> Assignment:
+    """The assignment on the whole cost matrix: least sum, after the least bottleneck when
+    ``bottleneck`` (small problems, and the ``sum`` objective)."""
     N, M = len(S), len(G)
     C = _costs(gr, V, hs, N, M, deadline)
     if C is None:
@@ -125,7 +124,7 @@ def _dense_bottleneck(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray, G: np
     if not reach.all():
         return Assignment(None, np.zeros(N), _unreached(G, np.zeros(M, bool), ~reach))
     vals = np.unique(C[np.isfinite(C)])
-    a, b = 0, len(vals) - 1
+    a, b = (0, len(vals) - 1) if bottleneck else (len(vals) - 1,) * 2
     while a < b:  # least t such that the pairs within t match every goal
         mid = (a + b) // 2
         rows, cols = linear_sum_assignment(vals[mid] < C)
@@ -136,26 +135,6 @@ def _dense_bottleneck(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray, G: np
     W = np.where(vals[a] >= C, C, _BIG)
     rows, cols = linear_sum_assignment(W)
     if np.any(W[rows, cols] >= _BIG):
-        return Assignment(None, np.zeros(N), "no assignment of robots to goals reaches every "
-                          "goal (some goals are reachable only by the same robots)")
-    goal = np.full(N, -1, dtype=np.int64)
-    goal[rows] = cols
-    cost = np.zeros(N)
-    cost[rows] = C[rows, cols]
-    return Assignment(goal, cost, bound=float(vals[a]))
-
-
-def _sum(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray, G: np.ndarray,
-         deadline: float) -> Assignment:
-    N, M = len(S), len(G)
-    C = _costs(gr, V, hs, N, M, deadline)
-    if C is None:
-        return Assignment(None, np.zeros(N), timed_out=True)
-    reach = np.isfinite(C).any(axis=0)
-    if not reach.all():
-        return Assignment(None, np.zeros(N), _unreached(G, np.zeros(M, bool), ~reach))
-    rows, cols = linear_sum_assignment(np.where(np.isfinite(C), C, _BIG))
-    if np.any(~np.isfinite(C[rows, cols])):
         return Assignment(None, np.zeros(N), "no assignment of robots to goals reaches every "
                           "goal (some goals are reachable only by the same robots)")
     goal = np.full(N, -1, dtype=np.int64)
