@@ -155,3 +155,18 @@ def test_warm_up_runs_once_per_process() -> None:
     events: list = []
     report = warm_up(events.append)  # everything is compiled now: nothing to announce
     assert events == [] and report.compiled == 0 and report.compile_s == 0.0
+
+
+def test_errors_raised_on_purpose_are_lamp_errors() -> None:
+    """A mistyped planner is an InputError (still a ValueError); model and recording
+    errors are LampErrors; an unknown scene name is a SceneError naming it."""
+    from lamp.errors import InputError, LampError
+    from lamp.planners.models import ModelError
+    from lamp.record.format import RecordingError
+
+    assert issubclass(ModelError, InputError) and issubclass(RecordingError, InputError)
+    assert issubclass(InputError, LampError) and issubclass(InputError, ValueError)
+    with pytest.raises(InputError, match="did you mean 'lazy'"):
+        lamp.solve("maze-07", "lazzy")
+    with pytest.raises(lamp.SceneError, match="maze-99x"):
+        lamp.solve("maze-99x")

@@ -389,3 +389,14 @@ def test_compilation_is_announced_and_not_planning_time(tmp_path: Path) -> None:
     res = subprocess.run([*cmd, "warmup"], env=env, capture_output=True, text=True, timeout=600)
     assert res.returncode == 0, res.stderr
     assert "already compiled" in res.stdout and "compiling" not in res.stderr
+
+
+def test_built_in_scenes_by_name(tmp_path: Path) -> None:
+    """``lamp show maze-07`` and ``lamp run maze-07`` take a built-in scene by name; an
+    unknown name exits 2 naming it."""
+    res = runner.invoke(app, ["show", "maze-07", "--out", str(tmp_path / "m.png")])
+    assert res.exit_code == 0, res.output
+    assert (tmp_path / "m.png").stat().st_size > 0
+    res = runner.invoke(app, ["run", "maze-99x", "-o", str(tmp_path / "o")])
+    assert res.exit_code == 2 and "maze-99x" in res.output
+    assert not (tmp_path / "o").exists()

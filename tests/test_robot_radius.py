@@ -76,3 +76,21 @@ def test_one_owner_for_the_team_constants():
     assert DEFAULT_TEAM.row_time == pytest.approx(0.08)
     with pytest.raises(ValueError, match="RobotTeam.speed"):
         RobotTeam(speed=0.0)
+
+
+def test_validate_applies_the_model_radius_check_as_run_does(tmp_path: Path) -> None:
+    """``lamp validate`` refuses robots the model does not serve (exit 2, naming
+    robots.radius), as ``lamp run`` would; ``--model any`` checks the format alone."""
+    from lamp.planners.models import model_robot_radius
+
+    assert model_robot_radius("learned") == pytest.approx(load_model().robot_radius)
+    assert model_robot_radius("geometric") == pytest.approx(ROBOT_RADIUS)
+    bad = tmp_path / "r8.json"
+    bad.write_text(json.dumps(_scene_dict(0.08)))
+    runner = CliRunner()
+    res = runner.invoke(app, ["validate", str(bad)])
+    assert res.exit_code == 2 and "robots.radius" in res.output
+    assert runner.invoke(app, ["validate", "--model", "any", str(bad)]).exit_code == 0
+    good = tmp_path / "ok.json"
+    good.write_text(json.dumps(_scene_dict(ROBOT_RADIUS)))
+    assert runner.invoke(app, ["validate", str(good)]).exit_code == 0

@@ -50,7 +50,8 @@ def solve(scene: Scene | str | Path, planner: PlannerName = "lazy", seed: int = 
     """Plan and execute ``scene`` with ``planner``; ``result.to_dict()`` is result.json.
 
     Args:
-        scene: a ``Scene`` or the path of a scene file (``SceneError`` if it is invalid).
+        scene: a ``Scene``, the path of a scene file or a built-in suite scene by name
+            (``"maze-07"``); ``SceneError`` if it is invalid or unknown.
         planner: ``"lazy"`` (LAMP-Lazy, default), ``"astar"`` (LAMP-A*, open loop),
             ``"astar-replan"`` (LAMP-A*, replanning on drift), ``"gco-ori"`` (GCo with its
             0.2 m buffer), ``"gco-var"`` (GCo with zero buffer) or ``"mapush"`` (the

@@ -27,7 +27,7 @@ from lamp.cli_support import (
 from lamp.errors import InputError
 from lamp.planners import registry
 from lamp.planners.config import PAPER_MAX_SEGMENTS, SEGMENTS_PER_METRE, planning_limit_help
-from lamp.scene import SceneError, load_scene
+from lamp.scene import SceneError
 
 app = typer.Typer(
     help="LAMP: long-horizon multi-robot collaborative manipulation planning.",
@@ -51,15 +51,20 @@ def main(
 
 
 def load_scene_or_exit(path: Path):
+    """The scene file at ``path``, or the built-in suite scene of that name
+    (``lamp run maze-07``); exit 2 naming what is wrong otherwise."""
+    from lamp.suites.registry import resolve_scene
+
     try:
-        return load_scene(path)
+        return resolve_scene(path)
     except SceneError as exc:
         fail_input(str(exc))
 
 
 @app.command()
 def show(
-    scene_file: Path = typer.Argument(..., help="Scene file (YAML or JSON).", show_default=False),
+    scene_file: Path = typer.Argument(..., help="Scene file (YAML or JSON), or a built-in "
+                                      "scene by name (maze-07).", show_default=False),
     out: Path = typer.Option(Path("scene.png"), "--out", "-o",
                              help="Image to write: .png, .svg or .pdf (by its extension)."),
 ) -> None:
@@ -159,7 +164,8 @@ VERBOSE_HELP = "Print a line per object and segment, even when the output is not
 
 @app.command()
 def run(
-    scene_file: Path = typer.Argument(..., help="Scene file (YAML or JSON).", show_default=False),
+    scene_file: Path = typer.Argument(..., help="Scene file (YAML or JSON), or a built-in "
+                                      "scene by name (maze-07).", show_default=False),
     planner: str = typer.Option("lazy", "--planner", "-p", help=PLANNER_HELP),
     seed: int = typer.Option(0, "--seed", "-s", help="Random seed (same seed, same result)."),
     out: Path = typer.Option(Path("lamp-run"), "--out", "-o", help=OUT_HELP),

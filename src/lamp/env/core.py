@@ -50,7 +50,6 @@ observations, rewards and infos (MuJoCo runs single-threaded; nothing here is ra
 from __future__ import annotations
 
 import math
-import re
 from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
@@ -62,47 +61,13 @@ from numpy.typing import ArrayLike
 from lamp.geometry.robot_space import RobotSpace
 from lamp.geometry.shapes import half_extents
 from lamp.planners.result import SUCCESS_ORIENTATION_TOL, SUCCESS_POSITION_TOL
-from lamp.scene.loader import SceneError, load_scene
 from lamp.scene.model import Scene
 from lamp.sim.mjcf import ROBOT_KP, ROBOT_KV, build_model
 from lamp.sim.simulator import WORKSPACE_TOLERANCE, Simulator, footprint_outside
-
-_SUITE_SCENE = re.compile(r"^(?P<suite>[a-z][a-z-]*)-(?P<index>\d+)$")
-
+from lamp.suites.registry import resolve_scene
 
 #: Axes of the common frame (``PushConfig.frame``).
 FRAMES = ("world", "goal")
-
-
-def resolve_scene(scene: Scene | str | Path) -> Scene:
-    """A ``Scene``: given as is, loaded from a scene file, or a built-in suite scene by name
-    (``"maze-07"``, as ``lamp suite list`` names the suites).
-
-    Raises:
-        SceneError: the file is invalid (message from ``load_scene``), or ``scene`` is
-            neither an existing file nor a built-in scene name (the message names it and
-            lists the suites).
-    """
-    if isinstance(scene, Scene):
-        return scene
-    if not isinstance(scene, (str, Path)):
-        raise SceneError(
-            f"scene must be a Scene, a scene file path or a suite scene name, got {scene!r}"
-        )
-    path = Path(scene)
-    if path.exists():
-        return load_scene(path)
-    from lamp.suites.registry import SUITES, suite_files
-
-    match = _SUITE_SCENE.match(str(scene))
-    if match and match["suite"] in SUITES:
-        for candidate in suite_files(match["suite"]):
-            if candidate.stem == str(scene):
-                return load_scene(candidate)
-    raise SceneError(
-        f"unknown scene {str(scene)!r}: no such file, and no built-in suite scene of that name "
-        f"(suite scenes are named like 'maze-07'; suites: {', '.join(SUITES)})"
-    )
 
 
 def _check(ok: bool, name: str, value: Any, rule: str) -> None:

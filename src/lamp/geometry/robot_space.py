@@ -463,9 +463,10 @@ class RobotSpace:
             # order: when it is valid it is the answer (a robot already where it may wait
             # costs one ``accept`` call)
             here = np.array([[(si + oi) * h, (sj + oj) * h]], dtype=np.float64)
-            if accept is None or bool(np.asarray(accept(here), dtype=bool).reshape(-1)[0]):
-                if max_distance is None or math.hypot(*(here[0] - p)) <= max_distance:
-                    return here[0]
+            if (max_distance is None or math.hypot(*(here[0] - p)) <= max_distance) and (
+                    accept is None
+                    or bool(np.asarray(accept(here), dtype=bool).reshape(-1)[0])):
+                return here[0]
         depth_cap = min(16, limit)
         judged = np.full(ny * nx, -1, dtype=np.int8) if accept is not None else None
         while True:

@@ -18,11 +18,13 @@ import difflib
 from pathlib import Path
 from typing import Any
 
+from lamp.errors import InputError
+
 #: The model names; anything else is read as a checkpoint path.
 MODEL_NAMES = ("learned", "geometric")
 
 
-class ModelError(ValueError):
+class ModelError(InputError):
     """A ``--model`` value is neither a model name nor a usable checkpoint file."""
 
 
@@ -83,3 +85,21 @@ def load_proposer(model: str | Path | Any = "learned") -> Any:
     if not path.is_file():
         raise ModelError(f"{text}: no such checkpoint file")
     return _load_checkpoint(path, threads=1)
+
+
+def model_robot_radius(model: str | Path | Any = "learned") -> float | None:
+    """The robot radius (m) the model makes contacts for; None when it serves any.
+
+    The shipped model's is read from its metadata (``flow_dc.json``) without loading
+    PyTorch, so that ``lamp validate`` stays quick.
+    """
+    if str(model) == "learned" and isinstance(model, (str, Path)):
+        import json
+        from importlib.resources import files
+
+        from lamp.manip.contacts import ROBOT_RADIUS
+
+        meta = json.loads((files("lamp.manip") / "checkpoints" / "flow_dc.json").read_text())
+        return float(meta.get("data_meta", {}).get("robot_radius", ROBOT_RADIUS))
+    want = getattr(load_proposer(model), "robot_radius", None)
+    return None if want is None else float(want)

@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Any, Protocol
 
+from lamp.errors import InputError
 from lamp.planners.base import LoopPolicy, ObjectPlanner
 from lamp.planners.config import DEFAULT_PLANNING_LIMIT
 
@@ -190,7 +191,7 @@ def get(name: str) -> PlannerSpec:
     if spec is None:
         hint = difflib.get_close_matches(str(name), names(), n=1)
         did = f"; did you mean {hint[0]!r}?" if hint else ""
-        raise ValueError(f"unknown planner {name!r}; expected one of: {', '.join(names())}{did}")
+        raise InputError(f"unknown planner {name!r}; expected one of: {', '.join(names())}{did}")
     return spec
 
 

@@ -53,14 +53,16 @@ def load_proposer(model: str | Path | Any = "learned") -> Any:
 
 
 def check_robot_radius(scene: Scene, proposer: Any) -> None:
-    """Refuse a scene whose robots the manipulation model does not make contacts for.
+    """Refuse a scene whose robots the manipulation model does not make contacts for
+    (``proposer``: the model, or the radius it serves; None serves any).
 
     The model's contacts sit ``robot_radius`` (plus a gap) off the object, so robots of
     another size would fail every ``Collide`` check or touch the object before the push:
     a :class:`~lamp.scene.SceneError` naming ``robots.radius`` instead of a run that
     silently finds nothing.
     """
-    want = getattr(proposer, "robot_radius", None)
+    want = (proposer if isinstance(proposer, (int, float)) or proposer is None
+            else getattr(proposer, "robot_radius", None))
     if want is not None and abs(float(scene.robot_radius) - float(want)) > 1e-9:
         where = scene.source or scene.name
         reason = (f"the manipulation model makes contacts for robots of radius "
@@ -99,14 +101,14 @@ def solve_with_frames(scene: Scene | str | Path, planner: PlannerName = "lazy", 
                       progress: ProgressCallback | None = None) -> Solution:
     """As ``solve``, also returning the animation frames when ``render`` is set.
 
-    ``scene``: a ``Scene`` or a scene file path (loaded with ``load_scene``). Numba kernels
+    ``scene``: a ``Scene``, a scene file path or a built-in scene name (``maze-07``). Numba kernels
     are compiled (or loaded from their disk cache) once per process before planning starts
     (``lamp.warmup.ensure_warm``): ``planning_time_s`` never includes compilation.
     """
     if isinstance(scene, (str, Path)):
-        from lamp.scene.loader import load_scene
+        from lamp.suites.registry import resolve_scene
 
-        scene = load_scene(scene)
+        scene = resolve_scene(scene)  # a scene file, or a built-in scene by name
     check_planner(planner)
     proposer = load_proposer(model)
     ensure_warm(progress)

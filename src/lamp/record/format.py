@@ -25,6 +25,8 @@ from typing import Any
 
 import numpy as np
 
+from lamp.errors import InputError
+
 #: The format name written to and required in ``recording.json``.
 FORMAT = "lamp-recording/1"
 NPZ_NAME = "recording.npz"
@@ -72,7 +74,7 @@ RAGGED = {
 }
 
 
-class RecordingError(ValueError):
+class RecordingError(InputError):
     """A recording that cannot be read: the message names the file and the field."""
 
 

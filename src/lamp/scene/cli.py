@@ -40,8 +40,20 @@ def _expand(paths: list[Path]) -> list[Path]:
 def validate_command(
     scene_files: list[Path] = typer.Argument(..., help="Scene files (YAML or JSON), or folders "
                                              "of them.", show_default=False),
+    model: str = typer.Option("learned", "--model", "-m", help="Also check the robots against "
+                              "what this manipulation model serves (learned, geometric, a "
+                              "checkpoint file; 'any' skips), as `lamp run` does."),
 ) -> None:
     """Load and check scene files: a line per file and a count; exit 2 if any is invalid."""
+    radius = None
+    if model != "any":
+        from lamp.planners.models import ModelError, model_robot_radius
+
+        try:
+            radius = model_robot_radius(model)
+        except ModelError as exc:
+            typer.echo(f"error: --model: {exc}", err=True)
+            raise typer.Exit(code=2) from None
     files = _expand(scene_files)
     if not files:
         typer.echo("error: no scene files found in " + ", ".join(map(str, scene_files)),
@@ -51,6 +63,10 @@ def validate_command(
     for path in files:
         try:
             scene = load_scene(path)
+            if radius is not None:
+                from lamp.planners.run import check_robot_radius
+
+                check_robot_radius(scene, radius)
         except SceneError as exc:
             bad += 1
             typer.echo(f"error: {exc}", err=True)

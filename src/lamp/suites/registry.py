@@ -15,13 +15,14 @@ from __future__ import annotations
 
 import hashlib
 import json
+import re
 import shutil
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from lamp.scene.loader import load_scene
+from lamp.scene.loader import SceneError, load_scene
 from lamp.scene.model import Scene
 
 #: The file beside a suite's scene files that records their hashes and generator.
@@ -182,3 +183,35 @@ def scene_yaml(d: dict[str, Any]) -> str:
             lines.append(f"{prefix}{k}: {_flow(v)}")
             first = False
     return "\n".join(lines) + "\n"
+
+
+_SUITE_SCENE = re.compile(r"^(?P<suite>[a-z][a-z-]*)-(?P<index>\d+)$")
+
+
+def resolve_scene(scene: Scene | str | Path) -> Scene:
+    """A ``Scene``: given as is, loaded from a scene file, or a built-in suite scene by name
+    (``"maze-07"``, as ``lamp suite list`` names the suites).
+
+    Raises:
+        SceneError: the file is invalid (message from ``load_scene``), or ``scene`` is
+            neither an existing file nor a built-in scene name (the message names it and
+            lists the suites).
+    """
+    if isinstance(scene, Scene):
+        return scene
+    if not isinstance(scene, (str, Path)):
+        raise SceneError(
+            f"scene must be a Scene, a scene file path or a suite scene name, got {scene!r}"
+        )
+    path = Path(scene)
+    if path.exists():
+        return load_scene(path)
+    match = _SUITE_SCENE.match(str(scene))
+    if match and match["suite"] in SUITES:
+        for candidate in suite_files(match["suite"]):
+            if candidate.stem == str(scene):
+                return load_scene(candidate)
+    raise SceneError(
+        f"unknown scene {str(scene)!r}: no such file, and no built-in suite scene of that name "
+        f"(suite scenes are named like 'maze-07'; suites: {', '.join(SUITES)})"
+    )
