@@ -170,3 +170,8 @@ def test_errors_raised_on_purpose_are_lamp_errors() -> None:
         lamp.solve("maze-07", "lazzy")
     with pytest.raises(lamp.SceneError, match="maze-99x"):
         lamp.solve("maze-99x")
+
+
+def test_top_level_namespace_is_the_public_api() -> None:
+    assert dir(lamp) == sorted(lamp.__all__)
+    assert all(hasattr(lamp, name) for name in lamp.__all__)

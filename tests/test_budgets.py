@@ -57,11 +57,13 @@ def loaded_clock(monkeypatch, factor: float) -> None:
 @pytest.mark.parametrize("planner", ["lazy", "astar"])
 def test_same_result_under_load(planner, proposer, monkeypatch):
     scene = scene_from_dict(SCENE)
-    # a planning limit that the unloaded run keeps well inside even when it is 8x shorter
-    calm = lamp.solve(scene, planner, seed=1, model=proposer, time_limit=60.0).to_dict()
+    # a planning limit that the run keeps well inside even when it is 8x shorter and the
+    # machine is busy (60 s at 8x left LAMP-A* 7.5 s of real time: too little beside two
+    # CPU-bound processes); the counts, not the clock, end the search
+    calm = lamp.solve(scene, planner, seed=1, model=proposer, time_limit=600.0).to_dict()
     assert calm["stats"]["gspi_calls"] > 0 and calm["stats"]["gspi_timeouts"] == 0
     loaded_clock(monkeypatch, 8.0)
-    busy = lamp.solve(scene, planner, seed=1, model=proposer, time_limit=60.0).to_dict()
+    busy = lamp.solve(scene, planner, seed=1, model=proposer, time_limit=600.0).to_dict()
     assert strip_times(busy) == strip_times(calm)
 
 

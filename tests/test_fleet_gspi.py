@@ -23,7 +23,7 @@ from lamp.mrmp.gspi import _link_special_vertices
 from lamp.mrmp.gspi_kernels import neighbour_lists
 from lamp.scene.mapf import load_grid_map, random_instance
 
-MAPF = Path(__file__).resolve().parents[2] / "shared" / "data" / "mapf"
+MAPF = Path(__file__).resolve().parent / "data" / "mapf"
 
 
 def _write_map(tmp_path: Path, rows: list[str]) -> Path:

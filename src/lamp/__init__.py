@@ -92,3 +92,8 @@ def render(recording, path, **options):
 __all__ = ["Scene", "SceneError", "load_recording", "load_scene", "render", "save_scene",
            "scene_from_dict", "solve",
            "__version__"]
+
+
+def __dir__() -> list[str]:
+    """The public names only (``dir(lamp)``), not the imports this module needs."""
+    return sorted(__all__)

@@ -204,8 +204,8 @@ def resolve_scene(scene: Scene | str | Path) -> Scene:
             f"scene must be a Scene, a scene file path or a suite scene name, got {scene!r}"
         )
     path = Path(scene)
-    if path.exists():
-        return load_scene(path)
+    if path.exists() or path.suffix or len(path.parts) > 1:
+        return load_scene(path)  # a file (the loader names a missing one)
     match = _SUITE_SCENE.match(str(scene))
     if match and match["suite"] in SUITES:
         for candidate in suite_files(match["suite"]):
