@@ -123,6 +123,13 @@ def _dense(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray, G: np.ndarray,
     reach = np.isfinite(C).any(axis=0)
     if not reach.all():
         return Assignment(None, np.zeros(N), _unreached(G, np.zeros(M, bool), ~reach))
+    if bottleneck:
+        # every goal needs a robot: B* >= the largest of the goals' nearest distances; a
+        # least-sum assignment that meets this bound is bottleneck-optimal as it is
+        floor = C.min(axis=0).max()
+        rows, cols = linear_sum_assignment(np.where(np.isfinite(C), C, _BIG))
+        if C[rows, cols].max() <= floor:
+            return _chosen(C, rows, cols)
     vals = np.unique(C[np.isfinite(C)])
     a, b = (0, len(vals) - 1) if bottleneck else (len(vals) - 1,) * 2
     while a < b:  # least t such that the pairs within t match every goal
@@ -137,9 +144,14 @@ def _dense(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray, G: np.ndarray,
     if np.any(W[rows, cols] >= _BIG):
         return Assignment(None, np.zeros(N), "no assignment of robots to goals reaches every "
                           "goal (some goals are reachable only by the same robots)")
-    goal = np.full(N, -1, dtype=np.int64)
+    return _chosen(C, rows, cols)
+
+
+def _chosen(C: np.ndarray, rows: np.ndarray, cols: np.ndarray) -> Assignment:
+    """The assignment of robots ``rows`` to goals ``cols`` with costs from ``C`` (N, M)."""
+    goal = np.full(len(C), -1, dtype=np.int64)
     goal[rows] = cols
-    cost = np.zeros(N)
+    cost = np.zeros(len(C))
     cost[rows] = C[rows, cols]
     return Assignment(goal, cost, bound=float(C[rows, cols].max()))
 

@@ -498,7 +498,6 @@ def _attempt(space: RobotSpace, S: np.ndarray, G: np.ndarray, c_start: np.ndarra
     stall = int(2 * n_side + 10 * N) if opts.stall_steps is None else opts.stall_steps
     run = _run(links.graph, V, gv0, hs, goal, prio, 2.0 * space.radius, links,
                max_steps, stall, opts)
-    stats["heuristic_settled"] = hs.settled()
 
     # Output: drop all-wait steps, densify.
     P = links.graph.coords[run.hist[: run.t + 1]]  # (t+1, N, 2)

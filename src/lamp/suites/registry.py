@@ -204,14 +204,17 @@ def resolve_scene(scene: Scene | str | Path) -> Scene:
             f"scene must be a Scene, a scene file path or a suite scene name, got {scene!r}"
         )
     path = Path(scene)
-    if path.exists() or path.suffix or len(path.parts) > 1:
-        return load_scene(path)  # a file (the loader names a missing one)
+    if path.exists():
+        return load_scene(path)
     match = _SUITE_SCENE.match(str(scene))
     if match and match["suite"] in SUITES:
         for candidate in suite_files(match["suite"]):
             if candidate.stem == str(scene):
                 return load_scene(candidate)
-    raise SceneError(
-        f"unknown scene {str(scene)!r}: no such file, and no built-in suite scene of that name "
-        f"(suite scenes are named like 'maze-07'; suites: {', '.join(SUITES)})"
-    )
+    try:
+        return load_scene(path)  # raises the loader's own "file not found"
+    except SceneError as exc:
+        raise SceneError(
+            f"{exc}; unknown scene {str(scene)!r}: no built-in suite scene of that name "
+            f"either (suite scenes are named like 'maze-07'; suites: {', '.join(SUITES)})",
+            path=exc.path, field=exc.field, reason=exc.reason) from None
