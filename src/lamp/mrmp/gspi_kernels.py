@@ -295,13 +295,15 @@ def _swap_goals(gr: tuple, V: int, gv0: int, hs: tuple, cur: np.ndarray, goal: n
 @nb.njit(cache=True)
 def _break_deadlocks(gr: tuple, V: int, gv0: int, hs: tuple, cur: np.ndarray,
                      goal: np.ndarray, prio: np.ndarray, nptr: np.ndarray, nidx: np.ndarray,
-                     stuck: np.ndarray, besth: np.ndarray) -> int:
+                     stuck: np.ndarray, besth: np.ndarray, near: float) -> int:
     """TSWAP's deadlock rule in continuous space: a robot that has made no progress
     towards its goal for :data:`STUCK_STEPS` steps trades goals (and priorities)
     with the first robot within reach, in index order, that is stuck too, or that rests
-    on its goal nearer to the stuck robot's goal (it stands in the way). The summed
+    on its goal nearer to the stuck robot's goal (it stands in the way); "within reach":
+    closer than ``near``, so that the two can block each other. The summed
     heuristic may grow; what it buys is that neither blocks the other any more (two
     robots each blocking the other's last move are otherwise stuck for good)."""
+    coords = gr[0]
     N = cur.shape[0]
     n = 0
     for i in range(N):
@@ -309,10 +311,12 @@ def _break_deadlocks(gr: tuple, V: int, gv0: int, hs: tuple, cur: np.ndarray,
         if stuck[0, i] < STUCK_STEPS or gi < 0:
             continue
         hi = hval(gi, cur[i], gr, V, gv0, hs)
+        xi = coords[cur[i], 0]
+        yi = coords[cur[i], 1]
         for q in range(nptr[i], nptr[i + 1]):
             j = nidx[q]
             gj = goal[j]
-            if gj < 0:
+            if gj < 0 or math.hypot(coords[cur[j], 0] - xi, coords[cur[j], 1] - yi) > near:
                 continue
             resting = cur[j] == gv0 + gj
             if not (stuck[0, j] >= STUCK_STEPS
@@ -357,6 +361,8 @@ def run_steps(
     status = np.zeros(N, dtype=np.int64)
     stack = np.empty(N, dtype=np.int64)
     mode = np.zeros(N, dtype=np.int64)
+    small = N < ALL_PAIRS_BELOW
+    aptr, aidx = neighbour_lists(np.zeros(N), np.zeros(N), np.inf)
     for t in range(t0, t1):
         done = True
         for i in range(N):
@@ -365,14 +371,16 @@ def run_steps(
                 break
         if done:
             return t, True
-        px = gr[0][cur, 0]
-        py = gr[0][cur, 1]
-        if swap:
+        if small:  # every robot checks every other: the same lists every step
+            sptr, sidx, nptr, nidx = aptr, aidx, aptr, aidx
+        else:
+            px = gr[0][cur, 0]
+            py = gr[0][cur, 1]
             sptr, sidx = neighbour_lists(px, py, swap_radius)
-            _swap_goals(gr, V, gv0, hs, cur, goal, prio, sptr, sidx, stuck[1])
-        nptr, nidx = neighbour_lists(px, py, near)
+            nptr, nidx = neighbour_lists(px, py, near)
         if swap:
-            _break_deadlocks(gr, V, gv0, hs, cur, goal, prio, nptr, nidx, stuck, besth)
+            _swap_goals(gr, V, gv0, hs, cur, goal, prio, sptr, sidx, stuck[1])
+            _break_deadlocks(gr, V, gv0, hs, cur, goal, prio, nptr, nidx, stuck, besth, near)
         _pibt_step(gr, V, gv0, hs, cur, goal, prio, two_r, seed, t, nxt, cand, ncand, ci,
                    status, stack, mode, nptr, nidx)
         s = 0.0
