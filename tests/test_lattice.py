@@ -303,3 +303,27 @@ def test_from_scene_and_bad_arguments():
         ObjectLattice(space, (0.5, 0.5))
     with pytest.raises(ValueError, match="tolerance"):
         lat.start_connections((0.5, 0.5, 0.0), tolerance=-1.0)
+
+
+def test_a_thin_object_joins_the_lattice_without_shrinking_to_nothing():
+    """The planners join a drifted object to the lattice with footprints shrunk by up to
+    2 cm; an object thinner than that is joined with the tolerances it survives (before,
+    the shrunk footprint raised and the run ended in an internal error)."""
+    from lamp.planners.lazy import JOIN_TOLERANCES, join_lattice
+
+    space = ObjectSpace(Rectangle((0.4, 0.01)), (1.6, 1.3), OBSTACLES)
+    lat = ObjectLattice(space, (1.33, 0.41, 0.7))
+    with pytest.raises(ValueError):
+        lat.tolerant_space(max(JOIN_TOLERANCES))
+    pose = np.array([0.41, 0.37, 0.013])  # off the lattice
+    real = lat.start_connections
+    asked = []
+
+    def no_exact_join(q, tolerance=0.0):  # as for an object drifted into contact
+        asked.append(tolerance)
+        return [] if tolerance == 0.0 else real(q, tolerance=tolerance)
+
+    lat.start_connections = no_exact_join
+    node, edges = join_lattice(lat, pose)
+    assert node == tuple(pose.tolist()) and edges == []
+    assert asked == [0.0, JOIN_TOLERANCES[1]]

@@ -85,7 +85,10 @@ def join_lattice(lattice: ObjectLattice, q_O: np.ndarray) -> tuple[Node, list | 
     if near:
         return near[0][0], None
     for tol in JOIN_TOLERANCES:
-        edges = lattice.start_connections(q_O, tolerance=tol)
+        try:
+            edges = lattice.start_connections(q_O, tolerance=tol)
+        except ValueError:  # a footprint this thin vanishes when shrunk by tol
+            break
         if edges:
             return tuple(float(v) for v in q_O), edges
     return tuple(float(v) for v in q_O), []
