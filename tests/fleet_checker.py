@@ -36,12 +36,11 @@ class _Disk:
         self.x, self.y, self.r = x, y, r
 
 
-def _clearance_of_points(p: np.ndarray, polys: list, disks: list[_Disk], W: float,
-                         H: float) -> np.ndarray:
+def _clearance_of_points(p: np.ndarray, polys: list, tree: shapely.STRtree | None,
+                         disks: list[_Disk], W: float, H: float) -> np.ndarray:
     out = np.minimum.reduce([p[:, 0], W - p[:, 0], p[:, 1], H - p[:, 1]])
     pts = shapely.points(p)
-    if polys:
-        tree = shapely.STRtree(polys)
+    if tree is not None:
         idx = tree.nearest(pts)
         d = shapely.distance(pts, np.asarray(polys, dtype=object)[idx])
         inside = shapely.contains(np.asarray(polys, dtype=object)[idx], pts)
@@ -79,8 +78,10 @@ def check_fleet_plan(scene_dict: dict[str, Any], starts: np.ndarray, goals: np.n
     # obstacles and border
     circles, polys = obstacle_parts(scene_dict)
     disks = [_Disk(*c) for c in circles]
-    c_start = _clearance_of_points(S, polys, disks, W, H)
-    c_goal = _clearance_of_points(G, polys, disks, W, H) if len(G) else np.array([np.inf])
+    tree = shapely.STRtree(polys) if polys else None
+    c_start = _clearance_of_points(S, polys, tree, disks, W, H)
+    c_goal = (_clearance_of_points(G, polys, tree, disks, W, H) if len(G)
+              else np.array([np.inf]))
     need = np.minimum(np.minimum(radius + margin, c_start), c_goal.min()) - TOL
     lo = P.min(axis=1)
     hi = P.max(axis=1)
@@ -88,8 +89,7 @@ def check_fleet_plan(scene_dict: dict[str, Any], starts: np.ndarray, goals: np.n
     for i in np.nonzero(border < need)[0][:3]:
         errs.append(f"robot {i} comes within {border[i]:.4f} m of the border")
     lines = shapely.linestrings(P) if T > 1 else shapely.points(P[:, 0])
-    if polys:
-        tree = shapely.STRtree(polys)
+    if tree is not None:
         hit = tree.query(lines, predicate="dwithin", distance=need)
         if hit.shape[1]:
             i, k = (int(v) for v in hit[:, 0])

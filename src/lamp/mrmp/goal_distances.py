@@ -112,15 +112,6 @@ class GoalDistances(NamedTuple):
             lat.ids, DIRS[:, 0].copy(), DIRS[:, 1].copy(), np.ascontiguousarray(centre),
             float(lat.step))
 
-    def settled(self) -> int:
-        """Nodes settled over all goals so far (a cost figure for the statistics)."""
-        return int(_count(self.done, True))
-
-    def window_nodes(self) -> int:
-        """Window entries allocated over all goals (9 bytes each, plus the queues)."""
-        return int(_count(self.done, False))
-
-
 # The typed lists are made and read in compiled code only: Numba compiles its list
 # helpers anew in every process (about 1 s) when Python code builds or reads them.
 
@@ -137,14 +128,6 @@ def _new_lists(M: int, slots: int) -> tuple[Any, Any, Any]:
     return dist, done, bucket
 
 
-@nb.njit(cache=True)
-def _count(done: Any, settled: bool) -> int:
-    n = 0
-    for d in done:
-        n += int(d.sum()) if settled else d.shape[0]
-    return n
-
-
 # ---- one goal's bucket queue and window ----------------------------------------------
 
 
@@ -156,15 +139,20 @@ def _push(m: int, v: int, d: float, hs: tuple) -> None:
     slots = bcnt.shape[1]
     k = max(int(d / step), win[m, 4])
     s = k & (slots - 1)
-    bk = bucket_l[m]
     c = bcnt[m, s]
-    if c == bk.shape[1]:
-        grown = np.empty((slots, max(_BUCKET_CAP, 2 * c)), dtype=np.int32)
-        grown[:, :c] = bk
-        bucket_l[m] = grown
-        bk = grown
-    bk[s, c] = v
+    if c == bucket_l[m].shape[1]:
+        _grow_buckets(m, bucket_l)
+    bucket_l[m][s, c] = v
     bcnt[m, s] = c + 1
+
+
+@nb.njit(cache=True)
+def _grow_buckets(m: int, bucket_l: Any) -> None:
+    """Double the capacity of goal m's buckets (at least :data:`_BUCKET_CAP`)."""
+    bk = bucket_l[m]
+    grown = np.empty((bk.shape[0], max(_BUCKET_CAP, 2 * bk.shape[1])), dtype=np.int32)
+    grown[:, : bk.shape[1]] = bk
+    bucket_l[m] = grown
 
 
 @nb.njit(cache=True)
@@ -329,10 +317,7 @@ def _run_until(m: int, target: int, bound: float, nbr: np.ndarray, dlen: np.ndar
         win[m, 4] = k
         if status != 2:
             return status == 0
-        bk = bucket_l[m]
-        grown = np.empty((bk.shape[0], 2 * bk.shape[1]), dtype=np.int32)
-        grown[:, : bk.shape[1]] = bk
-        bucket_l[m] = grown
+        _grow_buckets(m, bucket_l)
 
 
 @nb.njit(cache=True)

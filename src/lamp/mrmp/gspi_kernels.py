@@ -376,8 +376,8 @@ def run_steps(
         else:
             px = gr[0][cur, 0]
             py = gr[0][cur, 1]
-            sptr, sidx = neighbour_lists(px, py, swap_radius)
             nptr, nidx = neighbour_lists(px, py, near)
+            sptr, sidx = neighbour_lists(px, py, swap_radius) if swap else (nptr, nidx)
         if swap:
             _swap_goals(gr, V, gv0, hs, cur, goal, prio, sptr, sidx, stuck[1])
             _break_deadlocks(gr, V, gv0, hs, cur, goal, prio, nptr, nidx, stuck, besth, near)
