@@ -49,10 +49,10 @@ LARGE = {
 def scripted_run(scene, segments: int = 100, step: float = 0.4):
     """Push the scene's box ``segments`` times by ``step`` metres along +x, straight, in the
     simulator; returns (Recording, success)."""
-    from lamp.planners.base import Plan, PlanStatus
+    from lamp.contract.plan import Plan, PlanStatus
+    from lamp.contract.trajectory import straight_moves
+    from lamp.contract.transition import Transition
     from lamp.planners.closed_loop import RENDER_EVERY, SegmentEvent
-    from lamp.planners.trajectory import straight_moves
-    from lamp.planners.verify import Transition
     from lamp.record import Recorder
     from lamp.sim import Simulator
     from lamp.sim.mjcf import TIMESTEP

@@ -13,7 +13,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import lamp
-from lamp.planners.result import ObjectResult, RunResult
+from lamp.contract.result import ObjectResult, RunResult
 from lamp.planners.run import PLANNERS
 
 DATA = Path(__file__).parent / "data"

@@ -559,7 +559,7 @@ def test_solve_job_wiring_and_render_failure(monkeypatch, tmp_path):
 
     import lamp.planners.run as run_mod
     from lamp.bench.runner import solve_job
-    from lamp.planners.result import RunResult
+    from lamp.contract.result import RunResult
 
     calls = []
 

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import lamp
-from lamp.planners.base import PlanStatus
+from lamp.contract.plan import PlanStatus
 from lamp.planners.config import PlannerConfig
 from lamp.planners.lamp_astar import LampAStar
 from lamp.planners.lazy import LazyPlanner

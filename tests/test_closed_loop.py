@@ -17,11 +17,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from lamp.planners.base import LoopPolicy, Plan, PlanStatus
+from lamp.contract.plan import LoopPolicy, Plan, PlanStatus
+from lamp.contract.trajectory import MAX_STEP, straight_moves
+from lamp.contract.transition import Transition
 from lamp.planners.closed_loop import ROBOT_SNAP, ClosedLoop, LoopRecord, SegmentEvent
 from lamp.planners.config import PlannerConfig
-from lamp.planners.trajectory import MAX_STEP, straight_moves
-from lamp.planners.verify import Transition
 
 LAZY = LoopPolicy(replan_on_drift=True, replan_when_done=True, replan_on_stall=True)
 DRIFT_ONLY = LoopPolicy(replan_on_drift=True, replan_when_done=True)

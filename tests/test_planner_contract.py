@@ -16,12 +16,12 @@ import numpy as np
 import pytest
 from mrmp_checker import check_plan
 
+from lamp.contract.plan import Plan, PlanStatus
+from lamp.contract.trajectory import MAX_STEP
+from lamp.contract.transition import Transition
 from lamp.planners import registry
-from lamp.planners.base import Plan, PlanStatus
 from lamp.planners.config import PlannerConfig
 from lamp.planners.task import ManipulationTask
-from lamp.planners.trajectory import MAX_STEP
-from lamp.planners.verify import Transition
 from lamp.scene import scene_from_dict
 
 CLOSED_LOOP = [s.name for s in registry.specs() if s.closed_loop]

@@ -9,7 +9,7 @@ import pytest
 from typer.testing import CliRunner
 
 from lamp.cli import app
-from lamp.planners.base import PlanStatus
+from lamp.contract.plan import PlanStatus
 from lamp.planners.config import PlannerConfig
 from lamp.planners.lamp_astar import LampAStar
 from lamp.planners.lazy import LazyPlanner

@@ -166,7 +166,7 @@ def _task(scene, model):
 
 def test_a_whole_scene_runner_bypasses_the_loop(tmp_path):
     """A planner with a ``runner`` is handed the scene; its ``check_scene`` guards the CLI."""
-    from lamp.planners.result import RunResult
+    from lamp.contract.result import RunResult
     from lamp.planners.run import Solution
 
     calls = []

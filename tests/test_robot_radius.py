@@ -61,9 +61,9 @@ def test_lamp_run_exits_2_for_unsupported_robots(tmp_path):
 
 def test_one_owner_for_the_team_constants():
     """Radius, row step and speed come from ``geometry.team.DEFAULT_TEAM`` everywhere."""
+    from lamp.contract.trajectory import MAX_STEP
     from lamp.geometry.team import DEFAULT_TEAM, RobotTeam
     from lamp.manip.dataset import SIM_STEP
-    from lamp.planners.trajectory import MAX_STEP
     from lamp.scene.loader import DEFAULT_ROBOT_RADIUS
     from lamp.scene.model import Scene
     from lamp.sim.simulator import MAX_STEP as SIM_MAX_STEP

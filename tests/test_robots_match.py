@@ -1,4 +1,4 @@
-"""``lamp.planners.robots``: the two "same robot configuration" relations, as documented."""
+"""``lamp.contract.robots``: the two "same robot configuration" relations, as documented."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.optimize import linear_sum_assignment
 
-from lamp.planners.robots import robot_state_key, robots_match
+from lamp.contract.robots import robot_state_key, robots_match
 
 coords = st.floats(-5.0, 5.0, allow_nan=False, allow_infinity=False)
 

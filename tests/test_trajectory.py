@@ -5,7 +5,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from lamp.planners.trajectory import MAX_STEP, concat, densify, hold, straight_moves
+from lamp.contract.trajectory import MAX_STEP, concat, densify, hold, straight_moves
 
 coords = st.floats(-3.0, 3.0, allow_nan=False, allow_infinity=False)
 
@@ -47,7 +47,7 @@ def test_concat_drops_joint_row_and_hold_repeats():
 
 
 def test_retime_keeps_endpoints_and_step_bound_with_fewer_rows():
-    from lamp.planners.trajectory import retime
+    from lamp.contract.trajectory import retime
 
     t = np.linspace(0.0, 1.0, 20)
     push = np.stack([np.stack([0.1 * t, 0.0 * t], axis=1), np.stack([0.1 * t, 0.2 + 0 * t], axis=1)])

@@ -16,10 +16,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.optimize import linear_sum_assignment
 
+from lamp.contract.trajectory import MAX_STEP, straight_moves
 from lamp.geometry import se2
 from lamp.manip import GeometricProposer
 from lamp.mrmp.gspi import GspiStatus
-from lamp.planners.trajectory import MAX_STEP, straight_moves
 from lamp.planners.verifier import Verifier, VerifierParams
 from lamp.scene.model import Rectangle
 

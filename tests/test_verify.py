@@ -6,12 +6,12 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from lamp.contract.trajectory import MAX_STEP, densify
 from lamp.geometry import se2
 from lamp.geometry.shapes import signed_distance
 from lamp.manip import GeometricProposer
 from lamp.planners.config import PlannerConfig
 from lamp.planners.task import ManipulationTask, pairwise_min_distance
-from lamp.planners.trajectory import MAX_STEP, densify
 from lamp.suites.registry import suite_scenes
 
 SCENE = suite_scenes("maze")[3]  # cluttered: many proposals collide somewhere

@@ -58,9 +58,9 @@ import mujoco
 import numpy as np
 from numpy.typing import ArrayLike
 
+from lamp.contract.goals import SUCCESS_ORIENTATION_TOL, SUCCESS_POSITION_TOL
 from lamp.geometry.robot_space import RobotSpace
 from lamp.geometry.shapes import half_extents
-from lamp.planners.result import SUCCESS_ORIENTATION_TOL, SUCCESS_POSITION_TOL
 from lamp.scene.model import Scene
 from lamp.sim.mjcf import ROBOT_KP, ROBOT_KV, build_model
 from lamp.sim.simulator import WORKSPACE_TOLERANCE, Simulator, footprint_outside

@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from lamp.contract.model import MAX_ROBOTS, MOTION_RANGE  # noqa: F401  (re-exported: the model's contract)
 from lamp.geometry.shapes import local_outline
 from lamp.geometry.team import DEFAULT_TEAM
 from lamp.scene.model import Circle, Polygon, Rectangle, Shape, shape_from_dict
@@ -30,12 +31,6 @@ CONTACT_OFFSET = ROBOT_RADIUS + CONTACT_GAP
 """Distance (m) from the object boundary to a contact (a robot centre)."""
 HORIZON = 20
 """Waypoints per push trajectory (GCo's H)."""
-MAX_ROBOTS = 3
-"""Largest robot budget the proposers support."""
-MOTION_RANGE = (0.2, 0.2, 0.5)
-"""The requested motions the model is trained for (object frame): |dx|, |dy| (m) and
-|dtheta| (rad) at most this. The training data draws from it, the network scales by it and
-the object lattice keeps its primitives inside it."""
 
 
 def as_shape(shape: Shape | Mapping[str, Any]) -> Shape:

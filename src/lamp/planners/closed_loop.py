@@ -20,21 +20,21 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from lamp.geometry.se2 import pose_distance
-from lamp.planners.base import LoopPolicy, ObjectPlanner
-from lamp.planners.config import PlannerConfig, segment_limit
-from lamp.planners.long_push import merge, take_long_push
-from lamp.planners.result import (
+from lamp.contract.goals import (
     SUCCESS_ORIENTATION_TOL,
     SUCCESS_POSITION_TOL,
-    ObjectResult,
     goal_errors,
     within_goal,
 )
-from lamp.planners.robots import robots_match
+from lamp.contract.plan import LoopPolicy, ObjectPlanner
+from lamp.contract.result import ObjectResult
+from lamp.contract.robots import robots_match
+from lamp.contract.trajectory import concat, straight_moves
+from lamp.contract.transition import Transition
+from lamp.geometry.se2 import pose_distance
+from lamp.planners.config import PlannerConfig, segment_limit
+from lamp.planners.long_push import merge, take_long_push
 from lamp.planners.task import ManipulationTask
-from lamp.planners.trajectory import concat, straight_moves
-from lamp.planners.verify import Transition
 from lamp.planners.watch import WATCH_FACTOR, WATCH_ROTATION, PushWatch, watched
 
 

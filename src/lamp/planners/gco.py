@@ -16,12 +16,12 @@ from collections.abc import Callable
 
 import numpy as np
 
+from lamp.contract.plan import Plan, PlanStatus
+from lamp.contract.transition import Transition
 from lamp.geometry import se2
-from lamp.planners.base import Plan, PlanStatus
 from lamp.planners.config import PlannerConfig
 from lamp.planners.task import ManipulationTask
 from lamp.planners.verifier import Verifier
-from lamp.planners.verify import Transition
 from lamp.search.gco_lattice import gco_object_path
 
 #: ``object_path(q_O, inflation, time_limit)``: GCo's object-only lattice path from

@@ -24,14 +24,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from lamp.planners.base import Plan, PlanStatus
+from lamp.contract.plan import Plan, PlanStatus
+from lamp.contract.robots import robot_state_key
+from lamp.contract.trajectory import MAX_STEP
+from lamp.contract.transition import Transition
 from lamp.planners.config import PlannerConfig
 from lamp.planners.lazy import goal_lattice, join_lattice
-from lamp.planners.robots import robot_state_key
 from lamp.planners.task import ManipulationTask
-from lamp.planners.trajectory import MAX_STEP
 from lamp.planners.verifier import Verifier
-from lamp.planners.verify import Transition
 from lamp.search.lattice import ObjectLattice
 from lamp.search.reverse_distance import ReverseDistance
 

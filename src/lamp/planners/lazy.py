@@ -24,13 +24,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from lamp.planners.base import Plan, PlanStatus
+from lamp.contract.plan import Plan, PlanStatus
+from lamp.contract.robots import robots_match
+from lamp.contract.transition import Transition
 from lamp.planners.config import PlannerConfig
 from lamp.planners.recovery import recovery_push
-from lamp.planners.robots import robots_match
 from lamp.planners.task import ManipulationTask
 from lamp.planners.verifier import Verifier
-from lamp.planners.verify import Transition
 from lamp.search.dstar_lite import DStarLite
 from lamp.search.lattice import ObjectLattice
 from lamp.search.refined_lattice import RefinedLattice

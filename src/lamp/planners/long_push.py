@@ -21,10 +21,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from lamp.contract.robots import robots_match
+from lamp.contract.trajectory import concat
+from lamp.contract.transition import Transition
 from lamp.geometry import se2
-from lamp.planners.robots import robots_match
-from lamp.planners.trajectory import concat
-from lamp.planners.verify import Transition
 
 __all__ = ["approach_travel", "continues", "merge", "take_long_push"]
 

@@ -32,13 +32,13 @@ from typing import Any
 
 import numpy as np
 
-from lamp.planners.result import (
+from lamp.contract.goals import (
     SUCCESS_ORIENTATION_TOL,
     SUCCESS_POSITION_TOL,
-    ObjectResult,
     goal_errors,
     within_goal,
 )
+from lamp.contract.result import ObjectResult
 from lamp.scene.model import Scene
 from lamp.sim.simulator import MAX_STEP, ROBOT_SPEED
 
@@ -223,8 +223,8 @@ def solve_mapush(scene: Scene, seed: int = 0, *, policy=None, render: bool = Fal
     goal position within ``time_limit`` simulated seconds per object), per object
     ``mapush_objects``. ``progress`` receives ``lamp.progress.ProgressEvent``s.
     """
+    from lamp.contract.result import RunResult
     from lamp.planners.closed_loop import RENDER_EVERY
-    from lamp.planners.result import RunResult
     from lamp.planners.run import Solution
     from lamp.progress import ProgressEvent
     from lamp.record import Recorder

@@ -25,8 +25,8 @@ import math
 
 import numpy as np
 
+from lamp.contract.transition import Transition
 from lamp.geometry import se2
-from lamp.planners.verify import Transition
 
 #: Candidate object-frame motions (dx, dy, dtheta): the 0/5/10 cm grid times three
 #: rotations, without standing still (all within the model's range).

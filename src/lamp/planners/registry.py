@@ -7,7 +7,7 @@ markers, the paper's Table I and II figures). Adding a planner is one :func:`reg
 call; :func:`unregister` takes it away again.
 
 A planner is either closed-loop (a ``factory`` that builds an
-:class:`~lamp.planners.base.ObjectPlanner` per object, driven by
+:class:`~lamp.contract.plan.ObjectPlanner` per object, driven by
 ``lamp.planners.closed_loop.run_object`` under its ``policy``) or a whole-scene runner
 (``runner``) that plans and executes a scene by itself (``mapush``).
 
@@ -24,8 +24,8 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Any, Protocol
 
+from lamp.contract.plan import LoopPolicy, ObjectPlanner
 from lamp.errors import InputError
-from lamp.planners.base import LoopPolicy, ObjectPlanner
 from lamp.planners.config import DEFAULT_PLANNING_LIMIT
 
 if TYPE_CHECKING:

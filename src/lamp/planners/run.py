@@ -10,11 +10,11 @@ from typing import Any
 
 import numpy as np
 
+from lamp.contract.result import RunResult
 from lamp.planners import registry
 from lamp.planners.closed_loop import LoopRecord, SegmentEvent, run_object
 from lamp.planners.config import PlannerConfig, PlannerName
 from lamp.planners.models import load_proposer as _load_proposer
-from lamp.planners.result import RunResult
 from lamp.planners.task import ManipulationTask, TaskStats
 from lamp.progress import EventKind, ProgressCallback, ProgressEvent
 from lamp.scene.loader import SceneError

@@ -33,11 +33,12 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from lamp.contract.trajectory import MAX_STEP, concat, densify, straight_moves
+from lamp.contract.transition import Transition
 from lamp.geometry import se2
 from lamp.geometry.shapes import signed_distance
 from lamp.mrmp.gspi import GspiStatus
-from lamp.planners.trajectory import MAX_STEP, concat, densify, straight_moves
-from lamp.planners.verify import Transition, assign_to_contacts, push_paths
+from lamp.planners.verify import assign_to_contacts, push_paths
 from lamp.scene.model import Scene, Shape
 
 __all__ = ["FreeSpace", "GspiRouter", "MultiRobotPlanner", "PushCandidates", "RobotValidity",

@@ -1,57 +1,18 @@
-"""The verified transition and the pure helpers ``Verify`` builds it with.
+"""The pure helpers ``Verify`` builds a transition with (``lamp.contract.transition``).
 
 ``Verify`` itself (paper Sec. III-A-1, Alg. 1 lines 17-25) is
-:class:`lamp.planners.verifier.Verifier`: it returns a :class:`Transition`, the robot
-trajectories T_R = T_move (+) T_manip that realise one object motion. This module holds
-that record, the optimal robot-to-contact pairing and the push paths of all robots.
+:class:`lamp.planners.verifier.Verifier`. This module holds the optimal robot-to-contact
+pairing and the push paths of all robots.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from lamp.planners.trajectory import concat, hold, retime
+from lamp.contract.trajectory import hold, retime
 
-__all__ = ["Transition", "assign_to_contacts", "push_paths"]
-
-
-@dataclass
-class Transition:
-    """Verified robot trajectories for one object motion (an edge of LAMP's search)."""
-
-    q_from: np.ndarray  # (3,) object pose before the push
-    q_to: np.ndarray  # (3,) planned object pose after the push
-    contacts: np.ndarray  # (B, 2) contact points, world frame
-    pushes_local: np.ndarray  # (B, H, 2) push paths in the object frame at q_from
-    move: np.ndarray  # (N, Tm, 2) approach: robots to contacts / waiting spots
-    manip: np.ndarray  # (N, Tp, 2) push: contact robots follow pushes, others hold
-    #: The search edge (u, v) this transition realises, when a planner tracks it.
-    edge: tuple | None = None
-
-    @property
-    def robot_paths(self) -> np.ndarray:
-        """T_R = T_move (+) T_manip: the synchronised paths to execute."""
-        return concat(self.move, self.manip)
-
-    @property
-    def robot_start(self) -> np.ndarray:
-        return self.move[:, 0]
-
-    @property
-    def robot_end(self) -> np.ndarray:
-        return self.manip[:, -1]
-
-    @property
-    def steps(self) -> int:
-        """Synchronised time steps of T_R (its makespan)."""
-        return int(self.move.shape[1] + self.manip.shape[1] - 1)
-
-    @property
-    def budget(self) -> int:
-        return int(self.contacts.shape[0])
+__all__ = ["assign_to_contacts", "push_paths"]
 
 
 def assign_to_contacts(q_R: np.ndarray, contacts: np.ndarray) -> tuple[np.ndarray, float]:

@@ -58,10 +58,10 @@ import numba
 import numpy as np
 from numpy.typing import ArrayLike
 
+from lamp.contract.model import MOTION_RANGE
 from lamp.geometry import se2
 from lamp.geometry.object_kernels import motion_free_kernel, pose_free_kernel
 from lamp.geometry.object_space import ObjectSpace
-from lamp.manip.contacts import MOTION_RANGE
 from lamp.scene.model import Scene
 from lamp.search.landmark import LandmarkPotential
 from lamp.search.metric import OCTILE_MINOR, TWO_PI, lattice_metric, motion_cost

@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Protocol
 import numpy as np
 
 if TYPE_CHECKING:
-    from lamp.planners.verify import Transition
+    from lamp.contract.transition import Transition
 
 __all__ = ["LoopPolicy", "ObjectPlanner", "Plan", "PlanStatus"]
 

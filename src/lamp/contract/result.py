@@ -1,8 +1,10 @@
-"""Run results: what ``lamp run`` writes as ``result.json`` (see the interfaces spec).
+"""Run results: what ``lamp run`` writes as ``result.json`` (``docs/recording-format.md``
+and the README's result.json section list the keys).
 
-``RunResult.to_dict()`` carries exactly the spec's required keys plus a few extras
-(``verify_calls``, ``plan_cache_hits``...). Makespan counts synchronised robot time steps
-of ``MAKESPAN_STEP_S`` seconds (one waypoint of at most 0.02 m at the robot speed).
+``RunResult.to_dict()`` carries the documented keys plus a few extras (``stats``...).
+``makespan`` counts the synchronised rows of all executed robot trajectories (one row is a
+waypoint of at most ``lamp.contract.trajectory.MAX_STEP`` m); ``makespan_s`` is the run's
+simulated time, equal to the recording's last time.
 """
 
 from __future__ import annotations
@@ -11,23 +13,6 @@ from dataclasses import asdict, dataclass, field
 from typing import Any
 
 import numpy as np
-
-from lamp.geometry.se2 import pose_distance
-
-#: Success tolerances of the scene format (position metres, orientation radians).
-SUCCESS_POSITION_TOL = 0.1
-SUCCESS_ORIENTATION_TOL = 0.1
-
-
-def goal_errors(pose: np.ndarray, goal: np.ndarray) -> tuple[float, float]:
-    """(position error, wrapped orientation error) of ``pose`` against ``goal``."""
-    dt, dr = pose_distance(np.asarray(pose, float), np.asarray(goal, float))
-    return float(dt), float(dr)
-
-
-def within_goal(pose, goal, position_tol: float, orientation_tol: float) -> bool:
-    dt, dr = goal_errors(pose, goal)
-    return dt <= position_tol and dr <= orientation_tol
 
 
 @dataclass
