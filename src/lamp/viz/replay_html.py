@@ -25,7 +25,7 @@ from lamp.io import write_text_atomic
 from lamp.record.format import FORMAT, OUTCOMES, Recording
 from lamp.scene.model import Circle
 from lamp.viz.animation import PATH_COLOR, PENALISED_COLOR, VERIFIED_COLOR
-from lamp.viz.replay import CONTACT_COLOR, TRAIL_COLOR, RenderOptions, outcome_text
+from lamp.viz.replay_options import CONTACT_COLOR, TRAIL_COLOR, RenderOptions, outcome_text
 from lamp.viz.scene_plot import GOAL_COLOR, OBSTACLE_COLOR, ROBOT_COLOR, object_color
 
 #: Placeholders of viewer.html that ``write_html`` replaces.
