@@ -386,7 +386,7 @@ def bench_command(
     if scenes is not None and scenes < 1:
         _fail(f"--scenes must be at least 1, got {scenes}")
     try:
-        from lamp.bench.runner import job_fn_spec
+        from lamp.bench.job_fn import job_fn_spec
 
         job_fn_spec(job_fn)
     except ValueError as exc:

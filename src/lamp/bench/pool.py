@@ -129,7 +129,7 @@ def run_local(jobs: Sequence[Job], job_fn: str | Callable, workers: int,
     wrote anything. Raises :class:`WorkerStartError` when a worker dies before its first
     job (e.g. the job function's module fails to import there).
     """
-    from lamp.bench.runner import job_fn_spec
+    from lamp.bench.job_fn import job_fn_spec
 
     if workers < 1:
         raise ValueError(f"workers must be >= 1, got {workers!r}")

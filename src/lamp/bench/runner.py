@@ -20,7 +20,6 @@ result.json ``dict``), so the machinery can be tested without the planners
 
 from __future__ import annotations
 
-import importlib
 import logging
 import os
 import time
@@ -31,6 +30,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from lamp.bench.job_fn import MAX_TRACEBACK, JobFn, call_job, job_fn_spec
 from lamp.bench.jobs import Job, ResultsFile, failure_result, make_record
 from lamp.bench.pool import JobOutcome, run_local
 
@@ -41,13 +41,8 @@ DEFAULT_JOB_FN = "lamp.bench.runner:solve_job"
 
 BACKENDS = ("local", "ray")
 
-JobFn = Callable[[Job], dict[str, Any]]
-
 #: Thread-count variables set (if unset) for job processes: one job, one core.
 THREAD_ENV = ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS", "NUMBA_NUM_THREADS")
-
-#: Longest traceback kept in a results line.
-MAX_TRACEBACK = 4000
 
 
 def solve_job(job: Job) -> dict[str, Any]:
@@ -108,50 +103,6 @@ def warm_up_solver() -> None:
 
 
 solve_job.warm_up = warm_up_solver  # type: ignore[attr-defined]  # see lamp.bench.worker
-
-
-def resolve_job_fn(spec: str | JobFn) -> JobFn:
-    """A job function from ``"package.module:function"`` (or the callable itself)."""
-    if callable(spec):
-        return spec
-    if not isinstance(spec, str) or ":" not in spec:
-        raise ValueError(f"job_fn must be 'module:function' or a callable, got {spec!r}")
-    module, _, name = spec.partition(":")
-    try:
-        fn = getattr(importlib.import_module(module), name)
-    except (ImportError, AttributeError) as exc:
-        raise ValueError(f"job_fn {spec!r} cannot be imported: {exc}") from exc
-    if not callable(fn):
-        raise ValueError(f"job_fn {spec!r} is not callable")
-    return fn
-
-
-def job_fn_spec(fn: str | JobFn) -> str:
-    """``"module:function"`` for ``fn``; job processes import the job function by this name.
-
-    Raises ``ValueError`` for a callable that cannot be imported by name (a lambda, a
-    nested function, one defined in ``__main__``).
-    """
-    if isinstance(fn, str):
-        resolve_job_fn(fn)  # fail early, in the parent, with a clear message
-        return fn
-    module, qual = getattr(fn, "__module__", None), getattr(fn, "__qualname__", "")
-    if not module or module == "__main__" or "<" in qual or "." in qual:
-        raise ValueError(f"job_fn {fn!r} must be a top-level function of an importable module")
-    spec = f"{module}:{qual}"
-    resolve_job_fn(spec)
-    return spec
-
-
-def call_job(spec: str | JobFn, job: Job) -> tuple[str, Any, str]:
-    """Run the job; ``("ok", result, "")`` or ``("error", message, traceback)``."""
-    try:
-        result = resolve_job_fn(spec)(job)
-        if not isinstance(result, dict):
-            raise TypeError(f"job function returned {type(result).__name__}, expected dict")
-        return ("ok", result, "")
-    except Exception as exc:  # recorded as status "error", never lost
-        return ("error", f"{type(exc).__name__}: {exc}", traceback.format_exc()[-MAX_TRACEBACK:])
 
 
 def outcome_record(outcome: JobOutcome) -> dict[str, Any]:

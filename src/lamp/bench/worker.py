@@ -60,7 +60,7 @@ def serve(conn: Any, spec: str, parent_pid: int, idle_log: str) -> None:
     threading.Thread(target=_watch_parent, args=(parent_pid,), daemon=True).start()
     _point_output_at(idle_log)
     faulthandler.enable()
-    from lamp.bench.runner import call_job, resolve_job_fn
+    from lamp.bench.job_fn import call_job, resolve_job_fn
 
     fn = resolve_job_fn(spec)
     warm_up = getattr(fn, "warm_up", None)
