@@ -476,11 +476,11 @@ def test_bench_end_to_end_resume_and_render(tmp_path):
 def test_bench_rerun_replaces_one_planners_records(tmp_path, monkeypatch):
     """--resume --rerun lazy appends new LAMP-Lazy lines only; the report counts those; a
     second --rerun with the same code has nothing left to do, new code re-runs them again."""
-    from lamp.bench import cli as bench_cli
+    from lamp.bench import provenance
     from lamp.bench.report import load_results
 
     version = ["c0"]
-    monkeypatch.setattr(bench_cli, "_code_version", lambda out: (version[0], False))
+    monkeypatch.setattr(provenance, "code_version", lambda out: (version[0], False))
     folder = write_suite(tmp_path, "random", 2)
     out = tmp_path / "run"
     args = ["bench", "--suites", str(folder), "--planners", "lazy,gco-var", "--workers", "1",
@@ -590,10 +590,10 @@ def test_solve_job_wiring_and_render_failure(monkeypatch, tmp_path):
     ("", False),
 ])
 def test_session_ignores_changes_inside_the_output_folder(tmp_path, monkeypatch, changed, dirty):
-    from lamp.bench import cli as bench_cli
+    from lamp.bench import provenance
 
     answers = {"status": changed, "rev-parse": str(tmp_path)}
-    monkeypatch.setattr(bench_cli, "_git", lambda *args: answers[args[0]])
-    session = bench_cli._session("lamp bench", tmp_path / "docs" / "results" / "full")
+    monkeypatch.setattr(provenance, "_git", lambda *args: answers[args[0]])
+    session = provenance._session("lamp bench", tmp_path / "docs" / "results" / "full")
     assert session["git_dirty"] is dirty
     assert session["machine"]["cpu_count"] == os.cpu_count()  # each run says where it ran
