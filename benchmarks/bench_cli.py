@@ -24,7 +24,7 @@ ROOT = Path(__file__).resolve().parents[1]
 ENV = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT / "src"),
                                                      os.environ.get("PYTHONPATH", "")])}
 # imports first (every run pays them anyway), then the warm-up alone
-WARM = ("import time; import lamp.planners.run, lamp.sim; from lamp.warmup import warm_up; "
+WARM = ("import time; import lamp.pipeline.run, lamp.sim; from lamp.pipeline.warmup import warm_up; "
         "t = time.perf_counter(); r = warm_up(); "
         "print(time.perf_counter() - t, r.compiled, r.compile_s)")
 

@@ -24,8 +24,9 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
 
+from lamp.manip.models import load_proposer  # noqa: E402
+from lamp.pipeline.registry import get as planner_spec  # noqa: E402
 from lamp.planners.lamp_astar import LampAStar, edge_cost  # noqa: E402
-from lamp.planners.run import default_config, load_proposer  # noqa: E402
 from lamp.planners.task import ManipulationTask  # noqa: E402
 from lamp.suites.registry import suite_scenes  # noqa: E402
 
@@ -44,7 +45,7 @@ def main() -> None:
 
     torch.set_num_threads(1)
     # the planning limit sets the expansion budget as in lamp bench (astar_expansions)
-    cfg = dataclasses.replace(default_config("astar"), planning_time_limit=args.limit)
+    cfg = dataclasses.replace(planner_spec("astar").default_config(), planning_time_limit=args.limit)
     if args.weight is not None:
         cfg = dataclasses.replace(cfg, astar_heuristic_weight=args.weight)
     if args.cap is not None:

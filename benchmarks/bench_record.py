@@ -21,8 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
+from lamp import solve
 from lamp.planners.config import PlannerConfig
-from lamp.planners.run import solve
 from lamp.record import save_recording
 from lamp.scene import scene_from_dict
 from lamp.suites import suite_scenes

@@ -87,8 +87,8 @@ def run_point(size: float, robots: int, objects: int, density: float,
     import resource
     import time
 
+    from lamp import solve
     from lamp.planners.config import PlannerConfig
-    from lamp.planners.run import solve
     from lamp.scene.loader import scene_from_dict
 
     d = pillar_scene(size, robots, objects, density)

@@ -89,7 +89,7 @@ def main() -> None:
     ap.add_argument("--scenes", default=",".join(SCENES))
     ap.add_argument("--model", default="learned")
     args = ap.parse_args()
-    from lamp.planners.run import solve
+    from lamp import solve
     from lamp.scene.loader import scene_from_dict
 
     print(f"{'scene':<11} {'seed':>4} {'ok':>3} {'seg':>4} {'replans':>7} {'plan_s':>7} "

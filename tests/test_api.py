@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 
 import lamp
 from lamp.contract.result import ObjectResult, RunResult
-from lamp.planners.run import PLANNERS
+from lamp.pipeline.registry import names
 
 DATA = Path(__file__).parent / "data"
 
@@ -69,14 +69,14 @@ def test_solve_rejects_bad_input_clearly(tmp_path: Path) -> None:
 
 def test_solve_signature_and_docstring() -> None:
     params = inspect.signature(lamp.solve).parameters
-    assert list(params) == ["scene", "planner", "seed", "model", "config", "render",
-                            "time_limit", "progress"]
+    assert list(params) == ["scene", "planner", "seed", "model", "config", "params",
+                            "time_limit", "max_segments", "progress"]
     assert all(p.annotation is not inspect.Parameter.empty for p in params.values())
     assert params["planner"].default == "lazy" and params["seed"].default == 0
-    for name in PLANNERS:
+    for name in names():
         assert f'"{name}"' in lamp.solve.__doc__
     hints = typing.get_type_hints(lamp.solve)
-    assert set(typing.get_args(hints["planner"])) == set(PLANNERS)
+    assert set(typing.get_args(hints["planner"])) == set(names())
     assert hints["return"] is RunResult
 
 
@@ -145,12 +145,12 @@ def test_planning_time_figures(times: list[float], unexecuted: float) -> None:
 
 
 def test_warm_up_runs_once_per_process() -> None:
-    from lamp.warmup import ensure_warm
+    from lamp.pipeline.warmup import ensure_warm
 
     ensure_warm()
     again = ensure_warm()
     assert (again.seconds, again.compiled) == (0.0, 0)
-    from lamp.warmup import warm_up
+    from lamp.pipeline.warmup import warm_up
 
     events: list = []
     report = warm_up(events.append)  # everything is compiled now: nothing to announce
@@ -161,7 +161,7 @@ def test_errors_raised_on_purpose_are_lamp_errors() -> None:
     """A mistyped planner is an InputError (still a ValueError); model and recording
     errors are LampErrors; an unknown scene name is a SceneError naming it."""
     from lamp.errors import InputError, LampError
-    from lamp.planners.models import ModelError
+    from lamp.manip.models import ModelError
     from lamp.record.format import RecordingError
 
     assert issubclass(ModelError, InputError) and issubclass(RecordingError, InputError)

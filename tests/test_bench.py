@@ -552,27 +552,28 @@ def test_fake_synthetic_job_is_deterministic():
 
 
 def test_solve_job_wiring_and_render_failure(monkeypatch, tmp_path):
-    """solve_job passes the job's settings to solve_with_frames; a failing GIF writer
+    """solve_job builds the run request from the job's settings; a failing GIF writer
     costs only the animation, never the run's result."""
     import sys
     import types
 
-    import lamp.planners.run as run_mod
+    import lamp.pipeline as pipeline
     from lamp.bench.runner import solve_job
     from lamp.contract.result import RunResult
 
     calls = []
 
-    def fake_solve(scene, planner, seed, *, model, config, render, time_limit):
-        calls.append((scene.name, planner, seed, model, render, time_limit, config.max_segments))
-        return run_mod.Solution(RunResult(scene=scene.name, planner=planner, seed=seed), [])
+    def fake_run(request):
+        calls.append((request.scene.name, request.planner, request.seed, request.model,
+                      request.params.planning_time_limit, request.params.max_segments))
+        return RunResult(scene=request.scene.name, planner=request.planner, seed=request.seed)
 
-    def broken_writer(scene, frames, path):
+    def broken_render(recording, path):
         raise OSError("disk full")
 
-    monkeypatch.setattr(run_mod, "solve_with_frames", fake_solve)
-    monkeypatch.setitem(sys.modules, "lamp.viz.animation",
-                        types.SimpleNamespace(write_animation=broken_writer))
+    monkeypatch.setattr(pipeline, "run", fake_run)
+    monkeypatch.setitem(sys.modules, "lamp.viz.replay",
+                        types.SimpleNamespace(render=broken_render))
     jobs = enumerate_jobs([suite("iros", 1)], ["lazy", "astar"], [2], model="geometric",
                           planning_limit_s=12.0)
     out = solve_job(dataclasses.replace(jobs[0], render_to=str(tmp_path / "iros.gif")))
@@ -580,8 +581,8 @@ def test_solve_job_wiring_and_render_failure(monkeypatch, tmp_path):
     assert not (tmp_path / "iros.gif").exists()
     solve_job(jobs[1])
     # synthetic scenes, not the built-in suite: the segment limit scales with the task
-    assert calls == [("iros-00", "lazy", 2, "geometric", True, None, None),
-                     ("iros-00", "astar", 2, "geometric", False, 12.0, None)]
+    assert calls == [("iros-00", "lazy", 2, "geometric", 300.0, None),
+                     ("iros-00", "astar", 2, "geometric", 12.0, None)]
 
 
 @pytest.mark.parametrize(("changed", "dirty"), [

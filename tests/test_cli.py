@@ -21,7 +21,7 @@ from typer.testing import CliRunner
 
 import lamp
 from lamp.cli import app
-from lamp.planners.config import PLANNER_DESCRIPTIONS, default_planning_limit
+from lamp.pipeline.registry import default_planning_limit, descriptions
 
 DATA = Path(__file__).parent / "data"
 SPEC = DATA / "spec_example.yaml"
@@ -48,12 +48,12 @@ def small(tmp_path: Path) -> Path:
 @pytest.fixture
 def no_planning(monkeypatch: pytest.MonkeyPatch):
     """Make any attempt to plan fail the test: input checks must come first."""
-    from lamp.planners import run as run_mod
+    from lamp.pipeline import execute as execute_mod
 
     def boom(*a, **k):
         raise AssertionError("planning started before the input was checked")
 
-    monkeypatch.setattr(run_mod, "solve_with_frames", boom)
+    monkeypatch.setattr(execute_mod, "object_runner", boom)
 
 
 def help_text(*args: str) -> str:
@@ -113,7 +113,7 @@ def test_every_option_shows_its_default() -> None:
 def test_one_spelling_per_idea_old_ones_hidden() -> None:
     run_help, bench_help = help_text("run"), help_text("bench")
     assert "--planning-limit" in run_help and "--planning-limit" in bench_help
-    for name in PLANNER_DESCRIPTIONS:  # the per-planner defaults are shown
+    for name in descriptions():  # the per-planner defaults are shown
         assert f"{default_planning_limit(name):g} s" in run_help
     assert "--time-limit" not in run_help and "--time-limit" not in bench_help
     assert "--suites" in bench_help and "--num-seeds" in bench_help
@@ -143,7 +143,7 @@ def test_units_in_help_survive_rich_markup() -> None:
 
 def test_planner_choices_listed_and_suggested(small: Path, no_planning, tmp_path: Path) -> None:
     text = help_text("run")
-    for name in PLANNER_DESCRIPTIONS:
+    for name in descriptions():
         assert name in text
     res = runner.invoke(app, ["run", str(small), "-p", "lazzy", "-o", str(tmp_path / "o")])
     assert res.exit_code == 2
@@ -357,7 +357,7 @@ def _cache_without(cache: Path, dropped: Path) -> None:
     using it compiles just those (a fully empty cache costs 20-40 s)."""
     from numba.core.caching import _CacheLocator
 
-    from lamp.warmup import ensure_warm
+    from lamp.pipeline.warmup import ensure_warm
 
     ensure_warm()  # every kernel compiled (or loaded) into this checkout's __pycache__
     for folder in Path(lamp.__file__).parent.rglob("__pycache__"):

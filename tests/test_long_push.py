@@ -7,12 +7,12 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from lamp import solve
 from lamp.contract.trajectory import concat, straight_moves
 from lamp.contract.transition import Transition
 from lamp.geometry import se2
 from lamp.planners.config import PlannerConfig
 from lamp.planners.long_push import approach_travel, continues, merge, take_long_push
-from lamp.planners.run import solve
 from lamp.suites.registry import suite_scenes
 
 

@@ -14,10 +14,12 @@ from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 import lamp
+from lamp.baselines.mapush import MAKESPAN_STEP, MAPUSH_RADIUS, MapushRunner, check_scene
 from lamp.cli import app
 from lamp.env import PushEnv
 from lamp.geometry.object_space import ObjectSpace
-from lamp.planners.mapush import MAKESPAN_STEP, MAPUSH_RADIUS, check_scene, solve_mapush
+from lamp.pipeline.execute import execute
+from lamp.pipeline.request import RunRequest
 from lamp.rl.policy import load_policy
 from lamp.rl.train import (
     SUBGOAL_TOLERANCE,
@@ -132,8 +134,9 @@ def _tiny_policy(tmp_path, ppo_env):
 def test_mapush_run_is_deterministic_and_reports_both_criteria(tmp_path, ppo_env):
     scene = scene_from_dict(SHORT)
     policy = _tiny_policy(tmp_path, ppo_env)
-    a = solve_mapush(scene, policy=policy, time_limit=10.0).result.to_dict()
-    b = solve_mapush(scene, policy=policy, time_limit=10.0).result.to_dict()
+    a, b = (execute(RunRequest(scene, "mapush"),
+                    runner=MapushRunner(scene, policy, time_limit=10.0)).to_dict()
+            for _ in range(2))
     def untimed(d):  # wall-clock measurements differ between runs; nothing else may
         if isinstance(d, dict):
             return {k: untimed(v) for k, v in d.items() if "planning" not in k and "wall" not in k}
@@ -160,7 +163,7 @@ def test_scene_with_other_robot_count_is_rejected(tmp_path, ppo_env):
                                          "for 3"):
         check_scene(scene, policy)
     with pytest.raises(ValueError, match="trained for 3"):
-        solve_mapush(scene, policy=policy)
+        MapushRunner(scene, policy)
     env = PushEnv(scene)
     with pytest.raises(ValueError, match="has 4 robots, but the policy was trained for 3"):
         policy.check_env(4, env.observation_space, "scene 'x'")
@@ -168,7 +171,7 @@ def test_scene_with_other_robot_count_is_rejected(tmp_path, ppo_env):
 
 
 def test_cli_run_mapush_and_bad_robot_count(tmp_path, ppo_env, monkeypatch):
-    import lamp.planners.mapush as mapush
+    import lamp.baselines.mapush as mapush
     import lamp.rl.policy as policy_module
 
     _tiny_policy(tmp_path, ppo_env)

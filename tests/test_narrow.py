@@ -9,10 +9,10 @@ import pytest
 import shapely
 from shapely.geometry import LineString, Point
 
+from lamp import solve
 from lamp.geometry.exact_space import ExactSpace
 from lamp.geometry.object_space import ObjectSpace
 from lamp.planners.lazy import join_lattice
-from lamp.planners.run import solve
 from lamp.scene.loader import scene_from_dict
 from lamp.scene.model import Circle, Polygon, Rectangle
 from lamp.search.dstar_lite import DStarLite

@@ -19,7 +19,7 @@ from mrmp_checker import check_plan
 from lamp.contract.plan import Plan, PlanStatus
 from lamp.contract.trajectory import MAX_STEP
 from lamp.contract.transition import Transition
-from lamp.planners import registry
+from lamp.pipeline import registry
 from lamp.planners.config import PlannerConfig
 from lamp.planners.task import ManipulationTask
 from lamp.scene import scene_from_dict

@@ -8,12 +8,12 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
+from lamp import solve
 from lamp.cli import app
 from lamp.contract.plan import PlanStatus
 from lamp.planners.config import PlannerConfig
 from lamp.planners.lamp_astar import LampAStar
 from lamp.planners.lazy import LazyPlanner
-from lamp.planners.run import solve
 from lamp.planners.task import ManipulationTask
 from lamp.scene import scene_from_dict
 

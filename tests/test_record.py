@@ -202,7 +202,7 @@ def proposer():
 
 @pytest.fixture(scope="module")
 def solved(scene, proposer):
-    from lamp.planners.run import solve
+    from lamp import solve
 
     return solve(scene, "lazy", seed=0, model=proposer)
 
@@ -225,8 +225,8 @@ def test_solve_returns_the_recording_of_the_run(solved):
 
 def test_recording_only_watches(scene, proposer):
     """run_object gives the same result with and without an observer."""
+    from lamp.pipeline.registry import get
     from lamp.planners.lazy import LazyPlanner
-    from lamp.planners.run import default_config
     from lamp.planners.task import ManipulationTask
     from lamp.sim import Simulator
 
@@ -234,7 +234,7 @@ def test_recording_only_watches(scene, proposer):
     for observer in (None, seen.append):
         sim = Simulator(scene)
         task = ManipulationTask(scene, 0, scene.object_starts(), proposer,
-                                default_config("lazy"), seed=0)
+                                get("lazy").default_config(), seed=0)
         res = run_object(task, LazyPlanner.from_task(task), LoopPolicy(True, True), sim, LoopRecord(),
                          observer=observer)
         outs.append((res.final_pose, res.segments, res.success, sim.robot_positions.tolist()))
@@ -244,7 +244,7 @@ def test_recording_only_watches(scene, proposer):
 
 
 def test_same_seed_same_recording(scene, proposer, solved):
-    from lamp.planners.run import solve
+    from lamp import solve
 
     again = solve(scene, "lazy", seed=0, model=proposer).recording
     for name in ARRAYS:

@@ -12,9 +12,9 @@ from typer.testing import CliRunner
 import lamp
 from lamp.bench import report
 from lamp.bench.jobs import Job, planning_limit_applies
-from lamp.planners import registry
-from lamp.planners.config import PlannerName, default_planning_limit, planning_limit_help
-from lamp.planners.run import default_config, make_planner
+from lamp.pipeline import registry
+from lamp.pipeline.registry import default_planning_limit, planning_limit_help
+from lamp.planners.config import PlannerName
 from lamp.scene import scene_from_dict
 
 BUILT_IN = ("lazy", "astar", "astar-replan", "gco-ori", "gco-var", "mapush")
@@ -110,8 +110,8 @@ def test_one_entry_adds_a_planner_everywhere(dummy, tmp_path):
     assert got["planner"] == "dummy" and got["success"]
     assert got["objects"][0]["final_pose"] == want["objects"][0]["final_pose"]
     assert got["segments"] == want["segments"] and got["makespan"] == want["makespan"]
-    assert default_config("dummy").planning_time_limit == 42.0
-    assert type(make_planner("dummy", _task(scene, model))).__name__ == "LazyPlanner"
+    assert registry.get("dummy").default_config().planning_time_limit == 42.0
+    assert type(registry.get("dummy").factory(_task(scene, model))).__name__ == "LazyPlanner"
 
     # bench: --planning-limit applies, the name is accepted
     assert planning_limit_applies("dummy") and not planning_limit_applies("lazy")
@@ -164,27 +164,47 @@ def _task(scene, model):
     return ManipulationTask(scene, 0, poses, model, PlannerConfig(), seed=0)
 
 
-def test_a_whole_scene_runner_bypasses_the_loop(tmp_path):
-    """A planner with a ``runner`` is handed the scene; its ``check_scene`` guards the CLI."""
-    from lamp.contract.result import RunResult
-    from lamp.planners.run import Solution
+def test_an_object_runner_replaces_the_loop(tmp_path):
+    """A planner with a ``runner`` gets the scene and parameters, moves each object in the
+    pipeline's schedule; its ``check_scene`` guards the CLI before anything is written."""
+    from lamp.contract.goals import goal_errors
+    from lamp.contract.result import ObjectResult
+    from lamp.contract.runner import ObjectOutcome
 
     calls = []
 
-    def runner(scene, seed, *, model, config, render, time_limit, progress):
-        calls.append((scene.name, seed, time_limit))
-        return Solution(RunResult(scene=scene.name, planner="whole", seed=seed))
+    class StandStill:
+        """Moves nothing: each object ends where it is."""
+
+        row_dt_s = 0.08
+
+        def __init__(self, scene, config):
+            calls.append((scene.name, config.planning_time_limit))
+
+        def run_object(self, index, executor, observe):
+            pose = [float(v) for v in executor.object_poses[index]]
+            goal = list(SCENE["objects"][index]["goal"])
+            dt, dr = goal_errors(pose, goal)
+            calls.append(("object", index))
+            return ObjectOutcome(ObjectResult(False, pose, goal, dt, dr, False, 0, False,
+                                              "stood still"))
+
+        def run_stats(self, outcomes):
+            return {"objects": len(outcomes)}
 
     def check(scene):
         if scene.name != "tiny":
             raise ValueError("planner whole: only the tiny scene")
 
-    registry.register(registry.PlannerSpec("whole", "Whole", "whole-scene test runner",
-                                           runner=runner, check_scene=check))
+    registry.register(registry.PlannerSpec("whole", "Whole", "object-runner test planner",
+                                           runner=StandStill, check_scene=check,
+                                           uses_model=False))
     try:
         res = lamp.solve(scene_from_dict(SCENE), "whole", seed=5, model="geometric",
                          time_limit=9.0)
-        assert calls == [("tiny", 5, 9.0)] and res.planner == "whole"
+        assert calls == [("tiny", 9.0), ("object", 0)] and res.planner == "whole"
+        assert res.stats == {"objects": 1} and not res.success and res.segments == 0
+        assert res.objects[0].failure_reason == "stood still"
         from lamp.cli import app
 
         other = tmp_path / "other.json"

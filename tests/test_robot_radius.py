@@ -13,9 +13,10 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
+from lamp import solve
 from lamp.cli import app
 from lamp.manip import ROBOT_RADIUS, GeometricProposer, load_model
-from lamp.planners.run import check_robot_radius, solve
+from lamp.manip.models import check_robot_radius
 from lamp.scene import SceneError, scene_from_dict
 
 DATA = Path(__file__).parent / "data"
@@ -81,7 +82,7 @@ def test_one_owner_for_the_team_constants():
 def test_validate_applies_the_model_radius_check_as_run_does(tmp_path: Path) -> None:
     """``lamp validate`` refuses robots the model does not serve (exit 2, naming
     robots.radius), as ``lamp run`` would; ``--model any`` checks the format alone."""
-    from lamp.planners.models import model_robot_radius
+    from lamp.manip.models import model_robot_radius
 
     assert model_robot_radius("learned") == pytest.approx(load_model().robot_radius)
     assert model_robot_radius("geometric") == pytest.approx(ROBOT_RADIUS)

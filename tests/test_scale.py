@@ -229,8 +229,8 @@ def test_object_lattice_on_tiles_matches_the_whole_grid() -> None:
 
 
 def test_lamp_lazy_on_a_map_larger_than_its_windows() -> None:
+    from lamp import solve
     from lamp.geometry import robot_space
-    from lamp.planners.run import solve
 
     robot_space.clear_caches()
     scene = scene_from_dict(pillar_scene(6))

@@ -36,8 +36,8 @@ CHROMIUM = find_chromium()
 
 @pytest.fixture(scope="module")
 def recording():
+    from lamp import solve
     from lamp.manip import GeometricProposer
-    from lamp.planners.run import solve
 
     rec = solve(scene_from_dict(SCENE), "lazy", seed=0, model=GeometricProposer()).recording
     assert rec.n_segments >= 3

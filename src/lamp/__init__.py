@@ -10,6 +10,7 @@ only by the modules that use them.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from importlib import metadata as _metadata
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -45,9 +46,11 @@ __getattr__ = lazy_getattr("lamp", _EXPORTS, globals())
 
 def solve(scene: Scene | str | Path, planner: PlannerName = "lazy", seed: int = 0, *,
           model: str | Path | Any = "learned", config: PlannerConfig | None = None,
-          render: bool = False, time_limit: float | None = None,
+          params: Mapping[str, Any] | None = None, time_limit: float | None = None,
+          max_segments: int | None = None,
           progress: ProgressCallback | None = None) -> RunResult:
-    """Plan and execute ``scene`` with ``planner``; ``result.to_dict()`` is result.json.
+    """Plan and execute ``scene`` with ``planner``; ``result.to_dict()`` is result.json and
+    ``result.recording`` the run's recording (every picture is drawn from it).
 
     Args:
         scene: a ``Scene``, the path of a scene file or a built-in suite scene by name
@@ -59,20 +62,30 @@ def solve(scene: Scene | str | Path, planner: PlannerName = "lazy", seed: int = 
         seed: random seed; the same scene, planner and seed give the same result.
         model: ``"learned"`` (the shipped checkpoint), ``"geometric"``, the path of a
             checkpoint written by ``lamp model train``, or a proposer object.
-        config: planner parameters (``lamp.planners.config.PlannerConfig``); default: the
-            planner's own (cumulative planning limit 300 s per object, 500 s for LAMP-A*).
-        render: also record animation frames (see ``lamp.planners.run.solve_with_frames``).
-        time_limit: cumulative planning limit per object in seconds (overrides ``config``).
+        config: all planner parameters (``lamp.planners.config.PlannerConfig``); default:
+            the planner's own (cumulative planning limit 300 s per object, 500 s for
+            LAMP-A*).
+        params: instead of ``config``, overrides of the planner's declared parameters by
+            name (``{"max_plan_iterations": 400}``; ``lamp run --planner P --help-params``
+            lists them).
+        time_limit: cumulative planning limit per object in seconds (overrides both).
+        max_segments: executed segments allowed per object (overrides both).
         progress: called with a ``lamp.progress.ProgressEvent`` as the run advances.
 
-    Raises ``ValueError`` for an unknown planner or model (``ModelError`` for a bad
-    checkpoint file), ``SceneError`` for a scene the model cannot serve (robots of another
-    radius). Numba compilation happens before the planning clock starts.
+    Raises ``InputError`` (a ``ValueError``) for an unknown planner, model or parameter
+    (``ModelError`` for a bad checkpoint file), ``SceneError`` for a scene the model cannot
+    serve (robots of another radius). Numba compilation happens before the planning clock
+    starts. See ``lamp.pipeline`` for the request and observers behind this call.
     """
-    from lamp.planners.run import solve as _solve
+    from lamp.errors import InputError
+    from lamp.pipeline import RunRequest, run
 
-    return _solve(scene, planner=planner, seed=seed, model=model, config=config, render=render,
-                  time_limit=time_limit, progress=progress)
+    if config is not None and params is not None:
+        raise InputError("solve: give config or params, not both")
+    request = RunRequest.build(scene, planner, seed, model=model,
+                               params=config if config is not None else params,
+                               planning_limit=time_limit, max_segments=max_segments)
+    return run(request, progress=progress)
 
 
 def load_recording(run_dir):

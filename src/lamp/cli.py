@@ -21,20 +21,20 @@ from lamp.cli_support import (
     check_writable_file,
     fail_input,
     image_format,
+    lamp_typer,
     print_summary,
     version_callback,
 )
 from lamp.errors import InputError
-from lamp.planners import registry
-from lamp.planners.config import PAPER_MAX_SEGMENTS, SEGMENTS_PER_METRE, planning_limit_help
+from lamp.pipeline import registry
+from lamp.pipeline.registry import planning_limit_help
+from lamp.planners.config import PAPER_MAX_SEGMENTS, SEGMENTS_PER_METRE
 from lamp.scene import SceneError
 
-app = typer.Typer(
+app = lamp_typer(
     help="LAMP: long-horizon multi-robot collaborative manipulation planning.",
     no_args_is_help=True,
     add_completion=True,
-    pretty_exceptions_enable=False,
-    context_settings={"help_option_names": ["-h", "--help"]},
 )
 
 PLANNER_HELP = "Planner: " + "; ".join(f"{s.name}: {s.description}" for s in registry.specs())
@@ -78,31 +78,27 @@ def show(
     typer.echo(f"wrote {out}")
 
 
-def _run_and_write(scene, planner: str, seed: int, out: Path, render: bool, model: str,
-                   planning_limit: float | None, progress: RunProgress,
-                   html: bool = False, max_segments: int | None = None) -> dict:
+def _run_and_write(request, out: Path, progress: RunProgress, render: bool = False,
+                   html: bool = False) -> dict:
+    """Run ``request`` (``lamp.pipeline.run``) and write its outputs into ``out``:
+    result.json last (it marks the folder complete), the recording, and the pictures asked
+    for, each drawn from the recording."""
     from lamp.io import write_json_atomic
-    from lamp.planners.run import solve_with_frames
+    from lamp.pipeline import run
     from lamp.record import save_recording
     from lamp.record.run_dir import GIF_NAME, HTML_NAME, RESULT_NAME, clear_stale
 
     if out.exists() and not out.is_dir():
         fail_input(f"--out: {out} exists and is not a folder")
     try:
-        from dataclasses import replace
-
-        from lamp.planners.run import default_config
-
-        config = replace(default_config(planner), max_segments=max_segments)
         with progress:
-            solution = solve_with_frames(scene, planner, seed, model=model, config=config,
-                                         time_limit=planning_limit, progress=progress)
-    except InputError as exc:  # e.g. robots the model was not trained for
-        fail_input(str(exc))
+            run_result = run(request, progress=progress)
+    except InputError:
+        raise  # bad input found late (a model file, say): exit 2
     except Exception as exc:  # an internal error: exit status 1 with a short message
         typer.echo(f"internal error: {type(exc).__name__}: {exc}", err=True)
         raise typer.Exit(code=1) from exc
-    result = solution.result.to_dict()
+    result = run_result.to_dict()
 
     def say(message: str) -> None:
         if not progress.quiet:
@@ -116,13 +112,13 @@ def _run_and_write(scene, planner: str, seed: int, out: Path, render: bool, mode
         if not progress.quiet:
             print_summary(result)
         # each file atomically, result.json last: it marks the folder complete
-        npz, index = save_recording(solution.recording, out)
+        npz, index = save_recording(run_result.recording, out)
         say(f"wrote {index} and {npz.name}")
         if writes:
             from lamp.viz.replay import render as render_recording
 
             for name in writes:
-                render_recording(solution.recording, out / name)
+                render_recording(run_result.recording, out / name)
                 say(f"wrote {out / name}")
         write_json_atomic(out / RESULT_NAME, result)
     except OSError as exc:  # checked before planning; the disk may still fill up
@@ -140,14 +136,50 @@ OUT_HELP = ("Output folder: result.json, recording.npz + recording.json (lamp-re
             "write them; other files stay.")
 
 
-def _check_run_options(planner: str, model: str, out: Path,
-                       planning_limit: float | None = None) -> str:
-    """Exit 2 for a bad planner, model, output folder or limit; returns the model value."""
+def _build_request(scene_file: Path | None, scene, planner: str, seed: int, model: str,
+                   out: Path, params: list[str] | None = None,
+                   planning_limit: float | None = None, max_segments: int | None = None):
+    """The run request of ``lamp run`` / ``lamp demo``, every input checked before anything
+    is planned or written (bad input: ``InputError``, exit 2)."""
+    from lamp.contract.params import parse_assignments
+    from lamp.pipeline import RunRequest
+
     check_choice("--planner", planner, registry.names(), "planner")
     if planning_limit is not None and not planning_limit > 0:
         fail_input(f"--planning-limit: must be positive, got {planning_limit:g}")
+    overrides = {}
+    for who, name, value in parse_assignments(params or ()):
+        if who != planner:
+            fail_input(f"--param {who}.{name}={value}: names planner {who!r}, but the run "
+                       f"uses --planner {planner}")
+        overrides[name] = value
     check_writable_dir(out)
-    return check_model_option(model)
+    model = check_model_option(model)
+    if scene is None:
+        scene = load_scene_or_exit(scene_file)
+    return RunRequest.build(scene, planner, seed, model=model, params=overrides,
+                            planning_limit=planning_limit, max_segments=max_segments)
+
+
+def _print_params(planner: str) -> None:
+    """``--help-params``: the planner's declared parameters with their values and rules."""
+    from rich.console import Console
+    from rich.table import Table
+
+    from lamp.contract.params import param_table
+
+    spec = registry.get(check_choice("--planner", planner, registry.names(), "planner"))
+    rows = param_table(spec.default_config(), spec.params)
+    table = Table(title=f"parameters of {spec.name} ({spec.label}): --param {spec.name}.NAME=VALUE")
+    for col in ("name", "default", "valid", "meaning"):
+        table.add_column(col)
+    for row in rows:
+        table.add_row(*row)
+    console = Console(highlight=False)
+    if rows:
+        console.print(table)
+    else:
+        console.print(f"{spec.name} declares no parameters", markup=False)
 
 
 def _quiet_verbose(quiet: bool, verbose: bool) -> RunProgress:
@@ -162,9 +194,13 @@ QUIET_HELP = "Print nothing but errors (result.json is still written)."
 VERBOSE_HELP = "Print a line per object and segment, even when the output is not a terminal."
 
 
+PARAM_HELP = ("Set one of the planner's parameters, PLANNER.NAME=VALUE (repeatable; "
+              "--help-params lists them), e.g. lazy.max_plan_iterations=400.")
+
+
 @app.command()
 def run(
-    scene_file: Path = typer.Argument(..., help="Scene file (YAML or JSON), or a built-in "
+    scene_file: Path = typer.Argument(None, help="Scene file (YAML or JSON), or a built-in "
                                       "scene by name (maze-07).", show_default=False),
     planner: str = typer.Option("lazy", "--planner", "-p", help=PLANNER_HELP),
     seed: int = typer.Option(0, "--seed", "-s", help="Random seed (same seed, same result)."),
@@ -181,6 +217,10 @@ def run(
     max_segments: int = typer.Option(None, "--max-segments", min=1,
                                      help="Executed segments allowed per object.",
                                      show_default=SEGMENT_LIMIT_HELP),
+    param: list[str] = typer.Option(None, "--param", help=PARAM_HELP, show_default=False),
+    help_params: bool = typer.Option(False, "--help-params", help="List the parameters of "
+                                     "--planner (name, default, valid values, meaning) and "
+                                     "exit."),
     check: bool = typer.Option(False, "--check", help="Exit with status 1 when the task "
                                "failed (for scripts and CI); default: 0 whenever the run "
                                "finished."),
@@ -188,18 +228,16 @@ def run(
     verbose: bool = typer.Option(False, "--verbose", "-v", help=VERBOSE_HELP),
 ) -> None:
     """Plan and execute one scene file in MuJoCo; write DIR/result.json and the recording."""
+    if help_params:
+        _print_params(planner)
+        return
+    if scene_file is None:
+        fail_input("SCENE_FILE: missing (a scene file or a built-in scene name)")
     progress = _quiet_verbose(quiet, verbose)
     limit = time_limit if time_limit is not None else planning_limit
-    model = _check_run_options(planner, model, out, limit)
-    scene = load_scene_or_exit(scene_file)
-    check_scene = registry.get(planner).check_scene
-    if check_scene is not None:
-        try:
-            check_scene(scene)
-        except ValueError as exc:
-            fail_input(str(exc))
-    result = _run_and_write(scene, planner, seed, out, render, model, limit, progress, html,
-                            max_segments)
+    request = _build_request(scene_file, None, planner, seed, model, out, param, limit,
+                             max_segments)
+    result = _run_and_write(request, out, progress, render, html)
     if check and not result["success"]:
         raise typer.Exit(code=1)
 
@@ -218,14 +256,14 @@ def demo(
     from lamp.demo import demo_scene
 
     progress = _quiet_verbose(quiet, verbose)
-    model = _check_run_options(planner, model, out)
-    _run_and_write(demo_scene(), planner, seed, out, True, model, None, progress, html=True)
+    request = _build_request(None, demo_scene(), planner, seed, model, out)
+    _run_and_write(request, out, progress, render=True, html=True)
 
 
 @app.command()
 def warmup() -> None:
     """Compile the Numba kernels now (cached on disk), so that no run pays for it later."""
-    from lamp.warmup import warm_up
+    from lamp.pipeline.warmup import warm_up
 
     progress = RunProgress(verbose=True)
     report = warm_up(progress)

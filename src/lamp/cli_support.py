@@ -1,8 +1,11 @@
-"""Helpers shared by the ``lamp`` commands: input checks that exit 2, run progress, summary.
+"""Helpers shared by the ``lamp`` commands: the exit-2 handler, input checks, run progress,
+summary.
 
-Every check here runs before any planning or writing, so that bad input costs nothing and
-leaves nothing half-written: it prints ``error: <what>: <why>`` on stderr and exits with
-status 2.
+Bad input is reported in one place: every command group is a :class:`LampGroup`, which
+turns a :class:`~lamp.errors.LampError` escaping any command (an ``InputError`` raised by
+the library, or :func:`fail_input` here) into ``error: <what>: <why>`` on stderr and exit
+status 2. The checks here run before any planning or writing, so that bad input costs
+nothing and leaves nothing half-written.
 """
 
 from __future__ import annotations
@@ -16,14 +19,35 @@ from pathlib import Path
 from typing import Any, NoReturn
 
 import typer
+from typer.core import TyperGroup
 
+from lamp.errors import InputError, LampError
 from lamp.progress import ProgressEvent
 
 
+class LampGroup(TyperGroup):
+    """A command group whose commands report a :class:`~lamp.errors.LampError` as
+    ``error: <message>`` on stderr with exit status 2 (the one exit-2 handler)."""
+
+    def invoke(self, ctx: Any) -> Any:
+        try:
+            return super().invoke(ctx)
+        except LampError as exc:
+            typer.echo(f"error: {exc}", err=True)
+            raise typer.Exit(code=2) from None
+
+
+def lamp_typer(**kwargs: Any) -> typer.Typer:
+    """A ``typer.Typer`` for a ``lamp`` command group (a :class:`LampGroup`, ``-h`` as
+    well as ``--help``, no pretty tracebacks)."""
+    kwargs.setdefault("context_settings", {"help_option_names": ["-h", "--help"]})
+    return typer.Typer(cls=LampGroup, pretty_exceptions_enable=False, **kwargs)
+
+
 def fail_input(message: str) -> NoReturn:
-    """Report bad input on stderr and exit with status 2."""
-    typer.echo(f"error: {message}", err=True)
-    raise typer.Exit(code=2)
+    """Report bad input: an ``InputError``, shown by :class:`LampGroup` as
+    ``error: <message>`` with exit status 2."""
+    raise InputError(message)
 
 
 def did_you_mean(value: str, choices: Iterable[str]) -> str:
@@ -42,7 +66,7 @@ def check_choice(option: str, value: str, choices: Sequence[str], what: str) -> 
 
 def check_model_option(value: str, option: str = "--model") -> str:
     """The canonical model value (name or absolute checkpoint path); exit 2 if unusable."""
-    from lamp.planners.models import ModelError, check_model
+    from lamp.manip.models import ModelError, check_model
 
     try:
         return check_model(value)

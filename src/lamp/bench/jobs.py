@@ -18,7 +18,7 @@ import fcntl
 import json
 import logging
 import os
-from collections.abc import Callable, Collection, Iterable, Sequence
+from collections.abc import Callable, Collection, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -34,7 +34,7 @@ RESULTS_FILE = "results.jsonl"
 def planning_limit_applies(planner: str) -> bool:
     """Whether ``--planning-limit`` sets ``planner``'s limit (``PlannerSpec.bench_limited``:
     the paper gives LAMP-A* a 500 s limit; the others stop after 100 execution iterations)."""
-    from lamp.planners import registry
+    from lamp.pipeline import registry
 
     return planner in registry.bench_limited()
 
@@ -73,6 +73,9 @@ class Job:
     render_to: str | None = None
     record: bool = True
     recording_to: str | None = None
+    #: Overrides of the planner's declared parameters (``--param PLANNER.NAME=VALUE``):
+    #: (name, value text) pairs for this job's planner.
+    params: tuple[tuple[str, str], ...] = ()
 
     @property
     def key(self) -> JobKey:
@@ -84,7 +87,7 @@ class Job:
 
     @property
     def time_limit(self) -> float | None:
-        """The ``time_limit`` argument for ``lamp.planners.run.solve``."""
+        """The planning limit of the run (``RunRequest.build(planning_limit=...)``)."""
         return self.planning_limit_s if planning_limit_applies(self.planner) else None
 
 
@@ -111,13 +114,15 @@ def enumerate_jobs(
     time_cap_s: float = 600.0,
     planning_limit_s: float | None = None,
     scale_cap_by_objects: bool = True,
+    params: Mapping[str, Sequence[tuple[str, str]]] | None = None,
 ) -> list[Job]:
     """All jobs in a deterministic order: suite, scene, seed, then planner.
 
     ``suites`` holds each suite's scenes in suite order (see :func:`load_suite`);
     ``scenes_per_suite`` keeps the first N of each. With ``scale_cap_by_objects`` a K-object scene gets a cap of
     ``K * time_cap_s`` (a single-object scene exactly ``time_cap_s``), so the 9-object IROS
-    job is not cut off by a per-object budget.
+    job is not cut off by a per-object budget. ``params`` maps a planner name to the
+    overrides of its parameters (``Job.params``).
     """
     if scenes_per_suite is not None and scenes_per_suite < 1:
         raise ValueError(f"scenes_per_suite must be >= 1 or None, got {scenes_per_suite!r}")
@@ -135,7 +140,8 @@ def enumerate_jobs(
                                     scene_file=entry.scene_file, scene=entry.scene,
                                     planner=planner, seed=int(seed), model=model,
                                     time_cap_s=float(cap), planning_limit_s=planning_limit_s,
-                                    max_segments=PAPER_MAX_SEGMENTS if entry.builtin else None))
+                                    max_segments=PAPER_MAX_SEGMENTS if entry.builtin else None,
+                                    params=tuple((params or {}).get(planner, ()))))
     keys = [j.key for j in jobs]
     if len(set(keys)) != len(keys):
         dup = next(k for k in keys if keys.count(k) > 1)

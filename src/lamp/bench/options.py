@@ -14,7 +14,7 @@ from typing import Any, NoReturn
 import typer
 
 from lamp.bench.runner import BACKENDS, DEFAULT_JOB_FN
-from lamp.planners import registry
+from lamp.pipeline import registry
 
 DEFAULT_SUITES = "random,maze,tilt,warehouse"
 #: Default cumulative planning limit per object for LAMP-A* (the paper: 500 s). The paper's
@@ -34,7 +34,7 @@ def fail(message: str) -> NoReturn:
 
 
 def known_planners() -> tuple[str, ...]:
-    """The registered planner names (``lamp.planners.registry``)."""
+    """The registered planner names (``lamp.pipeline.registry``)."""
     return registry.names()
 
 

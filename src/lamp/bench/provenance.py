@@ -21,7 +21,7 @@ from typing import Any
 
 from lamp.bench.jobs import planning_limit_applies
 from lamp.bench.runner import DEFAULT_JOB_FN
-from lamp.planners import registry
+from lamp.pipeline import registry
 
 CONFIG_FILE = "config.json"
 

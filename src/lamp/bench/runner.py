@@ -36,7 +36,7 @@ from lamp.bench.pool import JobOutcome, run_local
 
 log = logging.getLogger(__name__)
 
-#: The production job function: plan and execute with ``lamp.planners.run``.
+#: The production job function: plan and execute with ``lamp.pipeline.run``.
 DEFAULT_JOB_FN = "lamp.bench.runner:solve_job"
 
 BACKENDS = ("local", "ray")
@@ -53,22 +53,21 @@ def solve_job(job: Job) -> dict[str, Any]:
     log) and in the result's ``render_error`` (``recording_error``) key; it never costs the
     run's result.
     """
-    from dataclasses import replace
+    from lamp.pipeline import RunRequest, run
 
-    from lamp.planners.run import default_config, solve_with_frames
-
-    render = job.render_to is not None
-    config = replace(default_config(job.planner), max_segments=job.max_segments)
-    solution = solve_with_frames(job.scene, job.planner, job.seed, model=job.model,
-                                 config=config, render=render, time_limit=job.time_limit)
-    result = solution.result.to_dict()
-    if render:
+    request = RunRequest.build(job.scene, job.planner, job.seed, model=job.model,
+                               params=dict(job.params), planning_limit=job.time_limit,
+                               max_segments=job.max_segments)
+    result_obj = run(request)
+    recording = result_obj.recording
+    result = result_obj.to_dict()
+    if job.render_to is not None:  # drawn from the recording, as `lamp render` does
         target = Path(str(job.render_to))
         partial = target.with_name(f".{target.stem}.partial{target.suffix}")
         try:
-            from lamp.viz.animation import write_animation
+            from lamp.viz.replay import render
 
-            write_animation(job.scene, solution.frames, partial)
+            render(recording, partial)
             os.replace(partial, target)
         except Exception as exc:  # the run itself is still a valid result
             traceback.print_exc()
@@ -77,9 +76,7 @@ def solve_job(job: Job) -> dict[str, Any]:
         try:
             from lamp.record import save_recording
 
-            if solution.recording is None:
-                raise ValueError("the run returned no recording")
-            save_recording(solution.recording, job.recording_to)
+            save_recording(recording, job.recording_to)
         except Exception as exc:  # as for the animation: the result stands
             traceback.print_exc()
             result["recording_error"] = f"{type(exc).__name__}: {exc}"
@@ -91,12 +88,12 @@ def warm_up_solver() -> None:
 
     Called by each local worker process (see :mod:`lamp.bench.worker`), so neither a job's
     cap nor its wall time includes imports, cached-kernel loading or (on a fresh
-    installation) Numba compilation (:func:`lamp.warmup.ensure_warm`). Plans are
+    installation) Numba compilation (:func:`lamp.pipeline.warmup.ensure_warm`). Plans are
     deterministic per scene, planner and seed, so a job's result does not depend on
     whether this ran before it.
     """
-    from lamp.planners.run import load_proposer
-    from lamp.warmup import ensure_warm
+    from lamp.manip.models import load_proposer
+    from lamp.pipeline.warmup import ensure_warm
 
     ensure_warm()
     load_proposer("learned")

@@ -1,5 +1,5 @@
 """The numbers of the benchmark report, computed from ``DIR/results.jsonl`` alone: loading,
-the per-planner facts the report shows (from ``lamp.planners.registry``), and the pure table
+the per-planner facts the report shows (from ``lamp.pipeline.registry``), and the pure table
 functions (:func:`success_table`, :func:`full_horizon_table`,
 :func:`median_planning_time_table`, :func:`path_cost_comparison`, :func:`iros_summary` ...)
 that the tests check against hand-computed values. Definitions: :mod:`lamp.bench.report`.
@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from lamp.bench.jobs import RESULTS_FILE, JobKey, latest_by_key, read_records, record_key
-from lamp.planners import registry
+from lamp.pipeline import registry
 
 #: The paper's four map families, in its column order.
 FAMILY_ORDER = ("random", "maze", "tilt", "warehouse")
@@ -27,11 +27,11 @@ IROS_SUITE = "iros"
 REFERENCE_PLANNER = "lazy"
 
 # Per-planner facts (row order, labels, colours, markers, the paper's Table I and II
-# figures, which planners are LAMP's) come from ``lamp.planners.registry``. The paper's
+# figures, which planners are LAMP's) come from ``lamp.pipeline.registry``. The paper's
 # MAPush row counts MAPush's own criterion (:data:`MAPUSH_CRITERION`), every other row the
 # strict one.
 #: The MAPush baseline's own success criterion (paper, footnote to Sec. V-A), recorded per
-#: run as ``stats.mapush_success`` by ``lamp.planners.mapush``.
+#: run as ``stats.mapush_success`` by ``lamp.baselines.mapush``.
 MAPUSH_PLANNER = "mapush"
 MAPUSH_CRITERION = ("within 0.5 m of the goal position, orientation ignored, within 2 "
                     "simulated minutes")

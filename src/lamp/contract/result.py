@@ -44,7 +44,7 @@ class RunResult:
     (a failed final search, say). ``total_planning_time_s`` counts both: all planning.
     ``planning_time_per_segment_s`` is total planning time over executed segments, the
     figure of ``lamp bench``'s report (``lamp.bench.report.scenario_planning_time``).
-    Numba compilation is never planning time (``lamp.warmup``).
+    Numba compilation is never planning time (``lamp.pipeline.warmup``).
     """
 
     scene: str
@@ -57,6 +57,11 @@ class RunResult:
     wall_time_s: float = 0.0
     stats: dict[str, Any] = field(default_factory=dict)
     unexecuted_planning_time_s: float = 0.0
+    #: Simulated seconds from the first segment's start to the last one's end: the
+    #: recording's last time.
+    makespan_s: float = 0.0
+    #: The planner's declared parameters and their values (``PlannerSpec.params``).
+    params: dict[str, Any] = field(default_factory=dict)
     #: The run's ``lamp.record.Recording`` (set by ``lamp.solve``); not part of result.json.
     recording: Any = field(default=None, repr=False, compare=False)
 
@@ -113,7 +118,9 @@ class RunResult:
                 round(float(np.median(self.planning_time_s)), 6) if self.planning_time_s else None
             ),
             "makespan": int(self.makespan),
+            "makespan_s": round(float(self.makespan_s), 6),
             "replans": int(self.replans),
             "wall_time_s": round(float(self.wall_time_s), 3),
             "stats": self.stats,
+            "params": dict(self.params),
         }

@@ -12,7 +12,9 @@ from pathlib import Path
 
 import typer
 
-model_app = typer.Typer(
+from lamp.cli_support import fail_input, lamp_typer
+
+model_app = lamp_typer(
     help="The learned manipulation model: push data, training, evaluation.",
     no_args_is_help=True,
     add_completion=False,
@@ -43,8 +45,7 @@ def data_cmd(
     from lamp.manip.dataset import generate
 
     if attempts < 1 or workers < 1:
-        typer.echo("error: --attempts and --workers must be >= 1", err=True)
-        raise typer.Exit(code=2)
+        fail_input("--attempts and --workers must be >= 1")
     ds = generate(attempts, seed=seed, workers=workers, accept_translation=accept_translation,
                   accept_rotation=accept_rotation)
     ds.save(out)
@@ -79,8 +80,7 @@ def train_cmd(
     from lamp.manip.train import TrainConfig, train
 
     if not data.is_file():
-        typer.echo(f"error: no dataset at {data} (run `lamp model data` first)", err=True)
-        raise typer.Exit(code=2)
+        fail_input(f"no dataset at {data} (run `lamp model data` first)")
     ds = PushDataset.load(data)
     summary = train(ds, run_dir, TrainConfig(epochs=epochs, seed=seed, threads=threads),
                     max_minutes=max_minutes)

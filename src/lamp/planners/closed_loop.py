@@ -20,6 +20,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from lamp.contract.events import TRACE_EVERY, SegmentEvent
 from lamp.contract.goals import (
     SUCCESS_ORIENTATION_TOL,
     SUCCESS_POSITION_TOL,
@@ -29,6 +30,7 @@ from lamp.contract.goals import (
 from lamp.contract.plan import LoopPolicy, ObjectPlanner
 from lamp.contract.result import ObjectResult
 from lamp.contract.robots import robots_match
+from lamp.contract.runner import Execution, Executor
 from lamp.contract.trajectory import concat, straight_moves
 from lamp.contract.transition import Transition
 from lamp.geometry.se2 import pose_distance
@@ -50,43 +52,11 @@ class LoopRecord:
     unexecuted_planning_s: float = 0.0
     #: Pushes the watch stopped early (``lamp.planners.watch``).
     watch_stops: int = 0
-    frames: list[Any] = field(default_factory=list)
-
-
-@dataclass(frozen=True)
-class SegmentEvent:
-    """One executed segment, as handed to ``run_object``'s ``observer`` right after it ran.
-
-    ``execution`` is the simulator's result, with a ``trace`` sampled every
-    ``RENDER_EVERY`` physics steps (its row 0 is the state before the segment);
-    ``transition`` the (robot-adapted) transition that was executed; ``plan`` the plan in
-    force (``object_path``, ``verified_edges``, ``penalised_edges``) or None;
-    ``planning_time_s`` the planning time charged to this segment; ``replanned`` whether a
-    plan call preceded it; ``drift`` the (position, orientation) miss of the reached pose
-    against ``transition.q_to``; ``outcome`` what the loop did next: ``"continue"``,
-    ``"drift"`` (replan), ``"stalled"`` (push reported failed, replan) or ``"left"``.
-    """
-
-    object_index: int
-    segment: int
-    transition: Transition
-    execution: Any
-    plan: Any
-    planning_time_s: float
-    replanned: bool
-    drift: tuple[float, float]
-    outcome: str
-    #: Replans of this object so far (the first plan is not a replan).
-    replans: int = 0
 
 
 #: Robot start positions that differ from a transition's by less than this are joined
 #: with a short straight move; larger differences re-route the robots (Alg. 2 l. 27-33).
 ROBOT_SNAP = 0.01
-
-#: Physics steps between recorded animation frames when rendering.
-RENDER_EVERY = 40
-
 
 class Reroute(Protocol):
     """New approach paths for a verified push from robots at ``q_R`` (None: unreachable);
@@ -117,36 +87,6 @@ def _stalled(q_before: np.ndarray, q_after: np.ndarray, trans: Transition) -> bo
     want_t, want_r = pose_distance(trans.q_from, trans.q_to)
     got_t, got_r = pose_distance(q_before, q_after)
     return bool(got_t < STALL_FRACTION * want_t + 1e-3 and got_r < STALL_FRACTION * want_r + 2e-3)
-
-
-class Execution(Protocol):
-    """What an executor reports after one segment (``lamp.sim.ExecutionResult`` is one)."""
-
-    object_poses: np.ndarray  # (K, 3) every object's pose after the segment
-    robot_positions: np.ndarray  # (N, 2)
-    left_workspace: bool  # an object left the map during the segment
-    trace: Any  # frames sampled every ``record_every`` physics steps, or None
-
-
-class Executor(Protocol):
-    """Runs synchronised robot paths and reports the state they led to (``lamp.sim.Simulator``)."""
-
-    @property
-    def object_poses(self) -> np.ndarray:
-        """(K, 3) the objects' poses now."""
-        ...
-
-    @property
-    def robot_positions(self) -> np.ndarray:
-        """(N, 2) the robots' centres now."""
-        ...
-
-    def execute(self, robot_paths: np.ndarray, record_every: int | None = None,
-                stop: Callable[[np.ndarray], bool] | None = None) -> Execution:
-        """Drive the robots along ``robot_paths`` (N, T, 2) and report the outcome; ``stop``
-        (given the (K, 3) object poses now and then) may end the paths early, the robots
-        then holding where they are (``Simulator.execute``)."""
-        ...
 
 
 @dataclass
@@ -186,9 +126,8 @@ class ClosedLoop:
 
     def __init__(self, planner: ObjectPlanner, policy: LoopPolicy, executor: Executor, *,
                  index: int, goal: np.ndarray, config: PlannerConfig, reroute: Reroute,
-                 record: LoopRecord | None = None, time_limit: float | None = None,
+                 record: LoopRecord | None = None,
                  observer: Callable[[SegmentEvent], None] | None = None,
-                 frames: Callable[[Execution, Any], list[Any]] | None = None,
                  clearance: Callable[[np.ndarray], float] | None = None,
                  reach: float = 0.0) -> None:
         self.planner = planner
@@ -203,9 +142,8 @@ class ClosedLoop:
         self.config = config
         self.reroute = reroute
         self.record = LoopRecord() if record is None else record
-        self.limit = config.planning_time_limit if time_limit is None else time_limit
+        self.limit = config.planning_time_limit
         self.observer = observer
-        self.frames = frames
 
     def run(self) -> ObjectResult:
         """Move the object to its goal; the :class:`ObjectResult` of the attempt."""
@@ -285,8 +223,7 @@ class ClosedLoop:
                                    cfg.long_push_length)
             adapted = merge(chain)
         paths = adapted.robot_paths
-        traced = self.frames is not None or self.observer is not None
-        out = self.executor.execute(paths, record_every=RENDER_EVERY if traced else None,
+        out = self.executor.execute(paths, record_every=TRACE_EVERY if self.observer else None,
                                     stop=self._watch(chain))
         st.iterations += 1
         st.segments += 1
@@ -317,8 +254,6 @@ class ClosedLoop:
         q_before = st.q_O
         st.q_O = np.asarray(out.object_poses[self.index], float)
         st.q_R = np.asarray(out.robot_positions, float)
-        if self.frames is not None:
-            self.record.frames.extend(self.frames(out, st.plan))
         dpos, drot = pose_distance(st.q_O, adapted.q_to)
         cfg, policy = self.config, self.policy
         # the limits of the tighter of the pose reached and the next one planned (a push
@@ -401,7 +336,7 @@ def drift_limits(cfg: PlannerConfig, clearance: float | None, reach: float
 
 
 def run_object(task: ManipulationTask, planner: ObjectPlanner, policy: LoopPolicy, sim: Executor,
-               record: LoopRecord, render: bool = False, time_limit: float | None = None,
+               record: LoopRecord,
                observer: Callable[[SegmentEvent], None] | None = None) -> ObjectResult:
     """Move ``task``'s object to its goal in ``sim`` with ``planner`` (Alg. 2 lines 2-7):
     a :class:`ClosedLoop` with the task's goal, config and ``Verifier.reroute``.
@@ -409,27 +344,8 @@ def run_object(task: ManipulationTask, planner: ObjectPlanner, policy: LoopPolic
     ``observer``, when given, is called with a :class:`SegmentEvent` after every executed
     segment (in order); it only watches, the run is the same with or without it.
     """
-    frames = (lambda out, plan: _frames(task, out, plan)) if render else None
     exact = task.exact_space
     loop = ClosedLoop(planner, policy, sim, index=task.index, goal=task.goal, config=task.config,
-                      reroute=task.verifier.reroute, record=record, time_limit=time_limit,
-                      observer=observer, frames=frames, clearance=exact.clearance,
-                      reach=exact.reach)
+                      reroute=task.verifier.reroute, record=record, observer=observer,
+                      clearance=exact.clearance, reach=exact.reach)
     return loop.run()
-
-
-def _frames(task: ManipulationTask, out, plan_obj) -> list[Any]:
-    from lamp.viz.animation import Frame
-
-    trace = getattr(out, "trace", None)
-    if trace is None:
-        return []
-    path = plan_obj.object_path if plan_obj is not None else None
-    verified = plan_obj.verified_edges if plan_obj is not None else []
-    penalised = plan_obj.penalised_edges if plan_obj is not None else []
-    frames = []
-    for robots, objects in zip(trace.robot_positions, trace.object_poses, strict=False):
-        frames.append(Frame(robot_positions=robots, object_poses=objects, active_object=task.index,
-                            planned_path=path, verified_edges=verified, penalised_edges=penalised,
-                            caption=f"object {task.index + 1}/{len(task.scene.objects)}"))
-    return frames

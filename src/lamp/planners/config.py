@@ -1,45 +1,21 @@
-"""Tunable parameters of the LAMP planners and the closed loop, with their defaults."""
+"""Tunable parameters of the LAMP planners and the closed loop, declared with their defaults,
+documentation and valid ranges (``lamp.contract.params``)."""
 
 from __future__ import annotations
 
 import math
 import sys
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import Literal
+
+from lamp.contract.params import check_fields, param
 
 #: The names of the built-in planners (``lamp run --planner``, ``lamp.solve``); the
-#: registry (``lamp.planners.registry``) holds what each one is.
+#: registry (``lamp.pipeline.registry``) holds what each one is.
 PlannerName = Literal["lazy", "astar", "astar-replan", "gco-ori", "gco-var", "mapush"]
 #: Cumulative planning limit per object (s) of a planner that does not set its own
 #: (``PlannerSpec.planning_limit``; LAMP-A* keeps the paper's 500 s).
 DEFAULT_PLANNING_LIMIT = 300.0
-
-
-def __getattr__(name: str) -> Any:
-    if name == "PLANNER_DESCRIPTIONS":  # name -> description, read from the registry
-        from lamp.planners import registry
-
-        return {s.name: s.description for s in registry.specs()}
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def default_planning_limit(planner: str) -> float:
-    """The cumulative planning limit per object that ``planner`` runs under by default."""
-    from lamp.planners import registry
-
-    return registry.get(planner).planning_limit
-
-
-def planning_limit_help() -> str:
-    """The per-planner defaults in words, e.g. ``300 s; 500 s for astar, astar-replan``."""
-    from lamp.planners import registry
-
-    by_value: dict[float, list[str]] = {}
-    for spec in registry.specs():
-        if spec.planning_limit != DEFAULT_PLANNING_LIMIT:
-            by_value.setdefault(spec.planning_limit, []).append(spec.name)
-    return f"{DEFAULT_PLANNING_LIMIT:g} s" + "".join(
-        f"; {v:g} s for {', '.join(names)}" for v, names in by_value.items())
 
 
 #: LAMP-A*'s default expansion budget per second of planning limit. It expands 9-12
@@ -70,88 +46,86 @@ def segment_limit(max_segments: int | None, distance: float) -> int:
 
 @dataclass(frozen=True)
 class PlannerConfig:
-    """Parameters shared by LAMP-Lazy, LAMP-A* and the GCo baselines."""
+    """The parameters of LAMP-Lazy, LAMP-A*, the GCo baselines and the closed loop, each
+    declared with its documentation and valid range (``lamp.contract.params``; validated on
+    construction). Which planner reads which is declared in the planner registry
+    (``PlannerSpec.params``; the groups below): ``lamp run --planner P --help-params``
+    lists them, ``--param P.NAME=VALUE`` sets them."""
 
-    #: Candidates drawn from the manipulation model per call (K in Alg. 1 line 20).
-    k: int = 16
-    #: Largest robot budget tried by Verify (budgets run from min(N, this) down to 1).
-    max_budget: int = 3
-    #: Candidates per budget that are handed to Gspi before trying a smaller budget.
-    gspi_attempts_per_budget: int = 3
-    #: Wall-clock cap of one Gspi call inside Verify (seconds): an outer cap only. Gspi
-    #: stops on counts first (its step budget and stall count, ``lamp.mrmp.plan_paths``),
-    #: so the result does not depend on the machine's load; the cap fires only on a
-    #: machine some 10x slower than the one this was tuned on (``TaskStats.gspi_timeouts``
-    #: counts the calls it ended).
-    gspi_time_limit: float = 10.0
-    #: Execution drift that triggers replanning (Alg. 2 line 6): metres / radians.
-    drift_position: float = 0.05
-    drift_orientation: float = 0.1
-    #: The closed loop stops pushing once the object is this close to its goal
-    #: (tighter than the success tolerance of 0.1 m / 0.1 rad, to keep a margin).
-    stop_position: float = 0.05
-    stop_orientation: float = 0.07
-    #: At most this many executed segments per object; None scales the limit with the task
-    #: (``segment_limit``), the paper benchmark sets ``PAPER_MAX_SEGMENTS``.
-    max_segments: int | None = None
+    k: int = param(16, "Candidates drawn per call: "
+                   "K of the manipulation model in Alg. 1 line 20.", low=1)
+    max_budget: int = param(3, "Largest robot budget tried by Verify (budgets run from "
+                            "min(N, this) down to 1).", low=1)
+    gspi_attempts_per_budget: int = param(3, "Candidates per budget handed to Gspi before a "
+                                          "smaller budget is tried.", low=1)
+    #: An outer cap only: Gspi stops on counts first (its step budget and stall count,
+    #: ``lamp.mrmp.plan_paths``), so the result does not depend on the machine's load; the
+    #: cap fires only on a machine some 10x slower than the one this was tuned on
+    #: (``TaskStats.gspi_timeouts`` counts the calls it ended).
+    gspi_time_limit: float = param(10.0, "Wall-clock cap of one Gspi call inside Verify (s), "
+                                   "an outer cap only.", low=0.0, low_open=True, unbounded=True)
+    drift_position: float = param(0.05, "Position drift that triggers replanning (m): "
+                                  "Drift in Alg. 2 line 6.", low=0.0, low_open=True)
+    drift_orientation: float = param(0.1, "Execution drift that triggers replanning, "
+                                     "orientation (rad).", low=0.0, low_open=True)
+    #: Tighter than the success tolerance of 0.1 m / 0.1 rad, to keep a margin.
+    stop_position: float = param(0.05, "The loop stops pushing this close to the goal (m).",
+                                 low=0.0, low_open=True)
+    stop_orientation: float = param(0.07, "The loop stops pushing this close to the goal "
+                                    "heading (rad).", low=0.0, low_open=True)
+    max_segments: int | None = param(None, "Executed segments allowed per object; none "
+                                     "scales the limit with the task (segment_limit); the "
+                                     "paper benchmark sets 100.", kind=int, low=1,
+                                     optional=True)
     #: Long pushes (``lamp.planners.long_push``): consecutive transitions whose approach
     #: moves no robot more than ``continuous_push_gap`` (m) execute as one segment, up to
     #: ``long_push_length`` m of planned object motion; 0 executes every transition alone.
-    long_push_length: float = 1.0
-    continuous_push_gap: float = 0.02
-    #: Object lattice: translation step (m) and heading bins.
-    lattice_step: float = 0.1
-    n_headings: int = 16
-    #: Cost added to an edge whose verification failed (Alg. 2 lines 18 and 31, UpdateChange).
-    edge_penalty: float = 10.0
-    #: Penalty added to a re-inserted LAMP-A* state (Alg. 1 line 16, Open.re-add): the paper's 1e4.
-    astar_reinsert_penalty: float = 1e4
-    #: Weight on LAMP-A*'s heuristic (weighted A*; the paper's plain A* is 1). Edge costs
-    #: are robot travel, pushes plus repositioning, about 3-7x the object's travel that
-    #: the heuristic measures, so at weight 1 the search fills long f-plateaus of robot
-    #: states; 4 keeps it directed (within 4x of optimal, were states not capped). On 18 suite
-    #: scenes (first 6 Random, 4 each of the others), 20 s limit, capped: weight 4 planned
-    #: 17 of 18; weight 2 (uncapped) 3 of the 6 Random.
-    astar_heuristic_weight: float = 4.0
-    #: Most robot configurations LAMP-A* keeps per object node (None: unbounded, as in
-    #: the paper). Robot positions are continuous, so without a cap every lattice node in
-    #: a dead end holds dozens of states that must all be expanded before the search
-    #: backs out; 2 keeps two ways of standing around each object pose.
-    astar_states_per_node: int | None = 2
-    #: Most states LAMP-A* expands per object, over all its ``plan`` calls
-    #: (``BUDGET_EXHAUSTED``): the deterministic limit of the search, of which the
-    #: cumulative planning time limit is only the outer cap. None: ``ASTAR_EXPANSION_RATE``
-    #: per second of ``planning_time_limit`` (4000 for the paper's 500 s).
-    astar_max_expansions: int | None = None
-    #: Cumulative planning limit per object (s): the paper's 500 s for LAMP-A*. Wall
-    #: clock, so an outer cap: the counts (plan iterations, Verify calls, expansions)
+    long_push_length: float = param(1.0, "Planned object motion executed as one long push "
+                                    "at most (m); 0: every transition alone.", low=0.0)
+    continuous_push_gap: float = param(0.02, "Approach moves up to this (m) continue a long "
+                                       "push.", low=0.0)
+    lattice_step: float = param(0.1, "Object lattice translation step (m).", low=0.0,
+                                low_open=True)
+    n_headings: int = param(16, "Object lattice heading bins.", low=1)
+    edge_penalty: float = param(10.0, "Cost added to an edge whose verification failed: "
+                                "UpdateChange in Alg. 2 lines 18 and 31.", low=0.0)
+    astar_reinsert_penalty: float = param(1e4, "Penalty of a LAMP-A* state put back in Open: "
+                                          "Open.re-add in Alg. 1 line 16 (the paper's 1e4).",
+                                          low=0.0)
+    #: Edge costs are robot travel, pushes plus repositioning, about 3-7x the object's
+    #: travel that the heuristic measures, so at weight 1 the search fills long
+    #: f-plateaus of robot states; 4 keeps it directed (within 4x of optimal, were states
+    #: not capped). On 18 suite scenes (first 6 Random, 4 each of the others), 20 s
+    #: limit, capped: weight 4 planned 17 of 18; weight 2 (uncapped) 3 of the 6 Random.
+    astar_heuristic_weight: float = param(4.0, "Weight on LAMP-A*'s heuristic (weighted A*; "
+                                          "the paper's plain A* is 1).", low=1.0)
+    #: Robot positions are continuous, so without a cap every lattice node in a dead end
+    #: holds dozens of states that must all be expanded before the search backs out; 2
+    #: keeps two ways of standing around each object pose.
+    astar_states_per_node: int | None = param(2, "Most robot configurations LAMP-A* keeps "
+                                              "per object node (none: unbounded, as in the "
+                                              "paper).", low=1, optional=True)
+    astar_max_expansions: int | None = param(None, "Most states LAMP-A* expands per object, "
+                                             "over all its plan calls; none: "
+                                             "ASTAR_EXPANSION_RATE per second of "
+                                             "planning_time_limit.", kind=int, low=1,
+                                             optional=True)
+    #: Wall clock, so an outer cap: the counts (plan iterations, Verify calls, expansions)
     #: end a search first on an unloaded machine.
-    planning_time_limit: float = 500.0
-    #: Robot configurations closer than this (m, per robot) count as the same (D_T keys).
-    robot_match_tolerance: float = 0.05
-    #: How far inside the nominal contact distance a contact may lie (m).
-    contact_tolerance: float = 0.006
-    #: Largest number of D* Lite replans inside one Plan call before giving up.
-    max_plan_iterations: int = 400
-    #: Most Verify calls in one LAMP-Lazy Plan call (``BUDGET_EXHAUSTED``).
-    max_verify_calls: int = 4000
+    planning_time_limit: float = param(500.0, "Cumulative planning limit per object (s), an "
+                                       "outer cap (the paper's 500 s for LAMP-A*).",
+                                       low=0.0, low_open=True, unbounded=True)
+    robot_match_tolerance: float = param(0.05, "Robot configurations closer than this (m, "
+                                         "per robot) count as the same (D_T keys).",
+                                         low=0.0, low_open=True)
+    contact_tolerance: float = param(0.006, "How far inside the nominal contact distance a "
+                                     "contact may lie (m).", low=0.0)
+    max_plan_iterations: int = param(400, "Most D* Lite replans inside one LAMP-Lazy Plan "
+                                     "call.", low=1)
+    max_verify_calls: int = param(4000, "Most Verify calls in one LAMP-Lazy Plan call.", low=1)
 
     def __post_init__(self) -> None:
-        for name in ("max_plan_iterations", "max_verify_calls", "astar_max_expansions",
-                     "max_segments"):
-            value = getattr(self, name)
-            if value is None and name in ("astar_max_expansions", "max_segments"):
-                continue
-            if not (isinstance(value, int) and not isinstance(value, bool) and value >= 1):
-                raise ValueError(f"PlannerConfig.{name}: a positive integer, got {value!r}")
-        for name in ("gspi_time_limit", "planning_time_limit"):
-            value = getattr(self, name)
-            if not (isinstance(value, int | float) and value > 0):
-                raise ValueError(f"PlannerConfig.{name}: positive seconds, got {value!r}")
-        for name in ("long_push_length", "continuous_push_gap"):
-            value = getattr(self, name)
-            if not (isinstance(value, int | float) and math.isfinite(value) and value >= 0):
-                raise ValueError(f"PlannerConfig.{name}: a length >= 0 m, got {value!r}")
+        check_fields(self)
 
     @property
     def astar_expansions(self) -> int:
@@ -161,3 +135,15 @@ class PlannerConfig:
         if not math.isfinite(self.planning_time_limit):
             return sys.maxsize
         return max(1, round(ASTAR_EXPANSION_RATE * self.planning_time_limit))
+
+
+#: Which parameters each consumer reads; a planner declares the union of its groups
+#: (``PlannerSpec.params``).
+LOOP_PARAMS = ("planning_time_limit", "max_segments", "drift_position", "drift_orientation",
+               "stop_position", "stop_orientation", "long_push_length", "continuous_push_gap")
+VERIFY_PARAMS = ("k", "max_budget", "gspi_attempts_per_budget", "gspi_time_limit",
+                 "contact_tolerance")
+LATTICE_PARAMS = ("lattice_step", "n_headings", "robot_match_tolerance")
+LAZY_PARAMS = ("edge_penalty", "max_plan_iterations", "max_verify_calls")
+ASTAR_PARAMS = ("astar_reinsert_penalty", "astar_heuristic_weight", "astar_states_per_node",
+                "astar_max_expansions")

@@ -36,7 +36,9 @@ def _edges(edges: Any) -> np.ndarray:
 
 
 class Recorder:
-    """Collects executed segments of one run (call it with each ``SegmentEvent``)."""
+    """Collects executed segments of one run: a ``lamp.contract.events.RunObserver`` (or
+    call it with each ``SegmentEvent``). ``sim_time_s`` is the simulated time recorded so
+    far: the run's makespan in seconds once it is finished."""
 
     def __init__(self, scene: Scene, row_dt_s: float) -> None:
         self.scene = scene
@@ -83,6 +85,20 @@ class Recorder:
             raise ValueError(f"Recorder: pushes_local has shape {pushes.shape}, expected "
                              f"({len(contacts)}, H, 2), one push per contact")
         self._pushes.extend(transform_points(np.asarray(trans.q_from, float), pushes))
+
+    def segment(self, event: Any) -> None:
+        self(event)
+
+    def object_started(self, index: int, n_objects: int) -> None:
+        pass
+
+    def object_finished(self, index: int, n_objects: int, result: Any) -> None:
+        pass
+
+    @property
+    def sim_time_s(self) -> float:
+        """Simulated seconds recorded so far (the last time of the recording)."""
+        return float(self._clock)
 
     def _plan_index(self, event: Any) -> int:
         plan = event.plan

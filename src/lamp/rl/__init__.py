@@ -2,6 +2,6 @@
 
 ``lamp.rl.train`` trains it with PPO (stable-baselines3) on ``lamp/Push-v0`` over
 randomised episodes on the benchmark maps; ``lamp.rl.policy`` stores and runs it (weights
-read with ``weights_only=True``). The planner ``mapush`` (``lamp.planners.mapush``) drives it
+read with ``weights_only=True``). The planner ``mapush`` (``lamp.baselines.mapush``) drives it
 with subgoals along an obstacle-aware object path.
 """

@@ -11,7 +11,9 @@ from pathlib import Path
 
 import typer
 
-rl_app = typer.Typer(
+from lamp.cli_support import lamp_typer
+
+rl_app = lamp_typer(
     help="The MAPush-style baseline's pushing policy (PPO on lamp/Push-v0).",
     no_args_is_help=True,
     add_completion=False,
@@ -28,7 +30,7 @@ def train_cmd(
     threads: int = typer.Option(1, help="Torch threads."),
 ) -> None:
     """Train with PPO; write OUT/policy.pt, OUT/policy.json, OUT/curve.json, OUT/curve.png."""
-    from lamp.cli import fail_input
+    from lamp.cli_support import fail_input
 
     for var in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS"):
         os.environ.setdefault(var, str(threads))

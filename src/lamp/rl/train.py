@@ -1,6 +1,6 @@
 """Training the mid-level pushing policy with PPO (stable-baselines3) on ``lamp/Push-v0``.
 
-The mid-level task is what the MAPush-style high level asks of it (``lamp.planners.mapush``):
+The mid-level task is what the MAPush-style high level asks of it (``lamp.baselines.mapush``):
 push the object to a subgoal ``SUBGOAL_AHEAD`` metres further along its obstacle-aware
 object path, within ``SUBGOAL_TOLERANCE`` (orientation ignored), in ``SUBGOAL_TIME``
 simulated seconds. Every episode is randomised (``SubgoalSampler``): a benchmark map

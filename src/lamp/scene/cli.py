@@ -10,6 +10,7 @@ from pathlib import Path
 
 import typer
 
+from lamp.cli_support import fail_input
 from lamp.scene.loader import SceneError, load_scene
 from lamp.scene.model import Scene
 from lamp.scene.save import SCENE_SUFFIXES
@@ -47,24 +48,21 @@ def validate_command(
     """Load and check scene files: a line per file and a count; exit 2 if any is invalid."""
     radius = None
     if model != "any":
-        from lamp.planners.models import ModelError, model_robot_radius
+        from lamp.manip.models import ModelError, model_robot_radius
 
         try:
             radius = model_robot_radius(model)
         except ModelError as exc:
-            typer.echo(f"error: --model: {exc}", err=True)
-            raise typer.Exit(code=2) from None
+            fail_input(f"--model: {exc}")
     files = _expand(scene_files)
     if not files:
-        typer.echo("error: no scene files found in " + ", ".join(map(str, scene_files)),
-                   err=True)
-        raise typer.Exit(code=2)
+        fail_input("no scene files found in " + ", ".join(map(str, scene_files)))
     bad = 0
     for path in files:
         try:
             scene = load_scene(path)
             if radius is not None:
-                from lamp.planners.run import check_robot_radius
+                from lamp.manip.models import check_robot_radius
 
                 check_robot_radius(scene, radius)
         except SceneError as exc:

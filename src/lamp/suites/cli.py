@@ -6,9 +6,10 @@ from pathlib import Path
 
 import typer
 
+from lamp.cli_support import fail_input, lamp_typer
 from lamp.suites.registry import SUITES, export_suite, suite_files
 
-suite_app = typer.Typer(help="Built-in benchmark suites.", no_args_is_help=True)
+suite_app = lamp_typer(help="Built-in benchmark suites.", no_args_is_help=True)
 
 
 @suite_app.command("list")
@@ -32,12 +33,10 @@ def export_command(
     if name not in SUITES:
         from lamp.cli_support import did_you_mean
 
-        typer.echo(f"error: unknown suite {name!r}; valid names: {', '.join(SUITES)}"
-                   + did_you_mean(name, SUITES), err=True)
-        raise typer.Exit(code=2)
+        fail_input(f"unknown suite {name!r}; valid names: {', '.join(SUITES)}"
+                   + did_you_mean(name, SUITES))
     try:
         written = export_suite(name, directory)
     except OSError as exc:
-        typer.echo(f"error: cannot write to {directory}: {exc.strerror or exc}", err=True)
-        raise typer.Exit(code=2) from None
+        fail_input(f"cannot write to {directory}: {exc.strerror or exc}")
     typer.echo(f"wrote {len(written) - 1} scene file(s) and manifest.json to {directory}")

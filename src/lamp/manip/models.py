@@ -19,6 +19,8 @@ from pathlib import Path
 from typing import Any
 
 from lamp.errors import InputError
+from lamp.scene.errors import SceneError
+from lamp.scene.model import Scene
 
 #: The model names; anything else is read as a checkpoint path.
 MODEL_NAMES = ("learned", "geometric")
@@ -103,3 +105,23 @@ def model_robot_radius(model: str | Path | Any = "learned") -> float | None:
         return float(meta.get("data_meta", {}).get("robot_radius", ROBOT_RADIUS))
     want = getattr(load_proposer(model), "robot_radius", None)
     return None if want is None else float(want)
+
+
+def check_robot_radius(scene: Scene, proposer: Any) -> None:
+    """Refuse a scene whose robots the manipulation model does not make contacts for
+    (``proposer``: the model, or the radius it serves; None serves any).
+
+    The model's contacts sit ``robot_radius`` (plus a gap) off the object, so robots of
+    another size would fail every ``Collide`` check or touch the object before the push:
+    a :class:`~lamp.scene.SceneError` naming ``robots.radius`` instead of a run that
+    silently finds nothing.
+    """
+    want = (proposer if isinstance(proposer, (int, float)) or proposer is None
+            else getattr(proposer, "robot_radius", None))
+    if want is not None and abs(float(scene.robot_radius) - float(want)) > 1e-9:
+        where = scene.source or scene.name
+        reason = (f"the manipulation model makes contacts for robots of radius "
+                  f"{float(want):g} m, got {float(scene.robot_radius):g}; use robots of radius "
+                  f"{float(want):g} m (or train a model for yours: lamp model data/train)")
+        raise SceneError(f"{where}: robots.radius: {reason}", path=scene.source,
+                         field="robots.radius", reason=reason)

@@ -1,15 +1,16 @@
 """The planner registry: one :class:`PlannerSpec` per planner name.
 
 Everything that depends on which planners exist reads it: ``lamp.solve`` and ``lamp run``
-(names, factories, loop policies, default limits), ``lamp bench`` (names, which planners
-``--planning-limit`` applies to) and the bench report (row order, labels, colours,
+(names, factories, loop policies, parameters, default limits), ``lamp bench`` (names, which
+planners ``--planning-limit`` applies to) and the bench report (row order, labels, colours,
 markers, the paper's Table I and II figures). Adding a planner is one :func:`register`
 call; :func:`unregister` takes it away again.
 
 A planner is either closed-loop (a ``factory`` that builds an
 :class:`~lamp.contract.plan.ObjectPlanner` per object, driven by
-``lamp.planners.closed_loop.run_object`` under its ``policy``) or a whole-scene runner
-(``runner``) that plans and executes a scene by itself (``mapush``).
+``lamp.planners.closed_loop.run_object`` under its ``policy``) or has its own object
+runner (``runner``: builds a :class:`~lamp.contract.runner.ObjectRunner` for a scene, as
+``mapush`` does). Either way the run pipeline (``lamp.pipeline``) schedules the objects.
 
 This module imports no planner: factories and runners import their module when called,
 so reading the registry (the CLI's help, the report) stays cheap.
@@ -22,20 +23,26 @@ import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import TYPE_CHECKING, Protocol
 
 from lamp.contract.plan import LoopPolicy, ObjectPlanner
 from lamp.errors import InputError
-from lamp.planners.config import DEFAULT_PLANNING_LIMIT
+from lamp.planners.config import (
+    ASTAR_PARAMS,
+    DEFAULT_PLANNING_LIMIT,
+    LATTICE_PARAMS,
+    LAZY_PARAMS,
+    LOOP_PARAMS,
+    VERIFY_PARAMS,
+    PlannerConfig,
+)
 
 if TYPE_CHECKING:
-    from lamp.planners.config import PlannerConfig
-    from lamp.planners.run import Solution
+    from lamp.contract.runner import ObjectRunner
     from lamp.planners.task import ManipulationTask
-    from lamp.progress import ProgressCallback
     from lamp.scene.model import Scene
 
-__all__ = ["PlannerSpec", "SceneRunner", "get", "names", "register", "specs", "unregister"]
+__all__ = ["PlannerSpec", "RunnerFactory", "get", "names", "register", "specs", "unregister"]
 
 #: Colour of a planner in the bench figures when it does not set its own.
 DEFAULT_COLOR = "#7f7f7f"
@@ -47,12 +54,11 @@ MARKER_CODES = frozenset(("o", "s", "^", "v", "<", ">", "D", "d", "p", "h", "H",
                           "X", "8", "x", "+"))
 
 
-class SceneRunner(Protocol):
-    """Plans and executes a whole scene (a planner outside the closed loop)."""
+class RunnerFactory(Protocol):
+    """Builds the object runner of a planner outside the closed loop for one run of
+    ``scene`` (``InputError`` for a scene it cannot run)."""
 
-    def __call__(self, scene: Scene, seed: int, *, model: Any, config: PlannerConfig | None,
-                 render: bool, time_limit: float | None,
-                 progress: ProgressCallback | None) -> Solution: ...
+    def __call__(self, scene: Scene, config: PlannerConfig) -> ObjectRunner: ...
 
 
 def _figures(value: Mapping[str, float], what: str, name: str) -> Mapping[str, float]:
@@ -88,8 +94,8 @@ class PlannerSpec:
     factory: Callable[[ManipulationTask], ObjectPlanner] | None = None
     #: When the closed loop replans (closed-loop planners).
     policy: LoopPolicy | None = None
-    #: Plans and executes a whole scene (planners outside the closed loop).
-    runner: SceneRunner | None = None
+    #: Builds the object runner (planners outside the closed loop).
+    runner: RunnerFactory | None = None
     #: Refuses a scene the planner cannot run (a ``ValueError`` saying why), before any
     #: output is written; None: every valid scene.
     check_scene: Callable[[Scene], None] | None = None
@@ -109,6 +115,11 @@ class PlannerSpec:
     paper_full_horizon: Mapping[str, float] = field(default_factory=dict)
     #: A LAMP planner: a row of Table II (full-horizon plan rate).
     lamp: bool = False
+    #: The ``PlannerConfig`` fields the planner reads (``--param NAME.FIELD=VALUE``).
+    params: tuple[str, ...] = LOOP_PARAMS
+    #: Whether the planner uses the manipulation model (``--model``; its robot radius is
+    #: then checked against the scene's).
+    uses_model: bool = True
 
     def __post_init__(self) -> None:
         name = self.name
@@ -147,6 +158,12 @@ class PlannerSpec:
                            _figures(self.paper_success, "paper_success", name))
         object.__setattr__(self, "paper_full_horizon",
                            _figures(self.paper_full_horizon, "paper_full_horizon", name))
+        known = PlannerConfig.__dataclass_fields__
+        unknown = [p for p in self.params if p not in known]
+        if unknown:
+            raise ValueError(f"planner {name!r}: params: not PlannerConfig fields: "
+                             f"{', '.join(unknown)}")
+        object.__setattr__(self, "params", tuple(self.params))
         if self.paper_full_horizon and not self.lamp:
             raise ValueError(f"planner {name!r}: paper_full_horizon: only LAMP planners "
                              "(lamp=True) are rows of Table II")
@@ -155,6 +172,11 @@ class PlannerSpec:
     def closed_loop(self) -> bool:
         """Whether ``lamp.planners.closed_loop.run_object`` drives this planner."""
         return self.factory is not None
+
+
+    def default_config(self) -> PlannerConfig:
+        """The planner's defaults: ``PlannerConfig`` with its own planning limit."""
+        return PlannerConfig(planning_time_limit=self.planning_limit)
 
 
 _SPECS: dict[str, PlannerSpec] = {}
@@ -195,6 +217,26 @@ def get(name: str) -> PlannerSpec:
     return spec
 
 
+def descriptions() -> dict[str, str]:
+    """Planner name -> one-line description, in registration order."""
+    return {s.name: s.description for s in _SPECS.values()}
+
+
+def default_planning_limit(planner: str) -> float:
+    """The cumulative planning limit per object that ``planner`` runs under by default."""
+    return get(planner).planning_limit
+
+
+def planning_limit_help() -> str:
+    """The per-planner defaults in words, e.g. ``300 s; 500 s for astar, astar-replan``."""
+    by_value: dict[float, list[str]] = {}
+    for spec in _SPECS.values():
+        if spec.planning_limit != DEFAULT_PLANNING_LIMIT:
+            by_value.setdefault(spec.planning_limit, []).append(spec.name)
+    return f"{DEFAULT_PLANNING_LIMIT:g} s" + "".join(
+        f"; {v:g} s for {', '.join(names)}" for v, names in by_value.items())
+
+
 def table_order() -> tuple[str, ...]:
     """Planner names in the paper's row order (``row``, then name)."""
     return tuple(s.name for s in sorted(_SPECS.values(), key=lambda s: (s.row, s.name)))
@@ -230,29 +272,30 @@ def _astar(task: ManipulationTask) -> ObjectPlanner:
 
 def _gco(inflation: float) -> Callable[[ManipulationTask], ObjectPlanner]:
     def factory(task: ManipulationTask) -> ObjectPlanner:
-        from lamp.planners.gco import GCoPlanner
+        from lamp.baselines.gco import GCoPlanner
 
         return GCoPlanner.from_task(task, inflation=inflation)
 
     return factory
 
 
-def _mapush(scene: Scene, seed: int, *, model: Any, config: PlannerConfig | None,
-            render: bool, time_limit: float | None,
-            progress: ProgressCallback | None) -> Solution:
-    """MAPush ignores the manipulation model, the planner config and the planning limit
-    (docs/mapush.md): its limit is simulated time per object."""
-    from lamp.planners.mapush import solve_mapush
+def _mapush(scene: Scene, config: PlannerConfig) -> ObjectRunner:
+    """MAPush ignores the manipulation model and the planner parameters (docs/mapush.md):
+    its limit is simulated time per object."""
+    from lamp.baselines.mapush import MapushRunner
 
-    return solve_mapush(scene, seed, render=render, progress=progress)
+    return MapushRunner(scene)
 
 
 def _mapush_check(scene: Scene) -> None:
-    from lamp.planners.mapush import check_scene
+    from lamp.baselines.mapush import check_scene
 
     check_scene(scene)
 
 
+_LAZY = LOOP_PARAMS + VERIFY_PARAMS + LATTICE_PARAMS + LAZY_PARAMS
+_ASTAR = LOOP_PARAMS + VERIFY_PARAMS + LATTICE_PARAMS + ASTAR_PARAMS
+_GCO = LOOP_PARAMS + VERIFY_PARAMS
 _LAMP_FULL_HORIZON = {"random": 100, "maze": 8, "tilt": 32, "warehouse": 40}
 _GCO_POLICY = LoopPolicy(replan_on_drift=False, replan_when_done=True, full_horizon=False,
                          failure_is_final=False)
@@ -261,7 +304,7 @@ for _spec in (
     PlannerSpec(
         "lazy", "LAMP-Lazy", "LAMP-Lazy (default)", factory=_lazy,
         policy=LoopPolicy(replan_on_drift=True, replan_when_done=True, replan_on_stall=True),
-        row=5, color="#2ca02c", marker="o", lamp=True,
+        row=5, color="#2ca02c", marker="o", lamp=True, params=_LAZY,
         paper_success={"random": 100, "maze": 96, "tilt": 100, "warehouse": 88},
         paper_full_horizon={"random": 100, "maze": 100, "tilt": 100, "warehouse": 100}),
     # The paper's single LAMP-A* row of Table II holds for both LAMP-A* variants (they
@@ -270,26 +313,27 @@ for _spec in (
         "astar", "LAMP-A*_ori", "LAMP-A*, open loop", factory=_astar,
         policy=LoopPolicy(replan_on_drift=False, replan_when_done=False),
         planning_limit=500.0, bench_limited=True, row=3, color="#1f77b4", marker="^",
-        lamp=True, paper_success={"random": 24, "maze": 0, "tilt": 0, "warehouse": 12},
+        lamp=True, params=_ASTAR, paper_success={"random": 24, "maze": 0, "tilt": 0, "warehouse": 12},
         paper_full_horizon=_LAMP_FULL_HORIZON),
     PlannerSpec(
         "astar-replan", "LAMP-A*_replan", "LAMP-A*, replanning on drift", factory=_astar,
         policy=LoopPolicy(replan_on_drift=True, replan_when_done=True),
         planning_limit=500.0, bench_limited=True, row=4, color="#9467bd", marker="D",
-        lamp=True, paper_success={"random": 88, "maze": 0, "tilt": 8, "warehouse": 0},
+        lamp=True, params=_ASTAR, paper_success={"random": 88, "maze": 0, "tilt": 8, "warehouse": 0},
         paper_full_horizon=_LAMP_FULL_HORIZON),
     PlannerSpec(
         "gco-ori", "GCo_ori", "GCo with its 0.2 m buffer", factory=_gco(0.2),
-        policy=_GCO_POLICY, row=1, color="#8c564b", marker="o",
+        policy=_GCO_POLICY, params=_GCO, row=1, color="#8c564b", marker="o",
         paper_success={"random": 0, "maze": 0, "tilt": 0, "warehouse": 0}),
     PlannerSpec(
         "gco-var", "GCo_var", "GCo with zero buffer", factory=_gco(0.0),
-        policy=_GCO_POLICY, row=2, color="#d62728", marker="s",
+        policy=_GCO_POLICY, params=_GCO, row=2, color="#d62728", marker="s",
         paper_success={"random": 68, "maze": 12, "tilt": 28, "warehouse": 20}),
     PlannerSpec(
         "mapush", "MAPush",
         "MAPush-style RL baseline (lattice subgoals + PPO pushing policy)",
-        runner=_mapush, check_scene=_mapush_check, bench_default=False, row=0, color="#7f7f7f", marker="o",
+        runner=_mapush, check_scene=_mapush_check, bench_default=False, row=0,
+        color="#7f7f7f", marker="o", params=(), uses_model=False,
         paper_success={"random": 8, "maze": 0, "tilt": 0, "warehouse": 0}),
 ):
     register(_spec)

@@ -32,6 +32,7 @@ from typing import Any
 
 import numpy as np
 
+from lamp.contract.events import TRACE_EVERY
 from lamp.contract.goals import (
     SUCCESS_ORIENTATION_TOL,
     SUCCESS_POSITION_TOL,
@@ -39,7 +40,9 @@ from lamp.contract.goals import (
     within_goal,
 )
 from lamp.contract.result import ObjectResult
+from lamp.contract.runner import ObjectOutcome
 from lamp.scene.model import Scene
+from lamp.sim.mjcf import TIMESTEP
 from lamp.sim.simulator import MAX_STEP, ROBOT_SPEED
 
 #: Simulated time limit per object [s] (MAPush's criterion: two minutes).
@@ -71,7 +74,7 @@ def check_scene(scene: Scene, policy=None) -> None:
 @dataclass
 class MapushRecord:
     """What one object's run measured (besides its ``ObjectResult``); ``observer`` (if
-    set) is called with a ``lamp.planners.closed_loop.SegmentEvent``-like record of every
+    set) is called with a ``lamp.contract.events.SegmentEvent`` of every
     subgoal (what ``lamp.record.Recorder`` takes)."""
 
     planning_time_s: list[float] = field(default_factory=list)
@@ -79,7 +82,6 @@ class MapushRecord:
     mapush_success: bool = False
     mapush_time_s: float | None = None
     sim_time_s: float = 0.0
-    frames: list[Any] = field(default_factory=list)
     observer: Any = None
 
 
@@ -89,6 +91,7 @@ def _segment_event(index: int, segment: int, rows: list, sub: np.ndarray, path: 
     state before it), the requested object motion, no contacts (the policy chooses them)."""
     from types import SimpleNamespace
 
+    from lamp.contract.events import SegmentEvent
     from lamp.sim.simulator import Trace
 
     steps = np.array([r[0] for r in rows], float)
@@ -102,9 +105,9 @@ def _segment_event(index: int, segment: int, rows: list, sub: np.ndarray, path: 
                                  pushes_local=np.zeros((0, 1, 2)))
     plan = SimpleNamespace(object_path=path, verified_edges=[], penalised_edges=[])
     miss = goal_errors(objects[-1, index], sub)
-    return SimpleNamespace(object_index=index, segment=segment, transition=transition,
-                           execution=execution, plan=plan, planning_time_s=planning_s,
-                           replanned=True, drift=miss, outcome=outcome)
+    return SegmentEvent(object_index=index, segment=segment, transition=transition,
+                        execution=execution, plan=plan, planning_time_s=planning_s,
+                        replanned=True, drift=miss, outcome=outcome, replans=segment)
 
 
 def _object_path(scene: Scene, index: int, pose: np.ndarray, poses: np.ndarray):
@@ -118,7 +121,7 @@ def _object_path(scene: Scene, index: int, pose: np.ndarray, poses: np.ndarray):
 
 
 def run_object(scene: Scene, index: int, sim, policy, record: MapushRecord,
-               render: bool = False, time_limit: float = OBJECT_TIME_LIMIT) -> ObjectResult:
+               time_limit: float = OBJECT_TIME_LIMIT) -> ObjectResult:
     """Move object ``index`` to its goal in ``sim`` within ``time_limit`` simulated seconds
     (see the module docstring)."""
     from lamp.env.core import PushConfig, PushCore
@@ -137,9 +140,7 @@ def run_object(scene: Scene, index: int, sim, policy, record: MapushRecord,
     policy.check_env(core.n_robots, obs_space, f"scene {scene.name!r}")
     goal = scene.objects[index].goal
     lookahead = SUBGOAL_AHEAD
-    from lamp.planners.closed_loop import RENDER_EVERY
-
-    every = max(1, round(RENDER_EVERY / config.frame_skip))  # env steps per recorded state
+    every = trace_stride(config.frame_skip)  # env steps per recorded state
     segments, reason, left = 0, "", False
     q = core.object_poses()[index]
     while True:
@@ -168,8 +169,6 @@ def run_object(scene: Scene, index: int, sim, policy, record: MapushRecord,
             d_goal = math.hypot(*(q[:2] - np.asarray(goal[:2])))
             if not record.mapush_success and d_goal <= MAPUSH_RADIUS:
                 record.mapush_success, record.mapush_time_s = True, core.time
-            if render and core.steps % every == 0:
-                record.frames.append(_frame(core, index, sub))
             if out.info["left_workspace"]:
                 left = True
             elif math.hypot(*(q[:2] - sub[:2])) <= SUBGOAL_TOLERANCE or d_goal <= STOP_RADIUS:
@@ -203,74 +202,41 @@ def run_object(scene: Scene, index: int, sim, policy, record: MapushRecord,
     )
 
 
-def _frame(core, index: int, subgoal: np.ndarray):
-    from lamp.viz.animation import Frame
-
-    return Frame(robot_positions=core.robot_positions().copy(),
-                 object_poses=core.object_poses(), active_object=index,
-                 planned_path=None, verified_edges=[], penalised_edges=[],
-                 caption=f"object {index + 1}/{core.n_objects}, subgoal "
-                         f"({subgoal[0]:.2f}, {subgoal[1]:.2f})")
+def trace_stride(frame_skip: int) -> int:
+    """Environment steps between recorded states: the closed loop's ``TRACE_EVERY`` physics
+    steps, rounded to whole environment steps of ``frame_skip`` physics steps."""
+    return max(1, round(TRACE_EVERY / int(frame_skip)))
 
 
-def solve_mapush(scene: Scene, seed: int = 0, *, policy=None, render: bool = False,
-                 progress=None, time_limit: float | None = None):
-    """Plan and execute ``scene`` object by object (``lamp.solve(..., planner="mapush")``);
-    returns a ``lamp.planners.run.Solution`` with the run's recording.
+class MapushRunner:
+    """The :class:`~lamp.contract.runner.ObjectRunner` of ``mapush``: :func:`run_object` per
+    object with the shipped (or a given) policy.
 
-    Deterministic: nothing is random (``seed`` is recorded only). ``result.stats`` adds
-    the MAPush criterion: ``mapush_success`` (every object within ``MAPUSH_RADIUS`` of its
-    goal position within ``time_limit`` simulated seconds per object), per object
-    ``mapush_objects``. ``progress`` receives ``lamp.progress.ProgressEvent``s.
+    Deterministic: nothing is random. The run's ``stats`` add the MAPush criterion:
+    ``mapush_success`` (every object within ``MAPUSH_RADIUS`` of its goal position within
+    ``time_limit`` simulated seconds per object) and, per object, ``mapush_objects``.
     """
-    from lamp.contract.result import RunResult
-    from lamp.planners.closed_loop import RENDER_EVERY
-    from lamp.planners.run import Solution
-    from lamp.progress import ProgressEvent
-    from lamp.record import Recorder
-    from lamp.rl.policy import load_policy
-    from lamp.sim import Simulator
-    from lamp.sim.mjcf import TIMESTEP
 
-    policy = policy or load_policy()
-    check_scene(scene, policy)
-    time_limit = OBJECT_TIME_LIMIT if time_limit is None else float(time_limit)
-    t_start = time.perf_counter()
-    sim = Simulator(scene)
-    result = RunResult(scene=scene.name, planner="mapush", seed=int(seed))
-    frame_skip = int(policy.info.env_settings.get("frame_skip", 10))
-    recorder = Recorder(scene, max(1, round(RENDER_EVERY / frame_skip)) * frame_skip * TIMESTEP)
-    frames: list[Any] = []
-    per_object = []
-    n = len(scene.objects)
+    def __init__(self, scene: Scene, policy=None, time_limit: float | None = None) -> None:
+        from lamp.rl.policy import load_policy
 
-    def emit(kind: str, index: int, **kw: Any) -> None:
-        if progress is not None:
-            progress(ProgressEvent(kind, object_index=index, n_objects=n, **kw))
+        self.scene = scene
+        self.policy = policy or load_policy()
+        check_scene(scene, self.policy)
+        self.time_limit = OBJECT_TIME_LIMIT if time_limit is None else float(time_limit)
+        frame_skip = int(self.policy.info.env_settings.get("frame_skip", 10))
+        self.row_dt_s = trace_stride(frame_skip) * frame_skip * TIMESTEP
 
-    for index in range(n):
-        record = MapushRecord()
+    def run_object(self, index: int, executor, observe) -> ObjectOutcome:
+        record = MapushRecord(observer=observe)
+        result = run_object(self.scene, index, executor, self.policy, record,
+                            time_limit=self.time_limit)
+        extra = {"mapush_success": record.mapush_success, "mapush_time_s": record.mapush_time_s,
+                 "sim_time_s": round(record.sim_time_s, 3)}
+        return ObjectOutcome(result, record.planning_time_s, record.makespan, extra=extra)
 
-        def observe(event, index=index) -> None:
-            recorder(event)
-            emit("segment", index, segments=event.segment + 1, replans=event.segment)
-
-        record.observer = observe
-        emit("object", index)
-        obj = run_object(scene, index, sim, policy, record, render=render,
-                         time_limit=time_limit)
-        emit("object-done", index, segments=obj.segments, replans=obj.replans,
-             success=obj.success)
-        result.add_object(obj, record.planning_time_s, record.makespan)
-        frames.extend(record.frames)
-        per_object.append({"mapush_success": record.mapush_success,
-                           "mapush_time_s": record.mapush_time_s,
-                           "sim_time_s": round(record.sim_time_s, 3)})
-    result.wall_time_s = time.perf_counter() - t_start
-    result.stats = {
-        "mapush_success": all(o["mapush_success"] for o in per_object),
-        "mapush_objects": per_object,
-        "failure_reasons": [o.failure_reason for o in result.objects],
-    }
-    result.recording = recorder.finish("mapush", int(seed), result.to_dict())
-    return Solution(result, frames, result.recording)
+    def run_stats(self, outcomes: list[ObjectOutcome]) -> dict[str, Any]:
+        per_object = [o.extra for o in outcomes]
+        return {"mapush_success": all(o["mapush_success"] for o in per_object),
+                "mapush_objects": per_object,
+                "failure_reasons": [o.result.failure_reason for o in outcomes]}

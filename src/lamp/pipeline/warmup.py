@@ -4,7 +4,7 @@ The planners' kernels (``lamp.geometry``, ``lamp.mrmp``, ``lamp.search``) are co
 with ``cache=True``: the first run in a fresh environment compiles them (20-30 s) and
 stores the machine code on disk, later processes load it in well under a second.
 :func:`warm_up` runs a tiny built-in scene through LAMP-Lazy with the geometric model,
-which exercises every planning kernel; ``lamp.solve`` calls it before its planning clock
+which exercises every planning kernel; ``lamp.pipeline.run`` calls it before its planning clock
 starts, so compilation never counts as planning time.
 """
 
@@ -64,14 +64,16 @@ def warm_up(progress: ProgressCallback | None = None) -> WarmupReport:
     ``progress`` receives ``compiling`` before the first compilation and ``compiled`` after
     the last one; with a warm cache it receives nothing.
     """
-    from lamp.planners.run import run_scene
+    from lamp.pipeline.execute import execute
+    from lamp.pipeline.request import RunRequest
     from lamp.scene.loader import scene_from_dict
 
     watch = _CompileWatch(progress)
     t0 = time.perf_counter()
     nb_event.register("numba:compile", watch)
     try:
-        run_scene(scene_from_dict(WARMUP_SCENE, source="<warmup>"), "lazy", 0, "geometric")
+        execute(RunRequest(scene_from_dict(WARMUP_SCENE, source="<warmup>"), "lazy", 0,
+                           "geometric"))
     finally:
         nb_event.unregister("numba:compile", watch)
     seconds = time.perf_counter() - t0
