@@ -1,0 +1,64 @@
+"""A run without the warm-up: the request's object runner, one simulator, the schedule, the
+recording and the result.
+
+:func:`execute` is what :func:`lamp.pipeline.run` calls once the Numba kernels are loaded
+(and what the warm-up itself runs). Every run is recorded: the recorder is the first
+observer, and the result's ``makespan_s`` is the recording's last time.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+
+from lamp.contract.events import RunObserver
+from lamp.contract.result import RunResult
+from lamp.contract.runner import ObjectRunner
+from lamp.pipeline.request import RunRequest
+from lamp.pipeline.schedule import run_in_order
+
+__all__ = ["execute", "object_runner"]
+
+
+def object_runner(request: RunRequest) -> ObjectRunner:
+    """The object runner of ``request``'s planner: the closed loop with the request's model
+    (loaded here) and parameters, or the planner's own (``PlannerSpec.runner``)."""
+    spec = request.spec
+    if spec.factory is None:
+        return spec.runner(request.scene, request.params)
+    from lamp.manip.models import load_proposer
+    from lamp.planners.runner import ClosedLoopRunner
+
+    return ClosedLoopRunner(request.scene, spec.factory, spec.policy,
+                            load_proposer(request.model), request.params, request.seed)
+
+
+def execute(request: RunRequest, observers: Sequence[RunObserver] = (),
+            runner: ObjectRunner | None = None) -> RunResult:
+    """Run ``request`` (see the module docstring); ``result.recording`` is the recording.
+
+    ``runner``: an object runner built by the caller (MAPush with another policy, say)
+    instead of :func:`object_runner`'s. ``wall_time_s`` runs from the simulator's
+    construction to the last object (model loading excluded); observers only watch.
+    """
+    from lamp.record import Recorder
+    from lamp.sim import Simulator
+
+    scene = request.scene
+    runner = object_runner(request) if runner is None else runner
+    t_start = time.perf_counter()
+    sim = Simulator(scene)
+    recorder = Recorder(scene, runner.row_dt_s)
+    outcomes = run_in_order(len(scene.objects), sim, runner, [recorder, *observers])
+    result = RunResult(scene=scene.name, planner=request.planner, seed=int(request.seed))
+    unexecuted = 0.0
+    for o in outcomes:
+        result.add_object(o.result, o.planning_time_s, o.makespan)
+        unexecuted += o.unexecuted_planning_s
+    result.wall_time_s = time.perf_counter() - t_start
+    result.unexecuted_planning_time_s = unexecuted
+    result.stats = runner.run_stats(outcomes)
+    result.makespan_s = recorder.sim_time_s
+    result.params = request.param_values()
+    result.recording = recorder.finish(request.planner, int(request.seed), result.to_dict())
+    return result

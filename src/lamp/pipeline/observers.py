@@ -1,0 +1,32 @@
+"""Observers of a run that are not the recording: the progress events of ``lamp.progress``."""
+
+from __future__ import annotations
+
+from lamp.contract.events import SegmentEvent
+from lamp.contract.result import ObjectResult
+from lamp.progress import ProgressCallback, ProgressEvent
+
+__all__ = ["ProgressObserver"]
+
+
+class ProgressObserver:
+    """Turns a run's object and segment events into :class:`~lamp.progress.ProgressEvent`\\ s
+    (``object``, ``segment``, ``object-done``) for ``callback``."""
+
+    def __init__(self, callback: ProgressCallback) -> None:
+        self.callback = callback
+        self.n_objects = 0
+
+    def object_started(self, index: int, n_objects: int) -> None:
+        self.n_objects = n_objects
+        self.callback(ProgressEvent("object", object_index=index, n_objects=n_objects))
+
+    def segment(self, event: SegmentEvent) -> None:
+        self.callback(ProgressEvent("segment", object_index=event.object_index,
+                                    n_objects=self.n_objects, segments=event.segment + 1,
+                                    replans=event.replans))
+
+    def object_finished(self, index: int, n_objects: int, result: ObjectResult) -> None:
+        self.callback(ProgressEvent("object-done", object_index=index, n_objects=n_objects,
+                                    segments=result.segments, replans=result.replans,
+                                    success=result.success))

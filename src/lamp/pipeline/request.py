@@ -1,0 +1,114 @@
+"""The run request: everything that decides a run, built once, frozen and validated.
+
+``lamp run``, ``lamp bench``, ``lamp.solve`` and the warm-up all build a :class:`RunRequest`
+(:meth:`RunRequest.build` resolves names and applies the shortcuts) and hand it to
+:func:`lamp.pipeline.run`. Validation happens here, before anything is planned or written:
+an unknown planner or model, parameters the planner does not read or values out of range,
+a scene the planner cannot run (MAPush: another number of robots) or robots of a radius the
+manipulation model does not serve are each an :class:`~lamp.errors.InputError` naming what
+is wrong.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from lamp.contract.params import apply_overrides, format_value
+from lamp.errors import InputError
+from lamp.manip.models import check_model, check_robot_radius, model_robot_radius
+from lamp.pipeline import registry
+from lamp.planners.config import PlannerConfig
+from lamp.scene.model import Scene
+
+__all__ = ["RunRequest"]
+
+
+@dataclass(frozen=True)
+class RunRequest:
+    """One run: ``scene`` moved by ``planner`` with ``seed``.
+
+    ``model``: the manipulation model, a name (``learned``, ``geometric``), a checkpoint
+    path (stored resolved) or a proposer object; ``params``: the planner's parameters
+    (None: its defaults, ``PlannerSpec.default_config``). The same request gives the same
+    result: budgets are counts, wall-clock limits only outer caps.
+    """
+
+    scene: Scene
+    planner: str = "lazy"
+    seed: int = 0
+    model: Any = "learned"
+    params: PlannerConfig | None = None
+
+    def __post_init__(self) -> None:
+        spec = registry.get(self.planner)  # InputError naming the planners
+        if not isinstance(self.scene, Scene):
+            raise InputError(f"scene: a lamp Scene, got {type(self.scene).__name__}")
+        if not (isinstance(self.seed, int) and not isinstance(self.seed, bool)):
+            raise InputError(f"seed: an integer, got {self.seed!r}")
+        if self.params is None:
+            object.__setattr__(self, "params", spec.default_config())
+        elif not isinstance(self.params, PlannerConfig):
+            raise InputError(f"params: a PlannerConfig, got {type(self.params).__name__}")
+        if spec.check_scene is not None:
+            try:
+                spec.check_scene(self.scene)
+            except InputError:
+                raise
+            except ValueError as exc:
+                raise InputError(str(exc)) from None
+        if spec.uses_model:
+            if isinstance(self.model, (str, Path)):
+                object.__setattr__(self, "model", check_model(self.model))
+                check_robot_radius(self.scene, model_robot_radius(self.model))
+            else:
+                check_robot_radius(self.scene, self.model)
+
+    @property
+    def spec(self) -> registry.PlannerSpec:
+        return registry.get(self.planner)
+
+    @classmethod
+    def build(cls, scene: Scene | str | Path, planner: str = "lazy", seed: int = 0, *,
+              model: Any = "learned", params: PlannerConfig | Mapping[str, Any] | None = None,
+              planning_limit: float | None = None,
+              max_segments: int | None = None) -> RunRequest:
+        """A request from what a user types: ``scene`` may be a scene file or a built-in
+        scene name (``maze-07``); ``params`` a ``PlannerConfig`` or overrides of the
+        planner's declared parameters by name (text or numbers); ``planning_limit`` and
+        ``max_segments`` set ``planning_time_limit`` and ``max_segments`` (shortcuts every
+        planner accepts; MAPush ignores them)."""
+        if isinstance(scene, (str, Path)):
+            from lamp.suites.registry import resolve_scene
+
+            scene = resolve_scene(scene)
+        spec = registry.get(planner)
+        if isinstance(params, PlannerConfig):
+            config = params
+        else:
+            config = apply_overrides(spec.default_config(), spec.params, dict(params or {}),
+                                     spec.name)
+        shortcuts: dict[str, Any] = {}
+        if planning_limit is not None:
+            shortcuts["planning_time_limit"] = planning_limit
+        if max_segments is not None:
+            shortcuts["max_segments"] = max_segments
+        if shortcuts:
+            config = dataclasses.replace(config, **shortcuts)  # validated: InputError
+        return cls(scene, planner, seed, model, config)
+
+    def param_values(self) -> dict[str, Any]:
+        """The planner's declared parameters and their values (result.json's ``params``)."""
+        return {n: getattr(self.params, n) for n in self.spec.params}
+
+    def describe(self) -> str:
+        """One line: planner, seed, model and the parameters that differ from the defaults."""
+        default = self.spec.default_config()
+        changed = [f"{n}={format_value(getattr(self.params, n))}" for n in self.spec.params
+                   if getattr(self.params, n) != getattr(default, n)]
+        model = self.model if isinstance(self.model, str) else type(self.model).__name__
+        return (f"{self.scene.name}: planner {self.planner}, seed {self.seed}, model {model}"
+                + (f", {' '.join(changed)}" if changed else ""))

@@ -1,0 +1,37 @@
+"""Which object moves when: the one place a run's objects are scheduled.
+
+:func:`run_in_order` is the paper's schedule (``schedule: sequential`` of the scene
+format): the objects are moved one after another, in the scene file's order, each by the
+whole team, the others standing as physical bodies where they are. The fleet schedule
+(several objects at once by sub-teams) is to replace this function, not the loops below it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from lamp.contract.events import RunObserver, SegmentEvent
+from lamp.contract.runner import Executor, ObjectOutcome, ObjectRunner
+
+__all__ = ["run_in_order"]
+
+
+def run_in_order(n_objects: int, executor: Executor, runner: ObjectRunner,
+                 observers: Sequence[RunObserver] = ()) -> list[ObjectOutcome]:
+    """Move objects ``0 .. n_objects - 1`` in order with ``runner`` on ``executor``;
+    returns their outcomes, in order. Every observer sees ``object_started``, the object's
+    segments and ``object_finished`` for each object, in that order."""
+
+    def observe(event: SegmentEvent) -> None:
+        for o in observers:
+            o.segment(event)
+
+    outcomes = []
+    for index in range(n_objects):
+        for o in observers:
+            o.object_started(index, n_objects)
+        outcome = runner.run_object(index, executor, observe)
+        for o in observers:
+            o.object_finished(index, n_objects, outcome.result)
+        outcomes.append(outcome)
+    return outcomes
