@@ -1,8 +1,11 @@
-"""The package's layers depend one way: scene -> geometry, never geometry -> scene.
+"""The package's layers depend one way, downward; no module imports itself in a circle.
 
-Checked twice: statically (no module of ``lamp.geometry`` imports ``lamp.scene`` or a layer
-above it outside ``if TYPE_CHECKING:``) and by importing leaf modules in a fresh
-interpreter and looking at what got loaded.
+The layers, bottom to top (``LAYERS``): what a module of one layer may import at run time is
+its own layer and the layers below (``if TYPE_CHECKING:`` imports excepted). The command
+line glue (``CLI_MODULES``: ``lamp.cli``, ``lamp.cli_support``, every ``*/cli.py``...) sits
+on top of everything. Checked statically over every module, and by importing leaf modules
+in a fresh interpreter and looking at what got loaded. Also: no import cycle among the
+modules, and no module over ``MAX_LINES`` lines.
 """
 
 from __future__ import annotations
@@ -16,16 +19,46 @@ from pathlib import Path
 import pytest
 
 SRC = Path(__file__).resolve().parents[1] / "src" / "lamp"
-#: What each layer may import from lamp (besides itself).
-ALLOWED = {
-    "geometry": set(),
-}
-LAYERS = ("geometry", "scene", "sim", "manip", "mrmp", "search", "planners", "suites",
-          "bench", "viz")
+#: Bottom to top; a package (or top-level module) per name, several per layer where they
+#: are peers that do not import each other.
+LAYERS: tuple[tuple[str, ...], ...] = (
+    ("errors", "_lazy", "io", "progress"),
+    ("geometry",),
+    ("contract",),
+    ("scene",),
+    ("sim",),
+    ("record", "mrmp", "search"),
+    ("manip",),
+    ("suites",),
+    ("viz",),
+    ("env",),
+    ("rl",),
+    ("planners",),
+    ("baselines",),
+    ("pipeline",),
+    ("bench",),
+    ("demo",),
+)
+#: The command line: parses, loads, calls, writes; may import any layer.
+CLI_MODULES = ("lamp", "lamp.cli", "lamp.cli_support", "lamp.bench.options")
+MAX_LINES = 500
+LEVEL = {name: i for i, names in enumerate(LAYERS) for name in names}
+
+
+def _module_name(path: Path) -> str:
+    parts = list(path.relative_to(SRC.parent).with_suffix("").parts)
+    if parts[-1] == "__init__":
+        parts.pop()
+    return ".".join(parts)
+
+
+MODULES = {_module_name(p): p for p in sorted(SRC.rglob("*.py"))}
 
 
 def _runtime_imports(path: Path) -> set[str]:
-    """The lamp modules ``path`` imports when it runs (TYPE_CHECKING blocks excluded)."""
+    """The lamp modules ``path`` imports when it runs (TYPE_CHECKING blocks excluded):
+    for ``from a.b import c`` both ``a.b`` and, when it is a module, ``a.b.c``; a bare
+    ``import lamp`` (the package root, loaded first by any import) is not counted."""
     tree = ast.parse(path.read_text(encoding="utf-8"))
     skipped: set[int] = set()
     for node in ast.walk(tree):
@@ -37,21 +70,89 @@ def _runtime_imports(path: Path) -> set[str]:
             continue
         if isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
             found.add(node.module)
-        elif isinstance(node, ast.Import):
-            found.update(a.name for a in node.names)
+            found.update(f"{node.module}.{a.name}" for a in node.names
+                         if f"{node.module}.{a.name}" in MODULES)
+        elif isinstance(node, ast.Import):  # a bare ``import lamp`` reads the version only
+            found.update(a.name for a in node.names if a.name != "lamp")
     return {m for m in found if m == "lamp" or m.startswith("lamp.")}
 
 
-@pytest.mark.parametrize("layer", sorted(ALLOWED))
-def test_layer_imports_only_what_it_may(layer):
+def _layer(module: str) -> int | None:
+    """The layer of a lamp module; None for the command line glue (above every layer)."""
+    if module in CLI_MODULES or module.endswith(".cli"):
+        return None
+    parts = module.split(".")
+    return LEVEL[parts[1]]
+
+
+def test_every_package_has_a_layer():
+    tops = {m.split(".")[1] for m in MODULES if m != "lamp"}
+    assert tops - set(LEVEL) - {"cli", "cli_support"} == set()
+
+
+def test_layers_import_only_downward():
     bad = []
-    for path in sorted((SRC / layer).rglob("*.py")):
-        for module in _runtime_imports(path):
-            parts = module.split(".")
-            other = parts[1] if len(parts) > 1 else ""
-            if other != layer and other not in ALLOWED[layer]:
-                bad.append(f"{path.relative_to(SRC)} imports {module}")
+    for module, path in MODULES.items():
+        mine = _layer(module)
+        if mine is None:
+            continue
+        for target in _runtime_imports(path):
+            theirs = _layer(target) if target != "lamp" else None
+            if theirs is None or theirs > mine:
+                bad.append(f"{module} (layer {mine}) imports {target} (layer {theirs})")
     assert not bad, "\n".join(bad)
+
+
+def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected components with more than one module (Tarjan)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on: set[str] = set()
+    out: list[list[str]] = []
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on.add(v)
+        for w in graph.get(v, ()):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                out.append(sorted(comp))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return out
+
+
+def test_cycle_finder_finds_cycles():
+    assert _cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
+    assert _cycles({"a": {"b"}, "b": set()}) == []
+
+
+def test_no_import_cycles():
+    graph = {m: {t for t in _runtime_imports(p) if t in MODULES and t != m and t != "lamp"}
+             for m, p in MODULES.items()}
+    assert _cycles(graph) == []
+
+
+def test_no_module_is_too_long():
+    long = {m: n for m, p in MODULES.items()
+            if (n := len(p.read_text(encoding="utf-8").splitlines())) > MAX_LINES}
+    assert long == {}
 
 
 def test_the_static_check_sees_imports(tmp_path):

@@ -75,7 +75,7 @@ def load_proposer(model: str | Path | Any = "learned") -> Any:
     if not isinstance(model, (str, Path)):
         return model
     text = str(model)
-    from lamp import manip
+    import lamp.manip as manip
 
     if text == "learned":
         return manip.load_model()
