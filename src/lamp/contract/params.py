@@ -110,9 +110,9 @@ def parse_value(info: ParamInfo, text: str, owner: str = "") -> Any:
         return None
     try:
         value: Any = int(t) if info.kind is int else float(t)
-    except ValueError:
+        return info.check(owner or "param", value)
+    except ValueError:  # InputError included: name the text as typed
         raise InputError(f"{where}: {info.rule()}, got {text!r}") from None
-    return info.check(owner or "param", value)
 
 
 def parse_assignments(items: Iterable[str], option: str = "--param") -> list[tuple[str, str, str]]:
