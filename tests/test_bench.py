@@ -532,6 +532,37 @@ def test_bench_rejects_bad_input_with_exit_2(tmp_path, extra, message):
     assert not (tmp_path / "run").exists()
 
 
+def test_bench_param_reaches_the_jobs_and_the_config(tmp_path):
+    """--param is checked against the run's planners before anything runs, reaches each job
+    of its planner only, is recorded in config.json's command and ``params``, and a resume
+    with other parameters is refused."""
+    import json
+
+    from lamp.bench import options
+
+    folder = write_suite(tmp_path, "random", 1)
+    out = tmp_path / "run"
+    args = ["bench", "--suites", str(folder), "--planners", "lazy,gco-var", "--workers", "1",
+            "--out", str(out), "--job-fn", "lamp.bench.fake:synthetic_job", "--no-progress"]
+    for bad, message in ((["--param", "astar.k=4"], "planner 'astar' is not among --planners"),
+                         (["--param", "gco-var.max_plan_iterations=4"], "no parameter"),
+                         (["--param", "lazy.k=-1"], "lazy.k: an integer >= 1")):
+        res = runner.invoke(app, [*args, *bad])
+        assert res.exit_code == 2 and message in res.output, res.output
+        assert not out.exists()
+    res = runner.invoke(app, [*args, "--param", "lazy.max_plan_iterations=300"])
+    assert res.exit_code == 0, res.output
+    config = json.loads((out / "config.json").read_text())
+    assert config["params"] == ["lazy.max_plan_iterations=300"]
+    assert "--param lazy.max_plan_iterations=300" in config["sessions"][-1]["command"]
+    res = runner.invoke(app, [*args, "--resume", "--param", "lazy.max_plan_iterations=200"])
+    assert res.exit_code == 2 and "params" in res.output
+    by_planner, texts = options.check_params(["lazy.k=4", "lazy.edge_penalty=2"], ["lazy"])
+    assert by_planner == {"lazy": (("edge_penalty", "2"), ("k", "4"))}
+    jobs = enumerate_jobs([suite("tilt", 1)], ["lazy", "gco-var"], [0], params=by_planner)
+    assert [j.params for j in jobs] == [by_planner["lazy"], ()]
+
+
 def test_dry_run_lists_jobs_without_writing(tmp_path):
     folder = write_suite(tmp_path, "maze", 3)
     res = runner.invoke(app, ["bench", "--suite", str(folder), "--out", str(tmp_path / "run"),

@@ -9,11 +9,12 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
-from typing import Any, NoReturn
+from typing import Any
 
 import typer
 
 from lamp.bench.runner import BACKENDS, DEFAULT_JOB_FN
+from lamp.cli_support import fail_input
 from lamp.pipeline import registry
 
 DEFAULT_SUITES = "random,maze,tilt,warehouse"
@@ -27,10 +28,8 @@ DEFAULT_PLANNING_LIMIT = 30.0
 DEFAULT_TIME_CAP = 600.0
 
 
-def fail(message: str) -> NoReturn:
-    """Report bad input on stderr and exit with status 2."""
-    typer.echo(f"error: {message}", err=True)
-    raise typer.Exit(code=2)
+#: Bad input: an ``InputError``, reported by the command group (exit 2).
+fail = fail_input
 
 
 def known_planners() -> tuple[str, ...]:
@@ -101,6 +100,10 @@ JOBS_PER_WORKER = typer.Option(0, "--jobs-per-worker", min=0, show_default=True,
                                help="Local backend: retire a worker process after "
                                     "this many jobs (0: never; 1: a fresh process "
                                     "per job).")
+PARAM = typer.Option(None, "--param", show_default=False,
+                     help="Set a planner parameter for this run, PLANNER.NAME=VALUE "
+                          "(repeatable; `lamp run --planner P --help-params` lists them), "
+                          "e.g. lazy.max_plan_iterations=400.")
 DB = typer.Option(None, "--db", help="Also write the results as an SQLite "
                   "database at this path (schema: docs/bench-db.md); rebuilt "
                   "from DIR/results.jsonl.", show_default="no database")
@@ -200,11 +203,32 @@ def check_options(*, planners: str, rerun: str, resume: bool, suite: str, model:
     return planner_list, rerun_list, suite_list, model
 
 
+def check_params(params: list[str] | None, planners: list[str]
+                 ) -> tuple[dict[str, tuple[tuple[str, str], ...]], list[str]]:
+    """``--param`` checked against the run's planners and their declared parameters:
+    (planner -> its (name, value) overrides, the assignments as canonical texts)."""
+    from lamp.contract.params import apply_overrides, parse_assignments
+
+    by_planner: dict[str, dict[str, str]] = {}
+    for planner, name, value in parse_assignments(params or ()):
+        if planner not in planners:
+            fail(f"--param {planner}.{name}={value}: planner {planner!r} is not among "
+                 f"--planners ({', '.join(planners)})")
+        spec = registry.get(planner)
+        apply_overrides(spec.default_config(), spec.params, {name: value}, planner)
+        by_planner.setdefault(planner, {})[name] = value
+    texts = [f"{p}.{n}={v}" for p in sorted(by_planner) for n, v in sorted(by_planner[p].items())]
+    return {p: tuple(sorted(kv.items())) for p, kv in by_planner.items()}, texts
+
+
 def check_resume_config(previous: dict[str, Any], *, time_cap: float, planning_limit: float,
-                        model: str, job_fn: str) -> None:
-    """A resumed run keeps its recorded cap, planning limit, model and job function."""
+                        model: str, job_fn: str, params: list[str] | None = None) -> None:
+    """A resumed run keeps its recorded cap, planning limit, model, job function and
+    parameters."""
     for key, given in (("time_cap_s", time_cap), ("planning_limit_s", planning_limit),
-                       ("model", model), ("job_fn", job_fn)):
+                       ("model", model), ("job_fn", job_fn), ("params", params or [])):
+        if key == "params" and key not in previous and not given:
+            continue
         if key in previous and previous[key] != given:
             fail(f"resuming a run recorded with {key}={previous[key]!r} but given {given!r}: "
                  "the results would mix settings; pass the recorded value or use a new --out")

@@ -123,8 +123,8 @@ def _session(command: str, out: Path) -> dict[str, Any]:
 
 def write_config(out: Path, previous: dict[str, Any], *, suites: list[str], planners: list[str],
                  seeds: list[int], workers: int, backend: str, model: str, time_cap: float,
-                 planning_limit: float, scenes: int | None, job_fn: str, command: str
-                 ) -> dict[str, Any]:
+                 planning_limit: float, scenes: int | None, job_fn: str, command: str,
+                 params: list[str] | None = None) -> dict[str, Any]:
     """Write ``out/config.json``: this invocation's settings plus every session's provenance.
 
     The top-level ``machine`` is this invocation's; each session records its own as well.
@@ -147,6 +147,9 @@ def write_config(out: Path, previous: dict[str, Any], *, suites: list[str], plan
         "planning_limit_note": "cumulative planning limit per object for "
         f"{', '.join(registry.bench_limited())}; the paper uses 500 s for LAMP-A*",
         "planner_planning_limits_s": planner_limits(all_planners, planning_limit),
+        "params": list(params or []),
+        "params_note": "planner parameters set with --param (PLANNER.NAME=VALUE); the rest "
+        "are the planners' defaults, listed per run in results.jsonl's params",
         "job_fn": job_fn, "machine": machine_info(),
         "sessions": [*(previous.get("sessions") or []), _session(command, out)],
     }
@@ -157,7 +160,8 @@ def write_config(out: Path, previous: dict[str, Any], *, suites: list[str], plan
 def canonical_command(suites: list[str], planners: list[str], *, seeds: int, workers: int,
                       out: Path, time_cap: float, planning_limit: float, model: str,
                       backend: str, scenes: int | None, render_iros: bool, job_fn: str,
-                      record: bool = False, jobs_per_worker: int = 0) -> str:
+                      record: bool = False, jobs_per_worker: int = 0,
+                      params: list[str] | None = None) -> str:
     """The ``lamp bench`` command line that reproduces this run, every setting explicit."""
     args = ["lamp", "bench", "--suites", ",".join(suites), "--planners", ",".join(planners),
             "--num-seeds", str(seeds), "--workers", str(workers), "--out", str(out),
@@ -171,6 +175,8 @@ def canonical_command(suites: list[str], planners: list[str], *, seeds: int, wor
         args.append("--record")
     if jobs_per_worker:
         args += ["--jobs-per-worker", str(jobs_per_worker)]
+    for text in params or ():
+        args += ["--param", text]
     if job_fn != DEFAULT_JOB_FN:
         args += ["--job-fn", job_fn]
     return shlex.join(args)
