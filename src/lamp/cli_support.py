@@ -187,7 +187,9 @@ def summary_line(d: dict[str, Any]) -> str:
         f"success: {d['success']}  segments: {d['segments']}  replans: {d['replans']}  "
         f"planning time: {d['total_planning_time_s']:.2f} s total"
         + (f" ({per:.3f} s per segment)" if per is not None else "")
-        + f"  makespan: {d['makespan']} steps  wall time: {d['wall_time_s']:.1f} s"
+        + (f"  makespan: {d['makespan_s']:.1f} s simulated" if "makespan_s" in d
+           else f"  makespan: {d['makespan']} steps")
+        + f"  wall time: {d['wall_time_s']:.1f} s"
     )
 
 
