@@ -98,92 +98,118 @@ def family_entry(
     }
 
 
+#: What one suite's builder returns: (files, manifest entries, generator record, checks).
+_Built = tuple[dict[str, str], list[dict[str, Any]], dict[str, Any], dict[str, Any]]
+
+
+def _build_xl(progress: Callable[[str], None] | None) -> _Built:
+    """The ``warehouse-xl`` suite's scene files, entries, generator record and checks."""
+    files: dict[str, str] = {}
+    entries = []
+    for k in range(XL.N_SCENES):
+        xg = XL.generate_scene(k)
+        text = scene_yaml(xg.scene_dict)
+        files[f"{xg.scene_dict['name']}.yaml"] = text
+        entries.append(family_entry(xg, text))
+        if progress is not None:
+            rep = xg.report.to_dict()
+            progress(
+                f"{xg.scene_dict['name']}: {xg.layout_info['workspace']} m, attempts "
+                f"{xg.attempts}, free route {rep['free_route']['length']:.2f} m, "
+                f"robot-room route {rep['robot_route']['length']:.2f} m"
+            )
+    generator = {
+        "module": "lamp.suites.warehouse_xl",
+        "seed": G.SUITE_SEED,
+        "rng": f"numpy.random.default_rng([{G.SUITE_SEED}, {XL.STREAM}, index])",
+    }
+    return files, entries, generator, _xl_check_settings()
+
+
+def _build_corridor(progress: Callable[[str], None] | None) -> _Built:
+    """The corridor suite's scene files, entries, generator record and checks."""
+    files: dict[str, str] = {}
+    entries = []
+    for k in range(CO.N_SCENES):
+        cg = CO.generate_scene(k)
+        text = scene_yaml(cg.scene_dict)
+        files[f"{cg.scene_dict['name']}.yaml"] = text
+        entries.append(family_entry(cg, text))
+        if progress is not None:
+            w = cg.report.witness
+            progress(
+                f"{cg.scene_dict['name']}: {cg.layout_info['workspace']} m, "
+                f"{cg.layout_info['turns']} turn(s), attempts {cg.attempts}, witness "
+                f"{w.length:.2f} m, min clearance {w.min_clearance:.4f} m"
+            )
+    generator = {
+        "module": "lamp.suites.corridor",
+        "seed": G.SUITE_SEED,
+        "rng": f"numpy.random.default_rng([{G.SUITE_SEED}, {CO.STREAM}, index])",
+    }
+    return files, entries, generator, _corridor_check_settings()
+
+
+def _build_iros() -> _Built:
+    """The ``iros`` suite (one scene); RuntimeError when the scene fails its checks."""
+    d, scene, steps = iros.build()
+    bad = [s.piece for s in steps if not s.ok]
+    if bad or not iros.goal_footprints_disjoint(scene):
+        raise RuntimeError(f"iros-01 fails its checks: {bad or 'goal footprints overlap'}")
+    text = scene_yaml(d)
+    entry = {
+        "name": "iros-01",
+        "file": "iros-01.yaml",
+        "sha256": hashlib.sha256(text.encode()).hexdigest(),
+        "n_obstacles": len(d["obstacles"]),
+        "approach_distance": iros.APPROACH,
+        "objects": [
+            {**_object_summary(o), **s.to_dict()}
+            for o, s in zip(d["objects"], steps, strict=True)
+        ],
+    }
+    return {"iros-01.yaml": text}, [entry], {"module": "lamp.suites.iros"}, _check_settings()
+
+
+def _build_family(name: str, progress: Callable[[str], None] | None) -> _Built:
+    """A generated map family's (``lamp.suites.generators``) files, entries, generator
+    record and checks."""
+    files: dict[str, str] = {}
+    entries = []
+    for k in range(G.SCENES_PER_FAMILY):
+        gen = G.generate_scene(name, k)
+        text = scene_yaml(gen.scene_dict)
+        files[f"{gen.scene_dict['name']}.yaml"] = text
+        entries.append(family_entry(gen, text))
+        if progress is not None:
+            rep = gen.report.to_dict()
+            progress(
+                f"{gen.scene_dict['name']}: attempts {gen.attempts}, too-tight shortest "
+                f"route {rep['tight_shortest_route']}, free route "
+                f"{rep['free_route']['length']:.2f} m, robot-room route "
+                f"{rep['robot_route']['length']:.2f} m"
+            )
+    generator = {
+        "module": "lamp.suites.generators",
+        "seed": G.SUITE_SEED,
+        "rng": f"numpy.random.default_rng([{G.SUITE_SEED}, {G.FAMILIES.index(name)}, index])",
+        "tight_share": G.TIGHT_SHARE,
+    }
+    return files, entries, generator, _check_settings()
+
+
 def build_suite(name: str, progress: Callable[[str], None] | None = None) -> dict[str, str]:
     """File name -> file text for every file of suite ``name``."""
     if name not in SUITES:
         raise ValueError(f"unknown suite {name!r}; valid names: {', '.join(SUITES)}")
-    files: dict[str, str] = {}
-    entries = []
-    checks = _check_settings()
     if name == XL.NAME:
-        for k in range(XL.N_SCENES):
-            xg = XL.generate_scene(k)
-            text = scene_yaml(xg.scene_dict)
-            files[f"{xg.scene_dict['name']}.yaml"] = text
-            entries.append(family_entry(xg, text))
-            if progress is not None:
-                rep = xg.report.to_dict()
-                progress(
-                    f"{xg.scene_dict['name']}: {xg.layout_info['workspace']} m, attempts "
-                    f"{xg.attempts}, free route {rep['free_route']['length']:.2f} m, "
-                    f"robot-room route {rep['robot_route']['length']:.2f} m"
-                )
-        generator = {
-            "module": "lamp.suites.warehouse_xl",
-            "seed": G.SUITE_SEED,
-            "rng": f"numpy.random.default_rng([{G.SUITE_SEED}, {XL.STREAM}, index])",
-        }
-        checks = _xl_check_settings()
+        files, entries, generator, checks = _build_xl(progress)
     elif name == CO.NAME:
-        for k in range(CO.N_SCENES):
-            cg = CO.generate_scene(k)
-            text = scene_yaml(cg.scene_dict)
-            files[f"{cg.scene_dict['name']}.yaml"] = text
-            entries.append(family_entry(cg, text))
-            if progress is not None:
-                w = cg.report.witness
-                progress(
-                    f"{cg.scene_dict['name']}: {cg.layout_info['workspace']} m, "
-                    f"{cg.layout_info['turns']} turn(s), attempts {cg.attempts}, witness "
-                    f"{w.length:.2f} m, min clearance {w.min_clearance:.4f} m"
-                )
-        generator = {
-            "module": "lamp.suites.corridor",
-            "seed": G.SUITE_SEED,
-            "rng": f"numpy.random.default_rng([{G.SUITE_SEED}, {CO.STREAM}, index])",
-        }
-        checks = _corridor_check_settings()
+        files, entries, generator, checks = _build_corridor(progress)
     elif name == "iros":
-        d, scene, steps = iros.build()
-        bad = [s.piece for s in steps if not s.ok]
-        if bad or not iros.goal_footprints_disjoint(scene):
-            raise RuntimeError(f"iros-01 fails its checks: {bad or 'goal footprints overlap'}")
-        text = scene_yaml(d)
-        files["iros-01.yaml"] = text
-        entries.append(
-            {
-                "name": "iros-01",
-                "file": "iros-01.yaml",
-                "sha256": hashlib.sha256(text.encode()).hexdigest(),
-                "n_obstacles": len(d["obstacles"]),
-                "approach_distance": iros.APPROACH,
-                "objects": [
-                    {**_object_summary(o), **s.to_dict()}
-                    for o, s in zip(d["objects"], steps, strict=True)
-                ],
-            }
-        )
-        generator = {"module": "lamp.suites.iros"}
+        files, entries, generator, checks = _build_iros()
     else:
-        for k in range(G.SCENES_PER_FAMILY):
-            gen = G.generate_scene(name, k)
-            text = scene_yaml(gen.scene_dict)
-            files[f"{gen.scene_dict['name']}.yaml"] = text
-            entries.append(family_entry(gen, text))
-            if progress is not None:
-                rep = gen.report.to_dict()
-                progress(
-                    f"{gen.scene_dict['name']}: attempts {gen.attempts}, too-tight shortest "
-                    f"route {rep['tight_shortest_route']}, free route "
-                    f"{rep['free_route']['length']:.2f} m, robot-room route "
-                    f"{rep['robot_route']['length']:.2f} m"
-                )
-        generator = {
-            "module": "lamp.suites.generators",
-            "seed": G.SUITE_SEED,
-            "rng": f"numpy.random.default_rng([{G.SUITE_SEED}, {G.FAMILIES.index(name)}, index])",
-            "tight_share": G.TIGHT_SHARE,
-        }
+        files, entries, generator, checks = _build_family(name, progress)
     manifest = {
         "format": MANIFEST_FORMAT,
         "suite": name,

@@ -287,19 +287,11 @@ def layout_tilt(rng: np.random.Generator, obj: ObjectSpec, want_tight: bool) -> 
     )
 
 
-def layout_warehouse(rng: np.random.Generator, obj: ObjectSpec, want_tight: bool) -> Layout:
-    """Shelf rows (long, shallow blocks) with aisles and cross-aisles sized for the
-    object, a dock area along one wall, pallets and cargo (boxes, barrels) narrowing some
-    aisles to tight passages, traffic barriers closing others, and cargo stacked against
-    the walls. The whole layout is randomly mirrored/transposed."""
-    W, H = WORKSPACE
-
-    def aisle() -> float:
-        return street_width(rng, obj, 0.30, 0.40)
-
-    dock = max(aisle(), rng.uniform(0.7, 1.0))
-    # rows of shelves above the dock (in the frame before transposing); a last row may
-    # stand against the far wall
+def _warehouse_rows(rng: np.random.Generator, aisle: Callable[[], float], dock: float
+                    ) -> tuple[list[float], list[float]]:
+    """Shelf depths and the streets before each (the first is the dock) up to the far wall,
+    in the frame before transposing; a last row may stand against the far wall."""
+    H = WORKSPACE[1]
     bv_list, sv_list = [], [dock]
     pos = dock
     while True:
@@ -319,8 +311,14 @@ def layout_warehouse(rng: np.random.Generator, obj: ObjectSpec, want_tight: bool
         sv_list.append(0.0)
     else:
         sv_list[-1] += rest
-    # columns of shelf segments with cross-aisles; the first may leave an aisle along the
-    # side wall, the last shelf reaches the other wall unless an aisle fits there
+    return bv_list, sv_list
+
+
+def _warehouse_columns(rng: np.random.Generator, aisle: Callable[[], float]
+                       ) -> tuple[list[float], list[float]]:
+    """Shelf segment lengths and the cross-aisles around them; the first may leave an aisle
+    along the side wall, the last shelf reaches the other wall unless an aisle fits there."""
+    W = WORKSPACE[0]
     bu_list, su_list = [], []
     first = aisle() if rng.random() < 0.6 else 0.0
     su_list.append(first)
@@ -338,61 +336,68 @@ def layout_warehouse(rng: np.random.Generator, obj: ObjectSpec, want_tight: bool
             break
         su_list.append(a)
         pos += a
-    lat = _Lattice(
-        np.array(bu_list), np.array(su_list), np.array(bv_list), np.array(sv_list), np.zeros(2), 0.0
-    )
-    transpose = rng.random() < 0.5
-    flip_x = rng.random() < 0.5
-    flip_y = rng.random() < 0.5
+    return bu_list, su_list
 
-    def plug(box: tuple[float, float, float, float], kind: str) -> list[dict[str, Any]]:
-        u0, u1, v0, v1 = box
-        if rng.random() < 0.5:  # traffic barrier across the aisle
-            t = rng.uniform(0.05, 0.08)
-            if kind == "c":
-                vm = rng.uniform(v0 + t, v1 - t)
-                return [rect(*lat.box(u0, u1, vm - t / 2, vm + t / 2))]
-            um = rng.uniform(u0 + t, u1 - t)
-            return [rect(*lat.box(um - t / 2, um + t / 2, v0, v1))]
-        # a pallet stack filling the aisle
+
+def _warehouse_plug(rng: np.random.Generator, lat: _Lattice,
+                    box: tuple[float, float, float, float], kind: str) -> list[dict[str, Any]]:
+    """A closed aisle segment: a traffic barrier across it or a pallet stack filling it."""
+    u0, u1, v0, v1 = box
+    if rng.random() < 0.5:  # traffic barrier across the aisle
+        t = rng.uniform(0.05, 0.08)
         if kind == "c":
-            ln = min(v1 - v0, rng.uniform(0.35, 0.55))
-            vm = rng.uniform(v0 + ln / 2, v1 - ln / 2)
-            return [rect(*lat.box(u0, u1, vm - ln / 2, vm + ln / 2))]
-        ln = min(u1 - u0, rng.uniform(0.35, 0.55))
-        um = rng.uniform(u0 + ln / 2, u1 - ln / 2)
-        return [rect(*lat.box(um - ln / 2, um + ln / 2, v0, v1))]
+            vm = rng.uniform(v0 + t, v1 - t)
+            return [rect(*lat.box(u0, u1, vm - t / 2, vm + t / 2))]
+        um = rng.uniform(u0 + t, u1 - t)
+        return [rect(*lat.box(um - t / 2, um + t / 2, v0, v1))]
+    # a pallet stack filling the aisle
+    if kind == "c":
+        ln = min(v1 - v0, rng.uniform(0.35, 0.55))
+        vm = rng.uniform(v0 + ln / 2, v1 - ln / 2)
+        return [rect(*lat.box(u0, u1, vm - ln / 2, vm + ln / 2))]
+    ln = min(u1 - u0, rng.uniform(0.35, 0.55))
+    um = rng.uniform(u0 + ln / 2, u1 - ln / 2)
+    return [rect(*lat.box(um - ln / 2, um + ln / 2, v0, v1))]
 
-    def tight(
-        box: tuple[float, float, float, float], kind: str, gap: float
-    ) -> list[dict[str, Any]]:
-        u0, u1, v0, v1 = box
-        side = rng.random() < 0.5
-        across = (u1 - u0) if kind == "c" else (v1 - v0)
-        fill = across - gap
-        if fill <= 0.02:
-            return []
-        along0, along1 = (v0, v1) if kind == "c" else (u0, u1)
-        if rng.random() < 0.3 and 0.2 <= fill <= 0.6 and along1 - along0 >= fill:
-            # a barrel (disk) against one side, its widest point leaving the gap
-            r = fill / 2
-            am = rng.uniform(along0 + r, along1 - r)
-            if kind == "c":
-                cu = u0 + r if side else u1 - r
-                x, y = lat.world(cu, am)
-            else:
-                cv = v0 + r if side else v1 - r
-                x, y = lat.world(am, cv)
-            return [circle(x, y, r)]
-        ln = min(along1 - along0, rng.uniform(0.3, 0.55))
-        am = rng.uniform(along0 + ln / 2, along1 - ln / 2)
+
+def _warehouse_tight(
+    rng: np.random.Generator, lat: _Lattice, box: tuple[float, float, float, float], kind: str,
+    gap: float,
+) -> list[dict[str, Any]]:
+    """Cargo against one side of an aisle segment leaving a ``gap`` wide passage: a barrel
+    (disk) or a box; nothing when the aisle is hardly wider than the gap."""
+    u0, u1, v0, v1 = box
+    side = rng.random() < 0.5
+    across = (u1 - u0) if kind == "c" else (v1 - v0)
+    fill = across - gap
+    if fill <= 0.02:
+        return []
+    along0, along1 = (v0, v1) if kind == "c" else (u0, u1)
+    if rng.random() < 0.3 and 0.2 <= fill <= 0.6 and along1 - along0 >= fill:
+        # a barrel (disk) against one side, its widest point leaving the gap
+        r = fill / 2
+        am = rng.uniform(along0 + r, along1 - r)
         if kind == "c":
-            a0, a1 = (u0, u0 + fill) if side else (u1 - fill, u1)
-            return [rect(*lat.box(a0, a1, am - ln / 2, am + ln / 2))]
-        a0, a1 = (v0, v0 + fill) if side else (v1 - fill, v1)
-        return [rect(*lat.box(am - ln / 2, am + ln / 2, a0, a1))]
+            cu = u0 + r if side else u1 - r
+            x, y = lat.world(cu, am)
+        else:
+            cv = v0 + r if side else v1 - r
+            x, y = lat.world(am, cv)
+        return [circle(x, y, r)]
+    ln = min(along1 - along0, rng.uniform(0.3, 0.55))
+    am = rng.uniform(along0 + ln / 2, along1 - ln / 2)
+    if kind == "c":
+        a0, a1 = (u0, u0 + fill) if side else (u1 - fill, u1)
+        return [rect(*lat.box(a0, a1, am - ln / 2, am + ln / 2))]
+    a0, a1 = (v0, v0 + fill) if side else (v1 - fill, v1)
+    return [rect(*lat.box(am - ln / 2, am + ln / 2, a0, a1))]
 
-    # cargo stacked against the dock wall (v = 0), away from the dock's middle
+
+def _dock_cargo(rng: np.random.Generator, lat: _Lattice, obj: ObjectSpec, dock: float
+                ) -> list[dict[str, Any]]:
+    """2-5 pieces of cargo (boxes, barrels) against the dock wall (v = 0), leaving the
+    object room to cross the dock."""
+    W = WORKSPACE[0]
     extra: list[dict[str, Any]] = []
     n_cargo = int(rng.integers(2, 6))
     room = dock - (obj.width + 2 * END_CLEARANCE)
@@ -408,6 +413,36 @@ def layout_warehouse(rng: np.random.Generator, obj: ObjectSpec, want_tight: bool
             extra.append(circle(x, y, r))
         else:
             extra.append(rect(*lat.box(um - ln / 2, um + ln / 2, 0.0, depth)))
+    return extra
+
+
+def layout_warehouse(rng: np.random.Generator, obj: ObjectSpec, want_tight: bool) -> Layout:
+    """Shelf rows (long, shallow blocks) with aisles and cross-aisles sized for the
+    object, a dock area along one wall, pallets and cargo (boxes, barrels) narrowing some
+    aisles to tight passages, traffic barriers closing others, and cargo stacked against
+    the walls. The whole layout is randomly mirrored/transposed."""
+
+    def aisle() -> float:
+        return street_width(rng, obj, 0.30, 0.40)
+
+    dock = max(aisle(), rng.uniform(0.7, 1.0))
+    bv_list, sv_list = _warehouse_rows(rng, aisle, dock)
+    bu_list, su_list = _warehouse_columns(rng, aisle)
+    lat = _Lattice(
+        np.array(bu_list), np.array(su_list), np.array(bv_list), np.array(sv_list), np.zeros(2), 0.0
+    )
+    transpose = rng.random() < 0.5
+    flip_x = rng.random() < 0.5
+    flip_y = rng.random() < 0.5
+
+    def plug(box: tuple[float, float, float, float], kind: str) -> list[dict[str, Any]]:
+        return _warehouse_plug(rng, lat, box, kind)
+
+    def tight(box: tuple[float, float, float, float], kind: str, gap: float
+              ) -> list[dict[str, Any]]:
+        return _warehouse_tight(rng, lat, box, kind, gap)
+
+    extra = _dock_cargo(rng, lat, obj, dock)
     p_plug, p_tight = (0.2, 0.3) if want_tight else (0.15, 0.15)
     layout = _lattice_layout(rng, lat, obj, p_plug, p_tight, plug, tight, extra, {})
     layout.obstacles = [_transform(d, transpose, flip_x, flip_y) for d in layout.obstacles]

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -104,20 +105,44 @@ def _maze_widths(
     return widths, np.array(tight)
 
 
-def layout_maze(rng: np.random.Generator, obj: ObjectSpec, want_tight: bool) -> Layout:
-    """A corridor maze of thin walls on a grid whose columns and rows are either roomy
-    (the object plus a robot on each side) or tight (the object plus 7-10 cm: corridors
-    too narrow for a robot beside the object). A spanning tree is carved by randomised
-    depth-first search over the roomy moves (horizontal moves are roomy in roomy rows,
-    vertical moves in roomy columns), so every cell with a roomy dimension is connected
-    with robot room; then some walls are opened along tight corridors (shortcuts only
-    the object fits through) and one roomy loop may be added. Sites are cell centres
-    where the object fits with room all around; the passage graph is the cell graph."""
+@dataclass(frozen=True)
+class _MazeGrid:
+    """The maze's cells: column widths and tightness (``cw``, ``ct``), row heights and
+    tightness (``rh``, ``rt``), cell edges ``xs``/``ys`` (``xs[i]`` = left edge of column
+    ``i``), cell centres ``xc``/``yc`` and the wall thickness ``t``. A wall key
+    ``(i, j, "v")`` separates cells (i, j) and (i+1, j); ``(i, j, "h")`` (i, j) and (i, j+1)."""
+
+    cw: np.ndarray
+    ct: np.ndarray
+    rh: np.ndarray
+    rt: np.ndarray
+    xs: np.ndarray
+    ys: np.ndarray
+    xc: np.ndarray
+    yc: np.ndarray
+    t: float
+
+    @property
+    def nx(self) -> int:
+        return len(self.cw)
+
+    @property
+    def ny(self) -> int:
+        return len(self.rh)
+
+    def cid(self, i: int, j: int) -> int:
+        return j * self.nx + i
+
+    def roomy_move(self, i: int, j: int, o: str) -> bool:
+        return not self.rt[j] if o == "v" else not self.ct[i]
+
+
+def _maze_grid(rng: np.random.Generator, obj: ObjectSpec) -> _MazeGrid:
+    """Draw the columns and rows (see :func:`_maze_widths`) and place them."""
     W, H = WORKSPACE
     t = 0.07
     cw, ct = _maze_widths(rng, obj, W, t)
     rh, rt = _maze_widths(rng, obj, H, t)
-    nx, ny = len(cw), len(rh)
     xs = np.concatenate([[0.0], np.cumsum(cw + t)])  # xs[i] = left edge of column i
     xs[-1] = W + t  # so that the last column's right edge is the border
     ys = np.concatenate([[0.0], np.cumsum(rh + t)])
@@ -125,13 +150,14 @@ def layout_maze(rng: np.random.Generator, obj: ObjectSpec, want_tight: bool) -> 
     # wall line between column i and i+1 is centred at xs[i+1] - t/2
     xc = 0.5 * (xs[:-1] + xs[1:] - t)
     yc = 0.5 * (ys[:-1] + ys[1:] - t)
+    return _MazeGrid(cw, ct, rh, rt, xs, ys, xc, yc, t)
 
-    def cid(i: int, j: int) -> int:
-        return j * nx + i
 
-    def roomy_move(i: int, j: int, o: str) -> bool:
-        return not rt[j] if o == "v" else not ct[i]
-
+def _carve_spanning_tree(rng: np.random.Generator, g: _MazeGrid) -> dict[tuple[int, int, str], str]:
+    """Every wall of the grid, "wall" or "open": randomised depth-first search over the
+    roomy moves opens a spanning tree of each roomy component (every cell not tight in
+    both directions is reached)."""
+    nx, ny, cid = g.nx, g.ny, g.cid
     walls: dict[tuple[int, int, str], str] = {}
     for j in range(ny):
         for i in range(nx):
@@ -139,9 +165,8 @@ def layout_maze(rng: np.random.Generator, obj: ObjectSpec, want_tight: bool) -> 
                 walls[(i, j, "v")] = "wall"
             if j + 1 < ny:
                 walls[(i, j, "h")] = "wall"
-    keys = sorted(walls)
     seen = np.zeros(nx * ny, dtype=bool)
-    roots = [(i, j) for j in range(ny) for i in range(nx) if not (ct[i] and rt[j])]
+    roots = [(i, j) for j in range(ny) for i in range(nx) if not (g.ct[i] and g.rt[j])]
     for root in [roots[int(rng.integers(len(roots)))]] + roots:
         if seen[cid(*root)]:
             continue
@@ -153,7 +178,7 @@ def layout_maze(rng: np.random.Generator, obj: ObjectSpec, want_tight: bool) -> 
             for di, dj in ((1, 0), (-1, 0), (0, 1), (0, -1)):
                 a, b = i + di, j + dj
                 key = (min(i, a), min(j, b), "v" if di else "h")
-                if 0 <= a < nx and 0 <= b < ny and not seen[cid(a, b)] and roomy_move(*key):
+                if 0 <= a < nx and 0 <= b < ny and not seen[cid(a, b)] and g.roomy_move(*key):
                     nbrs.append((a, b, key))
             if not nbrs:
                 stack.pop()
@@ -162,21 +187,33 @@ def layout_maze(rng: np.random.Generator, obj: ObjectSpec, want_tight: bool) -> 
             walls[key] = "open"
             seen[cid(a, b)] = True
             stack.append((a, b))
+    return walls
 
-    def edges(states: tuple[str, ...], roomy_only: bool) -> list[tuple[int, int, float]]:
-        out = []
-        for (i, j, o), st in walls.items():
-            if st in states and (roomy_move(i, j, o) or not roomy_only):
-                a = cid(i, j)
-                b = cid(i + 1, j) if o == "v" else cid(i, j + 1)
-                pa = (xc[i], yc[j])
-                pb = (xc[i + 1], yc[j]) if o == "v" else (xc[i], yc[j + 1])
-                out.append((a, b, float(math.dist(pa, pb))))
-        return out
 
+def _maze_edges(g: _MazeGrid, walls: dict[tuple[int, int, str], str], states: tuple[str, ...],
+                roomy_only: bool) -> list[tuple[int, int, float]]:
+    """Cell-graph edges (cell, cell, centre distance) through the walls in ``states``."""
+    out = []
+    for (i, j, o), st in walls.items():
+        if st in states and (g.roomy_move(i, j, o) or not roomy_only):
+            a = g.cid(i, j)
+            b = g.cid(i + 1, j) if o == "v" else g.cid(i, j + 1)
+            pa = (g.xc[i], g.yc[j])
+            pb = (g.xc[i + 1], g.yc[j]) if o == "v" else (g.xc[i], g.yc[j + 1])
+            out.append((a, b, float(math.dist(pa, pb))))
+    return out
+
+
+def _open_extra_walls(rng: np.random.Generator, g: _MazeGrid,
+                      walls: dict[tuple[int, int, str], str], want_tight: bool) -> None:
+    """Open, in place: shortcuts along tight corridors (preferring walls between cells far
+    apart), one wall of each cell tight in both directions that is still closed in, and
+    with probability 0.3 one roomy wall (a loop)."""
+    nx, ny, cid = g.nx, g.ny, g.cid
+    keys = sorted(walls)
     # shortcuts along tight corridors, preferring walls between cells far apart
-    d_open = graph_distances(nx * ny, edges(("open",), True))
-    tight_walls = [k for k in keys if walls[k] == "wall" and not roomy_move(*k)]
+    d_open = graph_distances(nx * ny, _maze_edges(g, walls, ("open",), True))
+    tight_walls = [k for k in keys if walls[k] == "wall" and not g.roomy_move(*k)]
     far = [
         k
         for k in tight_walls
@@ -193,21 +230,24 @@ def layout_maze(rng: np.random.Generator, obj: ObjectSpec, want_tight: bool) -> 
     # cells tight in both directions: open one of their walls (no closed boxes)
     for j in range(ny):
         for i in range(nx):
-            if not (ct[i] and rt[j]):
+            if not (g.ct[i] and g.rt[j]):
                 continue
             around = [(i - 1, j, "v"), (i, j, "v"), (i, j - 1, "h"), (i, j, "h")]
             around = [k for k in around if k in walls]
             if all(walls[k] == "wall" for k in around):
                 walls[around[int(rng.integers(len(around)))]] = "open"
-    roomy_walls = [k for k in keys if walls[k] == "wall" and roomy_move(*k)]
+    roomy_walls = [k for k in keys if walls[k] == "wall" and g.roomy_move(*k)]
     if roomy_walls and rng.random() < 0.3:
         walls[roomy_walls[int(rng.integers(len(roomy_walls)))]] = "open"
-    d_roomy = graph_distances(nx * ny, edges(("open",), True))
-    d_all = graph_distances(nx * ny, edges(("open",), False))
 
+
+def _wall_rectangles(g: _MazeGrid, walls: dict[tuple[int, int, str], str]) -> list[dict[str, Any]]:
+    """The closed walls as rectangles, each run of closed segments along a grid line merged
+    into one."""
+    W, H = WORKSPACE
+    xs, ys, t = g.xs, g.ys, g.t
     obstacles: list[dict[str, Any]] = []
-    # merge runs of closed wall segments along each grid line into one rectangle
-    for o, n_lines, n_pos in (("v", nx - 1, ny), ("h", ny - 1, nx)):
+    for o, n_lines, n_pos in (("v", g.nx - 1, g.ny), ("h", g.ny - 1, g.nx)):
         for line in range(n_lines):
             run: list[int] = []
             for pos in range(n_pos + 1):
@@ -225,12 +265,31 @@ def layout_maze(rng: np.random.Generator, obj: ObjectSpec, want_tight: bool) -> 
                     else:
                         obstacles.append(rect(0.5 * (lo + hi), c, hi - lo, t))
                     run = []
-    sites = np.array([(xc[i], yc[j], 0.0) for j in range(ny) for i in range(nx)])
-    n_tight_open = sum(1 for k, v in walls.items() if v == "open" and not roomy_move(*k))
+    return obstacles
+
+
+def layout_maze(rng: np.random.Generator, obj: ObjectSpec, want_tight: bool) -> Layout:
+    """A corridor maze of thin walls on a grid whose columns and rows are either roomy
+    (the object plus a robot on each side) or tight (the object plus 7-10 cm: corridors
+    too narrow for a robot beside the object). A spanning tree is carved by randomised
+    depth-first search over the roomy moves (horizontal moves are roomy in roomy rows,
+    vertical moves in roomy columns), so every cell with a roomy dimension is connected
+    with robot room; then some walls are opened along tight corridors (shortcuts only
+    the object fits through) and one roomy loop may be added. Sites are cell centres
+    where the object fits with room all around; the passage graph is the cell graph."""
+    g = _maze_grid(rng, obj)
+    nx, ny = g.nx, g.ny
+    walls = _carve_spanning_tree(rng, g)
+    _open_extra_walls(rng, g, walls, want_tight)
+    d_roomy = graph_distances(nx * ny, _maze_edges(g, walls, ("open",), True))
+    d_all = graph_distances(nx * ny, _maze_edges(g, walls, ("open",), False))
+    obstacles = _wall_rectangles(g, walls)
+    sites = np.array([(g.xc[i], g.yc[j], 0.0) for j in range(ny) for i in range(nx)])
+    n_tight_open = sum(1 for k, v in walls.items() if v == "open" and not g.roomy_move(*k))
     info = {
         "grid": [nx, ny],
-        "tight_columns": int(ct.sum()),
-        "tight_rows": int(rt.sum()),
+        "tight_columns": int(g.ct.sum()),
+        "tight_rows": int(g.rt.sum()),
         "tight_openings": n_tight_open,
     }
     return Layout(obstacles, sites, d_roomy, d_all, info)

@@ -12,6 +12,7 @@ from numpy.typing import ArrayLike
 
 from lamp.scene.model import Scene, Shape
 from lamp.suites import _kernels as K
+from lamp.suites import _search_kernels as S
 from lamp.suites.world import World, footprint_of, object_world
 
 #: clearance (m) kept by the "obstacle-free" route: small, but large enough that the
@@ -150,7 +151,7 @@ class RouteFinder:
         dst, dst_c = self._connectors(goal, tau)
         if len(src) == 0 or len(dst) == 0:
             return None
-        parent, end, _total = K.lattice_astar(
+        parent, end, _total = S.lattice_astar(
             self.nx, self.ny, self.nh, self.h, self.dth, float(tau), ROT_WEIGHT,
             src, src_c, dst, dst_c, float(goal[0]), float(goal[1]), self.cache, MAX_DEPTH,
             *self.fp.args, *self.world.args,
@@ -179,7 +180,7 @@ class RouteFinder:
         poses.append(g)
         arr = np.ascontiguousarray(np.array(poses))
         clear = K.batch_clearance(arr, *self.fp.args, *self.world.args)
-        keep = K.shortcut(
+        keep = S.shortcut(
             arr, clear, float(tau), 0.5 * math.pi, MAX_DEPTH, *self.fp.args, *self.world.args
         )
         arr = np.ascontiguousarray(arr[keep])

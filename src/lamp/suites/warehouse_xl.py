@@ -98,13 +98,10 @@ def _aisle(rng: np.random.Generator, obj: ObjectSpec) -> float:
     return s
 
 
-def layout_xl(rng: np.random.Generator, obj: ObjectSpec) -> XLLayout:
-    """Shelf rows along u, aisles between them, cross-aisles across; then transposed or
-    mirrored at random (the frame (u, v) maps to (x, y) or (y, x))."""
-    Lu = rnd(rng.uniform(*SIDE_RANGE), 1)
-    Lv = rnd(rng.uniform(*SIDE_RANGE), 1)
-    dock = rng.uniform(1.5, 2.5)
-    # rows: shelf depth / aisle alternating above the dock band
+def _xl_rows(rng: np.random.Generator, obj: ObjectSpec, Lv: float, dock: float
+             ) -> tuple[list[tuple[float, float]], list[tuple[float, float]]]:
+    """(v0, v1) of the shelf rows and of the aisles (the dock band first) alternating up to
+    the far wall; the last aisle takes what is left."""
     rows: list[tuple[float, float]] = []  # (v0, v1) of shelf rows
     aisles_v: list[tuple[float, float]] = [(0.0, dock)]
     pos = dock
@@ -119,7 +116,12 @@ def layout_xl(rng: np.random.Generator, obj: ObjectSpec) -> XLLayout:
     # the last aisle takes what is left up to the far wall
     v0, _ = aisles_v[-1]
     aisles_v[-1] = (v0, Lv)
-    # cross-aisles: an end aisle at each side wall, bays of 5-12 m between
+    return rows, aisles_v
+
+
+def _xl_cross_aisles(rng: np.random.Generator, obj: ObjectSpec, Lu: float
+                     ) -> list[tuple[float, float]]:
+    """(u0, u1) of the cross-aisles: an end aisle at each side wall, bays of 5-12 m between."""
     cross: list[tuple[float, float]] = []
     a = _aisle(rng, obj)
     cross.append((0.0, a))
@@ -133,7 +135,12 @@ def layout_xl(rng: np.random.Generator, obj: ObjectSpec) -> XLLayout:
         pos += bay + a
     a = _aisle(rng, obj)
     cross.append((Lu - a, Lu))
-    bays = [(cross[k][1], cross[k + 1][0]) for k in range(len(cross) - 1)]
+    return cross
+
+
+def _xl_shelves(rng: np.random.Generator, rows: list[tuple[float, float]],
+                bays: list[tuple[float, float]]) -> list[dict[str, Any]]:
+    """The shelves: in each row, one or two shelf units per bay."""
     obstacles: list[dict[str, Any]] = []
     for r0, r1 in rows:
         for b0, b1 in bays:
@@ -144,7 +151,14 @@ def layout_xl(rng: np.random.Generator, obj: ObjectSpec) -> XLLayout:
                 obstacles.append(_box(m + 0.05, b1, r0, r1))
             else:
                 obstacles.append(_box(b0, b1, r0, r1))
-    # pallets in the aisle bays between shelf rows (not the dock band or the last aisle)
+    return obstacles
+
+
+def _xl_pallets(rng: np.random.Generator, obj: ObjectSpec, aisles_v: list[tuple[float, float]],
+                bays: list[tuple[float, float]], obstacles: list[Any]) -> tuple[int, int]:
+    """Append pallets in the aisle bays between shelf rows (not the dock band or the last
+    aisle): stacks filling an aisle across, or pallets against one side leaving robot room.
+    Returns (stacks across, pallets aside)."""
     plugged = 0
     narrowed = 0
     for k in range(1, len(aisles_v) - 1):
@@ -173,7 +187,13 @@ def layout_xl(rng: np.random.Generator, obj: ObjectSpec) -> XLLayout:
                     else:
                         obstacles.append(_box(um - ln / 2, um + ln / 2, w1 - fill, w1))
                     narrowed += 1
-    # cargo (boxes, barrels) against the dock wall, leaving most of the band free
+    return plugged, narrowed
+
+
+def _xl_dock_cargo(rng: np.random.Generator, obj: ObjectSpec, Lu: float, dock: float,
+                   obstacles: list[Any]) -> None:
+    """Append cargo (boxes, and barrels as ``("circle", u, v, r)``) against the dock wall,
+    leaving most of the band free."""
     room = dock - (obj.width + 2 * END_CLEARANCE + 2 * C.ROBOT_ROOM)
     for _ in range(int(rng.integers(4, 12))):
         if room < 0.3:
@@ -182,9 +202,24 @@ def layout_xl(rng: np.random.Generator, obj: ObjectSpec) -> XLLayout:
         ln = rng.uniform(0.5, 1.2)
         um = rng.uniform(ln / 2, Lu - ln / 2)
         if rng.random() < 0.35:
-            obstacles.append(("circle", um, depth / 2, depth / 2))  # type: ignore[arg-type]
+            obstacles.append(("circle", um, depth / 2, depth / 2))
         else:
             obstacles.append(_box(um - ln / 2, um + ln / 2, 0.0, depth))
+
+
+def layout_xl(rng: np.random.Generator, obj: ObjectSpec) -> XLLayout:
+    """Shelf rows along u, aisles between them, cross-aisles across; then transposed or
+    mirrored at random (the frame (u, v) maps to (x, y) or (y, x))."""
+    Lu = rnd(rng.uniform(*SIDE_RANGE), 1)
+    Lv = rnd(rng.uniform(*SIDE_RANGE), 1)
+    dock = rng.uniform(1.5, 2.5)
+    # rows: shelf depth / aisle alternating above the dock band
+    rows, aisles_v = _xl_rows(rng, obj, Lv, dock)
+    cross = _xl_cross_aisles(rng, obj, Lu)
+    bays = [(cross[k][1], cross[k + 1][0]) for k in range(len(cross) - 1)]
+    obstacles: list[Any] = _xl_shelves(rng, rows, bays)
+    plugged, narrowed = _xl_pallets(rng, obj, aisles_v, bays, obstacles)
+    _xl_dock_cargo(rng, obj, Lu, dock, obstacles)
     # sites: centres of the crossings of the aisles with the cross-aisles
     sites = [
         (0.5 * (c0 + c1), 0.5 * (a0 + a1), 0.0) for a0, a1 in aisles_v for c0, c1 in cross
