@@ -18,6 +18,7 @@ import json
 import logging
 import math
 import time
+from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
@@ -35,12 +36,11 @@ from lamp.manip.flow import (
     noise_trajectory,
     tokenize,
 )
+from lamp.manip.flow_net import FlowNet, NetConfig
 from lamp.manip.image import batch_images
 from lamp.manip.network import (
     MOTION_SCALE,
     Checkpoint,
-    FlowNet,
-    NetConfig,
     SamplerConfig,
     save_checkpoint,
 )
@@ -92,7 +92,7 @@ def make_batch(
     """Assemble samples ``idx`` (with a random D4 symmetry each when ``rng`` is given).
 
     ``residual``: encode the pushes as deviations from the rigid displacement of the
-    contact along the (achieved) motion, see ``lamp.manip.network.TRAJECTORY_PARAMS``.
+    contact along the (achieved) motion, see ``lamp.manip.flow_net.TRAJECTORY_PARAMS``.
     """
     kind = ds.shape_kind[idx].astype(int)
     params = ds.shape_params[idx].copy()
@@ -187,6 +187,90 @@ def split_indices(n: int, val_fraction: float, seed: int) -> tuple[np.ndarray, n
 
 
 # --------------------------------------------------------------------------- the loop
+def _resume_state(state_path: Path, cfg: TrainConfig, net_cfg: NetConfig | None
+                  ) -> tuple[dict[str, Any] | None, TrainConfig, NetConfig | None, float | None, int]:
+    """What a run directory's saved state fixes: (state or None, train config with the
+    asked epochs, net config, trajectory scale, epochs done); unchanged when none is saved."""
+    if not state_path.is_file():
+        return None, cfg, net_cfg, None, 0
+    st = torch.load(state_path, map_location="cpu", weights_only=True)
+    net_cfg = NetConfig.from_dict(st["net_config"])
+    saved = TrainConfig(**st["train_config"])
+    if saved.epochs != cfg.epochs:
+        log.info("resuming with epochs %d (was %d)", cfg.epochs, saved.epochs)
+    cfg = TrainConfig(**{**asdict(saved), "epochs": cfg.epochs})
+    return st, cfg, net_cfg, float(st["traj_scale"]), int(st["epoch"])
+
+
+def _lr_schedule(cfg: TrainConfig, total_steps: int) -> Callable[[int], float]:
+    """Learning rate per step: linear warm-up, then cosine decay to 0 at ``total_steps``."""
+
+    def lr_at(step: int) -> float:
+        warm = min(1.0, (step + 1) / max(1, min(200, total_steps // 10)))
+        return cfg.lr * warm * 0.5 * (1 + math.cos(math.pi * min(step, total_steps) / total_steps))
+
+    return lr_at
+
+
+def _load_history(run: Path, start_epoch: int) -> list[dict[str, Any]]:
+    """The loss records of the epochs already done; the log is cut back to them."""
+    if not ((run / "losses.jsonl").is_file() and start_epoch):
+        return []
+    history = [json.loads(x) for x in (run / "losses.jsonl").read_text().splitlines()
+               if x.strip()][:start_epoch]
+    # drop log lines of an epoch whose state was never saved (killed in between)
+    (run / "losses.jsonl").write_text("".join(json.dumps(h) + "\n" for h in history))
+    return history
+
+
+def _train_epoch(net: FlowNet, opt: torch.optim.Optimizer, ds: PushDataset,
+                 train_idx: np.ndarray, epoch: int, steps_per_epoch: int, traj_scale: float,
+                 cfg: TrainConfig, net_cfg: NetConfig, lr_at: Callable[[int], float],
+                 progress: bool) -> np.ndarray:
+    """One epoch of optimisation (batches and noise seeded by ``(cfg.seed, epoch)``);
+    returns the summed (cross-entropy, MSE, token accuracy) over its steps."""
+    from tqdm import tqdm
+
+    rng = np.random.default_rng([cfg.seed, epoch])
+    gen = torch.Generator().manual_seed(cfg.seed * 100_003 + epoch)
+    perm = rng.permutation(train_idx)
+    sums = np.zeros(3)
+    bar = tqdm(range(steps_per_epoch), desc=f"epoch {epoch + 1}/{cfg.epochs}",
+               disable=not progress, leave=False)
+    for i in bar:
+        step = epoch * steps_per_epoch + i
+        for grp in opt.param_groups:
+            grp["lr"] = lr_at(step)
+        part = perm[i * cfg.images_per_step:(i + 1) * cfg.images_per_step]
+        batch = make_batch(ds, part, traj_scale, rng if cfg.augment else None,
+                           net_cfg.image_size, net_cfg.residual)
+        ce, mse, acc = batch_losses(net, batch, cfg.draws_per_image, gen)
+        loss = ce + cfg.mse_weight * mse
+        opt.zero_grad(set_to_none=True)
+        loss.backward()
+        torch.nn.utils.clip_grad_norm_(net.parameters(), 1.0)
+        opt.step()
+        sums += (ce.item(), mse.item(), acc.item())
+        if i % 10 == 0:
+            bar.set_postfix(ce=f"{sums[0] / (i + 1):.3f}", mse=f"{sums[1] / (i + 1):.4f}")
+    return sums
+
+
+def _save_epoch(run: Path, rec: dict[str, Any], net: FlowNet, opt: torch.optim.Optimizer,
+                epoch: int, net_cfg: NetConfig, cfg: TrainConfig, traj_scale: float,
+                summary: dict[str, Any]) -> None:
+    """Append the epoch's record to ``losses.jsonl``, save the resumable state and export
+    the current model."""
+    with open(run / "losses.jsonl", "a") as fh:
+        fh.write(json.dumps(rec) + "\n")
+    torch.save({
+        "model": net.state_dict(), "optimizer": opt.state_dict(), "epoch": epoch + 1,
+        "net_config": _cfg_dict(net_cfg), "train_config": asdict(cfg),
+        "traj_scale": traj_scale,
+    }, run / "train_state.pt")
+    export(net, traj_scale, run / "model.pt", summary)
+
+
 def train(
     ds: PushDataset,
     run_dir: str | Path,
@@ -205,18 +289,8 @@ def train(
     run = Path(run_dir)
     run.mkdir(parents=True, exist_ok=True)
     torch.set_num_threads(cfg.threads)
-    state_path = run / "train_state.pt"
-    traj_scale = None
-    start_epoch = 0
-    if state_path.is_file():
-        st = torch.load(state_path, map_location="cpu", weights_only=True)
-        net_cfg = NetConfig.from_dict(st["net_config"])
-        saved = TrainConfig(**st["train_config"])
-        if saved.epochs != cfg.epochs:
-            log.info("resuming with epochs %d (was %d)", cfg.epochs, saved.epochs)
-        cfg = TrainConfig(**{**asdict(saved), "epochs": cfg.epochs})
-        traj_scale = float(st["traj_scale"])
-        start_epoch = int(st["epoch"])
+    st, cfg, net_cfg, traj_scale, start_epoch = _resume_state(run / "train_state.pt", cfg,
+                                                               net_cfg)
     net_cfg = net_cfg or NetConfig()
     if traj_scale is None:
         traj_scale = trajectory_scale(ds, net_cfg.residual)
@@ -224,50 +298,20 @@ def train(
     net = FlowNet(net_cfg)
     opt = torch.optim.AdamW(net.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
     if start_epoch:
-        net.load_state_dict(st["model"])
-        opt.load_state_dict(st["optimizer"])
+        net.load_state_dict(st["model"])  # type: ignore[index]
+        opt.load_state_dict(st["optimizer"])  # type: ignore[index]
     train_idx, val_idx = split_indices(len(ds), cfg.val_fraction, cfg.seed)
     steps_per_epoch = max(1, len(train_idx) // cfg.images_per_step)
-    total_steps = steps_per_epoch * cfg.epochs
-
-    def lr_at(step: int) -> float:
-        warm = min(1.0, (step + 1) / max(1, min(200, total_steps // 10)))
-        return cfg.lr * warm * 0.5 * (1 + math.cos(math.pi * min(step, total_steps) / total_steps))
-
+    lr_at = _lr_schedule(cfg, steps_per_epoch * cfg.epochs)
     from tqdm import tqdm
 
-    history: list[dict[str, Any]] = []
-    if (run / "losses.jsonl").is_file() and start_epoch:
-        history = [json.loads(x) for x in (run / "losses.jsonl").read_text().splitlines()
-                   if x.strip()][:start_epoch]
-        # drop log lines of an epoch whose state was never saved (killed in between)
-        (run / "losses.jsonl").write_text("".join(json.dumps(h) + "\n" for h in history))
+    history = _load_history(run, start_epoch)
     t_start = time.perf_counter()
     net.train()
     for epoch in range(start_epoch, cfg.epochs):
-        rng = np.random.default_rng([cfg.seed, epoch])
-        gen = torch.Generator().manual_seed(cfg.seed * 100_003 + epoch)
-        perm = rng.permutation(train_idx)
-        sums = np.zeros(3)
         t_ep = time.perf_counter()
-        bar = tqdm(range(steps_per_epoch), desc=f"epoch {epoch + 1}/{cfg.epochs}",
-                   disable=not progress, leave=False)
-        for i in bar:
-            step = epoch * steps_per_epoch + i
-            for grp in opt.param_groups:
-                grp["lr"] = lr_at(step)
-            part = perm[i * cfg.images_per_step:(i + 1) * cfg.images_per_step]
-            batch = make_batch(ds, part, traj_scale, rng if cfg.augment else None,
-                               net_cfg.image_size, net_cfg.residual)
-            ce, mse, acc = batch_losses(net, batch, cfg.draws_per_image, gen)
-            loss = ce + cfg.mse_weight * mse
-            opt.zero_grad(set_to_none=True)
-            loss.backward()
-            torch.nn.utils.clip_grad_norm_(net.parameters(), 1.0)
-            opt.step()
-            sums += (ce.item(), mse.item(), acc.item())
-            if i % 10 == 0:
-                bar.set_postfix(ce=f"{sums[0] / (i + 1):.3f}", mse=f"{sums[1] / (i + 1):.4f}")
+        sums = _train_epoch(net, opt, ds, train_idx, epoch, steps_per_epoch, traj_scale, cfg,
+                            net_cfg, lr_at, progress)
         val = evaluate_losses(net, ds, val_idx, traj_scale, cfg.seed + 1) if len(val_idx) else {}
         rec = {
             "epoch": epoch + 1,
@@ -283,14 +327,8 @@ def train(
         if progress:
             tqdm.write(json.dumps({k: round(v, 5) if isinstance(v, float) else v
                                    for k, v in rec.items()}))
-        with open(run / "losses.jsonl", "a") as fh:
-            fh.write(json.dumps(rec) + "\n")
-        torch.save({
-            "model": net.state_dict(), "optimizer": opt.state_dict(), "epoch": epoch + 1,
-            "net_config": _cfg_dict(net_cfg), "train_config": asdict(cfg),
-            "traj_scale": traj_scale,
-        }, state_path)
-        export(net, traj_scale, run / "model.pt", _summary(ds, cfg, history))
+        _save_epoch(run, rec, net, opt, epoch, net_cfg, cfg, traj_scale,
+                    _summary(ds, cfg, history))
         if max_minutes is not None and time.perf_counter() - t_start > 60 * max_minutes:
             log.info("stopping after epoch %d: time budget of %.1f min used", epoch + 1,
                      max_minutes)
