@@ -180,7 +180,6 @@ class LazyPlanner:
         """
         cfg = self.config
         self.calls += 1
-        tol = cfg.robot_match_tolerance
         goal = self.lattice.goal_node
         stats = self.verifier.stats
         verify_cap = stats.verify_calls + cfg.max_verify_calls
@@ -231,35 +230,9 @@ class LazyPlanner:
                 curr, q_R = nxt, trans.robot_end  # line 24: q_curr = q_next, T_R.last()
             if failed:
                 continue
-            if curr != goal and self.lattice.is_node(curr) and curr in self.tree_eval:  # lines 25-40: Tree_eval
-                ok = True
-                walked: list[Node] = []
-                while curr != goal:
-                    entry = self.tree_eval.get(curr)
-                    if entry is None:  # the chain was cut below (a forgotten push): the
-                        for n in walked:  # part above it is verified afresh next iteration
-                            self.tree_eval.pop(n, None)
-                        ok = False
-                        break
-                    walked.append(curr)
-                    trans = entry.lookup(q_R, tol)  # line 38: reuse cached
-                    if trans is None:  # lines 27-35: Reassign, Gspi: new T_move for these robots
-                        trans = self.verifier.reroute(entry.transition, q_R)
-                        if trans is None:
-                            # departure: the cached push cannot be reached from here, so
-                            # it is forgotten (not only penalised): the next iteration
-                            # verifies this motion afresh, with new model samples
-                            del self.tree_eval[curr]
-                            self._penalise(curr, entry.next_node)
-                            ok = False
-                            break
-                        entry.cache.append((q_R.copy(), trans))  # line 35: cache
-                    else:
-                        self.verifier.stats.cache_hits += 1
-                    transitions.append(trans)
-                    curr, q_R = entry.next_node, trans.robot_end
-                if not ok:
-                    continue
+            if (curr != goal and self.lattice.is_node(curr) and curr in self.tree_eval
+                    and not self._follow_tree(curr, q_R, transitions)):  # lines 25-40: Tree_eval
+                continue
             self.tree_eval.update(tree_new)  # line 41: Tree_eval = Tree_new + Tree_eval
             verified = [(t.q_from[:2].copy(), t.q_to[:2].copy()) for t in transitions]
             if not transitions:  # already at the goal node
@@ -267,3 +240,37 @@ class LazyPlanner:
             return Plan(PlanStatus.SOLVED, transitions, verified, list(self.penalised))
         return self._recover(q_O_now, q_R_now, Plan.failed(
             PlanStatus.BUDGET_EXHAUSTED, self.penalised, "max_plan_iterations"))
+
+
+    def _follow_tree(self, curr: Node, q_R: np.ndarray, transitions: list[Transition]) -> bool:
+        """Alg. 2 lines 25-40 (Tree_eval): from ``curr`` to the goal along the verified
+        tree, appending each push to ``transitions``: a cached T_R for robots at ``q_R``
+        (line 38: reuse cached) or new approach paths (lines 27-35: Reassign, Gspi).
+        False when the chain is cut (a push forgotten below, or one the robots cannot
+        reach from here, then forgotten and penalised): the caller plans again."""
+        goal = self.lattice.goal_node
+        tol = self.config.robot_match_tolerance
+        walked: list[Node] = []
+        while curr != goal:
+            entry = self.tree_eval.get(curr)
+            if entry is None:  # the chain was cut below (a forgotten push): the
+                for n in walked:  # part above it is verified afresh next iteration
+                    self.tree_eval.pop(n, None)
+                return False
+            walked.append(curr)
+            trans = entry.lookup(q_R, tol)  # line 38: reuse cached
+            if trans is None:  # lines 27-35: Reassign, Gspi: new T_move for these robots
+                trans = self.verifier.reroute(entry.transition, q_R)
+                if trans is None:
+                    # departure: the cached push cannot be reached from here, so
+                    # it is forgotten (not only penalised): the next iteration
+                    # verifies this motion afresh, with new model samples
+                    del self.tree_eval[curr]
+                    self._penalise(curr, entry.next_node)
+                    return False
+                entry.cache.append((q_R.copy(), trans))  # line 35: cache
+            else:
+                self.verifier.stats.cache_hits += 1
+            transitions.append(trans)
+            curr, q_R = entry.next_node, trans.robot_end
+        return True
