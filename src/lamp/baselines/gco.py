@@ -1,6 +1,6 @@
 """The GCo baselines (``gco-ori``, ``gco-var``): GCo's own manipulation loop, no verification.
 
-Each iteration (facts sheet, "How GCo itself drives a manipulation"): weighted A* (w = 2)
+Each iteration (as GCo drives a manipulation, the LAMP paper's baseline): weighted A* (w = 2)
 for the object alone on a 0.1 m / 0.1 rad lattice, with the object inflated by 0.2 m
 (``gco-ori``) or not at all (``gco-var``); take the waypoint about 0.3 m ahead; clamp the
 step to +-0.2 m and +-0.3 rad; ask the model for ONE sample with budget = number of robots

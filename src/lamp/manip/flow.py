@@ -1,6 +1,7 @@
 """Discrete + continuous flow matching for contact formations (our own equations).
 
-Two coupled probability paths share one time t in [0, 1] (gco-facts.md "GCo_DC"):
+Two coupled probability paths share one time t in [0, 1] (GCo's discrete-continuous
+flow, GCo_DC, the manipulation model the LAMP paper uses):
 
 * **Contacts** are discrete. Each robot slot has two tokens (the x and the y cell of an
   object-centred grid of ``N_BINS`` cells over ``GRID_EXTENT`` metres) or the pair

@@ -14,13 +14,13 @@ message is about the first thing to fix:
    finite; sizes and radii are > 0; polygons have >= 3 vertices, no repeated consecutive
    vertex, are simple (not self-intersecting) and have positive area. An optional field
    written as ``null`` counts as absent (``obstacles:`` with nothing under it is common).
-2. geometry, with exact footprints (disks, rotated rectangles, polygons) and the spec's
+2. geometry, with exact footprints (disks, rotated rectangles, polygons) and the scene format's (``docs/scene-format.md``)
    absolute rounding tolerance ``EPS = 1e-6`` m (a wall written with ``angle: 1.5708``
    that touches the border is inside it): obstacles, robots and objects (at start and at goal) lie
    inside the workspace (touching the border is allowed, crossing by more than ``EPS``
    is not); robots do not overlap each other, an obstacle, or an object at its start; no
    object overlaps an obstacle at its start or at its goal.
-   Two rules beyond the spec's list, because such a scene is physically impossible:
+   Two rules beyond the format's list, because such a scene is physically impossible:
    objects do not overlap each other at their starts, nor at their goals.
 
 "Overlap" means a positive-area intersection: for two disks, centre distance below the sum

@@ -4,7 +4,7 @@ The schema states the structural rules of ``scene-format.md``: required fields, 
 unknown keys, types, positive sizes and radii, list lengths. The geometric rules
 (containment, overlaps, simple polygons) are beyond JSON Schema; ``lamp validate``
 checks everything. Every file ``load_scene`` accepts validates against this schema (the
-tests check it on the spec's example and the built-in suites).
+tests check it on the scene format's example and the built-in suites).
 """
 
 from __future__ import annotations

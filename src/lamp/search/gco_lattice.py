@@ -1,6 +1,6 @@
 """GCo's object-only planner: weighted A* (w = 2) on a 0.1 m / 0.1 rad lattice.
 
-GCo (see ``/work/shared/reference/gco-facts.md``) plans the object alone with weighted A*
+GCo (the LAMP paper's baseline) plans the object alone with weighted A*
 on a lattice of 0.1 m and 0.1 rad with 26 moves (8 neighbours or stay, times rotation
 {0, +-0.1}, minus staying put), inflating the object by 0.2 m in its collision check
 (``gco-ori``) or not at all (``gco-var``). Our version:
