@@ -67,12 +67,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from lamp.errors import InputError
 from lamp.geometry.robot_space import RobotSpace
-from lamp.mrmp.assignment import ASSIGNMENTS, assign
+from lamp.mrmp.assignment import assign
 from lamp.mrmp.distance_field import Lattice, get_lattice
-from lamp.mrmp.endpoints import as_points, check_points
 from lamp.mrmp.goal_distances import GoalDistances
+from lamp.mrmp.gspi_inputs import PlanInputs, check_inputs
 from lamp.mrmp.gspi_kernels import Graph, run_steps
 from lamp.mrmp.result import GspiStatus, MRMPPlan
 from lamp.scene.model import Scene
@@ -188,70 +187,40 @@ def plan_paths(
     if not _WARM:
         warmup()
     t_begin = time.perf_counter()
-    if isinstance(scene, RobotSpace):
-        if space is not None or object_poses is not None or len(extra_obstacles):
-            raise InputError("plan_paths(space, ...) plans in that space: pass no space=, "
-                             "object_poses= or extra_obstacles= beside it")
-        space = scene
-    elif not isinstance(scene, Scene):
-        raise InputError(f"scene must be a lamp Scene or a RobotSpace, got "
-                         f"{type(scene).__name__}")
-    S = as_points(starts, "starts")
-    G = as_points(goals, "goals")
-    N, M = len(S), len(G)
-    if N < 1:
-        raise InputError("starts must hold at least one robot")
-    if M > N:
-        raise InputError(f"goals has {M} points but there are only {N} robots (need M <= N)")
-    if not (np.isfinite(time_limit) and time_limit > 0):
-        raise InputError(f"time_limit must be positive, got {time_limit!r}")
-    if not (np.isfinite(max_spacing) and max_spacing > 0):
-        raise InputError(f"max_spacing must be positive, got {max_spacing!r}")
-    if goal_tolerance < 0 or start_tolerance < 0:
-        raise InputError("goal_tolerance and start_tolerance must be >= 0")
-    if assignment not in ASSIGNMENTS:
-        raise InputError(f"assignment must be one of {', '.join(ASSIGNMENTS)}, got "
-                         f"{assignment!r}")
-    if swap_radius is not None and not (np.isfinite(swap_radius) and swap_radius > 0):
-        raise InputError(f"swap_radius must be positive, got {swap_radius!r}")
-    if space is None:
-        space = RobotSpace.from_scene(scene, object_poses, extra_obstacles)
-    elif not isinstance(space, RobotSpace):
-        raise InputError(f"space must be a RobotSpace, got {type(space).__name__}")
-    c_start, bad_start = check_points(space, S, "starts", start_tolerance)
-    c_goal, bad_goal = check_points(space, G, "goals", goal_tolerance)
-    goal0: np.ndarray | None = None
-    if initial_goal_of is not None:
-        goal0 = np.asarray(initial_goal_of, dtype=np.int64).reshape(-1)
-        if goal0.shape != (N,) or np.any(goal0 < -1) or np.any(goal0 >= M):
-            raise InputError(f"initial_goal_of must be (N,) goal indices or -1, got {goal0}")
-        used = goal0[goal0 >= 0]
-        if len(np.unique(used)) != M or len(used) != M:
-            raise InputError("initial_goal_of must give every goal to exactly one robot")
-
-    steps = (lattice_step,) if np.isscalar(lattice_step) else tuple(lattice_step)  # type: ignore[arg-type]
-    if not steps:
-        raise InputError("lattice_step must be a step or a non-empty sequence of steps")
-    if bad_start or bad_goal:
-        status = GspiStatus.INVALID_START if bad_start else GspiStatus.INVALID_GOAL
+    inp = check_inputs(scene, starts, goals, object_poses, extra_obstacles, time_limit,
+                       space=space, max_spacing=max_spacing, goal_tolerance=goal_tolerance,
+                       start_tolerance=start_tolerance, assignment=assignment,
+                       swap_radius=swap_radius, initial_goal_of=initial_goal_of,
+                       lattice_step=lattice_step)
+    S, N = inp.starts, len(inp.starts)
+    if inp.bad_start or inp.bad_goal:
+        status = GspiStatus.INVALID_START if inp.bad_start else GspiStatus.INVALID_GOAL
         return MRMPPlan(False, S[:, None, :].copy(), np.full(N, -1, np.int64),
-                        bad_start or bad_goal, 0, time.perf_counter() - t_begin, {}, status)
-    if M == 0:
+                        inp.bad_start or inp.bad_goal, 0, time.perf_counter() - t_begin, {},
+                        status)
+    if len(inp.goals) == 0:
         return MRMPPlan(True, S[:, None, :].copy(), np.full(N, -1, np.int64), "", 0,
                         time.perf_counter() - t_begin, {})
     opts = _Options(link_radius, goal_swapping, float(max_spacing), max_steps, stall_steps,
                     seed, t_begin + float(time_limit), float(time_limit), assignment,
                     swap_radius)
+    return _try_lattices(inp, opts, t_begin)
+
+
+def _try_lattices(inp: PlanInputs, opts: _Options, t_begin: float) -> MRMPPlan:
+    """Attempt each lattice step in turn until one succeeds, fails in a way a finer
+    lattice cannot fix, or time runs out; the plan reports every attempt."""
     stats: dict[str, Any] = {"attempts": []}
     reasons: list[str] = []
     out: _Attempt | None = None
-    for L in steps:
+    for L in inp.steps:
         if out is not None and time.perf_counter() >= opts.deadline:
-            reasons.append(f"time limit of {time_limit:g} s reached before trying the "
+            reasons.append(f"time limit of {opts.time_limit:g} s reached before trying the "
                            f"{L:g} m lattice")
             out.status = GspiStatus.TIME_LIMIT
             break
-        out = _attempt(space, S, G, c_start, c_goal, float(L), goal0, opts)
+        out = _attempt(inp.space, inp.starts, inp.goals, inp.c_start, inp.c_goal, float(L),
+                       inp.goal0, opts)
         stats["attempts"].append({"lattice_step": float(L), **out.stats})
         stats.update(out.stats)
         if out.success:
