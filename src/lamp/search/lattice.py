@@ -54,124 +54,35 @@ import array
 import math
 from collections.abc import Sequence
 
-import numba
 import numpy as np
 from numpy.typing import ArrayLike
 
 from lamp.contract.model import MOTION_RANGE
 from lamp.geometry import se2
-from lamp.geometry.object_kernels import motion_free_kernel, pose_free_kernel
 from lamp.geometry.object_space import ObjectSpace
 from lamp.scene.model import Scene
 from lamp.search.landmark import LandmarkPotential
+from lamp.search.lattice_primitives import (
+    _REVERSE,
+    BLOCKED,
+    FREE,
+    PRIMITIVES,
+    UNKNOWN,
+    _successor_kernel,
+    check_lattice_args,
+    primitive_costs,
+)
 from lamp.search.metric import OCTILE_MINOR, TWO_PI, lattice_metric, motion_cost
 
 Node = int
 VirtualNode = tuple[float, float, float]
 
-#: Cached validity of nodes and edges: not checked yet, checked and blocked, checked and free.
-UNKNOWN, BLOCKED, FREE = 0, 1, 2
 #: Successor lists kept (they take ~1.5 kB a node; validity stays cached regardless).
 _SUCC_KEPT = 20_000
-
-#: the 26 primitives (di, dj, dk): 8 translations x {-1, 0, +1} heading bins, 2 rotations
-PRIMITIVES: tuple[tuple[int, int, int], ...] = tuple(
-    (di, dj, dk)
-    for di in (-1, 0, 1)
-    for dj in (-1, 0, 1)
-    for dk in (-1, 0, 1)
-    if (di, dj, dk) != (0, 0, 0)
-)
-#: index of the reverse primitive
-_REVERSE = tuple(PRIMITIVES.index((-di, -dj, -dk)) for di, dj, dk in PRIMITIVES)
 
 #: the manipulation model's trained range (object frame): |dx|, |dy| and |dtheta|
 MODEL_MAX_TRANSLATION = MOTION_RANGE[0]
 MODEL_MAX_ROTATION = MOTION_RANGE[2]
-
-
-@numba.njit(cache=True)
-def _successor_kernel(
-    u: int,
-    n_j: int,
-    n_k: int,
-    i_min: int,
-    j_min: int,
-    ax: float,
-    ay: float,
-    at: float,
-    step: float,
-    dth: float,
-    prim: np.ndarray,
-    rev: np.ndarray,
-    node_valid: np.ndarray,
-    edge_valid: np.ndarray,
-    out_ids: np.ndarray,
-    out_prim: np.ndarray,
-    margin: float,
-    reach: float,
-    sd: tuple,
-    res: float,
-    width: float,
-    height: float,
-    fp: tuple,
-    reach2: float,
-) -> tuple[int, int, int]:
-    """Fill ``out_ids``/``out_prim`` with u's valid edges, checking (and caching in
-    ``node_valid``/``edge_valid``) what is unknown. Returns (count, pose checks, motion
-    checks). Poses are computed exactly as ``ObjectLattice.poses`` does; each motion is
-    checked from its lower-id end and stored for both directions."""
-    n_i = node_valid.shape[0] // (n_j * n_k)
-    rest = u // n_k
-    k = u - rest * n_k
-    ii = rest // n_j
-    jj = rest - ii * n_j
-    two_pi = 2.0 * math.pi
-    xu = ax + (ii + i_min) * step
-    yu = ay + (jj + j_min) * step
-    tu = (at + k * dth + math.pi) % two_pi - math.pi
-    n_pose = 0
-    n_motion = 0
-    if node_valid[u] == UNKNOWN:
-        node_valid[u] = BLOCKED + pose_free_kernel(xu, yu, tu, sd, res, width, height, fp,
-                                                   reach2)
-        n_pose += 1
-    if node_valid[u] == BLOCKED:
-        return 0, n_pose, n_motion
-    n = 0
-    for p in range(prim.shape[0]):
-        ni = ii + prim[p, 0]
-        nj = jj + prim[p, 1]
-        if ni < 0 or ni >= n_i or nj < 0 or nj >= n_j:
-            continue
-        nk = (k + prim[p, 2]) % n_k
-        v = (ni * n_j + nj) * n_k + nk
-        xv = ax + (ni + i_min) * step
-        yv = ay + (nj + j_min) * step
-        tv = (at + nk * dth + math.pi) % two_pi - math.pi
-        if node_valid[v] == UNKNOWN:
-            node_valid[v] = BLOCKED + pose_free_kernel(xv, yv, tv, sd, res, width, height, fp,
-                                                       reach2)
-            n_pose += 1
-        if node_valid[v] == BLOCKED:
-            continue
-        if edge_valid[u, p] == UNKNOWN:
-            if u < v:
-                free = motion_free_kernel(
-                    xu, yu, tu, xv, yv, tv, margin, reach, sd, res, width, height, fp, reach2
-                )
-            else:
-                free = motion_free_kernel(
-                    xv, yv, tv, xu, yu, tu, margin, reach, sd, res, width, height, fp, reach2
-                )
-            n_motion += 1
-            edge_valid[u, p] = BLOCKED + free
-            edge_valid[v, rev[p]] = BLOCKED + free
-        if edge_valid[u, p] == FREE:
-            out_ids[n] = v
-            out_prim[n] = p
-            n += 1
-    return n, n_pose, n_motion
 
 
 class ObjectLattice:
@@ -202,27 +113,8 @@ class ObjectLattice:
         max_rotation: float = MODEL_MAX_ROTATION,
         landmark: ArrayLike | None = None,
     ) -> None:
-        anchor = np.asarray(anchor, dtype=float)
-        if anchor.shape != (3,) or not np.all(np.isfinite(anchor)):
-            raise ValueError(f"anchor must be a finite (x, y, theta) pose, got {anchor!r}")
-        if not (step > 0 and math.isfinite(step)):
-            raise ValueError(f"step must be finite and > 0, got {step!r}")
-        if not (isinstance(n_headings, (int, np.integer)) and n_headings >= 3):
-            raise ValueError(f"n_headings must be an integer >= 3, got {n_headings!r}")
-        if w_rot is None:
-            w_rot = float(space.shape.bounding_radius)
-        if not (w_rot >= 0 and math.isfinite(w_rot)):
-            raise ValueError(f"w_rot must be finite and >= 0, got {w_rot!r}")
-        dtheta = TWO_PI / n_headings
-        if step * math.sqrt(2.0) > max_translation + 1e-12:
-            raise ValueError(
-                f"step {step} gives diagonal primitives beyond max_translation {max_translation}"
-            )
-        if dtheta > max_rotation + 1e-12:
-            raise ValueError(
-                f"n_headings {n_headings} gives rotations of {dtheta:.3f} rad beyond "
-                f"max_rotation {max_rotation}"
-            )
+        anchor, w_rot, dtheta = check_lattice_args(space, anchor, step, n_headings, w_rot,
+                                                   max_translation, max_rotation)
         self.space = space
         self.anchor = anchor.copy()
         self.anchor[2] = se2.wrap_angle(anchor[2])
@@ -250,14 +142,8 @@ class ObjectLattice:
         #: id of the anchor pose (LAMP: the goal node)
         self.anchor_node: Node = self.node_id(0, 0, 0)
 
-        prim = np.array(PRIMITIVES, dtype=int)
-        self._prim = prim
-        self._prim_cost = step * np.hypot(prim[:, 0], prim[:, 1]) + self.w_rot * dtheta * np.abs(
-            prim[:, 2]
-        )
+        self._prim, self._prim_cost, self._prim_reach = primitive_costs(step, self.w_rot, dtheta)
         self._prim_cost_list = self._prim_cost.tolist()
-        #: farthest a primitive moves the object's origin (m)
-        self._prim_reach = float(step * np.max(np.hypot(prim[:, 0], prim[:, 1])))
         self._rev = np.array(_REVERSE, dtype=np.int64)
         self._out_ids = np.empty(len(PRIMITIVES), dtype=np.int64)
         self._out_prim = np.empty(len(PRIMITIVES), dtype=np.int64)

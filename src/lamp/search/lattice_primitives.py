@@ -1,0 +1,165 @@
+"""The motion primitives of the SE(2) lattice (:mod:`lamp.search.lattice`) and their checks.
+
+``PRIMITIVES`` are the 26 lattice offsets ``(di, dj, dk)`` (8 translations times {-1, 0, +1}
+heading bins, and the 2 pure rotations), ``_REVERSE`` the index of each one's reverse.
+:func:`check_lattice_args` refuses a lattice whose primitives leave the model's range (or
+whose arguments are malformed) with a ValueError naming the argument;
+:func:`primitive_costs` gives each primitive's cost and the farthest one's reach.
+:func:`_successor_kernel` lists a node's valid edges, checking and caching
+(``UNKNOWN``/``BLOCKED``/``FREE`` in ``int8`` arrays) only what is not known yet; each
+motion is checked once, from its lower-id end, and stored for both directions.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+import numba
+import numpy as np
+from numpy.typing import ArrayLike
+
+from lamp.geometry.object_kernels import motion_free_kernel, pose_free_kernel
+from lamp.search.metric import TWO_PI
+
+if TYPE_CHECKING:
+    from lamp.geometry.object_space import ObjectSpace
+
+#: Cached validity of nodes and edges: not checked yet, checked and blocked, checked and free.
+UNKNOWN, BLOCKED, FREE = 0, 1, 2
+#: the 26 primitives (di, dj, dk): 8 translations x {-1, 0, +1} heading bins, 2 rotations
+PRIMITIVES: tuple[tuple[int, int, int], ...] = tuple(
+    (di, dj, dk)
+    for di in (-1, 0, 1)
+    for dj in (-1, 0, 1)
+    for dk in (-1, 0, 1)
+    if (di, dj, dk) != (0, 0, 0)
+)
+#: index of the reverse primitive
+_REVERSE = tuple(PRIMITIVES.index((-di, -dj, -dk)) for di, dj, dk in PRIMITIVES)
+
+
+
+def check_lattice_args(
+    space: ObjectSpace, anchor: ArrayLike, step: float, n_headings: int, w_rot: float | None,
+    max_translation: float, max_rotation: float,
+) -> tuple[np.ndarray, float, float]:
+    """``ObjectLattice``'s arguments checked: (anchor as a float array, rotation weight
+    (default: the object's bounding radius), heading bin width). ValueError when one is
+    malformed or a primitive leaves the model's range."""
+    anchor = np.asarray(anchor, dtype=float)
+    if anchor.shape != (3,) or not np.all(np.isfinite(anchor)):
+        raise ValueError(f"anchor must be a finite (x, y, theta) pose, got {anchor!r}")
+    if not (step > 0 and math.isfinite(step)):
+        raise ValueError(f"step must be finite and > 0, got {step!r}")
+    if not (isinstance(n_headings, (int, np.integer)) and n_headings >= 3):
+        raise ValueError(f"n_headings must be an integer >= 3, got {n_headings!r}")
+    if w_rot is None:
+        w_rot = float(space.shape.bounding_radius)
+    if not (w_rot >= 0 and math.isfinite(w_rot)):
+        raise ValueError(f"w_rot must be finite and >= 0, got {w_rot!r}")
+    dtheta = TWO_PI / n_headings
+    if step * math.sqrt(2.0) > max_translation + 1e-12:
+        raise ValueError(
+            f"step {step} gives diagonal primitives beyond max_translation {max_translation}"
+        )
+    if dtheta > max_rotation + 1e-12:
+        raise ValueError(
+            f"n_headings {n_headings} gives rotations of {dtheta:.3f} rad beyond "
+            f"max_rotation {max_rotation}"
+        )
+    return anchor, w_rot, dtheta
+
+
+def primitive_costs(step: float, w_rot: float, dtheta: float
+                    ) -> tuple[np.ndarray, np.ndarray, float]:
+    """(primitives as a (26, 3) int array, their costs (translation length +
+    ``w_rot * |dtheta|``), the farthest a primitive moves the object's origin (m))."""
+    prim = np.array(PRIMITIVES, dtype=int)
+    cost = step * np.hypot(prim[:, 0], prim[:, 1]) + w_rot * dtheta * np.abs(prim[:, 2])
+    reach = float(step * np.max(np.hypot(prim[:, 0], prim[:, 1])))
+    return prim, cost, reach
+
+
+@numba.njit(cache=True)
+def _successor_kernel(
+    u: int,
+    n_j: int,
+    n_k: int,
+    i_min: int,
+    j_min: int,
+    ax: float,
+    ay: float,
+    at: float,
+    step: float,
+    dth: float,
+    prim: np.ndarray,
+    rev: np.ndarray,
+    node_valid: np.ndarray,
+    edge_valid: np.ndarray,
+    out_ids: np.ndarray,
+    out_prim: np.ndarray,
+    margin: float,
+    reach: float,
+    sd: tuple,
+    res: float,
+    width: float,
+    height: float,
+    fp: tuple,
+    reach2: float,
+) -> tuple[int, int, int]:
+    """Fill ``out_ids``/``out_prim`` with u's valid edges, checking (and caching in
+    ``node_valid``/``edge_valid``) what is unknown. Returns (count, pose checks, motion
+    checks). Poses are computed exactly as ``ObjectLattice.poses`` does; each motion is
+    checked from its lower-id end and stored for both directions."""
+    n_i = node_valid.shape[0] // (n_j * n_k)
+    rest = u // n_k
+    k = u - rest * n_k
+    ii = rest // n_j
+    jj = rest - ii * n_j
+    two_pi = 2.0 * math.pi
+    xu = ax + (ii + i_min) * step
+    yu = ay + (jj + j_min) * step
+    tu = (at + k * dth + math.pi) % two_pi - math.pi
+    n_pose = 0
+    n_motion = 0
+    if node_valid[u] == UNKNOWN:
+        node_valid[u] = BLOCKED + pose_free_kernel(xu, yu, tu, sd, res, width, height, fp,
+                                                   reach2)
+        n_pose += 1
+    if node_valid[u] == BLOCKED:
+        return 0, n_pose, n_motion
+    n = 0
+    for p in range(prim.shape[0]):
+        ni = ii + prim[p, 0]
+        nj = jj + prim[p, 1]
+        if ni < 0 or ni >= n_i or nj < 0 or nj >= n_j:
+            continue
+        nk = (k + prim[p, 2]) % n_k
+        v = (ni * n_j + nj) * n_k + nk
+        xv = ax + (ni + i_min) * step
+        yv = ay + (nj + j_min) * step
+        tv = (at + nk * dth + math.pi) % two_pi - math.pi
+        if node_valid[v] == UNKNOWN:
+            node_valid[v] = BLOCKED + pose_free_kernel(xv, yv, tv, sd, res, width, height, fp,
+                                                       reach2)
+            n_pose += 1
+        if node_valid[v] == BLOCKED:
+            continue
+        if edge_valid[u, p] == UNKNOWN:
+            if u < v:
+                free = motion_free_kernel(
+                    xu, yu, tu, xv, yv, tv, margin, reach, sd, res, width, height, fp, reach2
+                )
+            else:
+                free = motion_free_kernel(
+                    xv, yv, tv, xu, yu, tu, margin, reach, sd, res, width, height, fp, reach2
+                )
+            n_motion += 1
+            edge_valid[u, p] = BLOCKED + free
+            edge_valid[v, rev[p]] = BLOCKED + free
+        if edge_valid[u, p] == FREE:
+            out_ids[n] = v
+            out_prim[n] = p
+            n += 1
+    return n, n_pose, n_motion
