@@ -311,14 +311,7 @@ class Simulator:
             ValueError: malformed paths (shape, non-finite values, a step too long, a start
                 too far from the robot) or a bad ``record_every`` / ``settle_time``.
         """
-        if record_every is not None and (
-            isinstance(record_every, bool)
-            or not isinstance(record_every, (int, np.integer))
-            or record_every < 1
-        ):
-            raise ValueError(f"record_every must be a positive integer, got {record_every!r}")
-        if not (math.isfinite(settle_time) and settle_time >= 0.0):
-            raise ValueError(f"settle_time must be finite and >= 0, got {settle_time!r}")
+        _check_execute_args(record_every, settle_time)
         paths = self._validate(robot_paths)
         pos, vel = self._schedule(paths, settle_time)
         n_steps = len(pos)
@@ -337,23 +330,7 @@ class Simulator:
         # does not change the result
         lo = 0
         while lo < n_steps:
-            chunk = ctrl[lo : lo + chunk_size].reshape(1, -1, ctrl.shape[-1])
-            init = np.empty(self._nroll)
-            mujoco.mj_getState(self.model, self.data, init, _ROLLOUT_SPEC)
-            states, _ = mj_rollout.rollout(
-                self.model,
-                self.data,
-                init[None],
-                chunk,
-                initial_warmstart=self.data.qacc_warmstart[None].copy(),
-            )
-            states = states[0]
-            # the rollout ran on self.data, which now holds the final state and warm start;
-            # set the final state explicitly all the same so that nothing relies on that
-            warm = self.data.qacc_warmstart.copy()
-            mujoco.mj_setState(self.model, self.data, states[-1], _ROLLOUT_SPEC)
-            self.data.qacc_warmstart[:] = warm
-            self.data.ctrl[:] = chunk[0, -1]
+            states = self._roll_out(ctrl[lo : lo + chunk_size].reshape(1, -1, ctrl.shape[-1]))
             objects_left |= self._outside(states).any(axis=0)
             if record_every is not None:
                 steps = lo + 1 + np.arange(len(states))  # step index of each row
@@ -371,14 +348,7 @@ class Simulator:
         if n_steps > 0:
             mujoco.mj_forward(self.model, self.data)
 
-        trace = None
-        if record_every is not None:
-            recorded = np.concatenate(rows)
-            trace = Trace(
-                times=recorded[:, 0] - start_time,
-                robot_positions=recorded[:, self._roll_robot],
-                object_poses=self._qpos_to_poses(recorded[:, self._roll_object]),
-            )
+        trace = None if record_every is None else self._trace(np.concatenate(rows), start_time)
         robot_final = self.robot_positions
         return ExecutionResult(
             object_poses=self.object_poses,
@@ -390,6 +360,35 @@ class Simulator:
             robot_errors=np.hypot(*(robot_final - paths[:, -1]).T),
             trace=trace,
             stopped_at=stopped_at,
+        )
+
+    def _roll_out(self, chunk: np.ndarray) -> np.ndarray:
+        """Simulate the (1, S, nu) controls ``chunk`` from the current full physics state and
+        warm start; returns the (S, nroll) states and leaves ``self.data`` in the last one."""
+        init = np.empty(self._nroll)
+        mujoco.mj_getState(self.model, self.data, init, _ROLLOUT_SPEC)
+        states, _ = mj_rollout.rollout(
+            self.model,
+            self.data,
+            init[None],
+            chunk,
+            initial_warmstart=self.data.qacc_warmstart[None].copy(),
+        )
+        states = states[0]
+        # the rollout ran on self.data, which now holds the final state and warm start;
+        # set the final state explicitly all the same so that nothing relies on that
+        warm = self.data.qacc_warmstart.copy()
+        mujoco.mj_setState(self.model, self.data, states[-1], _ROLLOUT_SPEC)
+        self.data.qacc_warmstart[:] = warm
+        self.data.ctrl[:] = chunk[0, -1]
+        return states
+
+    def _trace(self, recorded: np.ndarray, start_time: float) -> Trace:
+        """The ``Trace`` of recorded rollout states (times from ``start_time``)."""
+        return Trace(
+            times=recorded[:, 0] - start_time,
+            robot_positions=recorded[:, self._roll_robot],
+            object_poses=self._qpos_to_poses(recorded[:, self._roll_object]),
         )
 
     def _outside(self, states: np.ndarray) -> np.ndarray:
@@ -463,6 +462,19 @@ class Simulator:
             vel[:n_move] = np.swapaxes((b - a) / span[None, :, None], 0, 1)
         pos[n_move:] = way[:, -1]
         return pos, vel
+
+
+def _check_execute_args(record_every: int | None, settle_time: float) -> None:
+    """ValueError unless ``record_every`` is None or a positive integer and ``settle_time``
+    finite and >= 0 (see :meth:`Simulator.execute`)."""
+    if record_every is not None and (
+        isinstance(record_every, bool)
+        or not isinstance(record_every, (int, np.integer))
+        or record_every < 1
+    ):
+        raise ValueError(f"record_every must be a positive integer, got {record_every!r}")
+    if not (math.isfinite(settle_time) and settle_time >= 0.0):
+        raise ValueError(f"settle_time must be finite and >= 0, got {settle_time!r}")
 
 
 def _as_array(name: str, value: ArrayLike, shape: tuple[int, int]) -> np.ndarray:
