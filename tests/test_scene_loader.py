@@ -280,8 +280,8 @@ RULES: list[tuple[str, Mutation, str, tuple[str, ...]]] = [
     ("polygon-point-nan", setp(("objects", 2, "points", 1, 0), float("nan")), "objects[2].points[1][0]", ("nan",)),
     # unknown keys
     ("unknown-top", setp(("colour",), "red"), "colour", ("unknown key", "obstacles")),
-    ("unknown-robots", setp(("robots", "speed"), 1.0), "robots.speed", ("unknown key", "radius")),
-    ("unknown-object", setp(("objects", 1, "mass"), 2.0), "objects[1].mass", ("unknown key",)),
+    ("unknown-robots", setp(("robots", "speeds"), 1.0), "robots.speeds", ("unknown key", "radius", "did you mean 'speed'")),
+    ("unknown-object", setp(("objects", 1, "weight"), 2.0), "objects[1].weight", ("unknown key", "mass")),
     ("unknown-typo", setp(("objects", 1, "radus"), 0.2), "objects[1].radus", ("did you mean 'radius'",)),
     ("unknown-obstacle", setp(("obstacles", 0, "angle"), 0.0), "obstacles[0].angle", ("unknown key", "center, radius")),
     ("unknown-nonstring-key", setp((3,), 1), "3", ("unknown key",)),

@@ -52,6 +52,14 @@ from lamp.geometry.team import DEFAULT_TEAM
 from lamp.scene.errors import Ctx, SceneError, fmt_xy, is_number, show, value_kind
 from lamp.scene.geometry_checks import check_geometry
 from lamp.scene.model import Circle, Obstacle, Polygon, Rectangle, Scene, SceneObject, Shape
+from lamp.scene.physics import (
+    DEFAULT_PHYSICS,
+    OBJECT_RANGES,
+    PHYSICS_RANGES,
+    ObjectPhysics,
+    Physics,
+    check_range,
+)
 
 __all__ = ["DEFAULT_ROBOT_RADIUS", "FORMAT", "MAX_WORKSPACE_SIDE", "SceneError", "load_scene", "scene_from_dict"]
 
@@ -64,17 +72,18 @@ MAX_WORKSPACE_SIDE = 200.0
 SHAPE_TYPES = ("circle", "rectangle", "polygon")
 
 # Allowed keys per mapping: (required, optional).
-_TOP_KEYS = (("format", "name", "workspace", "robots", "objects"), ("obstacles",))
-_ROBOT_KEYS = (("starts",), ("radius",))
+_TOP_KEYS = (("format", "name", "workspace", "robots", "objects"), ("obstacles", "physics"))
+_ROBOT_KEYS = (("starts",), ("radius", "speed", "force_limit"))
+_PHYSICS_KEYS = ((), ("contact_friction", "ground_damping"))
 _OBSTACLE_KEYS = {
     "circle": (("type", "center", "radius"), ()),
     "rectangle": (("type", "center", "size"), ("angle",)),
     "polygon": (("type", "points"), ()),
 }
 _OBJECT_KEYS = {
-    "circle": (("type", "radius", "start", "goal"), ()),
-    "rectangle": (("type", "size", "start", "goal"), ()),
-    "polygon": (("type", "points", "start", "goal"), ()),
+    "circle": (("type", "radius", "start", "goal"), ("mass", "friction")),
+    "rectangle": (("type", "size", "start", "goal"), ("mass", "friction")),
+    "polygon": (("type", "points", "start", "goal"), ("mass", "friction")),
 }
 
 
@@ -272,7 +281,29 @@ def _object(ctx: Ctx, v: Any, field: str) -> SceneObject:
     shape = _shape(ctx, d, field, kind)
     start = _vector(ctx, d["start"], f"{field}.start", 3, "x, y, theta")
     goal = _vector(ctx, d["goal"], f"{field}.goal", 3, "x, y, theta")
-    return SceneObject(shape, start, goal)  # type: ignore[arg-type]
+    phys = {k: _ranged(ctx, d[k], f"{field}.{k}", OBJECT_RANGES[k]) for k in OBJECT_RANGES
+            if k in d}
+    return SceneObject(shape, start, goal, ObjectPhysics(**phys))  # type: ignore[arg-type]
+
+
+def _ranged(ctx: Ctx, v: Any, field: str, bounds: tuple[float, float]) -> float:
+    """A number within a physical parameter's range (``lamp.scene.physics``)."""
+    x = _number(ctx, v, field)
+    why = check_range(field, x, *bounds)
+    if why is not None:
+        ctx.fail(field, why)
+    return x
+
+
+def _physics(ctx: Ctx, d: Mapping[str, Any], robots: Mapping[str, Any]) -> Physics:
+    """The ``physics`` section and ``robots.speed`` / ``robots.force_limit``."""
+    section = _mapping(ctx, d.get("physics") or {}, "physics", _PHYSICS_KEYS)
+    values = {k: _ranged(ctx, section[k], f"physics.{k}", PHYSICS_RANGES[k])
+              for k in _PHYSICS_KEYS[1] if k in section}
+    for key, attr in (("speed", "robot_speed"), ("force_limit", "robot_force_limit")):
+        if key in robots:
+            values[attr] = _ranged(ctx, robots[key], f"robots.{key}", PHYSICS_RANGES[attr])
+    return Physics(**values) if values else DEFAULT_PHYSICS
 
 
 def _structure(ctx: Ctx, raw: Any, source: str | None) -> Scene:
@@ -310,6 +341,7 @@ def _structure(ctx: Ctx, raw: Any, source: str | None) -> Scene:
         obstacles=obstacles,
         robot_radius=radius,
         source=source,
+        physics=_physics(ctx, d, robots),
     )
 
 

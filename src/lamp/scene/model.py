@@ -23,22 +23,26 @@ from lamp.geometry.primitives import (
     shape_from_dict,
 )
 from lamp.geometry.team import DEFAULT_TEAM
+from lamp.scene.physics import DEFAULT_PHYSICS, ObjectPhysics, Physics
 
-__all__ = ["Circle", "Obstacle", "Point", "Polygon", "Pose", "Rectangle", "Scene",
-           "SceneObject", "Shape", "shape_from_dict"]
+__all__ = ["Circle", "ObjectPhysics", "Obstacle", "Physics", "Point", "Polygon", "Pose",
+           "Rectangle", "Scene", "SceneObject", "Shape", "shape_from_dict"]
 
 @dataclass(frozen=True)
 class SceneObject:
-    """A movable object with its start and goal poses."""
+    """A movable object with its start and goal poses (and, optionally, its own mass and
+    friction: ``lamp.scene.physics``)."""
 
     shape: Shape
     start: Pose
     goal: Pose
+    physics: ObjectPhysics = ObjectPhysics()
 
     def to_dict(self) -> dict[str, Any]:
         d = self.shape.to_dict()
         d["start"] = [float(v) for v in self.start]
         d["goal"] = [float(v) for v in self.goal]
+        d.update(self.physics.to_dict())
         return d
 
 
@@ -53,6 +57,9 @@ class Scene:
     obstacles: tuple[Obstacle, ...] = ()
     robot_radius: float = DEFAULT_TEAM.radius
     source: str | None = field(default=None, compare=False)
+    #: What the robots and loads physically are (``lamp.scene.physics``; default: the
+    #: simulator's calibrated values).
+    physics: Physics = DEFAULT_PHYSICS
 
     @property
     def n_robots(self) -> int:
@@ -75,14 +82,21 @@ class Scene:
 
     def to_dict(self) -> dict[str, Any]:
         """The scene-file dict (format ``lamp-scene/1``); ``load_scene`` reads it back."""
-        return {
+        robots: dict[str, Any] = {
+            "radius": float(self.robot_radius),
+            "starts": [[float(x), float(y)] for x, y in self.robot_starts],
+        }
+        for key, attr in (("speed", "robot_speed"), ("force_limit", "robot_force_limit")):
+            if getattr(self.physics, attr) != getattr(DEFAULT_PHYSICS, attr):
+                robots[key] = getattr(self.physics, attr)
+        d: dict[str, Any] = {
             "format": "lamp-scene/1",
             "name": self.name,
             "workspace": [float(self.workspace[0]), float(self.workspace[1])],
-            "robots": {
-                "radius": float(self.robot_radius),
-                "starts": [[float(x), float(y)] for x, y in self.robot_starts],
-            },
+            "robots": robots,
             "obstacles": [o.to_dict() for o in self.obstacles],
             "objects": [o.to_dict() for o in self.objects],
         }
+        if self.physics.to_dict():
+            d["physics"] = self.physics.to_dict()
+        return d

@@ -12,6 +12,7 @@ from __future__ import annotations
 from typing import Any
 
 from lamp.scene.loader import DEFAULT_ROBOT_RADIUS, FORMAT, MAX_WORKSPACE_SIDE
+from lamp.scene.physics import DEFAULT_PHYSICS, OBJECT_RANGES, PHYSICS_RANGES
 
 SCHEMA_ID = "urn:lamp:scene-format:1"
 
@@ -36,6 +37,15 @@ def _points(description: str) -> dict[str, Any]:
             "description": description}
 
 
+def _ranged(bounds: tuple[float, float], description: str,
+            default: float | None = None) -> dict[str, Any]:
+    out: dict[str, Any] = {"type": ["number", "null"], "exclusiveMinimum": bounds[0],
+                           "maximum": bounds[1], "description": description}
+    if default is not None:
+        out["default"] = default
+    return out
+
+
 def _closed(kind: str, properties: dict[str, Any], required: list[str]) -> dict[str, Any]:
     return {"type": "object", "properties": {"type": {"const": kind}, **properties},
             "required": ["type", *required], "additionalProperties": False}
@@ -56,7 +66,10 @@ def scene_schema() -> dict[str, Any]:
         _closed("polygon", {"points": _points("world-frame vertices of a simple polygon")},
                 ["points"]),
     ]}
-    motion = {"start": pose, "goal": pose}
+    motion = {"start": pose, "goal": pose,
+              "mass": _ranged(OBJECT_RANGES["mass"], "the object's mass (kg), default 1"),
+              "friction": _ranged(OBJECT_RANGES["friction"], "Coulomb friction of the "
+                                  "object's contacts, default physics.contact_friction")}
     obj = {"oneOf": [
         _closed("circle", {"radius": _positive("radius (m)"), **motion},
                 ["radius", "start", "goal"]),
@@ -88,11 +101,29 @@ def scene_schema() -> dict[str, Any]:
                                "description": "robot disk radius (m)"},
                     "starts": {"type": "array", "items": _numbers(2, "[x, y]"),
                                "minItems": 1},
+                    "speed": _ranged(PHYSICS_RANGES["robot_speed"], "driving speed (m/s)",
+                                     DEFAULT_PHYSICS.robot_speed),
+                    "force_limit": _ranged(PHYSICS_RANGES["robot_force_limit"],
+                                           "actuator force limit per axis (N)",
+                                           DEFAULT_PHYSICS.robot_force_limit),
                 },
                 "required": ["starts"], "additionalProperties": False,
             },
             "obstacles": {"type": ["array", "null"], "items": obstacle,
                           "description": "static obstacles"},
+            "physics": {
+                "type": ["object", "null"],
+                "properties": {
+                    "contact_friction": _ranged(PHYSICS_RANGES["contact_friction"],
+                                                "Coulomb friction of every contact",
+                                                DEFAULT_PHYSICS.contact_friction),
+                    "ground_damping": _ranged(PHYSICS_RANGES["ground_damping"],
+                                              "objects' viscous ground friction "
+                                              "(N s/m per kg)", DEFAULT_PHYSICS.ground_damping),
+                },
+                "additionalProperties": False,
+                "description": "the physics of the scene (default: the simulator's)",
+            },
             "objects": {"type": "array", "items": obj, "minItems": 1,
                         "description": "moved one after another in this order"},
         },

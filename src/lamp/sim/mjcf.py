@@ -39,27 +39,33 @@ import shapely
 
 from lamp.geometry.shapes import local_outline
 from lamp.scene.model import Circle, Obstacle, Rectangle, Scene, Shape
+from lamp.scene.physics import DEFAULT_PHYSICS, ObjectPhysics, Physics
+from lamp.scene.physics import OBJECT_MASS as _OBJECT_MASS
 
 #: Physics time step [s].
 TIMESTEP = 0.002
 #: Mass of every robot [kg]: heavier than objects so pushes stay stable.
 ROBOT_MASS = 2.2
-#: Mass of every object [kg] (fixed, independent of size).
-OBJECT_MASS = 1.0
-#: Viscous ground friction of objects [N s / m per kg of object mass]; at the robot speed of
-#: 0.25 m/s a 1 kg object needs 7.5 N to be pushed, and a released object stops within
-#: about 1 cm (time constant OBJECT_MASS / GROUND_DAMPING = 33 ms).
-GROUND_DAMPING = 30.0
+#: Mass of an object [kg] whose scene file gives none (fixed, independent of size;
+#: owned by ``lamp.scene.physics``).
+OBJECT_MASS = _OBJECT_MASS
+#: Default viscous ground friction of objects [N s / m per kg of object mass]; at the robot
+#: speed of 0.25 m/s a 1 kg object needs 7.5 N to be pushed, and a released object stops
+#: within about 1 cm (time constant 1 / GROUND_DAMPING = 33 ms). A scene sets its own
+#: (``physics.ground_damping``).
+GROUND_DAMPING = DEFAULT_PHYSICS.ground_damping
 #: Dry ground friction per object slide joint [N] (per unit radius of gyration on the hinge).
 GROUND_FRICTIONLOSS = 0.3
 #: Position gain of the robot actuators [N/m].
 ROBOT_KP = 4000.0
 #: Velocity gain of the robot actuators [N s/m] (critically damped for ROBOT_MASS).
 ROBOT_KV = 2.0 * float(np.sqrt(ROBOT_KP * ROBOT_MASS))
-#: Force limit of each robot actuator (per axis) [N].
-ROBOT_FORCE_LIMIT = 60.0
-#: Coulomb friction coefficient of all contacts (robot-object, object-object, object-wall).
-CONTACT_FRICTION = 0.5
+#: Default force limit of each robot actuator (per axis) [N]; a scene sets its own
+#: (``robots.force_limit``).
+ROBOT_FORCE_LIMIT = DEFAULT_PHYSICS.robot_force_limit
+#: Default Coulomb friction of all contacts (robot-object, object-object, object-wall); a
+#: scene sets its own (``physics.contact_friction``), an object its own (``friction``).
+CONTACT_FRICTION = DEFAULT_PHYSICS.contact_friction
 #: Contact softness: (time constant [s], damping ratio); stiff, yet >= 2 time steps.
 CONTACT_SOLREF = (0.004, 1.0)
 #: Half height of object prisms [m] (objects are 4 cm tall).
@@ -222,6 +228,8 @@ def structure_key(scene: Scene) -> tuple:
         tuple(o.shape for o in scene.objects),
         scene.n_robots,
         float(scene.robot_radius),
+        scene.physics,
+        tuple(o.physics for o in scene.objects),
     )
 
 
@@ -232,8 +240,9 @@ def build_model(scene: Scene) -> BuiltModel:
 
 @functools.lru_cache(maxsize=256)
 def _build_cached(key: tuple) -> BuiltModel:
-    workspace, obstacles, shapes, n_robots, radius = key
-    xml, objects = _make_xml(workspace, obstacles, shapes, n_robots, radius)
+    workspace, obstacles, shapes, n_robots, radius, physics, object_physics = key
+    xml, objects = _make_xml(workspace, obstacles, shapes, n_robots, radius, physics,
+                             object_physics)
     model = mujoco.MjModel.from_xml_string(xml)
     jnt = model.jnt_qposadr
     dof = model.jnt_dofadr
@@ -262,6 +271,8 @@ def _make_xml(
     shapes: tuple[Shape, ...],
     n_robots: int,
     radius: float,
+    physics: Physics = DEFAULT_PHYSICS,
+    object_physics: tuple[ObjectPhysics, ...] = (),
 ) -> tuple[str, tuple[ObjectBody, ...]]:
     w, h = workspace
     t = WALL_THICKNESS
@@ -284,14 +295,17 @@ def _make_xml(
     bodies: list[str] = []
     objects: list[ObjectBody] = []
     for k, shape in enumerate(shapes):
+        own = object_physics[k] if k < len(object_physics) else ObjectPhysics()
+        mass = OBJECT_MASS if own.mass is None else own.mass
         centroid, rho2 = plate_properties(shape)
-        geoms = _shape_geoms(shape, -centroid, 0.0, OBJECT_HALF_HEIGHT, meshes, "object")
-        izz = OBJECT_MASS * rho2
+        cls = "object" if own.friction is None else f"object{k}"
+        geoms = _shape_geoms(shape, -centroid, 0.0, OBJECT_HALF_HEIGHT, meshes, cls)
+        izz = mass * rho2
         rho = float(np.sqrt(rho2))
-        damp = GROUND_DAMPING * OBJECT_MASS
+        damp = physics.ground_damping * mass
         bodies.append(
             f'<body name="o{k}">'
-            f'<inertial pos="0 0 0" mass="{OBJECT_MASS:.10g}" diaginertia="{_fmt([izz, izz, izz])}"/>'
+            f'<inertial pos="0 0 0" mass="{mass:.10g}" diaginertia="{_fmt([izz, izz, izz])}"/>'
             f'<joint name="o{k}x" type="slide" axis="1 0 0" damping="{damp:.10g}" '
             f'frictionloss="{GROUND_FRICTIONLOSS:.10g}"/>'
             f'<joint name="o{k}y" type="slide" axis="0 1 0" damping="{damp:.10g}" '
@@ -306,6 +320,7 @@ def _make_xml(
                 ObjectBody((float(centroid[0]), float(centroid[1])), local_outline(shape), 0.0)
             )
     actuators: list[str] = []
+    force = physics.robot_force_limit
     for i in range(n_robots):
         bodies.append(
             f'<body name="r{i}">'
@@ -318,18 +333,24 @@ def _make_xml(
         for a in "xy":
             actuators.append(
                 f'<position joint="r{i}{a}" kp="{ROBOT_KP:.10g}" kv="{ROBOT_KV:.10g}" '
-                f'forcelimited="true" forcerange="{-ROBOT_FORCE_LIMIT:.10g} {ROBOT_FORCE_LIMIT:.10g}"/>'
+                f'forcelimited="true" forcerange="{-force:.10g} {force:.10g}"/>'
             )
     solref = _fmt(CONTACT_SOLREF)
+    # an object with its own friction: its geoms take priority, so its contacts use it
+    own_friction = [f'<default class="object{k}"><geom rgba="0.8 0.5 0.2 1" '
+                    f'friction="{o.friction:.10g} 0.005 0.0001" priority="1"/></default>'
+                    for k, o in enumerate(object_physics) if o.friction is not None]
     xml = (
         '<mujoco model="lamp">'
         '<compiler angle="radian" autolimits="true"/>'
         f'<option timestep="{TIMESTEP:.10g}" gravity="0 0 0" integrator="implicitfast" '
         'cone="pyramidal" solver="Newton" iterations="50"/>'
         "<default>"
-        f'<geom friction="{CONTACT_FRICTION:.10g} 0.005 0.0001" solref="{solref}" condim="3"/>'
+        f'<geom friction="{physics.contact_friction:.10g} 0.005 0.0001" solref="{solref}" '
+        'condim="3"/>'
         '<default class="static"><geom rgba="0.4 0.4 0.4 1"/></default>'
         '<default class="object"><geom rgba="0.8 0.5 0.2 1"/></default>'
+        + "".join(own_friction) +
         '<default class="robot"><geom rgba="0.2 0.4 0.8 1"/></default>'
         "</default>"
         "<asset>" + "".join(meshes.assets) + "</asset>"

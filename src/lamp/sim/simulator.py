@@ -5,7 +5,8 @@ robots and objects at their start poses; ``execute(robot_paths)`` drives the rob
 (N, T, 2) synchronised world-frame waypoints and reports where the objects ended up.
 State (poses, velocities, the robots' held targets) carries over between calls.
 
-Timing. The robots move at ``ROBOT_SPEED`` = 0.25 m/s: the target of every robot moves
+Timing. The robots move at the scene's speed (``robots.speed``, default ``ROBOT_SPEED`` =
+0.25 m/s): the target of every robot moves
 linearly between consecutive rows of the path, and each row-to-row interval lasts
 ``max_i |p_i[t+1] - p_i[t]| / ROBOT_SPEED``, so the robot with the longest step in that row
 moves at exactly ``ROBOT_SPEED`` and the others move proportionally slower, all arriving at
@@ -170,7 +171,8 @@ class Simulator:
         robot_positions: (N, 2) initial robot centres (default: the robots' start positions).
 
     Construction compiles the model only once per scene structure (workspace, obstacles,
-    object shapes, robot count and radius); later simulators of that structure reuse it.
+    object shapes, robot count and radius, physics); later simulators of that structure
+    reuse it.
     """
 
     def __init__(
@@ -180,6 +182,9 @@ class Simulator:
         robot_positions: ArrayLike | None = None,
     ) -> None:
         self.scene = scene
+        #: The robots' driving speed (m/s): the scene's ``robots.speed``, default
+        #: ``ROBOT_SPEED``.
+        self.speed = float(scene.physics.robot_speed)
         self._built: BuiltModel = build_model(scene)
         self.model: mujoco.MjModel = self._built.model
         self.data = mujoco.MjData(self.model)
@@ -443,7 +448,7 @@ class Simulator:
         """Per-step targets and target velocities, (S, N, 2) each (see module docstring)."""
         dt = float(self.model.opt.timestep)
         way = np.concatenate([self.robot_positions[:, None], paths], axis=1)  # (N, T+1, 2)
-        dur = np.hypot(*np.moveaxis(np.diff(way, axis=1), 2, 0)).max(axis=0) / ROBOT_SPEED
+        dur = np.hypot(*np.moveaxis(np.diff(way, axis=1), 2, 0)).max(axis=0) / self.speed
         keep = np.concatenate([[True], dur > 1e-12])
         way = way[:, keep]
         tau = np.concatenate([[0.0], np.cumsum(dur[dur > 1e-12])])
