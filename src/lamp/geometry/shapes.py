@@ -57,6 +57,23 @@ def half_extents(shape: Shape) -> tuple[float, float]:
     return float(pts[:, 0].max()), float(pts[:, 1].max())
 
 
+def narrowest_width(shape: Shape) -> float:
+    """The shape's width in its narrowest direction (the least distance between two
+    parallel lines enclosing it): a circle's diameter, a rectangle's shorter side, and for a
+    polygon the least, over the edges of its convex hull, of the farthest vertex's distance
+    from the edge's line (a minimum is always attained along a hull edge)."""
+    if isinstance(shape, Circle):
+        return 2.0 * float(shape.radius)
+    if isinstance(shape, Rectangle):
+        return float(min(shape.size))
+    hull = np.asarray(shapely.MultiPoint(np.asarray(shape.points, float)).convex_hull
+                      .exterior.coords)[:-1]
+    edges = np.roll(hull, -1, axis=0) - hull
+    normals = np.column_stack([-edges[:, 1], edges[:, 0]]) / np.hypot(*edges.T)[:, None]
+    heights = np.abs(np.einsum("ek,evk->ev", normals, hull[None, :, :] - hull[:, None, :]))
+    return float(heights.max(axis=1).min())
+
+
 def is_polygon(shape: Shape) -> bool:
     return isinstance(shape, (Rectangle, Polygon))
 

@@ -4,7 +4,8 @@
 (:meth:`RunRequest.build` resolves names and applies the shortcuts) and hand it to
 :func:`lamp.pipeline.run`. Validation happens here, before anything is planned or written:
 an unknown planner or model, parameters the planner does not read or values out of range,
-a scene the planner cannot run (MAPush: another number of robots) or robots of a radius the
+a scene the planner cannot run (MAPush: another number of robots), shapes too thin for the
+planners or the simulator (``lamp.planners.limits``) or robots of a radius the
 manipulation model does not serve are each an :class:`~lamp.errors.InputError` naming what
 is wrong.
 """
@@ -22,6 +23,7 @@ from lamp.errors import InputError
 from lamp.manip.models import check_model, check_robot_radius, model_robot_radius
 from lamp.pipeline import registry
 from lamp.planners.config import PlannerConfig
+from lamp.planners.limits import check_scene_limits
 from lamp.scene.model import Scene
 
 __all__ = ["RunRequest"]
@@ -53,6 +55,7 @@ class RunRequest:
             object.__setattr__(self, "params", spec.default_config())
         elif not isinstance(self.params, PlannerConfig):
             raise InputError(f"params: a PlannerConfig, got {type(self.params).__name__}")
+        check_scene_limits(self.scene)
         if spec.check_scene is not None:
             try:
                 spec.check_scene(self.scene)

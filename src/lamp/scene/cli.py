@@ -41,9 +41,11 @@ def _expand(paths: list[Path]) -> list[Path]:
 def validate_command(
     scene_files: list[Path] = typer.Argument(..., help="Scene files (YAML or JSON), or folders "
                                              "of them.", show_default=False),
-    model: str = typer.Option("learned", "--model", "-m", help="Also check the robots against "
-                              "what this manipulation model serves (learned, geometric, a "
-                              "checkpoint file; 'any' skips), as `lamp run` does."),
+    model: str = typer.Option("learned", "--model", "-m", help="Also check what `lamp run` "
+                              "checks beyond the format: the robots against what this "
+                              "manipulation model serves (learned, geometric, a checkpoint "
+                              "file) and the shapes against what the planners and the "
+                              "simulator serve; 'any' checks the format alone."),
 ) -> None:
     """Load and check scene files: a line per file and a count; exit 2 if any is invalid."""
     radius = None
@@ -61,9 +63,11 @@ def validate_command(
     for path in files:
         try:
             scene = load_scene(path)
-            if radius is not None:
+            if model != "any":  # what `lamp run` checks beyond the format
                 from lamp.manip.models import check_robot_radius
+                from lamp.planners.limits import check_scene_limits
 
+                check_scene_limits(scene)
                 check_robot_radius(scene, radius)
         except SceneError as exc:
             bad += 1
