@@ -23,6 +23,7 @@ except _metadata.PackageNotFoundError:  # running from a source tree that is not
 # Light imports (NumPy at most): the types of ``solve``'s signature, so that
 # ``typing.get_type_hints(lamp.solve)`` resolves.
 from lamp._lazy import lazy_getattr
+from lamp.contract.disturb import Disturbances
 from lamp.contract.result import RunResult
 from lamp.planners.config import PlannerConfig, PlannerName
 from lamp.progress import ProgressCallback
@@ -47,7 +48,7 @@ __getattr__ = lazy_getattr("lamp", _EXPORTS, globals())
 def solve(scene: Scene | str | Path, planner: PlannerName = "lazy", seed: int = 0, *,
           model: str | Path | Any = "learned", config: PlannerConfig | None = None,
           params: Mapping[str, Any] | None = None, time_limit: float | None = None,
-          max_segments: int | None = None,
+          max_segments: int | None = None, disturbances: Disturbances | None = None,
           progress: ProgressCallback | None = None) -> RunResult:
     """Plan and execute ``scene`` with ``planner``; ``result.to_dict()`` is result.json and
     ``result.recording`` the run's recording (every picture is drawn from it).
@@ -70,6 +71,9 @@ def solve(scene: Scene | str | Path, planner: PlannerName = "lazy", seed: int = 
             lists them).
         time_limit: cumulative planning limit per object in seconds (overrides both).
         max_segments: executed segments allowed per object (overrides both).
+        disturbances: what goes wrong during the run: noisy sensing, imprecise robots,
+            robots that stop, knocked pushes (``lamp.contract.disturb.Disturbances``;
+            deterministic for the seed, recorded in result.json).
         progress: called with a ``lamp.progress.ProgressEvent`` as the run advances.
 
     Raises ``InputError`` (a ``ValueError``) for an unknown planner, model or parameter
@@ -77,6 +81,7 @@ def solve(scene: Scene | str | Path, planner: PlannerName = "lazy", seed: int = 
     serve (robots of another radius). Numba compilation happens before the planning clock
     starts. See ``lamp.pipeline`` for the request and observers behind this call.
     """
+    from lamp.contract.disturb import NO_DISTURBANCE
     from lamp.errors import InputError
     from lamp.pipeline import RunRequest, run
 
@@ -84,7 +89,8 @@ def solve(scene: Scene | str | Path, planner: PlannerName = "lazy", seed: int = 
         raise InputError("solve: give config or params, not both")
     request = RunRequest.build(scene, planner, seed, model=model,
                                params=config if config is not None else params,
-                               planning_limit=time_limit, max_segments=max_segments)
+                               planning_limit=time_limit, max_segments=max_segments,
+                               disturbances=disturbances or NO_DISTURBANCE)
     return run(request, progress=progress)
 
 

@@ -138,7 +138,8 @@ OUT_HELP = ("Output folder: result.json, recording.npz + recording.json (lamp-re
 
 def _build_request(scene_file: Path | None, scene, planner: str, seed: int, model: str,
                    out: Path, params: list[str] | None = None,
-                   planning_limit: float | None = None, max_segments: int | None = None):
+                   planning_limit: float | None = None, max_segments: int | None = None,
+                   disturbances=None):
     """The run request of ``lamp run`` / ``lamp demo``, every input checked before anything
     is planned or written (bad input: ``InputError``, exit 2)."""
     from lamp.contract.params import parse_assignments
@@ -158,7 +159,29 @@ def _build_request(scene_file: Path | None, scene, planner: str, seed: int, mode
     if scene is None:
         scene = load_scene_or_exit(scene_file)
     return RunRequest.build(scene, planner, seed, model=model, params=overrides,
-                            planning_limit=planning_limit, max_segments=max_segments)
+                            planning_limit=planning_limit, max_segments=max_segments,
+                            **({"disturbances": disturbances} if disturbances else {}))
+
+
+def _disturbances(sensing: float, actuation: float, failures: list[str] | None,
+                  push: float):
+    """The run's disturbances from ``lamp run``'s options (None: none)."""
+    from lamp.contract.disturb import Disturbances, parse_failure
+
+    if not (sensing or actuation or failures or push):
+        return None
+    try:
+        return Disturbances(sensing_noise=sensing, actuation_noise=actuation,
+                            robot_failures=tuple(parse_failure(f) for f in failures or ()),
+                            push_disturbance=push)
+    except InputError as exc:  # name the option, not the field
+        flag = {"sensing_noise": "--sensing-noise", "actuation_noise": "--actuation-noise",
+                "push_disturbance": "--push-disturbance",
+                "robot_failures": "--robot-failure"}
+        text = str(exc)
+        for field, option in flag.items():
+            text = text.replace(field, option, 1) if text.startswith(field) else text
+        raise InputError(text) from None
 
 
 def _print_params(planner: str) -> None:
@@ -218,6 +241,18 @@ def run(
                                      help="Executed segments allowed per object.",
                                      show_default=SEGMENT_LIMIT_HELP),
     param: list[str] = typer.Option(None, "--param", help=PARAM_HELP, show_default=False),
+    sensing_noise: float = typer.Option(0.0, "--sensing-noise", help="Disturbance: Gaussian "
+                                        "noise (m; heading SIGMA/0.2 rad) on every observed "
+                                        "object pose."),
+    actuation_noise: float = typer.Option(0.0, "--actuation-noise", help="Disturbance: each "
+                                          "robot's commanded motion scaled and turned by "
+                                          "noise of this relative size, per row."),
+    robot_failure: list[str] = typer.Option(None, "--robot-failure", show_default=False,
+                                            help="Disturbance: robot K stops for good at "
+                                                 "simulated time T, K@T (repeatable)."),
+    push_disturbance: float = typer.Option(0.0, "--push-disturbance", help="Disturbance: a "
+                                           "random impulse (N s) on the pushed object "
+                                           "during every segment."),
     help_params: bool = typer.Option(False, "--help-params", help="List the parameters of "
                                      "--planner (name, default, valid values, meaning) and "
                                      "exit."),
@@ -236,7 +271,8 @@ def run(
     progress = _quiet_verbose(quiet, verbose)
     limit = time_limit if time_limit is not None else planning_limit
     request = _build_request(scene_file, None, planner, seed, model, out, param, limit,
-                             max_segments)
+                             max_segments, _disturbances(sensing_noise, actuation_noise,
+                                                         robot_failure, push_disturbance))
     result = _run_and_write(request, out, progress, render, html)
     if check and not result["success"]:
         raise typer.Exit(code=1)

@@ -33,7 +33,8 @@ class SegmentEvent:
     ``planning_time_s`` the planning time charged to this segment; ``replanned`` whether a
     plan call preceded it; ``drift`` the (position, orientation) miss of the reached pose
     against ``transition.q_to``; ``outcome`` what the loop did next: ``"continue"``,
-    ``"drift"`` (replan), ``"stalled"`` (push reported failed, replan) or ``"left"``.
+    ``"drift"`` (replan), ``"stalled"`` (push reported failed, replan), ``"left"`` or
+    ``"team"`` (a robot failed during the segment: planning starts anew with the rest).
     """
 
     object_index: int

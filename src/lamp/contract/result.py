@@ -62,6 +62,8 @@ class RunResult:
     makespan_s: float = 0.0
     #: The planner's declared parameters and their values (``PlannerSpec.params``).
     params: dict[str, Any] = field(default_factory=dict)
+    #: The run's disturbances (``lamp.contract.disturb.Disturbances.to_dict``).
+    disturbances: dict[str, Any] = field(default_factory=dict)
     #: The run's ``lamp.record.Recording`` (set by ``lamp.solve``); not part of result.json.
     recording: Any = field(default=None, repr=False, compare=False)
 
@@ -123,4 +125,5 @@ class RunResult:
             "wall_time_s": round(float(self.wall_time_s), 3),
             "stats": self.stats,
             "params": dict(self.params),
+            "disturbances": dict(self.disturbances),
         }

@@ -48,8 +48,13 @@ def execute(request: RunRequest, observers: Sequence[RunObserver] = (),
     runner = object_runner(request) if runner is None else runner
     t_start = time.perf_counter()
     sim = Simulator(scene)
+    executor = sim
+    if request.disturbances.active:
+        from lamp.sim.disturbed import DisturbedExecutor
+
+        executor = DisturbedExecutor(sim, request.disturbances, request.seed)
     recorder = Recorder(scene, runner.row_dt_s)
-    outcomes = run_in_order(len(scene.objects), sim, runner, [recorder, *observers])
+    outcomes = run_in_order(len(scene.objects), executor, runner, [recorder, *observers])
     result = RunResult(scene=scene.name, planner=request.planner, seed=int(request.seed))
     unexecuted = 0.0
     for o in outcomes:
@@ -60,5 +65,9 @@ def execute(request: RunRequest, observers: Sequence[RunObserver] = (),
     result.stats = runner.run_stats(outcomes)
     result.makespan_s = recorder.sim_time_s
     result.params = request.param_values()
+    result.disturbances = request.disturbances.to_dict()
+    if request.disturbances.robot_failures:
+        result.stats["failed_robots"] = {str(k): [round(float(v), 4) for v in place]
+                                         for k, place in sorted(executor.failed.items())}
     result.recording = recorder.finish(request.planner, int(request.seed), result.to_dict())
     return result

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from lamp.contract.disturb import NO_DISTURBANCE, Disturbances
 from lamp.contract.params import apply_overrides, format_value
 from lamp.errors import InputError
 from lamp.manip.models import check_model, check_robot_radius, model_robot_radius
@@ -44,6 +45,8 @@ class RunRequest:
     seed: int = 0
     model: Any = "learned"
     params: PlannerConfig | None = None
+    #: What goes wrong during the run (``lamp.contract.disturb``; default: nothing).
+    disturbances: Disturbances = NO_DISTURBANCE
 
     def __post_init__(self) -> None:
         spec = registry.get(self.planner)  # InputError naming the planners
@@ -56,6 +59,12 @@ class RunRequest:
         elif not isinstance(self.params, PlannerConfig):
             raise InputError(f"params: a PlannerConfig, got {type(self.params).__name__}")
         check_scene_limits(self.scene)
+        if not isinstance(self.disturbances, Disturbances):
+            raise InputError(f"disturbances: a Disturbances, got {self.disturbances!r}")
+        self.disturbances.check_robots(self.scene.n_robots)
+        if self.disturbances.active and not spec.closed_loop:
+            raise InputError(f"planner {spec.name}: disturbances are supported for the "
+                             "closed-loop planners only")
         if spec.check_scene is not None:
             try:
                 spec.check_scene(self.scene)
@@ -77,13 +86,14 @@ class RunRequest:
     @classmethod
     def build(cls, scene: Scene | str | Path, planner: str = "lazy", seed: int = 0, *,
               model: Any = "learned", params: PlannerConfig | Mapping[str, Any] | None = None,
-              planning_limit: float | None = None,
-              max_segments: int | None = None) -> RunRequest:
+              planning_limit: float | None = None, max_segments: int | None = None,
+              disturbances: Disturbances = NO_DISTURBANCE) -> RunRequest:
         """A request from what a user types: ``scene`` may be a scene file or a built-in
         scene name (``maze-07``); ``params`` a ``PlannerConfig`` or overrides of the
         planner's declared parameters by name (text or numbers); ``planning_limit`` and
         ``max_segments`` set ``planning_time_limit`` and ``max_segments`` (shortcuts every
-        planner accepts; MAPush ignores them)."""
+        planner accepts; MAPush ignores them). With sensing noise, the closed loop's
+        ``sensing_sigma`` is the noise's level unless ``params`` sets it."""
         if isinstance(scene, (str, Path)):
             from lamp.suites.registry import resolve_scene
 
@@ -99,9 +109,13 @@ class RunRequest:
             shortcuts["planning_time_limit"] = planning_limit
         if max_segments is not None:
             shortcuts["max_segments"] = max_segments
+        if (disturbances.sensing_noise and "sensing_sigma" in spec.params
+                and not isinstance(params, PlannerConfig)
+                and "sensing_sigma" not in dict(params or {})):
+            shortcuts["sensing_sigma"] = disturbances.sensing_noise
         if shortcuts:
             config = dataclasses.replace(config, **shortcuts)  # validated: InputError
-        return cls(scene, planner, seed, model, config)
+        return cls(scene, planner, seed, model, config, disturbances)
 
     def param_values(self) -> dict[str, Any]:
         """The planner's declared parameters and their values (result.json's ``params``)."""

@@ -20,6 +20,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from lamp.contract.disturb import HEADING_PER_METRE
 from lamp.contract.events import TRACE_EVERY, SegmentEvent
 from lamp.contract.goals import (
     SUCCESS_ORIENTATION_TOL,
@@ -81,12 +82,21 @@ def adapt_to_robots(trans: Transition, q_R: np.ndarray, reroute: Reroute) -> Tra
 
 #: A push achieving less than this share of its requested motion has stalled.
 STALL_FRACTION = 0.25
+#: ``failure_reason`` of a loop stopped because a robot failed (the runner plans anew).
+TEAM_CHANGED = "a robot failed"
+#: Drift and stall tests keep this many standard deviations of the averaged reading above
+#: the sensor's noise (``PlannerConfig.sensing_sigma``).
+NOISE_SIGMAS = 3.0
 
 
-def _stalled(q_before: np.ndarray, q_after: np.ndarray, trans: Transition) -> bool:
+def _stalled(q_before: np.ndarray, q_after: np.ndarray, trans: Transition,
+             noise: float = 0.0) -> bool:
+    """Whether the push moved the object less than ``STALL_FRACTION`` of its request, beyond
+    ``noise`` (the position noise of the difference of two readings)."""
     want_t, want_r = pose_distance(trans.q_from, trans.q_to)
     got_t, got_r = pose_distance(q_before, q_after)
-    return bool(got_t < STALL_FRACTION * want_t + 1e-3 and got_r < STALL_FRACTION * want_r + 2e-3)
+    return bool(got_t < STALL_FRACTION * want_t + 1e-3 + noise
+                and got_r < STALL_FRACTION * want_r + 2e-3 + noise * HEADING_PER_METRE)
 
 
 @dataclass
@@ -168,7 +178,7 @@ class ClosedLoop:
                     st.reason = "robots cannot reach the next push (open loop)"
                     break
                 continue
-            if self.observe(st, *self.execute(st, adapted)) == "left":
+            if self.observe(st, *self.execute(st, adapted)) in ("left", "team"):
                 break
         return self._result(st, max_segments)
 
@@ -252,7 +262,7 @@ class ClosedLoop:
                 seg_replanned: bool) -> str:
         """Read the executed segment's outcome and apply the policy; returns the outcome."""
         q_before = st.q_O
-        st.q_O = np.asarray(out.object_poses[self.index], float)
+        st.q_O = self._read_pose(out)
         st.q_R = np.asarray(out.robot_positions, float)
         dpos, drot = pose_distance(st.q_O, adapted.q_to)
         cfg, policy = self.config, self.policy
@@ -264,11 +274,16 @@ class ClosedLoop:
             if st.pending:
                 tight = min(tight, self.clearance(st.pending[0].q_to))
         max_pos, max_rot = drift_limits(cfg, tight, self.reach)
+        floor = NOISE_SIGMAS * self._reading_sigma()  # drift within the noise is not drift
+        max_pos, max_rot = max(max_pos, floor), max(max_rot, floor * HEADING_PER_METRE)
         stopped = getattr(out, "stopped_at", None) is not None  # by the watch
         outcome = "continue"
         if out.left_workspace:
             outcome = "left"
-        elif policy.replan_on_stall and _stalled(q_before, st.q_O, adapted):
+        elif getattr(self.executor, "team_changed", False):
+            outcome = "team"  # a robot failed: the runner plans anew with the rest
+        elif policy.replan_on_stall and _stalled(q_before, st.q_O, adapted,
+                                                 NOISE_SIGMAS * np.sqrt(2) * self._reading_sigma()):
             outcome = "stalled"
         elif policy.replan_on_drift and (dpos > max_pos or drot > max_rot or stopped):
             outcome = "drift"
@@ -279,6 +294,8 @@ class ClosedLoop:
         if outcome == "left":
             st.left = True
             st.reason = "object left the workspace"
+        elif outcome == "team":
+            st.reason = TEAM_CHANGED
         elif outcome == "stalled":
             # The push executed but barely moved the object: the verified transition does
             # not work in practice, so it is treated like a failed verification.
@@ -292,6 +309,22 @@ class ClosedLoop:
                 self.record.watch_stops += 1
                 self.planner.report_failure(adapted)
         return outcome
+
+    def _reading_sigma(self) -> float:
+        """The position noise of one observation after averaging (0 for an exact sensor)."""
+        cfg = self.config
+        return cfg.sensing_sigma / np.sqrt(cfg.sensing_readings) if cfg.sensing_sigma else 0.0
+
+    def _read_pose(self, out: Execution) -> np.ndarray:
+        """The object's observed pose after a segment: the execution's reading, averaged
+        with ``sensing_readings - 1`` more of the settled object when the sensor is noisy."""
+        first = np.asarray(out.object_poses[self.index], float)
+        if not self.config.sensing_sigma or self.config.sensing_readings <= 1:
+            return first
+        reads = np.array([first] + [np.asarray(self.executor.object_poses[self.index], float)
+                                    for _ in range(self.config.sensing_readings - 1)])
+        heading = np.arctan2(np.sin(reads[:, 2]).mean(), np.cos(reads[:, 2]).mean())
+        return np.array([reads[:, 0].mean(), reads[:, 1].mean(), heading])
 
     def _result(self, st: _Progress, max_segments: int) -> ObjectResult:
         self.record.unexecuted_planning_s += st.pending_time

@@ -123,6 +123,15 @@ class PlannerConfig:
     max_plan_iterations: int = param(400, "Most D* Lite replans inside one LAMP-Lazy Plan "
                                      "call.", low=1)
     max_verify_calls: int = param(4000, "Most Verify calls in one LAMP-Lazy Plan call.", low=1)
+    #: What the loop knows of its object sensor: a noisy reading moves the observed pose
+    #: without the object moving, so drift and stall tests keep above the noise (a loop
+    #: that replans on noise alone thrashes). The pipeline sets it from the run's
+    #: ``--sensing-noise`` unless given.
+    sensing_sigma: float = param(0.0, "Standard deviation of the object sensor (m; heading "
+                                 "sigma / 0.2 rad); drift below 3 sigma of the averaged "
+                                 "reading is not drift.", low=0.0)
+    sensing_readings: int = param(4, "Readings of a settled object averaged after each "
+                                  "segment when sensing_sigma > 0.", low=1)
 
     def __post_init__(self) -> None:
         check_fields(self)
@@ -140,7 +149,8 @@ class PlannerConfig:
 #: Which parameters each consumer reads; a planner declares the union of its groups
 #: (``PlannerSpec.params``).
 LOOP_PARAMS = ("planning_time_limit", "max_segments", "drift_position", "drift_orientation",
-               "stop_position", "stop_orientation", "long_push_length", "continuous_push_gap")
+               "stop_position", "stop_orientation", "long_push_length", "continuous_push_gap",
+               "sensing_sigma", "sensing_readings")
 VERIFY_PARAMS = ("k", "max_budget", "gspi_attempts_per_budget", "gspi_time_limit",
                  "contact_tolerance")
 LATTICE_PARAMS = ("lattice_step", "n_headings", "robot_match_tolerance")

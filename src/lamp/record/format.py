@@ -33,7 +33,7 @@ NPZ_NAME = "recording.npz"
 JSON_NAME = "recording.json"
 
 #: What the loop did after a segment (``segment_outcome`` holds the index into this tuple).
-OUTCOMES = ("continue", "drift", "stalled", "left")
+OUTCOMES = ("continue", "drift", "stalled", "left", "team")
 
 # name -> (dtype, shape with symbolic sizes): S rows, N robots, K objects, G segments,
 # C contacts, M push points, L plans, P planned poses, E / F verified / penalised edges
