@@ -226,3 +226,26 @@ def test_cli_disturbance_options(tmp_path):
     assert ok.exit_code == 0, ok.output
     result = json.loads((tmp_path / "o" / "result.json").read_text())
     assert result["disturbances"]["robot_failures"] == [[2, 1.5]]
+
+
+def test_bench_disturb_presets(tmp_path):
+    from lamp.bench.disturb import FAILURE_HORIZON, disturbances_for
+    from lamp.suites.registry import suite_scenes
+
+    scene = suite_scenes("maze")[0]
+    a = disturbances_for("one-robot-fails", scene, 0)
+    assert a == disturbances_for("one-robot-fails", scene, 0)  # deterministic
+    assert a != disturbances_for("one-robot-fails", scene, 1)
+    (robot, when), = a.robot_failures
+    travel = float(np.hypot(*(scene.object_goals()[0, :2] - scene.object_starts()[0, :2])))
+    assert 0 <= robot < scene.n_robots and 0 <= when <= 0.5 * FAILURE_HORIZON * travel / 0.25
+    assert disturbances_for("noise-high", scene, 0).sensing_noise == 0.01
+    runner = CliRunner()
+    base = ["bench", "--suites", "maze", "--scenes", "1", "--out", str(tmp_path / "b"),
+            "--dry-run"]
+    res = runner.invoke(app, [*base, "--planners", "lazy", "--disturb", "noise-high"])
+    assert res.exit_code == 0, res.output
+    res = runner.invoke(app, [*base, "--planners", "lazy", "--disturb", "storm"])
+    assert res.exit_code == 2 and "unknown preset 'storm'" in res.output
+    res = runner.invoke(app, [*base, "--planners", "mapush", "--disturb", "noise-low"])
+    assert res.exit_code == 2 and "run no closed loop" in res.output

@@ -76,6 +76,8 @@ class Job:
     #: Overrides of the planner's declared parameters (``--param PLANNER.NAME=VALUE``):
     #: (name, value text) pairs for this job's planner.
     params: tuple[tuple[str, str], ...] = ()
+    #: Disturbance preset of the run (``lamp bench --disturb``; ``lamp.bench.disturb``).
+    disturb: str = "none"
 
     @property
     def key(self) -> JobKey:
@@ -115,6 +117,7 @@ def enumerate_jobs(
     planning_limit_s: float | None = None,
     scale_cap_by_objects: bool = True,
     params: Mapping[str, Sequence[tuple[str, str]]] | None = None,
+    disturb: str = "none",
 ) -> list[Job]:
     """All jobs in a deterministic order: suite, scene, seed, then planner.
 
@@ -141,7 +144,8 @@ def enumerate_jobs(
                                     planner=planner, seed=int(seed), model=model,
                                     time_cap_s=float(cap), planning_limit_s=planning_limit_s,
                                     max_segments=PAPER_MAX_SEGMENTS if entry.builtin else None,
-                                    params=tuple((params or {}).get(planner, ()))))
+                                    params=tuple((params or {}).get(planner, ())),
+                                    disturb=disturb))
     keys = [j.key for j in jobs]
     if len(set(keys)) != len(keys):
         dup = next(k for k in keys if keys.count(k) > 1)
@@ -290,6 +294,7 @@ def make_record(job: Job, result: dict[str, Any], *, status: str, job_wall_time_
         "time_cap_s": job.time_cap_s,
         "planning_limit_s": job.time_limit,
         "max_segments": job.max_segments,
+        "disturb": job.disturb,
         "job_wall_time_s": round(float(job_wall_time_s), 3),
     })
     rec.setdefault("failure_reason", _failure_reason(rec))

@@ -104,6 +104,10 @@ PARAM = typer.Option(None, "--param", show_default=False,
                      help="Set a planner parameter for this run, PLANNER.NAME=VALUE "
                           "(repeatable; `lamp run --planner P --help-params` lists them), "
                           "e.g. lazy.max_plan_iterations=400.")
+DISTURB = typer.Option("none", "--disturb", help="Disturbance preset of every job (a "
+                       "robustness sweep runs one folder per preset): none, noise-low "
+                       "(5 mm sensing, 5% actuation noise), noise-high (1 cm, 10%), "
+                       "push-knocks (0.5 N s per segment), one-robot-fails.")
 DB = typer.Option(None, "--db", help="Also write the results as an SQLite "
                   "database at this path (schema: docs/bench-db.md); rebuilt "
                   "from DIR/results.jsonl.", show_default="no database")
@@ -221,14 +225,28 @@ def check_params(params: list[str] | None, planners: list[str]
     return {p: tuple(sorted(kv.items())) for p, kv in by_planner.items()}, texts
 
 
+def check_disturb(disturb: str, planners: list[str]) -> str:
+    """``--disturb``: a known preset, and only for closed-loop planners when not none."""
+    from lamp.bench.disturb import DISTURB_PRESETS
+
+    if disturb not in DISTURB_PRESETS:
+        fail(f"--disturb: unknown preset {disturb!r}; expected one of: "
+             f"{', '.join(DISTURB_PRESETS)}")
+    open_loop = [p for p in planners if not registry.get(p).closed_loop]
+    if disturb != "none" and open_loop:
+        fail(f"--disturb {disturb}: planners {', '.join(open_loop)} run no closed loop; "
+             "disturbances are for the closed-loop planners")
+    return disturb
+
+
 def check_resume_config(previous: dict[str, Any], *, time_cap: float, planning_limit: float,
-                        model: str, job_fn: str, params: list[str] | None = None) -> None:
+                        model: str, job_fn: str, params: list[str] | None = None,
+                        disturb: str = "none") -> None:
     """A resumed run keeps its recorded cap, planning limit, model, job function and
     parameters."""
     for key, given in (("time_cap_s", time_cap), ("planning_limit_s", planning_limit),
-                       ("model", model), ("job_fn", job_fn), ("params", params or [])):
-        if key == "params" and key not in previous and not given:
-            continue
+                       ("model", model), ("job_fn", job_fn), ("params", params or []),
+                       ("disturb", disturb)):
         if key in previous and previous[key] != given:
             fail(f"resuming a run recorded with {key}={previous[key]!r} but given {given!r}: "
                  "the results would mix settings; pass the recorded value or use a new --out")

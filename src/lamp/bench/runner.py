@@ -53,11 +53,13 @@ def solve_job(job: Job) -> dict[str, Any]:
     log) and in the result's ``render_error`` (``recording_error``) key; it never costs the
     run's result.
     """
+    from lamp.bench.disturb import disturbances_for
     from lamp.pipeline import RunRequest, run
 
     request = RunRequest.build(job.scene, job.planner, job.seed, model=job.model,
                                params=dict(job.params), planning_limit=job.time_limit,
-                               max_segments=job.max_segments)
+                               max_segments=job.max_segments,
+                               disturbances=disturbances_for(job.disturb, job.scene, job.seed))
     result_obj = run(request)
     recording = result_obj.recording
     result = result_obj.to_dict()
