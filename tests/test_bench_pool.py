@@ -88,7 +88,9 @@ def test_a_worker_lost_to_a_timeout_or_crash_is_replaced():
     outcomes = []
     t0 = time.monotonic()
     run_local(jobs, "lamp.bench.fake:mixed_job", 1, outcomes.append)
-    assert time.monotonic() - t0 < 20.0  # the sleeping jobs were cut at their cap
+    # the two sleeping jobs (a minute each) were cut at their 1 s cap: well under the 120 s
+    # they would take, with room for restarting workers on a loaded machine
+    assert time.monotonic() - t0 < 100.0
     assert [o.job.key for o in outcomes] == [j.key for j in jobs]
     assert [o.status for o in outcomes] == ["ok", "error", "ok", "crashed", "timeout"] * 2
     by = {(o.job.scene_name, o.job.planner): o for o in outcomes}
