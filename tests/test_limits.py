@@ -97,12 +97,21 @@ _VALUES = st.one_of(
 
 
 def _set(d, path, value):
+    """``d[path] = value`` where the path still leads somewhere (an earlier mutation may
+    have replaced a container on it)."""
     node = d
     for key in path[:-1]:
-        node = node[key]
-    if isinstance(node, list) and path[-1] >= len(node):
-        return
-    node[path[-1]] = value
+        if isinstance(node, dict) and isinstance(key, str) and key in node:
+            node = node[key]
+        elif isinstance(node, list) and isinstance(key, int) and key < len(node):
+            node = node[key]
+        else:
+            return
+    last = path[-1]
+    if isinstance(node, dict) and isinstance(last, str):
+        node[last] = value
+    elif isinstance(node, list) and isinstance(last, int) and last < len(node):
+        node[last] = value
 
 
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow,
