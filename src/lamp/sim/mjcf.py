@@ -265,33 +265,10 @@ def _build_cached(key: tuple) -> BuiltModel:
     )
 
 
-def _make_xml(
-    workspace: tuple[float, float],
-    obstacles: tuple[Obstacle, ...],
-    shapes: tuple[Shape, ...],
-    n_robots: int,
-    radius: float,
-    physics: Physics = DEFAULT_PHYSICS,
-    object_physics: tuple[ObjectPhysics, ...] = (),
-) -> tuple[str, tuple[ObjectBody, ...]]:
-    w, h = workspace
-    t = WALL_THICKNESS
-    meshes = _MeshBank()
-    static: list[str] = []
-    # border walls: boxes whose inner faces are the workspace border lines
-    for cx, cy, sx, sy in (
-        (0.5 * w, -0.5 * t, 0.5 * w + t, 0.5 * t),
-        (0.5 * w, h + 0.5 * t, 0.5 * w + t, 0.5 * t),
-        (-0.5 * t, 0.5 * h, 0.5 * t, 0.5 * h + t),
-        (w + 0.5 * t, 0.5 * h, 0.5 * t, 0.5 * h + t),
-    ):
-        static.append(
-            f'<geom class="static" type="box" size="{_fmt([sx, sy, STATIC_HALF_HEIGHT])}" '
-            f'pos="{_fmt([cx, cy, 0.0])}"/>'
-        )
-    for obstacle in obstacles:
-        static.extend(_obstacle_geoms(obstacle, meshes))
-
+def _object_bodies(shapes: tuple[Shape, ...], physics: Physics,
+                   object_physics: tuple[ObjectPhysics, ...], meshes: _MeshBank
+                   ) -> tuple[list[str], list[ObjectBody]]:
+    """The objects' free planar bodies (mass, inertia, ground friction, geoms)."""
     bodies: list[str] = []
     objects: list[ObjectBody] = []
     for k, shape in enumerate(shapes):
@@ -319,6 +296,37 @@ def _make_xml(
             objects.append(
                 ObjectBody((float(centroid[0]), float(centroid[1])), local_outline(shape), 0.0)
             )
+    return bodies, objects
+
+
+def _make_xml(
+    workspace: tuple[float, float],
+    obstacles: tuple[Obstacle, ...],
+    shapes: tuple[Shape, ...],
+    n_robots: int,
+    radius: float,
+    physics: Physics = DEFAULT_PHYSICS,
+    object_physics: tuple[ObjectPhysics, ...] = (),
+) -> tuple[str, tuple[ObjectBody, ...]]:
+    w, h = workspace
+    t = WALL_THICKNESS
+    meshes = _MeshBank()
+    static: list[str] = []
+    # border walls: boxes whose inner faces are the workspace border lines
+    for cx, cy, sx, sy in (
+        (0.5 * w, -0.5 * t, 0.5 * w + t, 0.5 * t),
+        (0.5 * w, h + 0.5 * t, 0.5 * w + t, 0.5 * t),
+        (-0.5 * t, 0.5 * h, 0.5 * t, 0.5 * h + t),
+        (w + 0.5 * t, 0.5 * h, 0.5 * t, 0.5 * h + t),
+    ):
+        static.append(
+            f'<geom class="static" type="box" size="{_fmt([sx, sy, STATIC_HALF_HEIGHT])}" '
+            f'pos="{_fmt([cx, cy, 0.0])}"/>'
+        )
+    for obstacle in obstacles:
+        static.extend(_obstacle_geoms(obstacle, meshes))
+
+    bodies, objects = _object_bodies(shapes, physics, object_physics, meshes)
     actuators: list[str] = []
     force = physics.robot_force_limit
     for i in range(n_robots):

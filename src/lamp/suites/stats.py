@@ -162,24 +162,29 @@ def stats_markdown(manifests: dict[str, dict[str, Any]] | None = None) -> str:
     if "corridor" in manifests:
         lines += corridor_lines(manifests["corridor"])
     if "iros" in manifests:
-        sc = manifests["iros"]["scenes"][0]
-        lines += [
-            "",
-            f"## iros ({sc['name']}: {len(sc['objects'])} objects, moved in this order)",
-            "",
-            "| # | piece | shape | free route length | approach route length (robot room) | "
-            "approach min clearance | final push free |",
-            "|---|---|---|---|---|---|---|",
-        ]
-        for o in sc["objects"]:
-            shape = (
-                f"circle r={o['radius']}"
-                if o["type"] == "circle"
-                else f"rectangle {o['size'][0]} x {o['size'][1]}"
-            )
-            app = o["approach_route"]
-            lines.append(
-                f"| {o['index']} | {o['piece']} | {shape} | {o['free_route']['length']:.2f} | "
-                f"{app['length']:.2f} | {app['min_clearance']:.3f} | {o['final_push_ok']} |"
-            )
+        lines += _iros_lines(manifests["iros"]["scenes"][0])
     return "\n".join(lines) + "\n"
+
+
+def _iros_lines(sc: dict[str, Any]) -> list[str]:
+    """The IROS scene's own table: one row per object, in the order they are moved."""
+    lines = [
+        "",
+        f"## iros ({sc['name']}: {len(sc['objects'])} objects, moved in this order)",
+        "",
+        "| # | piece | shape | free route length | approach route length (robot room) | "
+        "approach min clearance | final push free |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for o in sc["objects"]:
+        shape = (
+            f"circle r={o['radius']}"
+            if o["type"] == "circle"
+            else f"rectangle {o['size'][0]} x {o['size'][1]}"
+        )
+        app = o["approach_route"]
+        lines.append(
+            f"| {o['index']} | {o['piece']} | {shape} | {o['free_route']['length']:.2f} | "
+            f"{app['length']:.2f} | {app['min_clearance']:.3f} | {o['final_push_ok']} |"
+        )
+    return lines
