@@ -249,3 +249,25 @@ def test_bench_disturb_presets(tmp_path):
     assert res.exit_code == 2 and "unknown preset 'storm'" in res.output
     res = runner.invoke(app, [*base, "--planners", "mapush", "--disturb", "noise-low"])
     assert res.exit_code == 2 and "run no closed loop" in res.output
+
+
+def test_a_watch_firing_with_no_settle_time_ends_the_call(scene):
+    """The knock splits a segment into calls without settling; a push watch may fire in the
+    first (the simulator once failed to build an empty settle block)."""
+    sim = Simulator(scene)
+    out = sim.execute(_walk(scene), settle_time=0.0, stop=lambda poses: True)
+    assert out.stopped_at is not None and out.sim_time > 0
+
+
+def test_knocks_resume_from_where_the_robots_are(scene):
+    """A robot held back from its target (pressing on a blocked object) must not make the
+    second half of a knocked segment start too far from it."""
+    starts = scene.robot_starts_array.copy()
+    starts[0] = [0.5, 1.0]
+    push = np.repeat(starts[:, None], 41, axis=1)
+    push[0] = _line([0.5, 1.0], [1.3, 1.0], 41)
+    for seed in range(6):
+        sim = Simulator(scene, robot_positions=starts)
+        ex = DisturbedExecutor(sim, Disturbances(push_disturbance=3.0), seed=seed)
+        out = ex.execute(push, record_every=40)
+        assert out.trace.times[-1] == pytest.approx(out.sim_time, abs=1e-9)

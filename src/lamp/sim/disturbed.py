@@ -138,7 +138,11 @@ class DisturbedExecutor:
                        * np.array([np.cos(angle), np.sin(angle)]))
         if first.stopped_at is not None:
             return first
-        second = self.sim.execute(paths[:, cut:], record_every=record_every, stop=stop)
+        # on from where the robots are (a robot pressing on the knocked object may lag its
+        # target by more than the simulator's start gap)
+        rest = densify(np.concatenate([self.sim.robot_positions[:, None], paths[:, cut + 1:]],
+                                      axis=1))
+        second = self.sim.execute(rest, record_every=record_every, stop=stop)
         return _joined(first, second)
 
     def _kick(self, k: int, impulse: np.ndarray) -> None:

@@ -348,7 +348,7 @@ class Simulator:
                 stopped_at = lo
                 hold = self.robot_positions.reshape(1, 2 * self.n_robots)
                 ctrl = np.concatenate([ctrl[:lo], np.repeat(hold, n_settle, axis=0)
-                                       .reshape(n_settle, 1, -1)])
+                                       .reshape(n_settle, 1, 2 * self.n_robots)])
                 n_steps = len(ctrl)
         if n_steps > 0:
             mujoco.mj_forward(self.model, self.data)
