@@ -96,22 +96,23 @@ _VALUES = st.one_of(
                      "polygon", "circle", {"contact_friction": 9}]))
 
 
+def _has(node, key) -> bool:
+    """Whether ``node[key]`` exists (a mapping's key or a list's index)."""
+    if isinstance(node, dict):
+        return isinstance(key, str)
+    return isinstance(node, list) and isinstance(key, int) and key < len(node)
+
+
 def _set(d, path, value):
     """``d[path] = value`` where the path still leads somewhere (an earlier mutation may
     have replaced a container on it)."""
     node = d
     for key in path[:-1]:
-        if isinstance(node, dict) and isinstance(key, str) and key in node:
-            node = node[key]
-        elif isinstance(node, list) and isinstance(key, int) and key < len(node):
-            node = node[key]
-        else:
+        if not (_has(node, key) and (isinstance(node, list) or key in node)):
             return
-    last = path[-1]
-    if isinstance(node, dict) and isinstance(last, str):
-        node[last] = value
-    elif isinstance(node, list) and isinstance(last, int) and last < len(node):
-        node[last] = value
+        node = node[key]
+    if _has(node, path[-1]):
+        node[path[-1]] = value
 
 
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow,
