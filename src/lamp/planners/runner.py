@@ -62,7 +62,8 @@ class ClosedLoopRunner:
         limit = segment_limit(self.config.max_segments, float(np.hypot(*(goal[:2] - start[:2]))))
         parts: list[ObjectOutcome] = []
         while True:  # one closed loop per team: a robot that fails ends it
-            failed = dict(executor.failed)
+            now = np.asarray(executor.robot_positions, float)
+            failed = {k: now[k] for k in executor.failed}  # where they stand now
             alive = [i for i in range(self.scene.n_robots) if i not in failed]
             used = sum(p.result.segments for p in parts)
             config = replace(self.config, max_segments=max(1, limit - used))

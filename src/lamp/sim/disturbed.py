@@ -11,7 +11,8 @@ call passes straight through (bit-identical). Deterministic for its seed.
 Timing of a failure: the rows of a path are reached at the documented times (row t -> t+1
 lasts the longest robot step over the scene's robot speed, ``lamp.sim.simulator``), so a
 robot failing at time T holds, from the first row reached at or after T, the place of that
-row, and in every later call; ``failed`` maps it to that place.
+row (``failed`` maps it to that place); in every later call it holds where it is at the
+call's start: a braked robot that a pushed object may shove, not a spring back to its place.
 """
 
 from __future__ import annotations
@@ -118,9 +119,10 @@ class DisturbedExecutor:
             paths[robot, row:] = self.failed[robot]
             self._pending.remove((robot, when))
             fresh.add(robot)
-        for robot, place in self.failed.items():
-            if robot not in fresh:
-                paths[robot, :] = place
+        now = self.sim.robot_positions
+        for robot in self.failed:
+            if robot not in fresh:  # braked where it is (others may have shoved it)
+                paths[robot, :] = now[robot]
         return paths
 
     def _knocked(self, paths: np.ndarray, record_every: int | None,
