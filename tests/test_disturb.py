@@ -271,3 +271,21 @@ def test_knocks_resume_from_where_the_robots_are(scene):
         ex = DisturbedExecutor(sim, Disturbances(push_disturbance=3.0), seed=seed)
         out = ex.execute(push, record_every=40)
         assert out.trace.times[-1] == pytest.approx(out.sim_time, abs=1e-9)
+
+
+def test_a_failed_robot_is_braked_where_it_stands(scene):
+    """Shoved by another robot, a failed robot stays where it was shoved to (it does not
+    spring back to where it stopped)."""
+    ex = DisturbedExecutor(Simulator(scene), Disturbances(robot_failures=((0, 0.0),)), seed=0)
+    starts = scene.robot_starts_array
+    ex.execute(np.repeat(starts[:, None], 3, axis=1))  # robot 0 fails at once, at (0.2, 0.3)
+    place = ex.failed[0].copy()
+    shove = np.repeat(ex.robot_positions[:, None], 31, axis=1)
+    shove[1] = _line(starts[1], [0.2, 0.35], 31)  # robot 1 drives down into robot 0
+    ex.execute(shove)
+    shoved = ex.robot_positions[0].copy()
+    rest = np.repeat(ex.robot_positions[:, None], 3, axis=1)
+    rest[1] = np.linspace(ex.robot_positions[1], ex.robot_positions[1] + [0.0, 0.04], 3)
+    ex.execute(rest)  # robot 1 backs off
+    assert np.linalg.norm(shoved - place) > 0.01
+    assert np.linalg.norm(ex.robot_positions[0] - shoved) < 0.005
