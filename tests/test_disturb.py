@@ -8,6 +8,7 @@ import json
 
 import numpy as np
 import pytest
+from scenes import TINY
 from typer.testing import CliRunner
 
 import lamp
@@ -23,13 +24,8 @@ from lamp.scene import scene_from_dict
 from lamp.sim import Simulator
 from lamp.sim.disturbed import DisturbedExecutor
 
-SCENE = {
-    "format": "lamp-scene/1", "name": "tiny", "workspace": [2.2, 2.0],
-    "robots": {"radius": 0.05, "starts": [[0.2, 0.3], [0.2, 0.6], [0.2, 0.9]]},
-    "obstacles": [],
-    "objects": [{"type": "rectangle", "size": [0.3, 0.2], "start": [0.7, 1.0, 0.0],
-                 "goal": [1.6, 1.2, 0.5]}],
-}
+SCENE = {**TINY, "objects": [{"type": "rectangle", "size": [0.3, 0.2],
+                              "start": [0.7, 1.0, 0.0], "goal": [1.6, 1.2, 0.5]}]}
 
 
 @pytest.fixture(scope="module")

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
+from scenes import TINY
 from typer.testing import CliRunner
 
 from lamp.cli import app
@@ -29,13 +30,7 @@ from lamp.pipeline.execute import execute
 from lamp.planners.config import PlannerConfig
 from lamp.scene import SceneError, scene_from_dict
 
-SCENE = {
-    "format": "lamp-scene/1", "name": "tiny", "workspace": [2.2, 2.0],
-    "robots": {"radius": 0.05, "starts": [[0.2, 0.3], [0.2, 0.6], [0.2, 0.9]]},
-    "obstacles": [],
-    "objects": [{"type": "rectangle", "size": [0.3, 0.2], "start": [0.85, 1.0, 0.0],
-                 "goal": [1.25, 1.0, 0.0]}],
-}
+SCENE = TINY
 INFOS = infos(PlannerConfig)
 
 

@@ -7,6 +7,7 @@ import typing
 from dataclasses import replace
 
 import pytest
+from scenes import TINY
 from typer.testing import CliRunner
 
 import lamp
@@ -19,13 +20,7 @@ from lamp.scene import scene_from_dict
 
 BUILT_IN = ("lazy", "astar", "astar-replan", "gco-ori", "gco-var", "mapush")
 
-SCENE = {
-    "format": "lamp-scene/1", "name": "tiny", "workspace": [2.2, 2.0],
-    "robots": {"radius": 0.05, "starts": [[0.2, 0.3], [0.2, 0.6], [0.2, 0.9]]},
-    "obstacles": [],
-    "objects": [{"type": "rectangle", "size": [0.3, 0.2], "start": [0.85, 1.0, 0.0],
-                 "goal": [1.25, 1.0, 0.0]}],
-}
+SCENE = TINY
 
 
 def _lazy_factory(task):
