@@ -174,14 +174,11 @@ def _disturbances(sensing: float, actuation: float, failures: list[str] | None,
         return Disturbances(sensing_noise=sensing, actuation_noise=actuation,
                             robot_failures=tuple(parse_failure(f) for f in failures or ()),
                             push_disturbance=push)
-    except InputError as exc:  # name the option, not the field
-        flag = {"sensing_noise": "--sensing-noise", "actuation_noise": "--actuation-noise",
-                "push_disturbance": "--push-disturbance",
-                "robot_failures": "--robot-failure"}
-        text = str(exc)
-        for field, option in flag.items():
-            text = text.replace(field, option, 1) if text.startswith(field) else text
-        raise InputError(text) from None
+    except InputError as exc:  # "field: why" -> "--option: why"
+        flags = {"sensing_noise": "--sensing-noise", "actuation_noise": "--actuation-noise",
+                 "push_disturbance": "--push-disturbance", "robot_failures": "--robot-failure"}
+        field, _, why = str(exc).partition(":")
+        raise InputError(f"{flags.get(field, field)}:{why}") from None
 
 
 def _print_params(planner: str) -> None:

@@ -101,9 +101,7 @@ class DisturbedExecutor:
 
     def _row_times(self, paths: np.ndarray) -> np.ndarray:
         """The simulated time each row is reached (the simulator's documented schedule)."""
-        way = np.concatenate([self.sim.robot_positions[:, None], paths], axis=1)
-        dur = np.hypot(*np.moveaxis(np.diff(way, axis=1), 2, 0)).max(axis=0) / self.sim.speed
-        return self.sim.time + np.cumsum(dur)
+        return self.sim.time + np.cumsum(self.sim.row_durations(paths))
 
     def _fail(self, paths: np.ndarray) -> np.ndarray:
         """Failed robots hold where they stopped; a failure due in this call stops its robot

@@ -444,11 +444,17 @@ class Simulator:
         """Physics steps the last row is held for ``settle_time`` seconds."""
         return math.ceil(settle_time / float(self.model.opt.timestep) - 1e-9)
 
+    def row_durations(self, paths: np.ndarray) -> np.ndarray:
+        """(T,) seconds the targets take to each row of ``paths`` from the one before (row 0:
+        from where the robots are): the row's longest robot step over the driving speed."""
+        way = np.concatenate([self.robot_positions[:, None], paths], axis=1)
+        return np.hypot(*np.moveaxis(np.diff(way, axis=1), 2, 0)).max(axis=0) / self.speed
+
     def _schedule(self, paths: np.ndarray, settle_time: float) -> tuple[np.ndarray, np.ndarray]:
         """Per-step targets and target velocities, (S, N, 2) each (see module docstring)."""
         dt = float(self.model.opt.timestep)
         way = np.concatenate([self.robot_positions[:, None], paths], axis=1)  # (N, T+1, 2)
-        dur = np.hypot(*np.moveaxis(np.diff(way, axis=1), 2, 0)).max(axis=0) / self.speed
+        dur = self.row_durations(paths)
         keep = np.concatenate([[True], dur > 1e-12])
         way = way[:, keep]
         tau = np.concatenate([[0.0], np.cumsum(dur[dur > 1e-12])])
