@@ -51,7 +51,16 @@ import yaml
 from lamp.geometry.team import DEFAULT_TEAM
 from lamp.scene.errors import Ctx, SceneError, fmt_xy, is_number, show, value_kind
 from lamp.scene.geometry_checks import check_geometry
-from lamp.scene.model import Circle, Obstacle, Polygon, Rectangle, Scene, SceneObject, Shape
+from lamp.scene.model import (
+    SCHEDULES,
+    Circle,
+    Obstacle,
+    Polygon,
+    Rectangle,
+    Scene,
+    SceneObject,
+    Shape,
+)
 from lamp.scene.physics import (
     DEFAULT_PHYSICS,
     OBJECT_RANGES,
@@ -72,7 +81,8 @@ MAX_WORKSPACE_SIDE = 200.0
 SHAPE_TYPES = ("circle", "rectangle", "polygon")
 
 # Allowed keys per mapping: (required, optional).
-_TOP_KEYS = (("format", "name", "workspace", "robots", "objects"), ("obstacles", "physics"))
+_TOP_KEYS = (("format", "name", "workspace", "robots", "objects"),
+             ("obstacles", "physics", "schedule"))
 _ROBOT_KEYS = (("starts",), ("radius", "speed", "force_limit"))
 _PHYSICS_KEYS = ((), ("contact_friction", "ground_damping"))
 _OBSTACLE_KEYS = {
@@ -81,9 +91,9 @@ _OBSTACLE_KEYS = {
     "polygon": (("type", "points"), ()),
 }
 _OBJECT_KEYS = {
-    "circle": (("type", "radius", "start", "goal"), ("mass", "friction")),
-    "rectangle": (("type", "size", "start", "goal"), ("mass", "friction")),
-    "polygon": (("type", "points", "start", "goal"), ("mass", "friction")),
+    "circle": (("type", "radius", "start", "goal"), ("mass", "friction", "after")),
+    "rectangle": (("type", "size", "start", "goal"), ("mass", "friction", "after")),
+    "polygon": (("type", "points", "start", "goal"), ("mass", "friction", "after")),
 }
 
 
@@ -283,7 +293,57 @@ def _object(ctx: Ctx, v: Any, field: str) -> SceneObject:
     goal = _vector(ctx, d["goal"], f"{field}.goal", 3, "x, y, theta")
     phys = {k: _ranged(ctx, d[k], f"{field}.{k}", OBJECT_RANGES[k]) for k in OBJECT_RANGES
             if k in d}
-    return SceneObject(shape, start, goal, ObjectPhysics(**phys))  # type: ignore[arg-type]
+    after = _after(ctx, d.get("after") or [], f"{field}.after")
+    return SceneObject(shape, start, goal, ObjectPhysics(**phys), after)  # type: ignore[arg-type]
+
+
+def _after(ctx: Ctx, v: Any, field: str) -> tuple[int, ...]:
+    """An object's ``after`` list: distinct non-negative integers (checked against the
+    objects by :func:`_check_order`)."""
+    out = []
+    for i, k in enumerate(_list(ctx, v, field, what="object indices")):
+        if isinstance(k, bool) or not isinstance(k, int) or k < 0:
+            ctx.fail(f"{field}[{i}]", f"must be an object index (an integer >= 0), got {show(k)}")
+        if k in out:
+            ctx.fail(f"{field}[{i}]", f"object {k} is listed twice")
+        out.append(k)
+    return tuple(out)
+
+
+def _check_order(ctx: Ctx, objects: tuple[SceneObject, ...]) -> None:
+    """Every ``after`` index names another object, and the ``after`` lists have no cycle
+    (named by its objects, as a path ``a -> b -> a``)."""
+    n = len(objects)
+    for i, o in enumerate(objects):
+        for j, k in enumerate(o.after):
+            if k >= n:
+                ctx.fail(f"objects[{i}].after[{j}]", f"no object {k} (the scene has {n}: "
+                         f"0..{n - 1})")
+            if k == i:
+                ctx.fail(f"objects[{i}].after[{j}]", "an object cannot wait for itself")
+    state = [0] * n  # 0 new, 1 on the path, 2 done
+    for root in range(n):
+        stack = [(root, iter(objects[root].after))]
+        path = [root]
+        if state[root]:
+            continue
+        state[root] = 1
+        while stack:
+            node, it = stack[-1]
+            nxt = next(it, None)
+            if nxt is None:
+                state[node] = 2
+                stack.pop()
+                path.pop()
+            elif state[nxt] == 1:
+                cycle = [*path[path.index(nxt):], nxt]
+                ctx.fail(f"objects[{cycle[0]}].after", "the after lists have a cycle: "
+                         + " -> ".join(f"objects[{k}]" for k in cycle)
+                         + " (each waits for the next to be placed)")
+            elif state[nxt] == 0:
+                state[nxt] = 1
+                stack.append((nxt, iter(objects[nxt].after)))
+                path.append(nxt)
 
 
 def _ranged(ctx: Ctx, v: Any, field: str, bounds: tuple[float, float]) -> float:
@@ -333,7 +393,12 @@ def _structure(ctx: Ctx, raw: Any, source: str | None) -> Scene:
         _object(ctx, o, f"objects[{i}]")
         for i, o in enumerate(_list(ctx, d["objects"], "objects", min_len=1, what="objects"))
     )
+    _check_order(ctx, objects)
+    schedule = d.get("schedule") or "sequential"
+    if not (isinstance(schedule, str) and schedule in SCHEDULES):
+        ctx.fail("schedule", f"must be one of {', '.join(SCHEDULES)}, got {show(schedule)}")
     return Scene(
+        schedule=schedule,
         name=name,
         workspace=workspace,  # type: ignore[arg-type]
         robot_starts=robot_starts,  # type: ignore[arg-type]

@@ -25,8 +25,13 @@ from lamp.geometry.primitives import (
 from lamp.geometry.team import DEFAULT_TEAM
 from lamp.scene.physics import DEFAULT_PHYSICS, ObjectPhysics, Physics
 
-__all__ = ["Circle", "ObjectPhysics", "Obstacle", "Physics", "Point", "Polygon", "Pose",
-           "Rectangle", "Scene", "SceneObject", "Shape", "shape_from_dict"]
+__all__ = ["SCHEDULES", "Circle", "ObjectPhysics", "Obstacle", "Physics", "Point", "Polygon",
+           "Pose", "Rectangle", "Scene", "SceneObject", "Shape", "shape_from_dict"]
+
+#: How a scene's objects are moved: ``sequential`` (the paper's: one after another, in the
+#: file's order, each by the whole team) or ``concurrent`` (several at once by sub-teams,
+#: ``lamp.fleet``). The first is the default.
+SCHEDULES = ("sequential", "concurrent")
 
 @dataclass(frozen=True)
 class SceneObject:
@@ -37,12 +42,18 @@ class SceneObject:
     start: Pose
     goal: Pose
     physics: ObjectPhysics = ObjectPhysics()
+    #: Indices of the objects that must be placed before this one moves (a blocker cleared
+    #: before the load behind it); only the concurrent schedule reads it (the sequential
+    #: one moves objects in the file's order).
+    after: tuple[int, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
         d = self.shape.to_dict()
         d["start"] = [float(v) for v in self.start]
         d["goal"] = [float(v) for v in self.goal]
         d.update(self.physics.to_dict())
+        if self.after:
+            d["after"] = [int(k) for k in self.after]
         return d
 
 
@@ -60,6 +71,8 @@ class Scene:
     #: What the robots and loads physically are (``lamp.scene.physics``; default: the
     #: simulator's calibrated values).
     physics: Physics = DEFAULT_PHYSICS
+    #: One of :data:`SCHEDULES`.
+    schedule: str = "sequential"
 
     @property
     def n_robots(self) -> int:
@@ -99,4 +112,6 @@ class Scene:
         }
         if self.physics.to_dict():
             d["physics"] = self.physics.to_dict()
+        if self.schedule != "sequential":
+            d["schedule"] = self.schedule
         return d

@@ -12,6 +12,7 @@ from __future__ import annotations
 from typing import Any
 
 from lamp.scene.loader import DEFAULT_ROBOT_RADIUS, FORMAT, MAX_WORKSPACE_SIDE
+from lamp.scene.model import SCHEDULES
 from lamp.scene.physics import DEFAULT_PHYSICS, OBJECT_RANGES, PHYSICS_RANGES
 
 SCHEMA_ID = "urn:lamp:scene-format:1"
@@ -69,7 +70,11 @@ def scene_schema() -> dict[str, Any]:
     motion = {"start": pose, "goal": pose,
               "mass": _ranged(OBJECT_RANGES["mass"], "the object's mass (kg), default 1"),
               "friction": _ranged(OBJECT_RANGES["friction"], "Coulomb friction of the "
-                                  "object's contacts, default physics.contact_friction")}
+                                  "object's contacts, default physics.contact_friction"),
+              "after": {"type": ["array", "null"], "items": {"type": "integer", "minimum": 0},
+                        "uniqueItems": True,
+                        "description": "indices of the objects placed before this one moves "
+                                       "(concurrent schedule; no cycles)"}}
     obj = {"oneOf": [
         _closed("circle", {"radius": _positive("radius (m)"), **motion},
                 ["radius", "start", "goal"]),
@@ -125,7 +130,12 @@ def scene_schema() -> dict[str, Any]:
                 "description": "the physics of the scene (default: the simulator's)",
             },
             "objects": {"type": "array", "items": obj, "minItems": 1,
-                        "description": "moved one after another in this order"},
+                        "description": "moved one after another in this order (schedule "
+                                       "sequential), or several at once (concurrent)"},
+            "schedule": {"enum": [*SCHEDULES, None], "default": "sequential",
+                         "description": "sequential: one object after another by the whole "
+                                        "team (the paper's); concurrent: several at once by "
+                                        "sub-teams"},
         },
         "required": ["format", "name", "workspace", "robots", "objects"],
         "additionalProperties": False,
