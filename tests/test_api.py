@@ -70,7 +70,7 @@ def test_solve_rejects_bad_input_clearly(tmp_path: Path) -> None:
 def test_solve_signature_and_docstring() -> None:
     params = inspect.signature(lamp.solve).parameters
     assert list(params) == ["scene", "planner", "seed", "model", "config", "params",
-                            "time_limit", "max_segments", "disturbances", "progress"]
+                            "time_limit", "max_segments", "disturbances", "schedule", "progress"]
     assert all(p.annotation is not inspect.Parameter.empty for p in params.values())
     assert params["planner"].default == "lazy" and params["seed"].default == 0
     for name in names():

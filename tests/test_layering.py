@@ -35,6 +35,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("rl",),
     ("planners",),
     ("baselines",),
+    ("fleet",),
     ("pipeline",),
     ("bench",),
     ("demo",),

@@ -49,7 +49,7 @@ def solve(scene: Scene | str | Path, planner: PlannerName = "lazy", seed: int = 
           model: str | Path | Any = "learned", config: PlannerConfig | None = None,
           params: Mapping[str, Any] | None = None, time_limit: float | None = None,
           max_segments: int | None = None, disturbances: Disturbances | None = None,
-          progress: ProgressCallback | None = None) -> RunResult:
+          schedule: str | None = None, progress: ProgressCallback | None = None) -> RunResult:
     """Plan and execute ``scene`` with ``planner``; ``result.to_dict()`` is result.json and
     ``result.recording`` the run's recording (every picture is drawn from it).
 
@@ -74,6 +74,9 @@ def solve(scene: Scene | str | Path, planner: PlannerName = "lazy", seed: int = 
         disturbances: what goes wrong during the run: noisy sensing, imprecise robots,
             robots that stop, knocked pushes (``lamp.contract.disturb.Disturbances``;
             deterministic for the seed, recorded in result.json).
+        schedule: ``"sequential"`` (one object after another by the whole team, the
+            paper's) or ``"concurrent"`` (several at once by sub-teams); default: the
+            scene's (``schedule:`` in the file, else sequential).
         progress: called with a ``lamp.progress.ProgressEvent`` as the run advances.
 
     Raises ``InputError`` (a ``ValueError``) for an unknown planner, model or parameter
@@ -90,7 +93,8 @@ def solve(scene: Scene | str | Path, planner: PlannerName = "lazy", seed: int = 
     request = RunRequest.build(scene, planner, seed, model=model,
                                params=config if config is not None else params,
                                planning_limit=time_limit, max_segments=max_segments,
-                               disturbances=disturbances or NO_DISTURBANCE)
+                               disturbances=disturbances or NO_DISTURBANCE,
+                               schedule=schedule)
     return run(request, progress=progress)
 
 

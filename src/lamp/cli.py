@@ -139,7 +139,7 @@ OUT_HELP = ("Output folder: result.json, recording.npz + recording.json (lamp-re
 def _build_request(scene_file: Path | None, scene, planner: str, seed: int, model: str,
                    out: Path, params: list[str] | None = None,
                    planning_limit: float | None = None, max_segments: int | None = None,
-                   disturbances=None):
+                   disturbances=None, schedule: str | None = None):
     """The run request of ``lamp run`` / ``lamp demo``, every input checked before anything
     is planned or written (bad input: ``InputError``, exit 2)."""
     from lamp.contract.params import parse_assignments
@@ -154,12 +154,17 @@ def _build_request(scene_file: Path | None, scene, planner: str, seed: int, mode
             fail_input(f"--param {who}.{name}={value}: names planner {who!r}, but the run "
                        f"uses --planner {planner}")
         overrides[name] = value
+    if schedule is not None:
+        from lamp.scene.model import SCHEDULES
+
+        check_choice("--schedule", schedule, SCHEDULES, "schedule")
     check_writable_dir(out)
     model = check_model_option(model)
     if scene is None:
         scene = load_scene_or_exit(scene_file)
     return RunRequest.build(scene, planner, seed, model=model, params=overrides,
                             planning_limit=planning_limit, max_segments=max_segments,
+                            schedule=schedule,
                             **({"disturbances": disturbances} if disturbances else {}))
 
 
@@ -238,6 +243,10 @@ def run(
                                      help="Executed segments allowed per object.",
                                      show_default=SEGMENT_LIMIT_HELP),
     param: list[str] = typer.Option(None, "--param", help=PARAM_HELP, show_default=False),
+    schedule: str = typer.Option(None, "--schedule", help="sequential: one object after "
+                                 "another by the whole team (the paper's); concurrent: "
+                                 "several at once by sub-teams.",
+                                 show_default="the scene file's, else sequential"),
     sensing_noise: float = typer.Option(0.0, "--sensing-noise", help="Disturbance: Gaussian "
                                         "noise (m; heading SIGMA/0.2 rad) on every observed "
                                         "object pose."),
@@ -269,7 +278,8 @@ def run(
     limit = time_limit if time_limit is not None else planning_limit
     request = _build_request(scene_file, None, planner, seed, model, out, param, limit,
                              max_segments, _disturbances(sensing_noise, actuation_noise,
-                                                         robot_failure, push_disturbance))
+                                                         robot_failure, push_disturbance),
+                             schedule)
     result = _run_and_write(request, out, progress, render, html)
     if check and not result["success"]:
         raise typer.Exit(code=1)

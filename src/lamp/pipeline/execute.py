@@ -15,7 +15,7 @@ from lamp.contract.events import RunObserver
 from lamp.contract.result import RunResult
 from lamp.contract.runner import ObjectRunner
 from lamp.pipeline.request import RunRequest
-from lamp.pipeline.schedule import run_in_order
+from lamp.pipeline.schedule import run_concurrently, run_in_order
 
 __all__ = ["execute", "object_runner"]
 
@@ -54,7 +54,11 @@ def execute(request: RunRequest, observers: Sequence[RunObserver] = (),
 
         executor = DisturbedExecutor(sim, request.disturbances, request.seed)
     recorder = Recorder(scene, runner.row_dt_s)
-    outcomes = run_in_order(len(scene.objects), executor, runner, [recorder, *observers])
+    fleet_stats = None
+    if scene.schedule == "concurrent":
+        outcomes, fleet_stats = run_concurrently(scene, executor, runner, recorder, observers)
+    else:
+        outcomes = run_in_order(len(scene.objects), executor, runner, [recorder, *observers])
     result = RunResult(scene=scene.name, planner=request.planner, seed=int(request.seed))
     unexecuted = 0.0
     for o in outcomes:
@@ -63,6 +67,8 @@ def execute(request: RunRequest, observers: Sequence[RunObserver] = (),
     result.wall_time_s = time.perf_counter() - t_start
     result.unexecuted_planning_time_s = unexecuted
     result.stats = runner.run_stats(outcomes)
+    if fleet_stats is not None:
+        result.stats["fleet"] = fleet_stats
     result.makespan_s = recorder.sim_time_s
     result.params = request.param_values()
     result.disturbances = request.disturbances.to_dict()

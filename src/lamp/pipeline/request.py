@@ -65,6 +65,13 @@ class RunRequest:
         if self.disturbances.active and not spec.closed_loop:
             raise InputError(f"planner {spec.name}: disturbances are supported for the "
                              "closed-loop planners only")
+        if self.scene.schedule == "concurrent":
+            if spec.factory is None:
+                raise InputError(f"planner {spec.name}: the concurrent schedule runs the "
+                                 "closed-loop planners only (use --schedule sequential)")
+            if self.disturbances.robot_failures:
+                raise InputError("robot failures are not supported with the concurrent "
+                                 "schedule yet (use --schedule sequential)")
         if spec.check_scene is not None:
             try:
                 spec.check_scene(self.scene)
@@ -87,17 +94,25 @@ class RunRequest:
     def build(cls, scene: Scene | str | Path, planner: str = "lazy", seed: int = 0, *,
               model: Any = "learned", params: PlannerConfig | Mapping[str, Any] | None = None,
               planning_limit: float | None = None, max_segments: int | None = None,
-              disturbances: Disturbances = NO_DISTURBANCE) -> RunRequest:
+              disturbances: Disturbances = NO_DISTURBANCE,
+              schedule: str | None = None) -> RunRequest:
         """A request from what a user types: ``scene`` may be a scene file or a built-in
         scene name (``maze-07``); ``params`` a ``PlannerConfig`` or overrides of the
         planner's declared parameters by name (text or numbers); ``planning_limit`` and
         ``max_segments`` set ``planning_time_limit`` and ``max_segments`` (shortcuts every
         planner accepts; MAPush ignores them). With sensing noise, the closed loop's
-        ``sensing_sigma`` is the noise's level unless ``params`` sets it."""
+        ``sensing_sigma`` is the noise's level unless ``params`` sets it. ``schedule``
+        (``sequential`` or ``concurrent``) overrides the scene's."""
         if isinstance(scene, (str, Path)):
             from lamp.suites.registry import resolve_scene
 
             scene = resolve_scene(scene)
+        if schedule is not None:
+            from lamp.scene.model import SCHEDULES
+
+            if schedule not in SCHEDULES:
+                raise InputError(f"schedule: one of {', '.join(SCHEDULES)}, got {schedule!r}")
+            scene = dataclasses.replace(scene, schedule=schedule)
         spec = registry.get(planner)
         if isinstance(params, PlannerConfig):
             config = params

@@ -2,18 +2,21 @@
 
 :func:`run_in_order` is the paper's schedule (``schedule: sequential`` of the scene
 format): the objects are moved one after another, in the scene file's order, each by the
-whole team, the others standing as physical bodies where they are. The fleet schedule
-(several objects at once by sub-teams) is to replace this function, not the loops below it.
+whole team, the others standing as physical bodies where they are.
+:func:`run_concurrently` is the fleet schedule (``schedule: concurrent``): several objects
+at once, each by a sub-team, in one simulator (``lamp.fleet``). Both drive the same
+closed loops.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 from lamp.contract.events import RunObserver, SegmentEvent
 from lamp.contract.runner import Executor, ObjectOutcome, ObjectRunner
 
-__all__ = ["run_in_order"]
+__all__ = ["run_concurrently", "run_in_order"]
 
 
 def run_in_order(n_objects: int, executor: Executor, runner: ObjectRunner,
@@ -35,3 +38,25 @@ def run_in_order(n_objects: int, executor: Executor, runner: ObjectRunner,
             o.object_finished(index, n_objects, outcome.result)
         outcomes.append(outcome)
     return outcomes
+
+
+def run_concurrently(scene: Any, executor: Executor, runner: ObjectRunner, recorder: Any,
+                     observers: Sequence[RunObserver] = ()) -> tuple[list[ObjectOutcome],
+                                                                     dict[str, Any]]:
+    """Move ``scene``'s objects several at once by sub-teams (``lamp.fleet.Fleet``) with
+    the closed loops of ``runner`` (a ``ClosedLoopRunner``); the recorder follows the
+    shared clock. Returns the outcomes in object order and the schedule's figures."""
+    from lamp.contract.trajectory import MAX_STEP
+    from lamp.fleet.coordinator import Fleet
+    from lamp.fleet.objects import object_main
+
+    watchers = [recorder, *observers]
+
+    def observe(event: SegmentEvent) -> None:
+        for o in watchers:
+            o.segment(event)
+
+    fleet = Fleet(scene, executor, object_main(runner, observe), recorder.follow, watchers,
+                  row_step=MAX_STEP)
+    outcomes = fleet.run()
+    return outcomes, fleet.stats()

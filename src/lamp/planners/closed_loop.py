@@ -84,6 +84,10 @@ def adapt_to_robots(trans: Transition, q_R: np.ndarray, reroute: Reroute) -> Tra
 STALL_FRACTION = 0.25
 #: ``failure_reason`` of a loop stopped because a robot failed (the runner plans anew).
 TEAM_CHANGED = "a robot failed"
+#: ``failure_reason`` of a loop stopped because the world changed around its plan: the
+#: executor declined its next segment, or its planner failed while other objects were
+#: moving (the fleet schedule, ``lamp.fleet``; its runner plans anew).
+WORLD_CHANGED = "the world changed around the plan"
 #: Drift and stall tests keep this many standard deviations of the averaged reading above
 #: the sensor's noise (``PlannerConfig.sensing_sigma``).
 NOISE_SIGMAS = 3.0
@@ -178,7 +182,11 @@ class ClosedLoop:
                     st.reason = "robots cannot reach the next push (open loop)"
                     break
                 continue
-            if self.observe(st, *self.execute(st, adapted)) in ("left", "team"):
+            executed = self.execute(st, adapted)
+            if executed is None:  # declined by the executor (``Execution.declined``)
+                st.reason = WORLD_CHANGED
+                break
+            if self.observe(st, *executed) in ("left", "team"):
                 break
         return self._result(st, max_segments)
 
@@ -205,6 +213,10 @@ class ClosedLoop:
             if self.policy.failure_is_final:
                 st.reason = st.plan.reason
                 return "stop"
+            blocked = getattr(self.executor, "plan_failed", None)
+            if blocked is not None and blocked():
+                st.reason = WORLD_CHANGED
+                return "stop"
             st.iterations += 1
             return "retry"
         st.pending = list(st.plan.transitions)
@@ -222,10 +234,16 @@ class ClosedLoop:
         st.planning_spent += dt
         st.pending_time += dt
 
-    def execute(self, st: _Progress, adapted: Transition) -> tuple[Transition, Execution, float, bool]:
+    def execute(self, st: _Progress, adapted: Transition
+                ) -> tuple[Transition, Execution, float, bool] | None:
         """Run ``adapted`` (with the pushes that continue it) on the executor; returns the
         executed transition, the execution, and the planning time and replan flag charged
-        to this segment."""
+        to this segment; None when the executor declined it (nothing ran, nothing is
+        counted).
+
+        An executor with an ``announce(segment, rest)`` method is told first the object
+        poses this segment plans to pass ((P, 3)) and those the plan goes on to ((R, 3)):
+        the fleet schedule reserves space with them."""
         cfg = self.config
         chain = [adapted]
         if cfg.long_push_length > 0:  # one approach, then every push that continues it
@@ -233,8 +251,14 @@ class ClosedLoop:
                                    cfg.long_push_length)
             adapted = merge(chain)
         paths = adapted.robot_paths
+        announce = getattr(self.executor, "announce", None)
+        if announce is not None:
+            announce(np.array([chain[0].q_from, *[t.q_to for t in chain]], dtype=float),
+                     np.array([t.q_to for t in st.pending], dtype=float).reshape(-1, 3))
         out = self.executor.execute(paths, record_every=TRACE_EVERY if self.observer else None,
                                     stop=self._watch(chain))
+        if getattr(out, "declined", False):
+            return None
         st.iterations += 1
         st.segments += 1
         self.record.planning_time_s.append(st.pending_time)

@@ -33,7 +33,7 @@ from lamp.planners.verifier import TaskStats
 from lamp.scene.model import Scene
 from lamp.sim.mjcf import TIMESTEP
 
-__all__ = ["ClosedLoopRunner"]
+__all__ = ["ClosedLoopRunner", "judged", "merged"]
 
 
 class ClosedLoopRunner:
@@ -56,7 +56,7 @@ class ClosedLoopRunner:
     def run_object(self, index: int, executor: Executor,
                    observe: Callable[[SegmentEvent], None]) -> ObjectOutcome:
         if not hasattr(executor, "failed"):  # a plain executor: one closed loop
-            return self._loop(self.scene, index, executor, self.config, observe)
+            return self.loop(self.scene, index, executor, self.config, observe)
         goal = np.asarray(self.scene.objects[index].goal, float)
         start = np.asarray(executor.object_poses[index], float)
         limit = segment_limit(self.config.max_segments, float(np.hypot(*(goal[:2] - start[:2]))))
@@ -68,15 +68,17 @@ class ClosedLoopRunner:
             used = sum(p.result.segments for p in parts)
             config = replace(self.config, max_segments=max(1, limit - used))
             view = TeamView(executor, alive)
-            parts.append(self._loop(team_scene(self.scene, alive, failed), index, view, config,
+            parts.append(self.loop(team_scene(self.scene, alive, failed), index, view, config,
                                     observe))
             if not (view.team_changed and parts[-1].result.failure_reason == TEAM_CHANGED
                     and used + parts[-1].result.segments < limit):
                 break
-        return _judged(_merged(parts), executor.true_object_poses[index], goal)
+        return judged(merged(parts), executor.true_object_poses[index], goal)
 
-    def _loop(self, scene: Scene, index: int, executor: Executor, config: PlannerConfig,
-              observe: Callable[[SegmentEvent], None]) -> ObjectOutcome:
+    def loop(self, scene: Scene, index: int, executor: Executor, config: PlannerConfig,
+             observe: Callable[[SegmentEvent], None]) -> ObjectOutcome:
+        """One closed loop for object ``index`` of ``scene`` (its robots, obstacles and
+        the objects where ``executor`` says they are) under ``config``."""
         task = ManipulationTask(scene, index, np.asarray(executor.object_poses, float),
                                 self.proposer, config, seed=self.seed * 1000 + index)
         record = LoopRecord()
@@ -96,7 +98,7 @@ class ClosedLoopRunner:
                 "failure_reasons": [o.result.failure_reason for o in outcomes]}
 
 
-def _merged(parts: list[ObjectOutcome]) -> ObjectOutcome:
+def merged(parts: list[ObjectOutcome]) -> ObjectOutcome:
     """One outcome for an object moved by successive teams: the last loop's verdict, every
     loop's segments, planning and makespan; each new team counts as a replan."""
     last = parts[-1].result
@@ -109,7 +111,7 @@ def _merged(parts: list[ObjectOutcome]) -> ObjectOutcome:
                          sum(p.unexecuted_planning_s for p in parts))
 
 
-def _judged(outcome: ObjectOutcome, true_pose: np.ndarray, goal: np.ndarray) -> ObjectOutcome:
+def judged(outcome: ObjectOutcome, true_pose: np.ndarray, goal: np.ndarray) -> ObjectOutcome:
     """``outcome`` with the final pose and success judged on the object's true pose (the
     loop saw it through a noisy sensor)."""
     r = outcome.result

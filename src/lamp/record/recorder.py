@@ -54,19 +54,31 @@ class Recorder:
         self._pushes: list[np.ndarray] = []
         self._plans: list[tuple[int, np.ndarray, np.ndarray, np.ndarray]] = []
         self._last_plan: Any = None
+        #: Set by :meth:`follow`: the run keeps the clock (several objects move at once)
+        #: and segment events carry no trace.
+        self._following = False
+        self._row_count = 0
 
-    def __call__(self, event: Any) -> None:
-        trace = event.execution.trace
-        if trace is None:
-            raise ValueError("Recorder: the segment was executed without a trace")
-        if len(self._seg["object"]) == 0:  # the true start state replaces the scene's
+    def follow(self, trace: Any, sim_time: float) -> None:
+        """Record a stretch of a run's shared clock (the fleet schedule, whose segments
+        overlap in time); the segment events that follow record their data only, each
+        ending at the row recorded last (so ``segment_rows`` holds the segments' end rows
+        in the order they ended)."""
+        if not self._following:
+            self._following = True
             self._robots[0] = trace.robot_positions[:1]
             self._objects[0] = trace.object_poses[:1]
         self._times.append(self._clock + trace.times[1:])
         self._robots.append(trace.robot_positions[1:])
         self._objects.append(trace.object_poses[1:])
-        self._rows.append(self._rows[-1] + len(trace.times) - 1)
-        self._clock += float(event.execution.sim_time)
+        self._row_count += len(trace.times) - 1
+        self._clock += float(sim_time)
+
+    def __call__(self, event: Any) -> None:
+        if self._following:
+            self._rows.append(self._row_count)
+        else:
+            self._add_trace(event)
         trans = event.transition
         seg = self._seg
         seg["object"].append(event.object_index)
@@ -85,6 +97,19 @@ class Recorder:
             raise ValueError(f"Recorder: pushes_local has shape {pushes.shape}, expected "
                              f"({len(contacts)}, H, 2), one push per contact")
         self._pushes.extend(transform_points(np.asarray(trans.q_from, float), pushes))
+
+    def _add_trace(self, event: Any) -> None:
+        trace = event.execution.trace
+        if trace is None:
+            raise ValueError("Recorder: the segment was executed without a trace")
+        if len(self._seg["object"]) == 0:  # the true start state replaces the scene's
+            self._robots[0] = trace.robot_positions[:1]
+            self._objects[0] = trace.object_poses[:1]
+        self._times.append(self._clock + trace.times[1:])
+        self._robots.append(trace.robot_positions[1:])
+        self._objects.append(trace.object_poses[1:])
+        self._rows.append(self._rows[-1] + len(trace.times) - 1)
+        self._clock += float(event.execution.sim_time)
 
     def segment(self, event: Any) -> None:
         self(event)

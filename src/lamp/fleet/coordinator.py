@@ -1,0 +1,400 @@
+"""The fleet schedule: several objects moved at once, each by its own sub-team, in one
+simulator.
+
+Design (``docs/fleet.md``):
+
+- **Loops.** Every object runs LAMP's own closed loop (planning, Verify, drift and stall
+  handling, recovery: ``lamp.planners``) in the world as it is when the loop starts: its
+  sub-team are the robots, every other robot is a disk obstacle where it stands, every
+  other object a body where it stands. Loops run as coroutines (``lamp.fleet.turns``):
+  one at a time, in priority order, so a run is deterministic.
+- **Priority.** Objects rank by the scene's order; an object with ``after`` waits until
+  those objects are placed. A lower-priority segment keeps out of every higher-priority
+  object's *claim* (the rest of its plan, ``regions.claim``): loads never meet head-on.
+- **Admission.** A segment a loop hands its executor starts only if the space it sweeps
+  (``regions.swept``, with margins) is clear of what every running segment still
+  sweeps and of higher claims; and its bodies as planned overlap no body standing still
+  (a standing overlap means the world changed since the plan: the segment is declined
+  and the loop plans anew, ``WORLD_CHANGED``). Otherwise it waits for the next event. A
+  planner that finds no plan while other objects still move waits for a change too.
+- **Clock.** Admitted segments are re-timed on a common row grid (``segments.on_grid``)
+  and run together; the simulator runs until the first of them ends (or a push watch
+  stops one), that loop gets its result and plans its next segment while the others hold
+  their place in their rows.
+- **Liveness.** When nothing runs and nothing waits on a change, the highest-priority
+  waiting segment is admitted against standing bodies only (counted as ``forced``), and
+  planners waiting on a change plan in the world as it is (like the sequential schedule).
+
+Robots are allocated by ``lamp.fleet.teams``. The recorder follows the shared clock.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import shapely
+
+from lamp.contract.events import TRACE_EVERY, RunObserver
+from lamp.contract.runner import ObjectOutcome
+from lamp.fleet.regions import claim, standing
+from lamp.fleet.segments import Segment, on_grid
+from lamp.fleet.teams import allocate
+from lamp.fleet.turns import Turns
+from lamp.scene.model import Scene
+
+__all__ = ["Fleet", "FleetExecution"]
+
+
+@dataclass
+class FleetExecution:
+    """What a sub-team's executor reports after a segment (an ``Execution``)."""
+
+    object_poses: np.ndarray
+    robot_positions: np.ndarray
+    left_workspace: bool = False
+    trace: Any = None
+    stopped_at: int | None = None
+    sim_time: float = 0.0
+    #: The segment was not run: the world changed around its plan.
+    declined: bool = False
+
+
+@dataclass
+class _Object:
+    index: int
+    status: str = "waiting"  # waiting -> active -> placed | failed
+    team: list[int] = field(default_factory=list)
+    claim: shapely.Geometry | None = None
+    announced: np.ndarray | None = None  # the next segment's planned poses
+    request: Segment | None = None  # submitted, not admitted
+    running: Segment | None = None
+    reply: FleetExecution | None = None
+    ready: bool = False  # its thread has something to resume with
+    blocked_at: int | None = None  # the world version at which its planner failed
+    wake: bool = False  # the answer to ``plan_failed``
+    outcome: ObjectOutcome | None = None
+    placed_at_s: float | None = None
+
+
+class Fleet:
+    """Moves a scene's objects concurrently on ``executor`` (see the module docstring).
+
+    ``object_main(fleet, k)`` runs in object ``k``'s thread and returns its outcome; it
+    drives its closed loops on ``fleet.view(k)``. ``timeline(trace, sim_time)`` receives
+    every stretch of the shared clock (the recorder's ``follow``).
+    """
+
+    def __init__(self, scene: Scene, executor: Any, object_main: Callable[[Fleet, int],
+                 ObjectOutcome], timeline: Callable[[Any, float], None],
+                 observers: Sequence[RunObserver] = (), row_step: float = 0.02) -> None:
+        self.scene = scene
+        self.executor = executor
+        self.object_main = object_main
+        self.timeline = timeline
+        self.observers = list(observers)
+        self.grid = float(row_step)
+        self.objects = [_Object(k) for k in range(len(scene.objects))]
+        self.turns = Turns()
+        self.version = 0  # bumped whenever anything moved or a team changed
+        self.rows = 0  # rows recorded so far
+        self.clock = 0.0
+        self.counts = {"admitted": 0, "declined": 0, "waited": 0, "forced": 0, "blocked": 0,
+                       "events": 0}
+        n = scene.n_robots
+        self.busy_s = np.zeros(n)  # robot-seconds in a running segment
+        self.moving_s = np.zeros(n)  # ... of which the robot was moving
+        self.owner = np.full(n, -1)  # robot -> object of its team (-1: free)
+
+    # ------------------------------------------------------------------ the schedule
+    def run(self) -> list[ObjectOutcome]:
+        """Move every object; their outcomes in object order."""
+        try:
+            while not all(o.status in ("placed", "failed") for o in self.objects):
+                self._release()
+                if self._resume_ready():
+                    continue
+                self._admit(force=False)
+                if any(o.ready for o in self.objects):
+                    continue
+                if any(o.running for o in self.objects):
+                    self._advance()
+                    continue
+                if not self._unstick():
+                    raise RuntimeError("fleet schedule: no object can move and none waits")
+        finally:
+            self.turns.close()
+        return [o.outcome for o in self.objects]  # type: ignore[misc]
+
+    def _release(self) -> None:
+        """Start objects whose ``after`` objects are placed, with teams from the free
+        robots; fail those waiting on an object that failed."""
+        waiting = [o for o in self.objects if o.status == "waiting"]
+        ready = []
+        for o in waiting:
+            after = self.scene.objects[o.index].after
+            if any(self.objects[k].status == "failed" for k in after):
+                self._give_up(o, "not started: an object it waits for (after) was not placed")
+            elif all(self.objects[k].status == "placed" for k in after):
+                ready.append(o.index)
+        if not ready:
+            return
+        free = [i for i in range(self.scene.n_robots) if self.owner[i] < 0]
+        active = any(o.status == "active" for o in self.objects)
+        teams = allocate(ready, free, self.executor.robot_positions,
+                         self.executor.object_poses, active)
+        for k, team in teams.items():
+            o = self.objects[k]
+            o.status, o.team, o.ready = "active", team, True
+            self.owner[team] = k
+            self.version += 1
+            for obs in self.observers:
+                obs.object_started(k, len(self.objects))
+            self.turns.start(k, lambda k=k: self._main(k))
+
+    def _main(self, k: int) -> None:
+        o = self.objects[k]
+        o.outcome = self.object_main(self, k)
+        o.status = "placed" if o.outcome.result.success else "failed"
+        if o.status == "placed":
+            o.placed_at_s = self.clock
+        o.claim = None
+        self.owner[o.team] = -1
+        self.version += 1
+        for obs in self.observers:
+            obs.object_finished(k, len(self.objects), o.outcome.result)
+
+    def _give_up(self, o: _Object, why: str) -> None:
+        from lamp.contract.goals import goal_errors
+        from lamp.contract.result import ObjectResult
+
+        pose = np.asarray(self.executor.object_poses[o.index], float)
+        goal = np.asarray(self.scene.objects[o.index].goal, float)
+        pos_err, rot_err = goal_errors(pose, goal)
+        o.status = "failed"
+        o.outcome = ObjectOutcome(ObjectResult(
+            success=False, final_pose=[float(v) for v in pose], goal=[float(v) for v in goal],
+            position_error=pos_err, orientation_error=rot_err, left_workspace=False,
+            segments=0, full_horizon_plan=False, failure_reason=why, replans=0,
+            planning_time_s=0.0))
+        for obs in self.observers:
+            obs.object_started(o.index, len(self.objects))
+            obs.object_finished(o.index, len(self.objects), o.outcome.result)
+
+    def _resume_ready(self) -> bool:
+        """Resume the highest-priority thread that has something to go on with."""
+        for o in self.objects:
+            if o.status == "active" and o.ready:
+                o.ready = False
+                self.turns.resume(o.index)
+                return True
+        return False
+
+    # ------------------------------------------------------------------ admission
+    def _admit(self, force: bool) -> None:
+        """Start the waiting segments that may start (module docstring), in priority
+        order; decline those that meet a standing body; with ``force`` the first waiting
+        one starts against standing bodies only."""
+        for o in self.objects:
+            seg = o.request
+            if seg is None:
+                continue
+            hit_standing = self._meets_standing(seg)
+            hit_moving = not force and self._meets_moving(seg)
+            if hit_standing and not force:
+                if not hit_moving:
+                    o.request, o.reply, o.ready = None, self._declined(o), True
+                    self.counts["declined"] += 1
+                continue
+            if hit_moving:
+                self.counts["waited"] += 1
+                continue
+            o.request, o.running = None, seg
+            seg.first_row = self.rows
+            self.counts["admitted" if not force else "forced"] += 1
+            if force:
+                return
+
+    def _meets_standing(self, seg: Segment) -> bool:
+        core = seg.core()
+        shapely.prepare(core)
+        r = self.scene.robot_radius
+        poses = self.executor.object_poses
+        for o in self.objects:
+            if o.index != seg.index and o.running is None and core.intersects(
+                    standing(self.scene.objects[o.index].shape, poses[o.index], r)):
+                return True
+        moving = {i for o in self.objects if o.running is not None for i in o.team}
+        pos = self.executor.robot_positions
+        for i in range(self.scene.n_robots):
+            if i not in seg.team and i not in moving and core.intersects(
+                    standing(None, pos[i], r)):
+                return True
+        return False
+
+    def _meets_moving(self, seg: Segment) -> bool:
+        space = seg.space()
+        shapely.prepare(space)
+        for o in self.objects:
+            if o.index == seg.index:
+                continue
+            if o.running is not None and space.intersects(o.running.space()):
+                return True
+            if o.index < seg.index and o.claim is not None and space.intersects(o.claim):
+                return True
+        return False
+
+    def _declined(self, o: _Object) -> FleetExecution:
+        return FleetExecution(np.asarray(self.executor.object_poses, float),
+                              np.asarray(self.executor.robot_positions, float)[o.team],
+                              declined=True)
+
+    def _unstick(self) -> bool:
+        """Nothing runs and no loop can go on: wake the planners waiting for a change
+        (they plan in the world as it is), else force the first waiting segment."""
+        blocked = [o for o in self.objects if o.blocked_at is not None]
+        if blocked:
+            for o in blocked:
+                o.blocked_at, o.wake, o.ready = None, False, True
+            return True
+        if any(o.request is not None for o in self.objects):
+            self._admit(force=True)
+            return True
+        return False
+
+    # ------------------------------------------------------------------ the clock
+    def _advance(self) -> None:
+        """Run every admitted segment until the first ends (or a watch stops one)."""
+        running = [o.running for o in self.objects if o.running is not None]
+        n_rows = min(s.remaining for s in running)
+        now = np.asarray(self.executor.robot_positions, float)
+        paths = np.repeat(now[:, None], n_rows, axis=1)
+        for s in running:
+            paths[s.team] = s.rows[:, s.cursor:s.cursor + n_rows]
+        fired: list[Segment] = []
+
+        def stop(poses: np.ndarray) -> bool:
+            for s in running:
+                if s.stop is not None and s.stop(poses):
+                    fired.append(s)
+            return bool(fired)
+
+        watched = any(s.stop is not None for s in running)
+        out = self.executor.execute(paths, record_every=TRACE_EVERY,
+                                    stop=stop if watched else None)
+        done = n_rows
+        if out.stopped_at is not None:
+            tau = np.cumsum(self.executor.row_durations(paths)) if hasattr(
+                self.executor, "row_durations") else None
+            step_s = float(out.sim_time) / max(1, int(out.steps))
+            done = n_rows if tau is None else int(np.clip(
+                np.searchsorted(tau, out.stopped_at * step_s, side="right"), 1, n_rows))
+        self._account(running, paths, float(out.sim_time))
+        self.timeline(out.trace, float(out.sim_time))
+        self.rows += len(out.trace.times) - 1
+        self.clock += float(out.sim_time)
+        self.version += 1
+        self.counts["events"] += 1
+        left = np.asarray(getattr(out, "objects_left", np.zeros(len(self.objects), bool)))
+        for s in running:
+            s.cursor += done
+            s.sim_time += float(out.sim_time)
+            s.left |= bool(left[s.index])
+            if s in fired:
+                s.stopped_at = int(out.stopped_at)
+            if s.done:
+                o = self.objects[s.index]
+                o.running = None
+                o.reply = FleetExecution(np.asarray(self.executor.object_poses, float),
+                                         np.asarray(self.executor.robot_positions, float)[s.team],
+                                         s.left, None, s.stopped_at, s.sim_time)
+                o.ready = True
+        for o in self.objects:  # planners waiting on a change go on
+            if o.blocked_at is not None and o.blocked_at < self.version:
+                o.blocked_at, o.wake, o.ready = None, True, True
+
+    def _account(self, running: list[Segment], paths: np.ndarray, sim_time: float) -> None:
+        for s in running:
+            self.busy_s[s.team] += sim_time
+        moved = np.hypot(*(paths[:, -1] - paths[:, 0]).T) > 1e-6
+        self.moving_s[moved] += sim_time
+
+    # ------------------------------------------------------------------ a loop's executor
+    def view(self, k: int) -> FleetView:
+        return FleetView(self, k)
+
+    def submit(self, k: int, paths: np.ndarray, stop: Callable[[np.ndarray], bool] | None
+               ) -> FleetExecution:
+        o = self.objects[k]
+        poses = o.announced if o.announced is not None else np.asarray(
+            self.executor.object_poses[k], float)[None]
+        start = np.asarray(self.executor.robot_positions, float)[o.team]
+        o.request = Segment(k, list(o.team), on_grid(start, paths, self.grid), poses, stop,
+                            self.scene.objects[k].shape, self.scene.robot_radius)
+        o.announced = None
+        self.turns.pause(k)
+        reply, o.reply = o.reply, None
+        return reply  # type: ignore[return-value]
+
+    def announce(self, k: int, segment: np.ndarray, rest: np.ndarray) -> None:
+        o = self.objects[k]
+        o.announced = np.asarray(segment, float)
+        poses = np.concatenate([o.announced, np.asarray(rest, float).reshape(-1, 3)])
+        o.claim = claim(self.scene.objects[k].shape, poses, self.scene.robot_radius)
+        if o.claim is not None:
+            shapely.prepare(o.claim)
+
+    def plan_failed(self, k: int) -> bool:
+        """Object ``k``'s planner found no plan: wait for the world to change (True: it did,
+        plan anew) unless nothing else can change it (False: go on as alone)."""
+        others = [o for o in self.objects if o.index != k and o.status in ("active", "waiting")]
+        if not others:
+            return False
+        o = self.objects[k]
+        o.claim = None
+        o.blocked_at = self.version
+        self.counts["blocked"] += 1
+        self.turns.pause(k)
+        return o.wake
+
+    def stats(self) -> dict[str, Any]:
+        """The schedule's figures for ``result.json``: counts, per-object placement times
+        and the robots' utilisation (shares of robot-time)."""
+        total = max(self.clock, 1e-9) * max(1, self.scene.n_robots)
+        return {
+            **self.counts,
+            "placed_at_s": [None if o.placed_at_s is None else round(o.placed_at_s, 4)
+                            for o in self.objects],
+            "utilisation": {"working": round(float(self.busy_s.sum()) / total, 4),
+                            "moving": round(float(self.moving_s.sum()) / total, 4),
+                            "idle": round(1.0 - float(self.busy_s.sum()) / total, 4)},
+        }
+
+
+class FleetView:
+    """Object ``k``'s sub-team's executor (the ``Executor`` its closed loop drives)."""
+
+    def __init__(self, fleet: Fleet, k: int) -> None:
+        self.fleet = fleet
+        self.k = k
+        self.team = list(fleet.objects[k].team)
+
+    @property
+    def object_poses(self) -> np.ndarray:
+        return self.fleet.executor.object_poses
+
+    @property
+    def robot_positions(self) -> np.ndarray:
+        return np.asarray(self.fleet.executor.robot_positions, float)[self.team]
+
+    def announce(self, segment: np.ndarray, rest: np.ndarray) -> None:
+        self.fleet.announce(self.k, segment, rest)
+
+    def plan_failed(self) -> bool:
+        return self.fleet.plan_failed(self.k)
+
+    def execute(self, robot_paths: np.ndarray, record_every: int | None = None,
+                stop: Callable[[np.ndarray], bool] | None = None) -> FleetExecution:
+        return self.fleet.submit(self.k, np.asarray(robot_paths, float), stop)

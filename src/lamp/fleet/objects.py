@@ -1,0 +1,68 @@
+"""One object's life in the fleet schedule: LAMP's closed loop, started anew whenever the
+world changed around its plan.
+
+:func:`object_main` is what ``Fleet`` runs in object ``k``'s thread: a
+:class:`~lamp.planners.runner.ClosedLoopRunner` loop on the object's sub-team
+(``Fleet.view``), in the world as it is when the loop starts (``sub_scene``: every other
+robot a disk obstacle where it stands). A loop that ends with ``WORLD_CHANGED`` (its
+segment was declined, or it found no plan while others moved) is followed by a new one,
+within the object's segment limit and cumulative planning limit; the object's outcome
+merges every loop's (``runner.merged``: each new loop counts as a replan).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import replace
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from lamp.contract.events import SegmentEvent
+from lamp.contract.runner import ObjectOutcome
+from lamp.planners.closed_loop import WORLD_CHANGED
+from lamp.planners.config import segment_limit
+from lamp.planners.runner import ClosedLoopRunner, judged, merged
+from lamp.planners.team import team_scene
+from lamp.scene.model import Scene
+
+if TYPE_CHECKING:
+    from lamp.fleet.coordinator import Fleet
+
+__all__ = ["object_main", "sub_scene"]
+
+
+def sub_scene(scene: Scene, team: list[int], robot_positions: np.ndarray) -> Scene:
+    """``scene`` as ``team`` plans in it: its robots only, where they stand now, and every
+    other robot a disk obstacle where it stands."""
+    pos = np.asarray(robot_positions, float)
+    others = {i: pos[i] for i in range(scene.n_robots) if i not in team}
+    return team_scene(scene, list(team), others).with_robot_starts(pos[list(team)])
+
+
+def object_main(runner: ClosedLoopRunner, observe: Callable[[SegmentEvent], None]
+                ) -> Callable[[Fleet, int], ObjectOutcome]:
+    """The function ``Fleet`` runs for each object (see the module docstring)."""
+
+    def main(fleet: Fleet, k: int) -> ObjectOutcome:
+        scene, cfg = runner.scene, runner.config
+        goal = np.asarray(scene.objects[k].goal, float)
+        start = np.asarray(fleet.executor.object_poses[k], float)
+        limit = segment_limit(cfg.max_segments, float(np.hypot(*(goal[:2] - start[:2]))))
+        parts: list[ObjectOutcome] = []
+        while True:
+            used = sum(p.result.segments for p in parts)
+            spent = sum(p.result.planning_time_s for p in parts)
+            config = replace(cfg, max_segments=max(1, limit - used),
+                             planning_time_limit=max(1e-3, cfg.planning_time_limit - spent))
+            view = fleet.view(k)
+            scene_k = sub_scene(scene, view.team, fleet.executor.robot_positions)
+            parts.append(runner.loop(scene_k, k, view, config, observe))
+            r = parts[-1].result
+            if (r.failure_reason != WORLD_CHANGED or used + r.segments >= limit
+                    or len(parts) > limit or spent + r.planning_time_s >= cfg.planning_time_limit):
+                break
+        truth = getattr(fleet.executor, "true_object_poses", fleet.executor.object_poses)
+        return judged(merged(parts), np.asarray(truth[k], float), goal)
+
+    return main

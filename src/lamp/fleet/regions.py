@@ -1,0 +1,112 @@
+"""Space in the fleet schedule: what a moving sub-team sweeps, what a plan claims, and what
+stands still (Shapely geometry).
+
+A segment that may start must keep out of the space every other body needs while it runs:
+
+- **Swept** (:func:`swept`): a segment's robots' remaining path rows, each robot a disk of
+  the robot radius plus ``ROBOT_MARGIN``, and its object's footprint at poses along the
+  planned motion (``POSE_STEP`` / ``TURN_STEP`` apart), grown by ``OBJECT_MARGIN`` for
+  the drift the closed loop tolerates.
+- **Claim** (:func:`claim`): the footprints along the rest of an object's plan, grown by a
+  robot diameter (its pushers stand around it). A lower-priority segment keeps out of a
+  higher-priority object's claim, so that two loads never meet head-on in a door.
+- **Standing** (:func:`standing`): an object's or robot's footprint where it is now,
+  shrunk by ``STATIC_SLACK``, tested against a segment's bodies exactly as planned
+  (``swept(..., margins=False)``): the planner saw them, so only a real overlap (the
+  world changed since the plan) counts.
+
+Guarantee (``tests/test_fleet_regions.py``): two segments whose swept regions do not
+intersect keep every robot disk and object footprint of one at least ``2 * ROBOT_MARGIN``
+(robots) / ``2 * OBJECT_MARGIN`` (objects, as planned) from the other's at all times,
+whatever their timing.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import shapely
+
+from lamp.geometry.se2 import interpolate, pose_distance
+from lamp.geometry.shapes import to_shapely
+from lamp.scene.model import Shape
+
+__all__ = ["OBJECT_MARGIN", "ROBOT_MARGIN", "STATIC_SLACK", "claim", "footprints",
+           "robot_disks", "standing", "swept"]
+
+#: Clearance (m) each moving robot keeps from another sub-team's space (half the gap).
+ROBOT_MARGIN = 0.01
+#: Clearance (m) around a moving object's planned footprints: the drift it may execute
+#: with before its loop replans (``PlannerConfig.drift_position`` is 0.05).
+OBJECT_MARGIN = 0.05
+#: A standing body is shrunk by this (m) before it is tested against a planned segment.
+STATIC_SLACK = 0.003
+#: Planned object motion is sampled this finely (m, rad).
+POSE_STEP = 0.05
+TURN_STEP = 0.15
+#: Robot path rows are thinned to at most this many per robot (the path between two kept
+#: rows is a straight line, so nothing is lost: the buffer covers the segments).
+_MAX_PATH_POINTS = 400
+
+
+def _densified(poses: np.ndarray) -> np.ndarray:
+    """``poses`` (P, 3) with interpolated poses no more than the steps apart."""
+    poses = np.asarray(poses, float).reshape(-1, 3)
+    out = [poses[:1]]
+    for a, b in zip(poses[:-1], poses[1:], strict=True):
+        dt, dr = pose_distance(a, b)
+        n = max(1, int(np.ceil(max(float(dt) / POSE_STEP, float(dr) / TURN_STEP))))
+        out.append(interpolate(a, b, np.arange(1, n + 1) / n))
+    return np.concatenate(out)
+
+
+def footprints(shape: Shape, poses: np.ndarray, grow: float = 0.0) -> shapely.Geometry:
+    """Union of ``shape``'s footprints at ``poses`` (densified), grown by ``grow`` (m)."""
+    poses = _densified(poses)
+    parts = [to_shapely(shape, q) for q in poses]
+    hulls = [shapely.convex_hull(shapely.union(a, b)) for a, b in zip(parts[:-1], parts[1:],
+                                                                       strict=True)]
+    geom = shapely.union_all(parts + hulls) if hulls else parts[0]
+    return geom.buffer(grow) if grow > 0 else geom
+
+
+def robot_disks(paths: np.ndarray, radius: float) -> shapely.Geometry:
+    """The space robots of ``radius`` sweep along ``paths`` (N, T, 2) (straight between
+    rows)."""
+    paths = np.asarray(paths, float)
+    if paths.ndim == 2:
+        paths = paths[:, None]
+    lines = []
+    for p in paths:
+        if len(p) > _MAX_PATH_POINTS:
+            keep = np.unique(np.linspace(0, len(p) - 1, _MAX_PATH_POINTS).astype(int))
+            p = p[keep]
+        lines.append(shapely.Point(p[0]) if len(p) == 1 or np.allclose(p, p[0])
+                     else shapely.LineString(p))
+    return shapely.union_all([g.buffer(radius, quad_segs=8) for g in lines])
+
+
+def swept(shape: Shape, object_poses: np.ndarray, robot_rows: np.ndarray,
+          robot_radius: float, margins: bool = True) -> shapely.Geometry:
+    """A segment's space (see the module docstring): its object along ``object_poses`` and
+    its robots along ``robot_rows`` (N, T, 2); without ``margins`` the bodies exactly as
+    planned (what is tested against standing bodies)."""
+    obj = footprints(shape, object_poses, OBJECT_MARGIN if margins else 0.0)
+    grow = ROBOT_MARGIN if margins else 0.0
+    return shapely.union(obj, robot_disks(robot_rows, robot_radius + grow))
+
+
+def claim(shape: Shape, poses: np.ndarray, robot_radius: float) -> shapely.Geometry | None:
+    """The space an object's remaining plan ``poses`` (P, 3) claims (None: no poses)."""
+    poses = np.asarray(poses, float).reshape(-1, 3)
+    if len(poses) == 0:
+        return None
+    return footprints(shape, poses, 2.0 * robot_radius + OBJECT_MARGIN)
+
+
+def standing(shape: Shape | None, pose: np.ndarray, robot_radius: float) -> shapely.Geometry:
+    """A body where it stands: an object (``shape`` at ``pose``) or, with ``shape`` None, a
+    robot at ``pose[:2]``; shrunk by ``STATIC_SLACK``."""
+    if shape is None:
+        return shapely.Point(float(pose[0]), float(pose[1])).buffer(
+            robot_radius - STATIC_SLACK, quad_segs=8)
+    return to_shapely(shape, pose).buffer(-STATIC_SLACK)

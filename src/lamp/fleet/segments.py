@@ -1,0 +1,82 @@
+"""A sub-team's segment on the fleet's shared clock: its rows re-timed to the common row
+grid, how far it has run, and the space it still needs.
+
+Every closed loop hands its executor robot paths whose rows are timed by the simulator's
+rule (``Simulator.row_durations``: a row lasts its longest robot step over the driving
+speed). Segments of several sub-teams run in one simulator, so each is first re-timed on
+its own (:func:`on_grid`): its robots' positions at multiples of ``row_step / speed``
+seconds after it starts. Rows of several re-timed segments then stack into one set of
+paths in which every sub-team moves as it would alone, and no row steps further than
+``row_step``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+import shapely
+
+from lamp.fleet.regions import swept
+from lamp.scene.model import Shape
+
+__all__ = ["Segment", "on_grid"]
+
+
+def on_grid(start: np.ndarray, paths: np.ndarray, row_step: float) -> np.ndarray:
+    """``paths`` (N, T, 2) of robots now at ``start`` (N, 2) re-timed to rows ``row_step /
+    speed`` seconds apart: (N, G, 2), G >= 1, the last row the paths' last. Rows in which
+    no robot moves take no time (as in the simulator) and are dropped; each robot's
+    position between two rows is interpolated linearly, so no step exceeds ``row_step``."""
+    way = np.concatenate([np.asarray(start, float)[:, None], np.asarray(paths, float)], axis=1)
+    dur = np.hypot(*np.moveaxis(np.diff(way, axis=1), 2, 0)).max(axis=0)  # (T,) in metres
+    keep = np.concatenate([[True], dur > 1e-12])
+    way = way[:, keep]
+    tau = np.concatenate([[0.0], np.cumsum(dur[dur > 1e-12])])
+    n = max(1, int(np.ceil(tau[-1] / row_step - 1e-9)))
+    grid = np.minimum(row_step * np.arange(1, n + 1), tau[-1])
+    out = np.empty((way.shape[0], n, 2))
+    for i in range(way.shape[0]):
+        for axis in (0, 1):
+            out[i, :, axis] = np.interp(grid, tau, way[i, :, axis])
+    out[:, -1] = way[:, -1]
+    return out
+
+
+@dataclass
+class Segment:
+    """One object's segment, submitted by its loop and then run on the shared clock."""
+
+    index: int  # the object
+    team: list[int]  # the robots, in the order of ``rows``
+    rows: np.ndarray  # (n, G, 2) on the grid
+    poses: np.ndarray  # (P, 3) the object poses the segment plans to pass
+    stop: Callable[[np.ndarray], bool] | None
+    shape: Shape
+    robot_radius: float
+    cursor: int = 0
+    first_row: int = 0  # the recording's row at which it started
+    sim_time: float = 0.0
+    left: bool = False
+    stopped_at: int | None = None
+    _space: tuple[int, shapely.Geometry] | None = field(default=None, repr=False)
+
+    @property
+    def remaining(self) -> int:
+        return self.rows.shape[1] - self.cursor
+
+    @property
+    def done(self) -> bool:
+        return self.cursor >= self.rows.shape[1] or self.stopped_at is not None
+
+    def space(self) -> shapely.Geometry:
+        """The space it still sweeps, with margins (``regions.swept``); cached per cursor."""
+        if self._space is None or self._space[0] != self.cursor:
+            rows = self.rows[:, max(0, self.cursor - 1):]
+            self._space = (self.cursor, swept(self.shape, self.poses, rows, self.robot_radius))
+        return self._space[1]
+
+    def core(self) -> shapely.Geometry:
+        """Its bodies exactly as planned (``regions.swept(..., margins=False)``)."""
+        return swept(self.shape, self.poses, self.rows, self.robot_radius, margins=False)
