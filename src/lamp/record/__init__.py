@@ -2,11 +2,16 @@
 
 - ``Recorder``: the per-segment observer that builds a ``Recording`` during a run;
 - ``save_recording(recording, run_dir)`` / ``load_recording(run_dir)``: the two files
-  ``recording.npz`` + ``recording.json`` (``docs/recording-format.md``).
+  ``recording.npz`` + ``recording.json`` (``docs/recording-format.md``);
+- ``check_recording`` / ``check_run_dir`` (``lamp.record.safety``, Shapely, loaded on first
+  use): an independent re-check that nothing collided in a recorded run.
 
 Rendering a recording (GIF, MP4, PNG, HTML) is ``lamp.viz.replay``.
 """
 
+from typing import TYPE_CHECKING
+
+from lamp._lazy import lazy_getattr
 from lamp.record.format import (
     FORMAT,
     JSON_NAME,
@@ -19,6 +24,14 @@ from lamp.record.format import (
 )
 from lamp.record.recorder import Recorder
 
+if TYPE_CHECKING:
+    from lamp.record.safety import SafetyReport, Violation, check_recording, check_run_dir
+
+#: The safety check's names, imported when first asked for (it loads Shapely).
+_LAZY = dict.fromkeys(("SafetyReport", "Violation", "check_recording", "check_run_dir"),
+                      "lamp.record.safety")
+__getattr__ = lazy_getattr("lamp.record", _LAZY, globals())
+
 __all__ = [
     "FORMAT",
     "JSON_NAME",
@@ -27,6 +40,10 @@ __all__ = [
     "Recorder",
     "Recording",
     "RecordingError",
+    "SafetyReport",
+    "Violation",
+    "check_recording",
+    "check_run_dir",
     "load_recording",
     "save_recording",
 ]
