@@ -16,6 +16,7 @@ from typing import Any
 
 from lamp.suites import checks as C
 from lamp.suites import corridor as CO
+from lamp.suites import fleet as FLEET
 from lamp.suites import generators as G
 from lamp.suites import iros
 from lamp.suites import warehouse_xl as XL
@@ -150,6 +151,29 @@ def _build_corridor(progress: Callable[[str], None] | None) -> _Built:
     return files, entries, generator, _corridor_check_settings()
 
 
+def _build_fleet(progress: Callable[[str], None] | None) -> _Built:
+    """The fleet suite's scene files, entries, generator record and checks."""
+    files: dict[str, str] = {}
+    entries = []
+    for k in range(FLEET.N_SCENES):
+        fg = FLEET.generate_scene(k)
+        text = scene_yaml(fg.scene_dict)
+        files[f"{fg.scene_dict['name']}.yaml"] = text
+        entries.append(FLEET.manifest_entry(fg, text))
+        if progress is not None:
+            progress(
+                f"{fg.scene_dict['name']}: {fg.kind}, {fg.layout_info['workspace']} m, "
+                f"{len(fg.reports)} objects, {fg.scene.n_robots} robots, attempts "
+                f"{fg.attempts}"
+            )
+    generator = {
+        "module": "lamp.suites.fleet",
+        "seed": G.SUITE_SEED,
+        "rng": f"numpy.random.default_rng([{G.SUITE_SEED}, {FLEET.STREAM}, index])",
+    }
+    return files, entries, generator, FLEET.check_settings()
+
+
 def _build_iros() -> _Built:
     """The ``iros`` suite (one scene); RuntimeError when the scene fails its checks."""
     d, scene, steps = iros.build()
@@ -206,6 +230,8 @@ def build_suite(name: str, progress: Callable[[str], None] | None = None) -> dic
         files, entries, generator, checks = _build_xl(progress)
     elif name == CO.NAME:
         files, entries, generator, checks = _build_corridor(progress)
+    elif name == FLEET.NAME:
+        files, entries, generator, checks = _build_fleet(progress)
     elif name == "iros":
         files, entries, generator, checks = _build_iros()
     else:

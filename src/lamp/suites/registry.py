@@ -6,7 +6,7 @@ settings and the check results of every scene: routes, clearances, robot reachab
 
 >>> from lamp.suites import list_suites, suite_scenes
 >>> list_suites()
-['random', 'maze', 'tilt', 'warehouse', 'iros', 'warehouse-xl', 'corridor']
+['random', 'maze', 'tilt', 'warehouse', 'iros', 'warehouse-xl', 'corridor', 'fleet']
 >>> len(suite_scenes("maze"))
 25
 """
@@ -77,6 +77,13 @@ SUITES: dict[str, SuiteInfo] = {
             "corridor",
             "6-14 m maps: one corridor 2-6 cm wider than the load, 1-4 oblique turns "
             "with turning bays",
+            25,
+            paper=False,
+        ),
+        SuiteInfo(
+            "fleet",
+            "6-50 m maps, 2-12 objects, 6-24 robots, concurrent schedule: rooms, aisles, "
+            "yards, door swaps, blockers cleared first",
             25,
             paper=False,
         ),
@@ -162,11 +169,13 @@ def _flow(v: Any) -> str:
 
 
 def scene_yaml(d: dict[str, Any]) -> str:
-    """Deterministic, readable YAML text of a scene-file dict (obstacles one per line)."""
+    """Deterministic, readable YAML text of a scene-file dict (obstacles one per line;
+    ``schedule`` when given, objects' ``after`` lists as integers)."""
     lines = [
         f"format: {d['format']}",
         f"name: {d['name']}",
         f"workspace: {_flow(d['workspace'])}",
+        *([f"schedule: {d['schedule']}"] if d.get("schedule") else []),
         "robots:",
         f"  radius: {_num(d['robots']['radius'])}",
         "  starts:",
@@ -180,7 +189,9 @@ def scene_yaml(d: dict[str, Any]) -> str:
         first = True
         for k, v in o.items():
             prefix = "  - " if first else "    "
-            lines.append(f"{prefix}{k}: {_flow(v)}")
+            # object indices stay integers (every other number is written as a float)
+            text = "[" + ", ".join(str(int(i)) for i in v) + "]" if k == "after" else _flow(v)
+            lines.append(f"{prefix}{k}: {text}")
             first = False
     return "\n".join(lines) + "\n"
 

@@ -51,7 +51,7 @@ def family_stats(manifest: dict[str, Any]) -> dict[str, Any]:
 
 
 #: suites with a table of their own (not the route-search tables)
-_OWN_TABLES = ("iros", "corridor")
+_OWN_TABLES = ("iros", "corridor", "fleet")
 
 
 def corridor_lines(manifest: dict[str, Any]) -> list[str]:
@@ -88,6 +88,37 @@ def corridor_lines(manifest: dict[str, Any]) -> list[str]:
         f" | {_mmm([w['min_clearance'] for w in wit], '{:.4f}')}"
         f" | {_mmm([sc['objects'][0]['robots']['ring_reachable_fraction'] for sc in scenes])} |",
     ]
+
+
+def fleet_lines(manifest: dict[str, Any]) -> list[str]:
+    """The ``fleet`` suite's table: one row per kind of map."""
+    scenes = manifest["scenes"]
+    lines = [
+        "",
+        f"## fleet ({len(scenes)} scenes, concurrent schedule)",
+        "",
+        "Every object has a certified route keeping "
+        f"{manifest['checks']['robot_room']} m of clearance with the other objects standing "
+        "where the schedule may have left them; *waits*: objects with an `after` list "
+        "(each checked to be blocked until its blockers are placed).",
+        "",
+        "| kind | scenes | map side (m) | objects | robots | robots per object "
+        "| obstacles | route length | waits |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for kind in dict.fromkeys(sc["kind"] for sc in scenes):
+        sel = [sc for sc in scenes if sc["kind"] == kind]
+        routes = [o["robot_route"]["length"] for sc in sel for o in sc["objects"]]
+        lines.append(
+            f"| {kind} | {len(sel)} | "
+            f"{_mmm([v for sc in sel for v in sc['layout']['workspace']], '{:.1f}')} | "
+            f"{_mmm([sc['n_objects'] for sc in sel], '{:.0f}')} | "
+            f"{_mmm([sc['n_robots'] for sc in sel], '{:.0f}')} | "
+            f"{_mmm([sc['n_robots'] / sc['n_objects'] for sc in sel], '{:.1f}')} | "
+            f"{_mmm([sc['n_obstacles'] for sc in sel], '{:.0f}')} | {_mmm(routes)} | "
+            f"{sum(bool(o['after']) for sc in sel for o in sc['objects'])} |"
+        )
+    return lines
 
 
 def stats_markdown(manifests: dict[str, dict[str, Any]] | None = None) -> str:
@@ -161,6 +192,8 @@ def stats_markdown(manifests: dict[str, dict[str, Any]] | None = None) -> str:
         )
     if "corridor" in manifests:
         lines += corridor_lines(manifests["corridor"])
+    if "fleet" in manifests:
+        lines += fleet_lines(manifests["fleet"])
     if "iros" in manifests:
         lines += _iros_lines(manifests["iros"]["scenes"][0])
     return "\n".join(lines) + "\n"
