@@ -9,11 +9,14 @@ Design (``docs/fleet.md``):
   other object a body where it stands. Loops run as coroutines (``lamp.fleet.turns``):
   one at a time, in priority order, so a run is deterministic.
 - **Priority.** Objects rank by the scene's order; an object with ``after`` waits until
-  those objects are placed. A lower-priority segment keeps out of every higher-priority
-  object's *claim* (the rest of its plan, ``regions.claim``): loads never meet head-on.
-- **Admission.** A segment a loop hands its executor starts only if the space it sweeps
-  (``regions.swept``, with margins) is clear of what every running segment still
-  sweeps and of higher claims; and its bodies as planned overlap no body standing still
+  those objects are placed. A lower-priority segment may not end with its object and
+  robots deeper in a higher-priority object's *claim* (the rest of its plan,
+  ``regions.claim``) than they began (crossing one, or leaving it, is allowed): loads
+  never meet head-on in a door.
+- **Admission.** A segment a loop hands its executor starts only if it is compatible
+  with every running segment (robots row by row on the shared clock, objects by the
+  space they may take: ``spacetime.compatible``) and respects higher claims; and its
+  bodies as planned overlap no body standing still
   (a standing overlap means the world changed since the plan: the segment is declined
   and the loop plans anew, ``WORLD_CHANGED``). Otherwise it waits for the next event. A
   planner that finds no plan while other objects still move waits for a change too.
@@ -41,11 +44,16 @@ from lamp.contract.events import TRACE_EVERY, RunObserver
 from lamp.contract.runner import ObjectOutcome
 from lamp.fleet.regions import claim, standing
 from lamp.fleet.segments import Segment, on_grid
+from lamp.fleet.spacetime import compatible
 from lamp.fleet.teams import allocate
 from lamp.fleet.turns import Turns
 from lamp.scene.model import Scene
 
-__all__ = ["Fleet", "FleetExecution"]
+__all__ = ["CLAIM_AREA_SLACK", "Fleet", "FleetExecution"]
+
+#: A segment may end with this much more of its bodies' area (m^2) inside a higher claim
+#: than it started with (rounding of the footprints).
+CLAIM_AREA_SLACK = 1e-4
 
 
 @dataclass
@@ -75,6 +83,7 @@ class _Object:
     ready: bool = False  # its thread has something to resume with
     blocked_at: int | None = None  # the world version at which its planner failed
     wake: bool = False  # the answer to ``plan_failed``
+    needs_team: bool = False  # its thread waits for robots (``wait_for_team``)
     outcome: ObjectOutcome | None = None
     placed_at_s: float | None = None
 
@@ -96,12 +105,15 @@ class Fleet:
         self.timeline = timeline
         self.observers = list(observers)
         self.grid = float(row_step)
+        self.speed = float(scene.physics.robot_speed)
         self.objects = [_Object(k) for k in range(len(scene.objects))]
         self.turns = Turns()
         self.version = 0  # bumped whenever anything moved or a team changed
         self.rows = 0  # rows recorded so far
         self.clock = 0.0
-        self.counts = {"admitted": 0, "declined": 0, "waited": 0, "forced": 0, "blocked": 0,
+        #: (simulated time, what, object, detail) of every decision: for the curious
+        self.log: list[tuple[float, str, int, str]] = []
+        self.counts = {"admitted": 0, "declined": 0, "waited": 0, "forced": 0, "blocked": 0, "merged": 0,
                        "events": 0}
         n = scene.n_robots
         self.busy_s = np.zeros(n)  # robot-seconds in a running segment
@@ -129,27 +141,35 @@ class Fleet:
         return [o.outcome for o in self.objects]  # type: ignore[misc]
 
     def _release(self) -> None:
-        """Start objects whose ``after`` objects are placed, with teams from the free
-        robots; fail those waiting on an object that failed."""
-        waiting = [o for o in self.objects if o.status == "waiting"]
+        """Start objects whose ``after`` objects are placed, and give robots to those
+        that wait for a team, from the free robots (``teams.allocate``); fail those
+        waiting on an object that failed."""
         ready = []
-        for o in waiting:
-            after = self.scene.objects[o.index].after
-            if any(self.objects[k].status == "failed" for k in after):
-                self._give_up(o, "not started: an object it waits for (after) was not placed")
-            elif all(self.objects[k].status == "placed" for k in after):
+        for o in self.objects:
+            if o.status == "active" and o.needs_team:
                 ready.append(o.index)
+            elif o.status == "waiting":
+                after = self.scene.objects[o.index].after
+                if any(self.objects[k].status == "failed" for k in after):
+                    self._give_up(o, "not started: an object it waits for (after) was not "
+                                  "placed")
+                elif all(self.objects[k].status == "placed" for k in after):
+                    ready.append(o.index)
         if not ready:
             return
         free = [i for i in range(self.scene.n_robots) if self.owner[i] < 0]
-        active = any(o.status == "active" for o in self.objects)
+        active = any(o.status == "active" and o.team for o in self.objects)
         teams = allocate(ready, free, self.executor.robot_positions,
                          self.executor.object_poses, active)
         for k, team in teams.items():
             o = self.objects[k]
-            o.status, o.team, o.ready = "active", team, True
+            o.team, o.ready = team, True
             self.owner[team] = k
             self.version += 1
+            if o.needs_team:
+                o.needs_team = False
+                continue
+            o.status = "active"
             for obs in self.observers:
                 obs.object_started(k, len(self.objects))
             self.turns.start(k, lambda k=k: self._main(k))
@@ -203,6 +223,8 @@ class Fleet:
                 continue
             hit_standing = self._meets_standing(seg)
             hit_moving = not force and self._meets_moving(seg)
+            self.log.append((self.clock, "check", o.index,
+                             f"standing={hit_standing} moving={hit_moving}"))
             if hit_standing and not force:
                 if not hit_moving:
                     o.request, o.reply, o.ready = None, self._declined(o), True
@@ -235,15 +257,23 @@ class Fleet:
         return False
 
     def _meets_moving(self, seg: Segment) -> bool:
-        space = seg.space()
-        shapely.prepare(space)
+        """Whether ``seg`` meets what a running segment still sweeps, or leaves its object
+        and robots deeper in a higher-priority object's claim than they stood (they may
+        pass through one, and leave it)."""
+        ends = None
         for o in self.objects:
             if o.index == seg.index:
                 continue
-            if o.running is not None and space.intersects(o.running.space()):
+            if o.running is not None and not compatible(o.running, seg):
+                self.log.append((self.clock, "meets", seg.index, f"running {o.index}"))
                 return True
-            if o.index < seg.index and o.claim is not None and space.intersects(o.claim):
-                return True
+            if o.index < seg.index and o.claim is not None:
+                ends = seg.ends() if ends is None else ends
+                before, after = (float(shapely.area(shapely.intersection(g, o.claim)))
+                                 for g in ends)
+                if after > before + CLAIM_AREA_SLACK:
+                    self.log.append((self.clock, "meets", seg.index, f"claim {o.index}"))
+                    return True
         return False
 
     def _declined(self, o: _Object) -> FleetExecution:
@@ -252,12 +282,26 @@ class Fleet:
                               declined=True)
 
     def _unstick(self) -> bool:
-        """Nothing runs and no loop can go on: wake the planners waiting for a change
-        (they plan in the world as it is), else force the first waiting segment."""
+        """Nothing runs and no loop can go on. Planners that wait for a change: the first
+        gets the robots of all of them (like the sequential schedule, where the whole
+        team plans), the others wait for robots; when it has them all already, it plans
+        in the world as it is. Else the first waiting segment is forced."""
         blocked = [o for o in self.objects if o.blocked_at is not None]
         if blocked:
+            first = blocked[0]
+            pool = sorted({i for o in blocked for i in o.team}
+                          | {i for i in range(self.scene.n_robots) if self.owner[i] < 0})
+            merge = len(pool) > len(first.team)
             for o in blocked:
-                o.blocked_at, o.wake, o.ready = None, False, True
+                o.blocked_at, o.wake, o.ready = None, merge, True
+                if merge and o is not first:
+                    o.team = []
+            if merge:
+                first.team = pool
+                self.owner[pool] = first.index
+                self.counts["merged"] += 1
+                self.log.append((self.clock, "merge", first.index, f"robots {pool}"))
+            self.version += 1
             return True
         if any(o.request is not None for o in self.objects):
             self._admit(force=True)
@@ -268,8 +312,10 @@ class Fleet:
     def _advance(self) -> None:
         """Run every admitted segment until the first ends (or a watch stops one)."""
         running = [o.running for o in self.objects if o.running is not None]
-        n_rows = min(s.remaining for s in running)
         now = np.asarray(self.executor.robot_positions, float)
+        for s in running:  # robots nudged off their rows (by a push nearby) rejoin them
+            s.rejoin(now[s.team], self.grid)
+        n_rows = min(s.remaining for s in running)
         paths = np.repeat(now[:, None], n_rows, axis=1)
         for s in running:
             paths[s.team] = s.rows[:, s.cursor:s.cursor + n_rows]
@@ -282,15 +328,15 @@ class Fleet:
             return bool(fired)
 
         watched = any(s.stop is not None for s in running)
+        # when each row is reached (``Simulator.row_durations``, from where robots are now)
+        tau = np.cumsum(np.hypot(*np.moveaxis(np.diff(np.concatenate(
+            [now[:, None], paths], axis=1), axis=1), 2, 0)).max(axis=0))
         out = self.executor.execute(paths, record_every=TRACE_EVERY,
                                     stop=stop if watched else None)
         done = n_rows
-        if out.stopped_at is not None:
-            tau = np.cumsum(self.executor.row_durations(paths)) if hasattr(
-                self.executor, "row_durations") else None
-            step_s = float(out.sim_time) / max(1, int(out.steps))
-            done = n_rows if tau is None else int(np.clip(
-                np.searchsorted(tau, out.stopped_at * step_s, side="right"), 1, n_rows))
+        if out.stopped_at is not None:  # the rows whose time had come (in metres at speed)
+            moved = out.stopped_at * float(out.sim_time) / max(1, int(out.steps)) * self.speed
+            done = int(np.clip(np.searchsorted(tau, moved + 1e-9, side="right"), 0, n_rows))
         self._account(running, paths, float(out.sim_time))
         self.timeline(out.trace, float(out.sim_time))
         self.rows += len(out.trace.times) - 1
@@ -358,6 +404,13 @@ class Fleet:
         self.counts["blocked"] += 1
         self.turns.pause(k)
         return o.wake
+
+    def wait_for_team(self, k: int) -> None:
+        """Object ``k`` has no robots (they went to another object): wait for some."""
+        o = self.objects[k]
+        o.claim = None
+        o.needs_team = True
+        self.turns.pause(k)
 
     def stats(self) -> dict[str, Any]:
         """The schedule's figures for ``result.json``: counts, per-object placement times

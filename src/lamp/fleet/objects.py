@@ -55,6 +55,8 @@ def object_main(runner: ClosedLoopRunner, observe: Callable[[SegmentEvent], None
             spent = sum(p.result.planning_time_s for p in parts)
             config = replace(cfg, max_segments=max(1, limit - used),
                              planning_time_limit=max(1e-3, cfg.planning_time_limit - spent))
+            while not fleet.objects[k].team:  # its robots went to another object
+                fleet.wait_for_team(k)
             view = fleet.view(k)
             scene_k = sub_scene(scene, view.team, fleet.executor.robot_positions)
             parts.append(runner.loop(scene_k, k, view, config, observe))

@@ -18,10 +18,15 @@ from dataclasses import dataclass, field
 import numpy as np
 import shapely
 
+from lamp.contract.trajectory import straight_moves
 from lamp.fleet.regions import swept
 from lamp.scene.model import Shape
 
-__all__ = ["Segment", "on_grid"]
+__all__ = ["REJOIN_GAP", "Segment", "on_grid"]
+
+#: A robot farther than this (m) from its next row moves back to it first (the simulator
+#: takes paths that start within ``MAX_START_GAP`` = 0.05 m of the robots).
+REJOIN_GAP = 0.03
 
 
 def on_grid(start: np.ndarray, paths: np.ndarray, row_step: float) -> np.ndarray:
@@ -76,6 +81,24 @@ class Segment:
             rows = self.rows[:, max(0, self.cursor - 1):]
             self._space = (self.cursor, swept(self.shape, self.poses, rows, self.robot_radius))
         return self._space[1]
+
+    def rejoin(self, positions: np.ndarray, row_step: float) -> None:
+        """Robots that stand more than ``REJOIN_GAP`` from the next row (nudged while they
+        held) first move straight back to it: rows are inserted before it."""
+        gap = np.hypot(*(np.asarray(positions, float) - self.rows[:, self.cursor]).T)
+        if gap.max() <= REJOIN_GAP:
+            return
+        back = straight_moves(np.asarray(positions, float), self.rows[:, self.cursor], row_step)
+        self.rows = np.concatenate([back, self.rows[:, self.cursor:]], axis=1)
+        self.cursor = 0
+        self._space = None
+
+    def ends(self) -> tuple[shapely.Geometry, shapely.Geometry]:
+        """Where its bodies stand before and after it (with margins): its object at the
+        first and last planned pose, its robots at their first and last rows."""
+        before = swept(self.shape, self.poses[:1], self.rows[:, :1], self.robot_radius)
+        after = swept(self.shape, self.poses[-1:], self.rows[:, -1:], self.robot_radius)
+        return before, after
 
     def core(self) -> shapely.Geometry:
         """Its bodies exactly as planned (``regions.swept(..., margins=False)``)."""

@@ -210,12 +210,14 @@ class ClosedLoop:
         st.planned_once = True
         st.replanned = True
         if not st.plan.solved:
-            if self.policy.failure_is_final:
-                st.reason = st.plan.reason
-                return "stop"
+            # an executor shared with other moving objects (``lamp.fleet``) may wait for the
+            # world to change: True, and the loop stops so that its runner plans anew
             blocked = getattr(self.executor, "plan_failed", None)
             if blocked is not None and blocked():
                 st.reason = WORLD_CHANGED
+                return "stop"
+            if self.policy.failure_is_final:
+                st.reason = st.plan.reason
                 return "stop"
             st.iterations += 1
             return "retry"
