@@ -132,6 +132,7 @@ def bench_command(
     db: Path = opt.DB,
     param: list[str] = opt.PARAM,
     disturb: str = opt.DISTURB,
+    schedule: str = opt.SCHEDULE,
 ) -> None:
     """Run planners over benchmark suites; write results.jsonl, config.json and report.md."""
     suite = suite_alias if suite_alias is not None else suite
@@ -144,12 +145,13 @@ def bench_command(
         planning_limit=planning_limit, scenes=scenes, job_fn=job_fn, db=db, dry_run=dry_run)
     param_map, param_texts = opt.check_params(param, planner_list)
     disturb = opt.check_disturb(disturb, planner_list)
+    schedule = opt.check_schedule(schedule)
     previous = _previous_config(out, resume=resume, dry_run=dry_run, time_cap=time_cap,
                                 planning_limit=planning_limit, model=model, job_fn=job_fn,
-                                params=param_texts, disturb=disturb)
+                                params=param_texts, disturb=disturb, schedule=schedule)
     jobs = _load_jobs(suite_list, planner_list, seeds, scenes=scenes, model=model,
                       time_cap=time_cap, planning_limit=planning_limit, params=param_map,
-                      disturb=disturb)
+                      disturb=disturb, schedule=schedule)
     if render_iros and not any(j.suite == "iros" for j in jobs):
         _fail("--render-iros needs the iros suite in --suites")
     records = read_records(out / RESULTS_FILE) if resume else []
@@ -172,7 +174,7 @@ def bench_command(
                      backend=backend, ray_address=ray_address, scenes=scenes,
                      render_iros=render_iros, job_fn=job_fn, record=record,
                      jobs_per_worker=jobs_per_worker, progress=progress, params=param_texts,
-                     disturb=disturb)
+                     disturb=disturb, schedule=schedule)
     has_results = (out / RESULTS_FILE).exists()
     if report and has_results:
         _write_report(out)
@@ -184,7 +186,8 @@ def bench_command(
 
 def _previous_config(out: Path, *, resume: bool, dry_run: bool, time_cap: float,
                      planning_limit: float, model: str, job_fn: str,
-                     params: list[str], disturb: str = "none") -> dict[str, Any]:
+                     params: list[str], disturb: str = "none",
+                     schedule: str | None = None) -> dict[str, Any]:
     """The config.json of the run resumed in ``out`` ({} if none); exits 2 when ``out`` is
     not a folder, is not empty without ``--resume``, or was run with other settings."""
     previous: dict[str, Any] = {}
@@ -200,14 +203,15 @@ def _previous_config(out: Path, *, resume: bool, dry_run: bool, time_cap: float,
         except json.JSONDecodeError:
             previous = {}
         check_resume_config(previous, time_cap=time_cap, planning_limit=planning_limit,
-                            model=model, job_fn=job_fn, params=params, disturb=disturb)
+                            model=model, job_fn=job_fn, params=params, disturb=disturb,
+                            schedule=schedule)
     return previous
 
 
 def _load_jobs(suite_list: list[str], planner_list: list[str], seeds: int, *,
                scenes: int | None, model: str, time_cap: float, planning_limit: float,
                params: dict[str, tuple[tuple[str, str], ...]] | None = None,
-               disturb: str = "none") -> list[Job]:
+               disturb: str = "none", schedule: str | None = None) -> list[Job]:
     """Every job of the run (see :func:`lamp.bench.jobs.enumerate_jobs`); a suite that
     fails to load exits 2."""
     try:
@@ -216,7 +220,7 @@ def _load_jobs(suite_list: list[str], planner_list: list[str], seeds: int, *,
         return enumerate_jobs(loaded, planner_list, seed_list, scenes_per_suite=scenes,
                               model=model, time_cap_s=time_cap,
                               planning_limit_s=planning_limit, params=params,
-                              disturb=disturb)
+                              disturb=disturb, schedule=schedule)
     except ValueError as exc:
         _fail(f"--suites: {exc}")
     except Exception as exc:  # a scene that fails to load is bad input too
@@ -253,20 +257,21 @@ def _run_pending(pending: list[Job], jobs: list[Job], out: Path, previous: dict[
                  time_cap: float, planning_limit: float, model: str, backend: str,
                  ray_address: str | None, scenes: int | None, render_iros: bool, job_fn: str,
                  record: bool, jobs_per_worker: int, progress: bool,
-                 params: list[str] | None = None, disturb: str = "none") -> None:
+                 params: list[str] | None = None, disturb: str = "none",
+                 schedule: str | None = None) -> None:
     """Record this invocation in config.json and run ``pending``; exit 130/143 if stopped."""
     command = canonical_command(
         suite_list, planner_list, seeds=seeds, workers=workers, out=out, time_cap=time_cap,
         planning_limit=planning_limit, model=model, backend=backend, scenes=scenes,
         render_iros=render_iros, job_fn=job_fn, record=record,
-        jobs_per_worker=jobs_per_worker, params=params, disturb=disturb)
+        jobs_per_worker=jobs_per_worker, params=params, disturb=disturb, schedule=schedule)
     out.mkdir(parents=True, exist_ok=True)
     run_id = len(previous.get("sessions") or [])
     write_config(out, previous, command=command, suites=list(dict.fromkeys(j.suite for j in jobs)),
                  planners=planner_list,
                  seeds=list(range(seeds)), workers=workers, backend=backend, model=model,
                  time_cap=time_cap, planning_limit=planning_limit, scenes=scenes, job_fn=job_fn,
-                 params=params, disturb=disturb)
+                 params=params, disturb=disturb, schedule=schedule)
     from lamp.bench.pool import WorkerStartError
     from lamp.bench.runner import execute
 

@@ -19,7 +19,7 @@ import json
 import logging
 import os
 from collections.abc import Callable, Collection, Iterable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -118,6 +118,7 @@ def enumerate_jobs(
     scale_cap_by_objects: bool = True,
     params: Mapping[str, Sequence[tuple[str, str]]] | None = None,
     disturb: str = "none",
+    schedule: str | None = None,
 ) -> list[Job]:
     """All jobs in a deterministic order: suite, scene, seed, then planner.
 
@@ -125,7 +126,8 @@ def enumerate_jobs(
     ``scenes_per_suite`` keeps the first N of each. With ``scale_cap_by_objects`` a K-object scene gets a cap of
     ``K * time_cap_s`` (a single-object scene exactly ``time_cap_s``), so the 9-object IROS
     job is not cut off by a per-object budget. ``params`` maps a planner name to the
-    overrides of its parameters (``Job.params``).
+    overrides of its parameters (``Job.params``); ``schedule`` replaces every scene's
+    (None: each keeps its own).
     """
     if scenes_per_suite is not None and scenes_per_suite < 1:
         raise ValueError(f"scenes_per_suite must be >= 1 or None, got {scenes_per_suite!r}")
@@ -135,6 +137,8 @@ def enumerate_jobs(
     for scenes in suites:
         chosen = list(scenes)[:scenes_per_suite] if scenes_per_suite else list(scenes)
         for entry in chosen:
+            if schedule is not None:
+                entry = replace(entry, scene=replace(entry.scene, schedule=schedule))
             n_obj = max(1, len(entry.scene.objects))
             cap = time_cap_s * (n_obj if scale_cap_by_objects else 1)
             for seed in seeds:
@@ -295,6 +299,7 @@ def make_record(job: Job, result: dict[str, Any], *, status: str, job_wall_time_
         "planning_limit_s": job.time_limit,
         "max_segments": job.max_segments,
         "disturb": job.disturb,
+        "schedule": job.scene.schedule,
         "job_wall_time_s": round(float(job_wall_time_s), 3),
     })
     rec.setdefault("failure_reason", _failure_reason(rec))

@@ -108,6 +108,10 @@ DISTURB = typer.Option("none", "--disturb", help="Disturbance preset of every jo
                        "robustness sweep runs one folder per preset): none, noise-low "
                        "(5 mm sensing, 5% actuation noise), noise-high (1 cm, 10%), "
                        "push-knocks (0.5 N s per segment), one-robot-fails.")
+SCHEDULE = typer.Option(None, "--schedule", help="Object schedule of every job: "
+                        "sequential (one object after another by the whole team, the "
+                        "paper's) or concurrent (several at once by sub-teams).",
+                        show_default="each scene's own")
 DB = typer.Option(None, "--db", help="Also write the results as an SQLite "
                   "database at this path (schema: docs/bench-db.md); rebuilt "
                   "from DIR/results.jsonl.", show_default="no database")
@@ -225,6 +229,16 @@ def check_params(params: list[str] | None, planners: list[str]
     return {p: tuple(sorted(kv.items())) for p, kv in by_planner.items()}, texts
 
 
+def check_schedule(schedule: str | None) -> str | None:
+    """``--schedule``: None or one of the scene format's schedules."""
+    from lamp.scene.model import SCHEDULES
+
+    if schedule is not None and schedule not in SCHEDULES:
+        fail(f"--schedule: unknown schedule {schedule!r}; expected one of: "
+             f"{', '.join(SCHEDULES)}")
+    return schedule
+
+
 def check_disturb(disturb: str, planners: list[str]) -> str:
     """``--disturb``: a known preset, and only for closed-loop planners when not none."""
     from lamp.bench.disturb import DISTURB_PRESETS
@@ -241,12 +255,12 @@ def check_disturb(disturb: str, planners: list[str]) -> str:
 
 def check_resume_config(previous: dict[str, Any], *, time_cap: float, planning_limit: float,
                         model: str, job_fn: str, params: list[str] | None = None,
-                        disturb: str = "none") -> None:
+                        disturb: str = "none", schedule: str | None = None) -> None:
     """A resumed run keeps its recorded cap, planning limit, model, job function and
     parameters."""
     for key, given in (("time_cap_s", time_cap), ("planning_limit_s", planning_limit),
                        ("model", model), ("job_fn", job_fn), ("params", params or []),
-                       ("disturb", disturb)):
+                       ("disturb", disturb), ("schedule", schedule)):
         if key in previous and previous[key] != given:
             fail(f"resuming a run recorded with {key}={previous[key]!r} but given {given!r}: "
                  "the results would mix settings; pass the recorded value or use a new --out")

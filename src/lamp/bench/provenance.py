@@ -124,7 +124,8 @@ def _session(command: str, out: Path) -> dict[str, Any]:
 def write_config(out: Path, previous: dict[str, Any], *, suites: list[str], planners: list[str],
                  seeds: list[int], workers: int, backend: str, model: str, time_cap: float,
                  planning_limit: float, scenes: int | None, job_fn: str, command: str,
-                 params: list[str] | None = None, disturb: str = "none") -> dict[str, Any]:
+                 params: list[str] | None = None, disturb: str = "none",
+                 schedule: str | None = None) -> dict[str, Any]:
     """Write ``out/config.json``: this invocation's settings plus every session's provenance.
 
     The top-level ``machine`` is this invocation's; each session records its own as well.
@@ -149,6 +150,9 @@ def write_config(out: Path, previous: dict[str, Any], *, suites: list[str], plan
         "planner_planning_limits_s": planner_limits(all_planners, planning_limit),
         "params": list(params or []),
         "disturb": disturb,
+        "schedule": schedule,
+        "schedule_note": "the object schedule of every job (sequential or concurrent); null: "
+        "each scene's own",
         "params_note": "planner parameters set with --param (PLANNER.NAME=VALUE); the rest "
         "are the planners' defaults, listed per run in results.jsonl's params",
         "job_fn": job_fn, "machine": machine_info(),
@@ -162,7 +166,8 @@ def canonical_command(suites: list[str], planners: list[str], *, seeds: int, wor
                       out: Path, time_cap: float, planning_limit: float, model: str,
                       backend: str, scenes: int | None, render_iros: bool, job_fn: str,
                       record: bool = False, jobs_per_worker: int = 0,
-                      params: list[str] | None = None, disturb: str = "none") -> str:
+                      params: list[str] | None = None, disturb: str = "none",
+                      schedule: str | None = None) -> str:
     """The ``lamp bench`` command line that reproduces this run, every setting explicit."""
     args = ["lamp", "bench", "--suites", ",".join(suites), "--planners", ",".join(planners),
             "--num-seeds", str(seeds), "--workers", str(workers), "--out", str(out),
@@ -180,6 +185,8 @@ def canonical_command(suites: list[str], planners: list[str], *, seeds: int, wor
         args += ["--param", text]
     if disturb != "none":
         args += ["--disturb", disturb]
+    if schedule is not None:
+        args += ["--schedule", schedule]
     if job_fn != DEFAULT_JOB_FN:
         args += ["--job-fn", job_fn]
     return shlex.join(args)

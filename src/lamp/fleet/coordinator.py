@@ -114,6 +114,7 @@ class Fleet:
         #: (simulated time, what, object, detail) of every decision: for the curious
         self.log: list[tuple[float, str, int, str]] = []
         self.counts = {"admitted": 0, "declined": 0, "waited": 0, "forced": 0, "blocked": 0, "merged": 0,
+                       "grown": 0,
                        "events": 0}
         n = scene.n_robots
         self.busy_s = np.zeros(n)  # robot-seconds in a running segment
@@ -393,12 +394,20 @@ class Fleet:
             shapely.prepare(o.claim)
 
     def plan_failed(self, k: int) -> bool:
-        """Object ``k``'s planner found no plan: wait for the world to change (True: it did,
-        plan anew) unless nothing else can change it (False: go on as alone)."""
+        """Object ``k``'s planner found no plan: free robots join its team (True: plan
+        anew), else wait for the world to change (True: it did) unless nothing else can
+        change it (False: go on as alone)."""
+        o = self.objects[k]
+        free = [i for i in range(self.scene.n_robots) if self.owner[i] < 0]
+        if free:  # robots nobody needs: they join (and stand in nobody's way)
+            o.team = sorted([*o.team, *free])
+            self.owner[free] = k
+            self.counts["grown"] += 1
+            self.version += 1
+            return True
         others = [o for o in self.objects if o.index != k and o.status in ("active", "waiting")]
         if not others:
             return False
-        o = self.objects[k]
         o.claim = None
         o.blocked_at = self.version
         self.counts["blocked"] += 1
