@@ -8,8 +8,8 @@ Design (``docs/fleet.md``):
   sub-team are the robots, every other robot is a disk obstacle where it stands, every
   other object a body where it stands. Loops run as coroutines (``lamp.fleet.turns``):
   one at a time, in priority order, so a run is deterministic.
-- **Priority.** Objects rank by the scene's order; an object with ``after`` waits until
-  those objects are placed. A lower-priority segment may not end with its object and
+- **Priority.** Objects rank in the order they started (the scene's order among those
+  that start together); an object with ``after`` starts once those objects are placed. A lower-priority segment may not end with its object and
   robots deeper in a higher-priority object's *claim* (the rest of its plan,
   ``regions.claim``) than they began (crossing one, or leaving it, is allowed): loads
   never meet head-on in a door.
@@ -84,6 +84,7 @@ class _Object:
     blocked_at: int | None = None  # the world version at which its planner failed
     wake: bool = False  # the answer to ``plan_failed``
     needs_team: bool = False  # its thread waits for robots (``wait_for_team``)
+    rank: int = 1 << 30  # its priority: the order in which objects started (lower first)
     outcome: ObjectOutcome | None = None
     placed_at_s: float | None = None
 
@@ -109,6 +110,7 @@ class Fleet:
         self.objects = [_Object(k) for k in range(len(scene.objects))]
         self.turns = Turns()
         self.version = 0  # bumped whenever anything moved or a team changed
+        self.started = 0  # objects started so far (their ranks)
         self.rows = 0  # rows recorded so far
         self.clock = 0.0
         #: (simulated time, what, object, detail) of every decision: for the curious
@@ -170,7 +172,8 @@ class Fleet:
             if o.needs_team:
                 o.needs_team = False
                 continue
-            o.status = "active"
+            o.status, o.rank = "active", self.started
+            self.started += 1
             for obs in self.observers:
                 obs.object_started(k, len(self.objects))
             self.turns.start(k, lambda k=k: self._main(k))
@@ -204,9 +207,13 @@ class Fleet:
             obs.object_started(o.index, len(self.objects))
             obs.object_finished(o.index, len(self.objects), o.outcome.result)
 
+    def _ranked(self) -> list[_Object]:
+        """The objects by priority: in the order they started (then the scene's)."""
+        return sorted(self.objects, key=lambda o: (o.rank, o.index))
+
     def _resume_ready(self) -> bool:
         """Resume the highest-priority thread that has something to go on with."""
-        for o in self.objects:
+        for o in self._ranked():
             if o.status == "active" and o.ready:
                 o.ready = False
                 self.turns.resume(o.index)
@@ -218,7 +225,7 @@ class Fleet:
         """Start the waiting segments that may start (module docstring), in priority
         order; decline those that meet a standing body; with ``force`` the first waiting
         one starts against standing bodies only."""
-        for o in self.objects:
+        for o in self._ranked():
             seg = o.request
             if seg is None:
                 continue
@@ -268,7 +275,7 @@ class Fleet:
             if o.running is not None and not compatible(o.running, seg):
                 self.log.append((self.clock, "meets", seg.index, f"running {o.index}"))
                 return True
-            if o.index < seg.index and o.claim is not None:
+            if o.rank < self.objects[seg.index].rank and o.claim is not None:
                 ends = seg.ends() if ends is None else ends
                 before, after = (float(shapely.area(shapely.intersection(g, o.claim)))
                                  for g in ends)
@@ -287,7 +294,7 @@ class Fleet:
         gets the robots of all of them (like the sequential schedule, where the whole
         team plans), the others wait for robots; when it has them all already, it plans
         in the world as it is. Else the first waiting segment is forced."""
-        blocked = [o for o in self.objects if o.blocked_at is not None]
+        blocked = [o for o in self._ranked() if o.blocked_at is not None]
         if blocked:
             first = blocked[0]
             pool = sorted({i for o in blocked for i in o.team}
