@@ -1,0 +1,219 @@
+"""The fleet schedule's parts, each against a simple reference: coroutine turns, the
+re-timing of rows on the shared grid, robot allocation, and the space-time test of two
+segments (``spacetime.compatible``: when it holds, a row-by-row brute force finds every
+robot and object clear)."""
+
+from __future__ import annotations
+
+import math
+import threading
+
+import numpy as np
+import pytest
+import shapely
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from lamp.contract.model import MAX_ROBOTS
+from lamp.fleet.regions import OBJECT_MARGIN, ROBOT_MARGIN, claim, footprints
+from lamp.fleet.segments import Segment, on_grid
+from lamp.fleet.spacetime import compatible
+from lamp.fleet.teams import MIN_TEAM, allocate
+from lamp.fleet.turns import Turns
+from lamp.geometry.shapes import to_shapely
+from lamp.scene.model import Rectangle
+
+R = 0.05
+STEP = 0.02
+
+# ------------------------------------------------------------------ turns
+
+
+def test_turns_run_one_thread_at_a_time_in_the_schedulers_order() -> None:
+    turns = Turns()
+    log: list[str] = []
+    running = threading.Semaphore(1)
+
+    def body(k: int) -> None:
+        for i in range(3):
+            assert running.acquire(blocking=False), "two threads ran at once"
+            log.append(f"{k}.{i}")
+            running.release()
+            turns.pause(k)
+
+    for k in range(3):
+        turns.start(k, lambda k=k: body(k))
+    order = [2, 0, 1, 1, 0, 2, 0, 1, 2, 0, 1, 2]
+    for k in order:
+        if not turns.finished(k):
+            turns.resume(k)
+    assert log == ["2.0", "0.0", "1.0", "1.1", "0.1", "2.1", "0.2", "1.2", "2.2"]
+    assert all(turns.finished(k) for k in range(3))
+    turns.close()
+
+
+def test_an_exception_in_a_thread_is_raised_by_resume() -> None:
+    turns = Turns()
+
+    def body() -> None:
+        turns.pause(0)
+        raise KeyError("inside")
+
+    turns.start(0, body)
+    turns.resume(0)
+    with pytest.raises(KeyError, match="inside"):
+        turns.resume(0)
+    turns.close()
+
+
+def test_close_ends_paused_threads() -> None:
+    turns = Turns()
+    reached = []
+
+    def body() -> None:
+        turns.pause(0)
+        reached.append("after")  # never: closed while paused
+
+    turns.start(0, body)
+    turns.resume(0)
+    turns.close()
+    assert turns.finished(0) and reached == []
+
+
+# ------------------------------------------------------------------ the grid
+
+paths_st = st.integers(1, 3).flatmap(lambda n: st.lists(
+    st.lists(st.tuples(st.floats(-0.05, 0.05), st.floats(-0.05, 0.05)), min_size=n, max_size=n),
+    min_size=1, max_size=25))
+
+
+@settings(max_examples=80)
+@given(paths_st)
+def test_on_grid_keeps_the_route_and_steps_at_most_a_row(steps) -> None:
+    """Reference: each robot's polyline; re-timed rows lie on it, in order, no step longer
+    than the row step, and the last row is the paths' last."""
+    deltas = np.array(steps, float).transpose(1, 0, 2)  # (N, T, 2)
+    start = np.zeros((deltas.shape[0], 2))
+    paths = start[:, None] + np.cumsum(deltas, axis=1)
+    rows = on_grid(start, paths, STEP)
+    assert rows.shape[0] == paths.shape[0] and rows.shape[1] >= 1
+    np.testing.assert_allclose(rows[:, -1], paths[:, -1], atol=1e-12)
+    way = np.concatenate([start[:, None], rows], axis=1)
+    assert np.hypot(*np.moveaxis(np.diff(way, axis=1), 2, 0)).max() <= STEP + 1e-9
+    for i in range(paths.shape[0]):
+        line = shapely.LineString(np.concatenate([start[i:i + 1], paths[i]]))
+        if line.length == 0:
+            np.testing.assert_allclose(rows[i], start[i][None].repeat(rows.shape[1], 0),
+                                       atol=1e-12)
+            continue
+        where = [line.project(shapely.Point(p)) for p in rows[i]]
+        assert all(line.distance(shapely.Point(p)) < 1e-7 for p in rows[i])
+        # distance along a self-crossing polyline can jump back; monotone where simple
+        if line.is_simple:
+            assert all(b >= a - 1e-7 for a, b in zip(where[:-1], where[1:], strict=True))
+
+
+# ------------------------------------------------------------------ allocation
+
+
+@settings(max_examples=80)
+@given(st.integers(0, 2**31 - 1), st.integers(1, 5), st.integers(0, 12), st.booleans())
+def test_allocate_gives_nearest_free_robots_in_priority_order(seed, n_obj, n_free, moving):
+    rng = np.random.default_rng(seed)
+    robots = rng.uniform(0, 10, (14, 2))
+    objects = np.c_[rng.uniform(0, 10, (n_obj, 2)), np.zeros(n_obj)]
+    free = sorted(rng.choice(14, n_free, replace=False).tolist())
+    teams = allocate(list(range(n_obj)), free, robots, objects, moving)
+    # reference: the same greedy rule written plainly
+    pool, expect, busy = list(free), {}, moving
+    for k in range(n_obj):
+        want = min(MAX_ROBOTS, len(pool))
+        if want < (MIN_TEAM if busy else 1):
+            break
+        order = sorted(pool, key=lambda i: (math.dist(robots[i], objects[k][:2]), i))
+        expect[k] = sorted(order[:want])
+        pool = [i for i in pool if i not in expect[k]]
+        busy = True
+    assert teams == expect
+    used = [i for t in teams.values() for i in t]
+    assert len(used) == len(set(used)) and set(used) <= set(free)
+
+
+# ------------------------------------------------------------------ space-time
+
+BOX = Rectangle((0.3, 0.2))
+
+
+def _segment(index: int, start_xy, rows: np.ndarray, poses: np.ndarray, cursor: int = 0):
+    return Segment(index, list(range(len(rows))), rows, poses, None, BOX, R, cursor=cursor)
+
+
+def _brute_force_clear(a: Segment, b: Segment) -> bool:
+    """Row by row: robots (holding their last row) at least 2R + 2*ROBOT_MARGIN apart, and
+    each robot ROBOT_MARGIN clear of the other's object wherever it may be (the planned
+    poses while its segment runs, the last one after)."""
+    n = max(a.remaining, b.remaining)
+    def at(seg, t):
+        return seg.rows[:, min(seg.cursor + t, seg.rows.shape[1] - 1)]
+    def obj(seg, t):
+        poses = seg.poses if t < seg.remaining else seg.poses[-1:]
+        return footprints(seg.shape, poses, OBJECT_MARGIN)
+    if obj(a, 0).intersects(obj(b, 0)):
+        return False
+    for t in range(n):
+        pa, pb = at(a, t), at(b, t)
+        if min(math.dist(p, q) for p in pa for q in pb) < 2 * R + 2 * ROBOT_MARGIN - 1e-9:
+            return False
+        for robots, seg in ((pb, a), (pa, b)):
+            region = obj(seg, t)
+            if min(region.distance(shapely.Point(p)) for p in robots) < R + ROBOT_MARGIN - 1e-9:
+                return False
+    return True
+
+
+def _random_segment(rng, index: int, centre) -> Segment:
+    n = int(rng.integers(1, 4))
+    start = np.asarray(centre) + rng.uniform(-0.6, 0.6, (n, 2))
+    end = start + rng.uniform(-0.8, 0.8, (n, 2))
+    t = int(rng.integers(2, 30))
+    rows = start[:, None] + (end - start)[:, None] * np.linspace(0, 1, t)[None, :, None]
+    q0 = np.r_[np.asarray(centre) + rng.uniform(-0.3, 0.3, 2), rng.uniform(-3, 3)]
+    q1 = q0 + np.r_[rng.uniform(-0.4, 0.4, 2), rng.uniform(-0.5, 0.5)]
+    cursor = int(rng.integers(0, t)) if index == 0 else 0
+    return _segment(index, start, rows, np.array([q0, q1]), cursor)
+
+
+@settings(max_examples=150)
+@given(st.integers(0, 2**31 - 1), st.floats(0.0, 2.5))
+def test_compatible_segments_stay_clear_row_by_row(seed, apart) -> None:
+    rng = np.random.default_rng(seed)
+    a = _random_segment(rng, 0, (0.0, 0.0))
+    b = _random_segment(rng, 1, (apart, 0.3))
+    if compatible(a, b):
+        assert _brute_force_clear(a, b)
+    if not _brute_force_clear(a, b):
+        assert not compatible(a, b)
+
+
+def test_far_apart_segments_are_compatible_and_crossing_robots_are_not() -> None:
+    rows = np.linspace([0.0, 0.0], [1.0, 0.0], 50)[None]
+    a = _segment(0, None, rows, np.array([[0.0, 1.0, 0.0], [0.5, 1.0, 0.0]]))
+    far = _segment(1, None, rows + [0.0, 5.0], np.array([[0.0, 6.0, 0.0], [0.5, 6.0, 0.0]]))
+    assert compatible(a, far) and compatible(far, a)
+    crossing = _segment(1, None, np.linspace([0.5, -0.5], [0.5, 0.5], 50)[None],
+                        np.array([[3.0, 3.0, 0.0], [3.2, 3.0, 0.0]]))
+    assert not compatible(a, crossing)
+    # the same crossing, but only after ``a``'s robot has passed: fine
+    later = _segment(1, None, np.linspace([0.5, -0.5], [0.5, 0.5], 50)[None],
+                     np.array([[3.0, 3.0, 0.0], [3.2, 3.0, 0.0]]))
+    ahead = _segment(0, None, np.linspace([0.9, 0.0], [3.0, 0.0], 50)[None],
+                     np.array([[5.0, 1.0, 0.0], [5.5, 1.0, 0.0]]))
+    assert compatible(ahead, later)
+
+
+def test_claim_covers_the_planned_footprints_and_room_for_pushers() -> None:
+    poses = np.array([[1.0, 1.0, 0.0], [2.0, 1.0, 0.0], [2.0, 2.0, math.pi / 2]])
+    c = claim(BOX, poses, R)
+    for q in poses:
+        assert c.contains(to_shapely(BOX, q).buffer(2 * R))
+    assert claim(BOX, np.zeros((0, 3)), R) is None

@@ -1,0 +1,117 @@
+"""The fleet schedule end to end: several objects moved at once by sub-teams in one
+simulator, every recording re-checked by the independent safety check
+(``lamp.record.safety``), deterministic, and faster than one object after another."""
+
+from __future__ import annotations
+
+import copy
+import json
+from pathlib import Path
+
+import pytest
+import yaml
+from typer.testing import CliRunner
+
+import lamp
+from lamp.cli import app
+from lamp.errors import InputError
+from lamp.pipeline import RunRequest
+from lamp.record.safety import check_recording
+from lamp.scene import scene_from_dict
+
+#: Two rooms side by side, a box in each to push along its room, six robots: two
+#: sub-teams of three, which should work at the same time.
+ROOMS = {
+    "format": "lamp-scene/1", "name": "two-rooms", "workspace": [5.0, 4.0],
+    "schedule": "concurrent",
+    "robots": {"starts": [[0.4, 0.5], [0.4, 1.0], [0.4, 1.5], [0.4, 2.5], [0.4, 3.0],
+                          [0.4, 3.5]]},
+    "obstacles": [{"type": "rectangle", "center": [2.5, 2.0], "size": [5.0, 0.1]}],
+    "objects": [
+        {"type": "rectangle", "size": [0.4, 0.3], "start": [1.3, 1.0, 0.0],
+         "goal": [3.6, 1.0, 0.0]},
+        {"type": "rectangle", "size": [0.4, 0.3], "start": [1.3, 3.0, 0.0],
+         "goal": [3.6, 3.0, 0.0]},
+    ],
+}
+
+
+def _safe(result) -> None:
+    rec = result.recording
+    report = check_recording(rec.scene_model(), rec.arrays["times"], rec.arrays["robots"],
+                             rec.arrays["objects"])
+    assert report.ok, report.summary()
+
+
+@pytest.fixture(scope="module")
+def rooms_runs():
+    scene = scene_from_dict(copy.deepcopy(ROOMS))
+    concurrent = lamp.solve(scene, "lazy", 0)
+    again = lamp.solve(scene, "lazy", 0)
+    sequential = lamp.solve(scene, "lazy", 0, schedule="sequential")
+    return concurrent, again, sequential
+
+
+def test_concurrent_run_places_every_object_safely_and_sooner(rooms_runs) -> None:
+    concurrent, _, sequential = rooms_runs
+    assert concurrent.success and sequential.success
+    _safe(concurrent)
+    _safe(sequential)
+    fleet = concurrent.to_dict()["stats"]["fleet"]
+    placed = fleet["placed_at_s"]
+    assert all(t is not None for t in placed)
+    assert max(placed) == pytest.approx(concurrent.makespan_s)
+    # both sub-teams worked at once: the two objects' segments overlap in time
+    assert concurrent.makespan_s < 0.8 * sequential.makespan_s
+    assert 0.0 < fleet["utilisation"]["working"] <= 1.0
+    assert "fleet" not in sequential.to_dict()["stats"]
+
+
+def test_concurrent_runs_are_deterministic(rooms_runs) -> None:
+    a, b, _ = rooms_runs
+    da, db = a.to_dict(), b.to_dict()
+    for d in (da, db):
+        d.pop("wall_time_s", None)
+        d.pop("planning_time_s", None)
+        d.pop("unexecuted_planning_time_s", None)
+        for o in d["objects"]:
+            o.pop("planning_time_s", None)
+    assert da["objects"] == db["objects"]
+    assert da["makespan_s"] == db["makespan_s"]
+    assert a.recording.arrays["robots"].tobytes() == b.recording.arrays["robots"].tobytes()
+
+
+@pytest.mark.parametrize("name", ["fleet-13", "fleet-21"])
+def test_fleet_family_scenes_run_concurrently_and_safely(name: str) -> None:
+    result = lamp.solve(name, "lazy", 0)
+    assert result.to_dict()["stats"]["fleet"]["admitted"] > 0
+    assert result.success, [o.failure_reason for o in result.objects]
+    _safe(result)
+
+
+def test_schedule_is_refused_by_name_where_it_cannot_run(tmp_path: Path) -> None:
+    scene = scene_from_dict(copy.deepcopy(ROOMS))
+    with pytest.raises(InputError, match="schedule"):
+        RunRequest.build(scene, "lazy", schedule="parallel")
+    with pytest.raises(InputError, match="concurrent schedule"):
+        RunRequest.build(scene, "mapush")
+    path = tmp_path / "rooms.yaml"
+    path.write_text(yaml.safe_dump(ROOMS, sort_keys=False))
+    out = CliRunner().invoke(app, ["run", str(path), "--schedule", "parallel",
+                                   "--out", str(tmp_path / "o")])
+    assert out.exit_code == 2, out.output
+    assert "--schedule" in out.output and "concurrent" in out.output
+    assert not (tmp_path / "o").exists()
+
+
+def test_cli_schedule_overrides_the_file(tmp_path: Path) -> None:
+    d = copy.deepcopy(ROOMS)
+    d["objects"] = d["objects"][:1]
+    d["robots"]["starts"] = d["robots"]["starts"][:3]
+    path = tmp_path / "one.yaml"
+    path.write_text(yaml.safe_dump(d, sort_keys=False))
+    out = CliRunner().invoke(app, ["run", str(path), "--schedule", "sequential", "--quiet",
+                                   "--out", str(tmp_path / "seq")])
+    assert out.exit_code == 0, out.output
+    result = json.loads((tmp_path / "seq" / "result.json").read_text())
+    assert "fleet" not in result["stats"] and result["success"]
