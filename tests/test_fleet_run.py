@@ -115,3 +115,21 @@ def test_cli_schedule_overrides_the_file(tmp_path: Path) -> None:
     assert out.exit_code == 0, out.output
     result = json.loads((tmp_path / "seq" / "result.json").read_text())
     assert "fleet" not in result["stats"] and result["success"]
+
+
+def test_recording_keeps_the_sub_teams_and_the_viewer_shows_them(rooms_runs,
+                                                                tmp_path: Path) -> None:
+    from lamp.record.format import load_recording, save_recording
+    from lamp.viz.replay_html import payload
+
+    concurrent, _, sequential = rooms_runs
+    save_recording(concurrent.recording, tmp_path)
+    rec = load_recording(tmp_path)
+    team = rec.arrays["robot_team"]
+    assert team.shape == (rec.n_rows, 6)
+    assert set(team.ravel().tolist()) <= {-1, 0, 1}
+    assert (team[1:] >= 0).any(axis=0).sum() >= 6 - 1  # robots did work for an object
+    assert (team[0] == -1).all()
+    assert payload(rec)["robot_team"] is not None
+    assert "robot_team" not in sequential.recording.arrays
+    assert payload(sequential.recording)["robot_team"] is None

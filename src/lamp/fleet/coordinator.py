@@ -93,12 +93,13 @@ class Fleet:
     """Moves a scene's objects concurrently on ``executor`` (see the module docstring).
 
     ``object_main(fleet, k)`` runs in object ``k``'s thread and returns its outcome; it
-    drives its closed loops on ``fleet.view(k)``. ``timeline(trace, sim_time)`` receives
-    every stretch of the shared clock (the recorder's ``follow``).
+    drives its closed loops on ``fleet.view(k)``. ``timeline(trace, sim_time, team)``
+    receives every stretch of the shared clock and the object whose sub-team each robot
+    was in (-1: none; the recorder's ``follow``).
     """
 
     def __init__(self, scene: Scene, executor: Any, object_main: Callable[[Fleet, int],
-                 ObjectOutcome], timeline: Callable[[Any, float], None],
+                 ObjectOutcome], timeline: Callable[[Any, float, np.ndarray], None],
                  observers: Sequence[RunObserver] = (), row_step: float = 0.02) -> None:
         self.scene = scene
         self.executor = executor
@@ -346,7 +347,7 @@ class Fleet:
             moved = out.stopped_at * float(out.sim_time) / max(1, int(out.steps)) * self.speed
             done = int(np.clip(np.searchsorted(tau, moved + 1e-9, side="right"), 0, n_rows))
         self._account(running, paths, float(out.sim_time))
-        self.timeline(out.trace, float(out.sim_time))
+        self.timeline(out.trace, float(out.sim_time), self.owner.copy())
         self.rows += len(out.trace.times) - 1
         self.clock += float(out.sim_time)
         self.version += 1

@@ -64,6 +64,12 @@ ARRAYS: dict[str, tuple[str, tuple[str | int, ...]]] = {
     "penalised": ("float32", ("F", 2, 2)),
 }
 
+#: Arrays a recording may hold (same conventions): ``robot_team[s, i]`` is the object
+#: robot ``i`` works for at row ``s`` (-1: none), written by the concurrent schedule.
+OPTIONAL_ARRAYS: dict[str, tuple[str, tuple[str | int, ...]]] = {
+    "robot_team": ("int16", ("S", "N")),
+}
+
 #: Which offsets array cuts which flat array, and the count its length is one more than.
 RAGGED = {
     "contacts": ("contact_offsets", "G"),
@@ -97,7 +103,7 @@ class Recording:
     def __post_init__(self) -> None:
         check_arrays(self.arrays, where="arrays")
         frozen = {}
-        for name in ARRAYS:
+        for name in [*ARRAYS, *(k for k in OPTIONAL_ARRAYS if k in self.arrays)]:
             arr = np.array(self.arrays[name], copy=True)
             arr.flags.writeable = False
             frozen[name] = arr
@@ -173,15 +179,17 @@ class Recording:
 
 
 def check_arrays(arrays: Mapping[str, Any], where: str) -> None:
-    """RecordingError unless ``arrays`` holds exactly :data:`ARRAYS` with consistent sizes."""
+    """RecordingError unless ``arrays`` holds exactly :data:`ARRAYS` (and any of
+    :data:`OPTIONAL_ARRAYS`) with consistent sizes."""
     missing = [k for k in ARRAYS if k not in arrays]
     if missing:
         raise RecordingError(f"{where}: missing arrays {', '.join(missing)}")
-    extra = [k for k in arrays if k not in ARRAYS]
+    extra = [k for k in arrays if k not in ARRAYS and k not in OPTIONAL_ARRAYS]
     if extra:
         raise RecordingError(f"{where}: unknown arrays {', '.join(extra)}")
     sizes: dict[str, int] = {}
-    for name, (dtype, shape) in ARRAYS.items():
+    present = {**ARRAYS, **{k: v for k, v in OPTIONAL_ARRAYS.items() if k in arrays}}
+    for name, (dtype, shape) in present.items():
         arr = arrays[name]
         if not isinstance(arr, np.ndarray) or arr.dtype != np.dtype(dtype):
             got = getattr(arr, "dtype", type(arr).__name__)

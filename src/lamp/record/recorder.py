@@ -58,16 +58,22 @@ class Recorder:
         #: and segment events carry no trace.
         self._following = False
         self._row_count = 0
+        self._teams: list[np.ndarray] = []
 
-    def follow(self, trace: Any, sim_time: float) -> None:
+    def follow(self, trace: Any, sim_time: float, team: np.ndarray | None = None) -> None:
         """Record a stretch of a run's shared clock (the fleet schedule, whose segments
         overlap in time); the segment events that follow record their data only, each
         ending at the row recorded last (so ``segment_rows`` holds the segments' end rows
-        in the order they ended)."""
+        in the order they ended). ``team`` (N,): the object each robot worked for during
+        the stretch (-1: none), kept as the optional ``robot_team`` array."""
         if not self._following:
             self._following = True
             self._robots[0] = trace.robot_positions[:1]
             self._objects[0] = trace.object_poses[:1]
+            self._teams = [np.full((1, self.scene.n_robots), -1, np.int16)]
+        if team is not None:
+            self._teams.append(np.repeat(np.asarray(team, np.int16)[None],
+                                         len(trace.times) - 1, axis=0))
         self._times.append(self._clock + trace.times[1:])
         self._robots.append(trace.robot_positions[1:])
         self._objects.append(trace.object_poses[1:])
@@ -167,4 +173,6 @@ class Recorder:
             "penalised_offsets": _offsets([len(p[3]) for p in plans]),
             "penalised": _stack([p[3] for p in plans], (2, 2), "float32"),
         }
+        if self._following and sum(len(t) for t in self._teams) == len(arrays["times"]):
+            arrays["robot_team"] = np.concatenate(self._teams).astype(np.int16)
         return Recording(self.scene.to_dict(), planner, int(seed), result, self.row_dt_s, arrays)

@@ -154,7 +154,8 @@ class ReplayRenderer:
         rec, a = self.rec, self.rec.arrays
         g = rec.segment_of_row(row) if segment is None else segment
         active = int(a["segment_object"][g]) if g >= 0 else None
-        self.painter.update(a["objects"][row], a["robots"][row], active)
+        self.painter.update(a["objects"][row], a["robots"][row], active,
+                            a["robot_team"][row] if "robot_team" in a else None)
         plan = int(a["segment_plan"][g]) if g >= 0 else -1
         self.path_line.set_data(*rec.plan_path(plan)[:, :2].T)
         self.verified.set_segments(rec.verified_of(plan))

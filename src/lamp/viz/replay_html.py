@@ -104,6 +104,7 @@ def payload(recording: Recording, options: RenderOptions | None = None) -> dict[
         "robots": _b64(a["robots"], "float32"),
         "object_poses": _b64(a["objects"], "float32"),
         "segment_rows": [int(v) for v in a["segment_rows"]],
+        "robot_team": _b64(a["robot_team"], "int16") if "robot_team" in a else None,
         "segments": segments,
         "plans": plans,
     }

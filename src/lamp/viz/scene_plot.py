@@ -169,10 +169,12 @@ class ScenePainter:
         object_poses: ArrayLike | None = None,
         robot_positions: ArrayLike | None = None,
         highlight_object: int | None = None,
+        robot_team: ArrayLike | None = None,
     ) -> None:
         """Move objects to ``object_poses`` (K, 3) and robots to ``robot_positions`` (N, 2);
         ``None`` means the scene's start poses. ``highlight_object`` draws that object, its
-        start and goal with a heavy outline."""
+        start and goal with a heavy outline. ``robot_team`` (N,): the object whose
+        sub-team each robot is in (-1: none); a robot in one takes its object's colour."""
         scene = self.scene
         K, N = len(scene.objects), scene.n_robots
         poses = (
@@ -196,8 +198,11 @@ class ScenePainter:
             self.objects[k].set_linewidth(2.2 if on else 0.6)
             self.start_outlines[k].set_linewidth(2.0 if on else 1.0)
             self.goal_outlines[k].set_linewidth(2.4 if on else 1.4)
-        for patch, p in zip(self.robots, robots, strict=True):
+        for i, (patch, p) in enumerate(zip(self.robots, robots, strict=True)):
             patch.set_center((p[0], p[1]))
+            team = -1 if robot_team is None else int(robot_team[i])
+            patch.set_facecolor(object_color(team) if 0 <= team < K else ROBOT_COLOR)
+            patch.set_edgecolor("black" if 0 <= team < K else "white")
 
 
 def draw_scene(

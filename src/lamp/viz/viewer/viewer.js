@@ -14,6 +14,8 @@
   const times = decode(D.times, Float64Array);
   const robots = decode(D.robots, Float32Array);   // rows x N x 2
   const poses = decode(D.object_poses, Float32Array); // rows x K x 3
+  // rows x N: the object whose sub-team each robot is in (-1: none); concurrent runs only
+  const teams = D.robot_team ? decode(D.robot_team, Int16Array) : null;
   const N = D.n_robots, K = D.n_objects, S = D.n_rows;
   const segRows = D.segment_rows, segs = D.segments, plans = D.plans;
   const G = segs.length;
@@ -188,7 +190,9 @@
       const [x, y] = robotAt(row, i);
       shownRobots.push([x, y]);
       ctx.beginPath(); ctx.arc(sx(x), sy(y), rPx, 0, 2 * Math.PI);
-      ctx.fillStyle = C.robot; ctx.fill(); ctx.strokeStyle = "#fff"; ctx.lineWidth = 0.8; ctx.stroke();
+      const team = teams ? teams[row * N + i] : -1;
+      ctx.fillStyle = team >= 0 ? D.objects[team].color : C.robot; ctx.fill();
+      ctx.strokeStyle = team >= 0 ? "#000" : "#fff"; ctx.lineWidth = 0.8; ctx.stroke();
     }
     const event = seg && seg.outcome !== "continue" ? "  [" + seg.outcome + "]" : "";
     $("clock").textContent = "t = " + times[row].toFixed(2) + " s   " +
