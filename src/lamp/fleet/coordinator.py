@@ -20,10 +20,12 @@ Design (``docs/fleet.md``):
   (a standing overlap means the world changed since the plan: the segment is declined
   and the loop plans anew, ``WORLD_CHANGED``). Otherwise it waits for the next event. A
   planner that finds no plan while other objects still move waits for a change too.
-- **Clock.** Admitted segments are re-timed on a common row grid (``segments.on_grid``)
-  and run together; the simulator runs until the first of them ends (or a push watch
-  stops one), that loop gets its result and plans its next segment while the others hold
-  their place in their rows.
+- **Clock.** Admitted segments are re-timed on a common row grid (``segments.on_grid``),
+  with rows appended in which their robots hold for the simulator's settle time, and run
+  together; the simulator runs until the first of them ends (or a push watch stops one),
+  that loop gets its result and plans its next segment while the others hold their place
+  in their rows (simulated time stands still while loops plan). Only when every running
+  segment ends together does the simulator settle as it does after a sequential segment.
 - **Liveness.** When nothing runs and nothing waits on a change, the highest-priority
   waiting segment is admitted against standing bodies only (counted as ``forced``), and
   planners waiting on a change plan in the world as it is (like the sequential schedule).
@@ -33,6 +35,7 @@ Robots are allocated by ``lamp.fleet.teams``. The recorder follows the shared cl
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -48,6 +51,7 @@ from lamp.fleet.spacetime import compatible
 from lamp.fleet.teams import allocate
 from lamp.fleet.turns import Turns
 from lamp.scene.model import Scene
+from lamp.sim.simulator import SETTLE_TIME, Simulator
 
 __all__ = ["CLAIM_AREA_SLACK", "Fleet", "FleetExecution"]
 
@@ -108,6 +112,8 @@ class Fleet:
         self.observers = list(observers)
         self.grid = float(row_step)
         self.speed = float(scene.physics.robot_speed)
+        #: rows a segment's robots hold at its end while others move: the settle time
+        self.hold_rows = math.ceil(SETTLE_TIME / (self.grid / self.speed) - 1e-9)
         self.objects = [_Object(k) for k in range(len(scene.objects))]
         self.turns = Turns()
         self.version = 0  # bumped whenever anything moved or a team changed
@@ -340,8 +346,12 @@ class Fleet:
         # when each row is reached (``Simulator.row_durations``, from where robots are now)
         tau = np.cumsum(np.hypot(*np.moveaxis(np.diff(np.concatenate(
             [now[:, None], paths], axis=1), axis=1), 2, 0)).max(axis=0))
+        # objects come to rest while their robots hold the rows ``submit`` appended; the
+        # simulator's own settle only when nobody moves on
+        every = all(s.remaining == n_rows for s in running)
+        settle = {} if every or not isinstance(self.executor, Simulator) else {"settle_time": 0.0}
         out = self.executor.execute(paths, record_every=TRACE_EVERY,
-                                    stop=stop if watched else None)
+                                    stop=stop if watched else None, **settle)
         done = n_rows
         if out.stopped_at is not None:  # the rows whose time had come (in metres at speed)
             moved = out.stopped_at * float(out.sim_time) / max(1, int(out.steps)) * self.speed
@@ -386,8 +396,10 @@ class Fleet:
         poses = o.announced if o.announced is not None else np.asarray(
             self.executor.object_poses[k], float)[None]
         start = np.asarray(self.executor.robot_positions, float)[o.team]
-        o.request = Segment(k, list(o.team), on_grid(start, paths, self.grid), poses, stop,
-                            self.scene.objects[k].shape, self.scene.robot_radius)
+        rows = on_grid(start, paths, self.grid)
+        rows = np.concatenate([rows, np.repeat(rows[:, -1:], self.hold_rows, axis=1)], axis=1)
+        o.request = Segment(k, list(o.team), rows, poses, stop, self.scene.objects[k].shape,
+                            self.scene.robot_radius)
         o.announced = None
         self.turns.pause(k)
         reply, o.reply = o.reply, None
