@@ -53,8 +53,11 @@ from lamp.fleet.turns import Turns
 from lamp.scene.model import Scene
 from lamp.sim.simulator import SETTLE_TIME, Simulator
 
-__all__ = ["CLAIM_AREA_SLACK", "Fleet", "FleetExecution"]
+__all__ = ["BLOCKED_WAKE_EVENTS", "CLAIM_AREA_SLACK", "Fleet", "FleetExecution"]
 
+#: A planner that found no plan while others moved plans again after this many events
+#: (segments ending) at the latest, sooner when an object is placed or given up.
+BLOCKED_WAKE_EVENTS = 6
 #: A segment may end with this much more of its bodies' area (m^2) inside a higher claim
 #: than it started with (rounding of the footprints).
 CLAIM_AREA_SLACK = 1e-4
@@ -85,7 +88,8 @@ class _Object:
     running: Segment | None = None
     reply: FleetExecution | None = None
     ready: bool = False  # its thread has something to resume with
-    blocked_at: int | None = None  # the world version at which its planner failed
+    #: (objects finished, events) when its planner failed; None: not waiting on a change
+    blocked_at: tuple[int, int] | None = None
     wake: bool = False  # the answer to ``plan_failed``
     needs_team: bool = False  # its thread waits for robots (``wait_for_team``)
     rank: int = 1 << 30  # its priority: the order in which objects started (lower first)
@@ -116,8 +120,8 @@ class Fleet:
         self.hold_rows = math.ceil(SETTLE_TIME / (self.grid / self.speed) - 1e-9)
         self.objects = [_Object(k) for k in range(len(scene.objects))]
         self.turns = Turns()
-        self.version = 0  # bumped whenever anything moved or a team changed
         self.started = 0  # objects started so far (their ranks)
+        self.finished = 0  # objects placed or given up so far
         self.rows = 0  # rows recorded so far
         self.clock = 0.0
         #: (simulated time, what, object, detail) of every decision: for the curious
@@ -136,6 +140,7 @@ class Fleet:
         try:
             while not all(o.status in ("placed", "failed") for o in self.objects):
                 self._release()
+                self._wake_blocked()
                 if self._resume_ready():
                     continue
                 self._admit(force=False)
@@ -175,7 +180,6 @@ class Fleet:
             o = self.objects[k]
             o.team, o.ready = team, True
             self.owner[team] = k
-            self.version += 1
             if o.needs_team:
                 o.needs_team = False
                 continue
@@ -193,7 +197,7 @@ class Fleet:
             o.placed_at_s = self.clock
         o.claim = None
         self.owner[o.team] = -1
-        self.version += 1
+        self.finished += 1
         for obs in self.observers:
             obs.object_finished(k, len(self.objects), o.outcome.result)
 
@@ -316,7 +320,6 @@ class Fleet:
                 self.owner[pool] = first.index
                 self.counts["merged"] += 1
                 self.log.append((self.clock, "merge", first.index, f"robots {pool}"))
-            self.version += 1
             return True
         if any(o.request is not None for o in self.objects):
             self._admit(force=True)
@@ -360,7 +363,6 @@ class Fleet:
         self.timeline(out.trace, float(out.sim_time), self.owner.copy())
         self.rows += len(out.trace.times) - 1
         self.clock += float(out.sim_time)
-        self.version += 1
         self.counts["events"] += 1
         left = np.asarray(getattr(out, "objects_left", np.zeros(len(self.objects), bool)))
         for s in running:
@@ -376,8 +378,17 @@ class Fleet:
                                          np.asarray(self.executor.robot_positions, float)[s.team],
                                          s.left, None, s.stopped_at, s.sim_time)
                 o.ready = True
-        for o in self.objects:  # planners waiting on a change go on
-            if o.blocked_at is not None and o.blocked_at < self.version:
+        self._wake_blocked()
+
+    def _wake_blocked(self) -> None:
+        """Planners waiting on a change plan again once an object was placed or given up,
+        or after ``BLOCKED_WAKE_EVENTS`` events (a failed search is costly: not at every
+        step of the others)."""
+        for o in self.objects:
+            if o.blocked_at is None:
+                continue
+            finished, events = o.blocked_at
+            if self.finished > finished or self.counts["events"] - events >= BLOCKED_WAKE_EVENTS:
                 o.blocked_at, o.wake, o.ready = None, True, True
 
     def _account(self, running: list[Segment], paths: np.ndarray, sim_time: float) -> None:
@@ -423,13 +434,12 @@ class Fleet:
             o.team = sorted([*o.team, *free])
             self.owner[free] = k
             self.counts["grown"] += 1
-            self.version += 1
             return True
         others = [o for o in self.objects if o.index != k and o.status in ("active", "waiting")]
         if not others:
             return False
         o.claim = None
-        o.blocked_at = self.version
+        o.blocked_at = (self.finished, self.counts["events"])
         self.counts["blocked"] += 1
         self.turns.pause(k)
         return o.wake
