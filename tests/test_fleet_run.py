@@ -63,7 +63,9 @@ def test_concurrent_run_places_every_object_safely_and_sooner(rooms_runs) -> Non
     assert max(placed) == pytest.approx(concurrent.makespan_s)
     # both sub-teams worked at once: the two objects' segments overlap in time
     assert concurrent.makespan_s < 0.8 * sequential.makespan_s
-    assert 0.0 < fleet["utilisation"]["working"] <= 1.0
+    use = fleet["utilisation"]
+    assert 0.0 < use["working"] <= 1.0 and 0.0 <= use["moving"] <= use["working"]
+    assert use["working"] + use["waiting"] + use["idle"] == pytest.approx(1.0, abs=1e-3)
     assert "fleet" not in sequential.to_dict()["stats"]
 
 

@@ -130,8 +130,8 @@ class Fleet:
                        "grown": 0,
                        "events": 0}
         n = scene.n_robots
-        self.busy_s = np.zeros(n)  # robot-seconds in a running segment
-        self.moving_s = np.zeros(n)  # ... of which the robot was moving
+        #: robot-seconds by state (``_account``)
+        self.time_s = {k: np.zeros(n) for k in ("working", "moving", "waiting", "idle")}
         self.owner = np.full(n, -1)  # robot -> object of its team (-1: free)
 
     # ------------------------------------------------------------------ the schedule
@@ -392,10 +392,17 @@ class Fleet:
                 o.blocked_at, o.wake, o.ready = None, True, True
 
     def _account(self, running: list[Segment], paths: np.ndarray, sim_time: float) -> None:
+        """Charge ``sim_time`` of every robot: working (its sub-team's segment runs; of
+        that, moving when its rows moved it), waiting (in a sub-team whose segment does not
+        run) or idle (in none)."""
+        working = np.zeros(self.scene.n_robots, bool)
         for s in running:
-            self.busy_s[s.team] += sim_time
-        moved = np.hypot(*(paths[:, -1] - paths[:, 0]).T) > 1e-6
-        self.moving_s[moved] += sim_time
+            working[s.team] = True
+        self.time_s["working"][working] += sim_time
+        self.time_s["waiting"][~working & (self.owner >= 0)] += sim_time
+        self.time_s["idle"][~working & (self.owner < 0)] += sim_time
+        steps = np.hypot(*np.moveaxis(np.diff(paths, axis=1), 2, 0)).sum(axis=1)
+        self.time_s["moving"][working & (steps > 1e-6)] += sim_time
 
     # ------------------------------------------------------------------ a loop's executor
     def view(self, k: int) -> FleetView:
@@ -453,15 +460,16 @@ class Fleet:
 
     def stats(self) -> dict[str, Any]:
         """The schedule's figures for ``result.json``: counts, per-object placement times
-        and the robots' utilisation (shares of robot-time)."""
+        and the robots' utilisation: shares of robot-time working (their sub-team's
+        segment runs), moving (working and driven), waiting (in a sub-team, its segment
+        not running) and idle (in no sub-team); working + waiting + idle = 1."""
         total = max(self.clock, 1e-9) * max(1, self.scene.n_robots)
         return {
             **self.counts,
             "placed_at_s": [None if o.placed_at_s is None else round(o.placed_at_s, 4)
                             for o in self.objects],
-            "utilisation": {"working": round(float(self.busy_s.sum()) / total, 4),
-                            "moving": round(float(self.moving_s.sum()) / total, 4),
-                            "idle": round(1.0 - float(self.busy_s.sum()) / total, 4)},
+            "utilisation": {k: round(float(v.sum()) / total, 4)
+                            for k, v in self.time_s.items()},
         }
 
 

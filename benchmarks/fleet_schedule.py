@@ -1,0 +1,116 @@
+"""The fleet table: the ``fleet`` family moved one object after another and concurrently.
+
+Reads ``lamp bench`` result folders of the family, one per schedule (and planner), and
+prints a markdown table per scene (robots, objects, map, success, makespan of each,
+the ratio concurrent / sequential, planning per segment, robot utilisation, collisions
+found by the independent safety check in the recordings), then the summary the fleet
+targets are stated in: success, the median makespan ratio over the family and over the
+scenes with at least three sub-teams' worth of robots, and the collisions.
+
+    lamp bench --suites fleet --planners lazy --schedule sequential --out SEQ
+    lamp bench --suites fleet --planners lazy --schedule concurrent --record --out CON
+    lamp bench --suites fleet --planners gco-var --schedule concurrent --record --out GCO
+    python benchmarks/fleet_schedule.py SEQ CON [--peer GCO] [--out docs/results/fleet/table.md]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+from pathlib import Path
+
+from lamp.contract.model import MAX_ROBOTS
+from lamp.suites.registry import resolve_scene
+
+
+def _records(folder: Path) -> dict[str, dict]:
+    out = {}
+    for line in (folder / "results.jsonl").read_text().splitlines():
+        if line.strip():
+            rec = json.loads(line)
+            out[rec["scene"]] = rec  # the last record of a scene wins (reruns)
+    return out
+
+
+def _collisions(folder: Path, rec: dict) -> int | None:
+    """Violations the safety check finds in the job's recording (None: not recorded)."""
+    from lamp.record.safety import check_run_dir
+
+    run = folder / "recordings" / rec["suite"] / f"{rec['scene']}-{rec['planner']}-s{rec['seed']}"
+    if not (run / "recording.json").exists():
+        return None
+    return len(check_run_dir(run).violations)
+
+
+def _f(x: float | None, fmt: str = ".1f") -> str:
+    return "-" if x is None else format(x, fmt)
+
+
+def table(seq: Path, con: Path, peer: Path | None) -> str:
+    s_recs, c_recs = _records(seq), _records(con)
+    p_recs = _records(peer) if peer else {}
+    rows = ["| scene | robots | objects | map (m) | seq ok | seq makespan (s) | conc ok | "
+            "conc makespan (s) | ratio | plan/seg seq (s) | plan/seg conc (s) | working | "
+            "collisions | peer ok | peer makespan (s) |",
+            "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    ratios, big, ok, hits, checked = [], [], 0, 0, 0
+    for name in sorted(c_recs):
+        c, s, p = c_recs[name], s_recs.get(name), p_recs.get(name)
+        scene = resolve_scene(name)
+        ratio = None
+        if s and c["success"] and s["success"]:
+            ratio = c["makespan_s"] / s["makespan_s"]
+            ratios.append(ratio)
+            if scene.n_robots >= 3 * MAX_ROBOTS:
+                big.append(ratio)
+        ok += bool(c["success"])
+        n_hits = _collisions(con, c)
+        if n_hits is not None:
+            checked += 1
+            hits += n_hits
+        fleet = c.get("stats", {}).get("fleet", {})
+        rows.append("| " + " | ".join([
+            name, str(scene.n_robots), str(len(scene.objects)),
+            f"{scene.workspace[0]:.0f} x {scene.workspace[1]:.0f}",
+            "-" if s is None else ("yes" if s["success"] else "no"),
+            _f(s and s["makespan_s"]), "yes" if c["success"] else "no", _f(c["makespan_s"]),
+            _f(ratio, ".2f"), _f(s and s["planning_time_per_segment_s"], ".3f"),
+            _f(c["planning_time_per_segment_s"], ".3f"),
+            _f(fleet.get("utilisation", {}).get("working"), ".2f"),
+            "-" if n_hits is None else str(n_hits),
+            "-" if p is None else ("yes" if p["success"] else "no"),
+            _f(p and p["makespan_s"])]) + " |")
+    n = len(c_recs)
+    seq_ok = sum(bool(r["success"]) for r in s_recs.values())
+    summary = [
+        "",
+        f"- concurrent success: {ok}/{n} ({100 * ok / max(n, 1):.0f}%); sequential "
+        f"{seq_ok}/{len(s_recs)}"
+        + (f"; peer {sum(bool(r['success']) for r in p_recs.values())}/{len(p_recs)}"
+           if p_recs else ""),
+        f"- makespan concurrent / sequential (scenes both solved, {len(ratios)}): median "
+        f"{_f(statistics.median(ratios) if ratios else None, '.2f')}; on the "
+        f"{len(big)} with at least {3 * MAX_ROBOTS} robots: median "
+        f"{_f(statistics.median(big) if big else None, '.2f')}",
+        f"- collisions found by the safety check: {hits} in {checked} recordings",
+    ]
+    return "\n".join(rows + summary) + "\n"
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("sequential", type=Path)
+    ap.add_argument("concurrent", type=Path)
+    ap.add_argument("--peer", type=Path, help="the peer's (GCo_var) concurrent folder")
+    ap.add_argument("--out", type=Path, help="also write the table here")
+    args = ap.parse_args()
+    text = table(args.sequential, args.concurrent, args.peer)
+    print(text, end="")
+    if args.out:
+        args.out.parent.mkdir(parents=True, exist_ok=True)
+        args.out.write_text(text)
+
+
+if __name__ == "__main__":
+    main()
