@@ -45,36 +45,20 @@ import shapely
 
 from lamp.contract.events import TRACE_EVERY, RunObserver
 from lamp.contract.runner import ObjectOutcome
-from lamp.fleet.regions import claim, standing
+from lamp.fleet.admission import meets_moving, meets_standing
+from lamp.fleet.regions import claim
 from lamp.fleet.segments import Segment, on_grid
-from lamp.fleet.spacetime import compatible
 from lamp.fleet.teams import allocate
 from lamp.fleet.turns import Turns
+from lamp.fleet.view import FleetExecution, FleetView
 from lamp.scene.model import Scene
 from lamp.sim.simulator import SETTLE_TIME, Simulator
 
-__all__ = ["BLOCKED_WAKE_EVENTS", "CLAIM_AREA_SLACK", "Fleet", "FleetExecution"]
+__all__ = ["BLOCKED_WAKE_EVENTS", "Fleet"]
 
 #: A planner that found no plan while others moved plans again after this many events
 #: (segments ending) at the latest, sooner when an object is placed or given up.
 BLOCKED_WAKE_EVENTS = 6
-#: A segment may end with this much more of its bodies' area (m^2) inside a higher claim
-#: than it started with (rounding of the footprints).
-CLAIM_AREA_SLACK = 1e-4
-
-
-@dataclass
-class FleetExecution:
-    """What a sub-team's executor reports after a segment (an ``Execution``)."""
-
-    object_poses: np.ndarray
-    robot_positions: np.ndarray
-    left_workspace: bool = False
-    trace: Any = None
-    stopped_at: int | None = None
-    sim_time: float = 0.0
-    #: The segment was not run: the world changed around its plan.
-    declined: bool = False
 
 
 @dataclass
@@ -259,41 +243,21 @@ class Fleet:
                 return
 
     def _meets_standing(self, seg: Segment) -> bool:
-        core = seg.core()
-        shapely.prepare(core)
-        r = self.scene.robot_radius
-        poses = self.executor.object_poses
-        for o in self.objects:
-            if o.index != seg.index and o.running is None and core.intersects(
-                    standing(self.scene.objects[o.index].shape, poses[o.index], r)):
-                return True
+        still = [o.index for o in self.objects if o.index != seg.index and o.running is None]
         moving = {i for o in self.objects if o.running is not None for i in o.team}
-        pos = self.executor.robot_positions
-        for i in range(self.scene.n_robots):
-            if i not in seg.team and i not in moving and core.intersects(
-                    standing(None, pos[i], r)):
-                return True
-        return False
+        return meets_standing(seg, self.scene, self.executor.object_poses,
+                              self.executor.robot_positions, still, moving)
 
     def _meets_moving(self, seg: Segment) -> bool:
-        """Whether ``seg`` meets what a running segment still sweeps, or leaves its object
-        and robots deeper in a higher-priority object's claim than they stood (they may
-        pass through one, and leave it)."""
-        ends = None
-        for o in self.objects:
-            if o.index == seg.index:
-                continue
-            if o.running is not None and not compatible(o.running, seg):
-                self.log.append((self.clock, "meets", seg.index, f"running {o.index}"))
-                return True
-            if o.rank < self.objects[seg.index].rank and o.claim is not None:
-                ends = seg.ends() if ends is None else ends
-                before, after = (float(shapely.area(shapely.intersection(g, o.claim)))
-                                 for g in ends)
-                if after > before + CLAIM_AREA_SLACK:
-                    self.log.append((self.clock, "meets", seg.index, f"claim {o.index}"))
-                    return True
-        return False
+        rank = self.objects[seg.index].rank
+        running = [o.running for o in self.objects if o.running is not None
+                   and o.index != seg.index]
+        claims = [(o.index, o.claim) for o in self.objects if o.index != seg.index
+                  and o.rank < rank and o.claim is not None]
+        why = meets_moving(seg, running, claims)
+        if why:
+            self.log.append((self.clock, "meets", seg.index, why))
+        return why is not None
 
     def _declined(self, o: _Object) -> FleetExecution:
         return FleetExecution(np.asarray(self.executor.object_poses, float),
@@ -406,6 +370,7 @@ class Fleet:
 
     # ------------------------------------------------------------------ a loop's executor
     def view(self, k: int) -> FleetView:
+        """Object ``k``'s sub-team's executor, for its closed loop."""
         return FleetView(self, k)
 
     def submit(self, k: int, paths: np.ndarray, stop: Callable[[np.ndarray], bool] | None
@@ -471,30 +436,3 @@ class Fleet:
             "utilisation": {k: round(float(v.sum()) / total, 4)
                             for k, v in self.time_s.items()},
         }
-
-
-class FleetView:
-    """Object ``k``'s sub-team's executor (the ``Executor`` its closed loop drives)."""
-
-    def __init__(self, fleet: Fleet, k: int) -> None:
-        self.fleet = fleet
-        self.k = k
-        self.team = list(fleet.objects[k].team)
-
-    @property
-    def object_poses(self) -> np.ndarray:
-        return self.fleet.executor.object_poses
-
-    @property
-    def robot_positions(self) -> np.ndarray:
-        return np.asarray(self.fleet.executor.robot_positions, float)[self.team]
-
-    def announce(self, segment: np.ndarray, rest: np.ndarray) -> None:
-        self.fleet.announce(self.k, segment, rest)
-
-    def plan_failed(self) -> bool:
-        return self.fleet.plan_failed(self.k)
-
-    def execute(self, robot_paths: np.ndarray, record_every: int | None = None,
-                stop: Callable[[np.ndarray], bool] | None = None) -> FleetExecution:
-        return self.fleet.submit(self.k, np.asarray(robot_paths, float), stop)

@@ -1,0 +1,62 @@
+"""May a submitted segment start? The two tests of the fleet schedule's admission.
+
+- :func:`meets_standing`: its bodies as planned (``Segment.core``) overlap an object or a
+  robot that stands still (shrunk by ``regions.STATIC_SLACK``): the world changed since
+  the plan, so the segment is declined and its loop plans anew.
+- :func:`meets_moving`: it cannot run beside a running segment (``spacetime.compatible``),
+  or it would leave its object and robots deeper inside a higher-ranked object's claim
+  than they were (``CLAIM_AREA_SLACK`` of rounding): it waits for the next event.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import shapely
+
+from lamp.fleet.regions import standing
+from lamp.fleet.segments import Segment
+from lamp.fleet.spacetime import compatible
+from lamp.scene.model import Scene
+
+__all__ = ["CLAIM_AREA_SLACK", "meets_moving", "meets_standing"]
+
+#: A segment may end with this much more of its bodies' area (m^2) inside a higher claim
+#: than it started with (rounding of the footprints).
+CLAIM_AREA_SLACK = 1e-4
+
+
+def meets_standing(seg: Segment, scene: Scene, object_poses: np.ndarray,
+                   robot_positions: np.ndarray, still_objects: Sequence[int],
+                   moving_robots: set[int]) -> bool:
+    """Whether ``seg``'s planned bodies overlap an object of ``still_objects`` where it is
+    or a robot (not in ``seg``'s team nor in ``moving_robots``) where it stands."""
+    core = seg.core()
+    shapely.prepare(core)
+    r = scene.robot_radius
+    for k in still_objects:
+        if core.intersects(standing(scene.objects[k].shape, object_poses[k], r)):
+            return True
+    for i in range(scene.n_robots):
+        if i not in seg.team and i not in moving_robots and core.intersects(
+                standing(None, robot_positions[i], r)):
+            return True
+    return False
+
+
+def meets_moving(seg: Segment, running: Sequence[Segment],
+                 claims: Sequence[tuple[int, shapely.Geometry]]) -> str | None:
+    """Why ``seg`` must wait: ``"running k"`` (it cannot run beside object k's running
+    segment) or ``"claim k"`` (it would end deeper in object k's claim, ``claims`` being
+    the higher-ranked objects'); None when it need not."""
+    for other in running:
+        if not compatible(other, seg):
+            return f"running {other.index}"
+    ends = None
+    for k, region in claims:
+        ends = seg.ends() if ends is None else ends
+        before, after = (float(shapely.area(shapely.intersection(g, region))) for g in ends)
+        if after > before + CLAIM_AREA_SLACK:
+            return f"claim {k}"
+    return None
