@@ -7,7 +7,8 @@ world changed around its plan.
 robot a disk obstacle where it stands). A loop that ends with ``WORLD_CHANGED`` (its
 segment was declined, or it found no plan while others moved) is followed by a new one,
 within the object's segment limit and cumulative planning limit; the object's outcome
-merges every loop's (``runner.merged``: each new loop counts as a replan).
+merges every loop's (``runner.merged``: each new loop counts as a replan). The objects
+moving at once share ``FLEET_SPACE_CACHE_MB`` of robot-space cache.
 """
 
 from __future__ import annotations
@@ -29,7 +30,13 @@ from lamp.scene.model import Scene
 if TYPE_CHECKING:
     from lamp.fleet.coordinator import Fleet
 
-__all__ = ["object_main", "sub_scene"]
+__all__ = ["FLEET_SPACE_CACHE_MB", "MIN_SPACE_CACHE_MB", "object_main", "sub_scene"]
+
+#: Robot-space cache (MB) the objects moving at once share (``space_cache_mb`` each
+#: gets its part, at least ``MIN_SPACE_CACHE_MB``): memory stays near one sequential
+#: run's, whatever the number of sub-teams.
+FLEET_SPACE_CACHE_MB = 192.0
+MIN_SPACE_CACHE_MB = 16.0
 
 
 def sub_scene(scene: Scene, team: list[int], robot_positions: np.ndarray) -> Scene:
@@ -53,8 +60,11 @@ def object_main(runner: ClosedLoopRunner, observe: Callable[[SegmentEvent], None
         while True:
             used = sum(p.result.segments for p in parts)
             spent = sum(p.result.planning_time_s for p in parts)
+            moving = sum(o.status == "active" for o in fleet.objects)
             config = replace(cfg, max_segments=max(1, limit - used),
-                             planning_time_limit=max(1e-3, cfg.planning_time_limit - spent))
+                             planning_time_limit=max(1e-3, cfg.planning_time_limit - spent),
+                             space_cache_mb=max(MIN_SPACE_CACHE_MB, min(
+                                 cfg.space_cache_mb, FLEET_SPACE_CACHE_MB / max(1, moving))))
             while not fleet.objects[k].team:  # its robots went to another object
                 fleet.wait_for_team(k)
             view = fleet.view(k)

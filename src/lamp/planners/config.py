@@ -132,6 +132,11 @@ class PlannerConfig:
                                  "reading is not drift.", low=0.0)
     sensing_readings: int = param(4, "Readings of a settled object averaged after each "
                                   "segment when sensing_sigma > 0.", low=1)
+    #: Memory, not results: an evicted space is rebuilt the same. The fleet schedule
+    #: shares ``FLEET_SPACE_CACHE_MB`` among the objects moving at once.
+    space_cache_mb: float = param(96.0, "Robot configuration spaces (MB) one object's task "
+                                  "keeps cached; a speed / memory trade, the results do "
+                                  "not depend on it.", low=1.0)
 
     def __post_init__(self) -> None:
         check_fields(self)
@@ -150,7 +155,7 @@ class PlannerConfig:
 #: (``PlannerSpec.params``).
 LOOP_PARAMS = ("planning_time_limit", "max_segments", "drift_position", "drift_orientation",
                "stop_position", "stop_orientation", "long_push_length", "continuous_push_gap",
-               "sensing_sigma", "sensing_readings")
+               "sensing_sigma", "sensing_readings", "space_cache_mb")
 VERIFY_PARAMS = ("k", "max_budget", "gspi_attempts_per_budget", "gspi_time_limit",
                  "contact_tolerance")
 LATTICE_PARAMS = ("lattice_step", "n_headings", "robot_match_tolerance")

@@ -46,9 +46,8 @@ WINDOW_SNAP = 1.0
 WINDOW_MIN_SIDE = 4.0
 #: Largest window side (m) a failed approach may grow its window to.
 WINDOW_MAX_SIDE = 16.0
-#: Robot spaces kept per task: at most this many, and this many bytes in all.
+#: Robot spaces kept per task: at most this many (and ``PlannerConfig.space_cache_mb``).
 _SPACES_KEPT = 64
-_SPACES_BYTES = 96 * 2**20
 
 
 @dataclass
@@ -165,8 +164,9 @@ class ManipulationTask:
                                           window=window)
             self._spaces[key] = space
             total = sum(sp.nbytes for sp in self._spaces.values())
+            budget = self.config.space_cache_mb * 2**20
             while len(self._spaces) > 1 and (len(self._spaces) > _SPACES_KEPT
-                                             or total > _SPACES_BYTES):
+                                             or total > budget):
                 _, old = self._spaces.popitem(last=False)
                 total -= old.nbytes
         else:
