@@ -16,7 +16,7 @@ import lamp
 from lamp.cli import app
 from lamp.errors import InputError
 from lamp.pipeline import RunRequest
-from lamp.record.safety import check_recording
+from lamp.record.safety import check_recording, recorded_teams
 from lamp.scene import scene_from_dict
 
 #: Two rooms side by side, a box in each to push along its room, six robots: two
@@ -39,7 +39,7 @@ ROOMS = {
 def _safe(result) -> None:
     rec = result.recording
     report = check_recording(rec.scene_model(), rec.arrays["times"], rec.arrays["robots"],
-                             rec.arrays["objects"])
+                             rec.arrays["objects"], robot_team=recorded_teams(rec))
     assert report.ok, report.summary()
 
 
