@@ -32,7 +32,18 @@ class Execution(Protocol):
 
 
 class Executor(Protocol):
-    """Runs synchronised robot paths and reports the state they led to (``lamp.sim.Simulator``)."""
+    """Runs synchronised robot paths and reports the state they led to (``lamp.sim.Simulator``).
+
+    An executor shared with other moving objects (the fleet schedule's
+    ``lamp.fleet.view.FleetView``) may also offer, and the closed loop then uses:
+
+    - ``announce(segment, rest)``: told before each ``execute`` the object poses the
+      segment plans to pass ((P, 3)) and those the plan goes on to ((R, 3));
+    - ``plan_failed() -> bool``: called when the planner found no plan; True stops the
+      loop (``WORLD_CHANGED``) so that its runner plans anew once the world has changed;
+    - an ``Execution`` with ``declined = True``: the segment was not run (the world changed
+      around its plan); the loop stops with ``WORLD_CHANGED`` and counts nothing.
+    """
 
     @property
     def object_poses(self) -> np.ndarray:
