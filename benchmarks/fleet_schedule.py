@@ -74,13 +74,13 @@ def table(seq: Path, con: Path, peer: Path | None) -> str:
             name, str(scene.n_robots), str(len(scene.objects)),
             f"{scene.workspace[0]:.0f} x {scene.workspace[1]:.0f}",
             "-" if s is None else ("yes" if s["success"] else "no"),
-            _f(s and s["makespan_s"]), "yes" if c["success"] else "no", _f(c["makespan_s"]),
-            _f(ratio, ".2f"), _f(s and s["planning_time_per_segment_s"], ".3f"),
-            _f(c["planning_time_per_segment_s"], ".3f"),
+            _f(s and s.get("makespan_s")), "yes" if c["success"] else "no", _f(c.get("makespan_s")),
+            _f(ratio, ".2f"), _f(s and s.get("planning_time_per_segment_s"), ".3f"),
+            _f(c.get("planning_time_per_segment_s"), ".3f"),
             _f(fleet.get("utilisation", {}).get("working"), ".2f"),
             "-" if n_hits is None else str(n_hits),
             "-" if p is None else ("yes" if p["success"] else "no"),
-            _f(p and p["makespan_s"])]) + " |")
+            _f(p and p.get("makespan_s"))]) + " |")
     n = len(c_recs)
     seq_ok = sum(bool(r["success"]) for r in s_recs.values())
     summary = [
