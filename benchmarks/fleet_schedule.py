@@ -11,6 +11,9 @@ scenes with at least three sub-teams' worth of robots, and the collisions.
     lamp bench --suites fleet --planners lazy --schedule concurrent --record --out CON
     lamp bench --suites fleet --planners gco-var --schedule concurrent --record --out GCO
     python benchmarks/fleet_schedule.py SEQ CON [--peer GCO] [--out docs/results/fleet/table.md]
+
+``--seeds DIR`` instead summarises a folder run with several seeds (``--num-seeds 3``):
+success per seed and the collisions in all its recordings.
 """
 
 from __future__ import annotations
@@ -98,14 +101,42 @@ def table(seq: Path, con: Path, peer: Path | None) -> str:
     return "\n".join(rows + summary) + "\n"
 
 
+def seeds_summary(folder: Path) -> str:
+    """Success per seed and collisions over every recording of ``folder``."""
+    by_seed: dict[int, list[dict]] = {}
+    for line in (folder / "results.jsonl").read_text().splitlines():
+        if line.strip():
+            rec = json.loads(line)
+            by_seed.setdefault(int(rec["seed"]), []).append(rec)
+    lines = []
+    hits = checked = 0
+    for seed, recs in sorted(by_seed.items()):
+        ok = sum(bool(r["success"]) for r in recs)
+        failed = ", ".join(r["scene"] for r in recs if not r["success"]) or "none"
+        lines.append(f"- seed {seed}: {ok}/{len(recs)} ({100 * ok / len(recs):.0f}%); "
+                     f"failed: {failed}")
+        for r in recs:
+            n = _collisions(folder, r)
+            if n is not None:
+                checked, hits = checked + 1, hits + n
+    lines.append(f"- collisions found by the safety check: {hits} in {checked} recordings")
+    return "\n".join(lines) + "\n"
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("sequential", type=Path)
-    ap.add_argument("concurrent", type=Path)
+    ap.add_argument("sequential", type=Path, nargs="?")
+    ap.add_argument("concurrent", type=Path, nargs="?")
+    ap.add_argument("--seeds", type=Path, help="summarise this several-seed folder instead")
     ap.add_argument("--peer", type=Path, help="the peer's (GCo_var) concurrent folder")
     ap.add_argument("--out", type=Path, help="also write the table here")
     args = ap.parse_args()
-    text = table(args.sequential, args.concurrent, args.peer)
+    if args.seeds is not None:
+        text = seeds_summary(args.seeds)
+    elif args.sequential is None or args.concurrent is None:
+        ap.error("give SEQUENTIAL and CONCURRENT folders, or --seeds FOLDER")
+    else:
+        text = table(args.sequential, args.concurrent, args.peer)
     print(text, end="")
     if args.out:
         args.out.parent.mkdir(parents=True, exist_ok=True)
