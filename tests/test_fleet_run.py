@@ -135,3 +135,18 @@ def test_recording_keeps_the_sub_teams_and_the_viewer_shows_them(rooms_runs,
     assert payload(rec)["robot_team"] is not None
     assert "robot_team" not in sequential.recording.arrays
     assert payload(sequential.recording)["robot_team"] is None
+
+
+def test_bench_schedule_is_checked_and_recorded(tmp_path: Path) -> None:
+    bad = CliRunner().invoke(app, ["bench", "--suites", "fleet", "--planners", "lazy",
+                                   "--schedule", "parallel", "--dry-run",
+                                   "--out", str(tmp_path / "b")])
+    assert bad.exit_code == 2, bad.output
+    assert "--schedule" in bad.output and "sequential, concurrent" in bad.output
+    from lamp.bench.jobs import enumerate_jobs, load_suite
+
+    jobs = enumerate_jobs([load_suite("fleet")], ["lazy"], [0], scenes_per_suite=2,
+                          schedule="sequential")
+    assert [j.scene.schedule for j in jobs] == ["sequential", "sequential"]
+    kept = enumerate_jobs([load_suite("fleet")], ["lazy"], [0], scenes_per_suite=2)
+    assert [j.scene.schedule for j in kept] == ["concurrent", "concurrent"]
