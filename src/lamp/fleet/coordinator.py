@@ -82,7 +82,8 @@ class _Object:
 
 
 class Fleet:
-    """Moves a scene's objects concurrently on ``executor`` (see the module docstring).
+    """Moves a scene's objects concurrently on ``executor`` (see the module docstring): a
+    ``Simulator`` or an executor wrapping one, with its ``row_durations``.
 
     ``object_main(fleet, k)`` runs in object ``k``'s thread and returns its outcome; it
     drives its closed loops on ``fleet.view(k)``. ``timeline(trace, sim_time, team)``
@@ -99,20 +100,18 @@ class Fleet:
         self.timeline = timeline
         self.observers = list(observers)
         self.grid = float(row_step)
-        self.speed = float(scene.physics.robot_speed)
         #: rows a segment's robots hold at its end while others move: the settle time
-        self.hold_rows = math.ceil(SETTLE_TIME / (self.grid / self.speed) - 1e-9)
+        row_s = self.grid / float(scene.physics.robot_speed)
+        self.hold_rows = math.ceil(SETTLE_TIME / row_s - 1e-9)
         self.objects = [_Object(k) for k in range(len(scene.objects))]
         self.turns = Turns()
         self.started = 0  # objects started so far (their ranks)
         self.finished = 0  # objects placed or given up so far
-        self.rows = 0  # rows recorded so far
         self.clock = 0.0
         #: (simulated time, what, object, detail) of every decision: for the curious
         self.log: list[tuple[float, str, int, str]] = []
-        self.counts = {"admitted": 0, "declined": 0, "waited": 0, "forced": 0, "blocked": 0, "merged": 0,
-                       "grown": 0,
-                       "events": 0}
+        self.counts = dict.fromkeys(("admitted", "declined", "waited", "forced", "blocked",
+                                     "merged", "grown", "events"), 0)
         n = scene.n_robots
         #: robot-seconds by state (``_account``)
         self.time_s = {k: np.zeros(n) for k in ("working", "moving", "waiting", "idle")}
@@ -237,7 +236,6 @@ class Fleet:
                 self.counts["waited"] += 1
                 continue
             o.request, o.running = None, seg
-            seg.first_row = self.rows
             self.counts["admitted" if not force else "forced"] += 1
             if force:
                 return
@@ -310,9 +308,7 @@ class Fleet:
             return bool(fired)
 
         watched = any(s.stop is not None for s in running)
-        # when each row is reached (``Simulator.row_durations``, from where robots are now)
-        tau = np.cumsum(np.hypot(*np.moveaxis(np.diff(np.concatenate(
-            [now[:, None], paths], axis=1), axis=1), 2, 0)).max(axis=0))
+        tau = np.cumsum(self.executor.row_durations(paths))  # when each row is reached
         # objects come to rest while their robots hold the rows ``submit`` appended; the
         # simulator's own settle only when nobody moves on
         every = all(s.remaining == n_rows for s in running)
@@ -320,12 +316,11 @@ class Fleet:
         out = self.executor.execute(paths, record_every=TRACE_EVERY,
                                     stop=stop if watched else None, **settle)
         done = n_rows
-        if out.stopped_at is not None:  # the rows whose time had come (in metres at speed)
-            moved = out.stopped_at * float(out.sim_time) / max(1, int(out.steps)) * self.speed
-            done = int(np.clip(np.searchsorted(tau, moved + 1e-9, side="right"), 0, n_rows))
+        if out.stopped_at is not None:  # the rows whose time had come
+            stopped_s = out.stopped_at * float(out.sim_time) / max(1, int(out.steps))
+            done = int(np.clip(np.searchsorted(tau, stopped_s + 1e-9, side="right"), 0, n_rows))
         self._account(running, paths, float(out.sim_time))
         self.timeline(out.trace, float(out.sim_time), self.owner.copy())
-        self.rows += len(out.trace.times) - 1
         self.clock += float(out.sim_time)
         self.counts["events"] += 1
         left = np.asarray(getattr(out, "objects_left", np.zeros(len(self.objects), bool)))
@@ -407,8 +402,8 @@ class Fleet:
             self.owner[free] = k
             self.counts["grown"] += 1
             return True
-        others = [o for o in self.objects if o.index != k and o.status in ("active", "waiting")]
-        if not others:
+        if not any(other.index != k and other.status in ("active", "waiting")
+                   for other in self.objects):
             return False
         o.claim = None
         o.blocked_at = (self.finished, self.counts["events"])

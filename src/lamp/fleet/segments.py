@@ -13,7 +13,7 @@ paths in which every sub-team moves as it would alone, and no row steps further 
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 import shapely
@@ -61,11 +61,9 @@ class Segment:
     shape: Shape
     robot_radius: float
     cursor: int = 0
-    first_row: int = 0  # the recording's row at which it started
     sim_time: float = 0.0
     left: bool = False
     stopped_at: int | None = None
-    _space: tuple[int, shapely.Geometry] | None = field(default=None, repr=False)
 
     @property
     def remaining(self) -> int:
@@ -74,13 +72,6 @@ class Segment:
     @property
     def done(self) -> bool:
         return self.cursor >= self.rows.shape[1] or self.stopped_at is not None
-
-    def space(self) -> shapely.Geometry:
-        """The space it still sweeps, with margins (``regions.swept``); cached per cursor."""
-        if self._space is None or self._space[0] != self.cursor:
-            rows = self.rows[:, max(0, self.cursor - 1):]
-            self._space = (self.cursor, swept(self.shape, self.poses, rows, self.robot_radius))
-        return self._space[1]
 
     def rejoin(self, positions: np.ndarray, row_step: float) -> None:
         """Robots that stand more than ``REJOIN_GAP`` from the next row (nudged while they
@@ -91,7 +82,6 @@ class Segment:
         back = straight_moves(np.asarray(positions, float), self.rows[:, self.cursor], row_step)
         self.rows = np.concatenate([back, self.rows[:, self.cursor:]], axis=1)
         self.cursor = 0
-        self._space = None
 
     def ends(self) -> tuple[shapely.Geometry, shapely.Geometry]:
         """Where its bodies stand before and after it (with margins): its object at the

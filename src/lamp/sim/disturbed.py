@@ -99,6 +99,10 @@ class DisturbedExecutor:
         out = np.concatenate([paths[:, :1], paths[:, :1] + np.cumsum(moved, axis=1)], axis=1)
         return densify(out)
 
+    def row_durations(self, paths: np.ndarray) -> np.ndarray:
+        """The simulator's schedule of ``paths`` as given (``Simulator.row_durations``)."""
+        return self.sim.row_durations(paths)
+
     def _row_times(self, paths: np.ndarray) -> np.ndarray:
         """The simulated time each row is reached (the simulator's documented schedule)."""
         return self.sim.time + np.cumsum(self.sim.row_durations(paths))
