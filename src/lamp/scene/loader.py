@@ -37,6 +37,7 @@ mapping is an error (it would otherwise silently win). ``.json`` files are read 
 from __future__ import annotations
 
 import difflib
+import graphlib
 import json
 import math
 import re
@@ -312,7 +313,7 @@ def _after(ctx: Ctx, v: Any, field: str) -> tuple[int, ...]:
 
 def _check_order(ctx: Ctx, objects: tuple[SceneObject, ...]) -> None:
     """Every ``after`` index names another object, and the ``after`` lists have no cycle
-    (named by its objects, as a path ``a -> b -> a``)."""
+    (named by its objects, as a path ``a -> b -> a`` from its lowest index)."""
     n = len(objects)
     for i, o in enumerate(objects):
         for j, k in enumerate(o.after):
@@ -321,29 +322,15 @@ def _check_order(ctx: Ctx, objects: tuple[SceneObject, ...]) -> None:
                          f"0..{n - 1})")
             if k == i:
                 ctx.fail(f"objects[{i}].after[{j}]", "an object cannot wait for itself")
-    state = [0] * n  # 0 new, 1 on the path, 2 done
-    for root in range(n):
-        stack = [(root, iter(objects[root].after))]
-        path = [root]
-        if state[root]:
-            continue
-        state[root] = 1
-        while stack:
-            node, it = stack[-1]
-            nxt = next(it, None)
-            if nxt is None:
-                state[node] = 2
-                stack.pop()
-                path.pop()
-            elif state[nxt] == 1:
-                cycle = [*path[path.index(nxt):], nxt]
-                ctx.fail(f"objects[{cycle[0]}].after", "the after lists have a cycle: "
-                         + " -> ".join(f"objects[{k}]" for k in cycle)
-                         + " (each waits for the next to be placed)")
-            elif state[nxt] == 0:
-                state[nxt] = 1
-                stack.append((nxt, iter(objects[nxt].after)))
-                path.append(nxt)
+    try:
+        graphlib.TopologicalSorter({i: o.after for i, o in enumerate(objects)}).prepare()
+    except graphlib.CycleError as exc:
+        cycle = exc.args[1][::-1][:-1]  # each waits for the next (graphlib: the reverse)
+        first = cycle.index(min(cycle))
+        cycle = [*cycle[first:], *cycle[:first], cycle[first]]
+        ctx.fail(f"objects[{cycle[0]}].after", "the after lists have a cycle: "
+                 + " -> ".join(f"objects[{k}]" for k in cycle)
+                 + " (each waits for the next to be placed)")
 
 
 def _ranged(ctx: Ctx, v: Any, field: str, bounds: tuple[float, float]) -> float:
