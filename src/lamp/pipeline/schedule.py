@@ -10,7 +10,7 @@ closed loops.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 from lamp.contract.events import RunObserver, SegmentEvent
@@ -19,16 +19,22 @@ from lamp.contract.runner import Executor, ObjectOutcome, ObjectRunner
 __all__ = ["run_concurrently", "run_in_order"]
 
 
-def run_in_order(n_objects: int, executor: Executor, runner: ObjectRunner,
-                 observers: Sequence[RunObserver] = ()) -> list[ObjectOutcome]:
-    """Move objects ``0 .. n_objects - 1`` in order with ``runner`` on ``executor``;
-    returns their outcomes, in order. Every observer sees ``object_started``, the object's
-    segments and ``object_finished`` for each object, in that order."""
+def _segments_to(observers: Sequence[RunObserver]) -> Callable[[SegmentEvent], None]:
+    """The ``observe`` callback that hands each segment to every observer, in order."""
 
     def observe(event: SegmentEvent) -> None:
         for o in observers:
             o.segment(event)
 
+    return observe
+
+
+def run_in_order(n_objects: int, executor: Executor, runner: ObjectRunner,
+                 observers: Sequence[RunObserver] = ()) -> list[ObjectOutcome]:
+    """Move objects ``0 .. n_objects - 1`` in order with ``runner`` on ``executor``;
+    returns their outcomes, in order. Every observer sees ``object_started``, the object's
+    segments and ``object_finished`` for each object, in that order."""
+    observe = _segments_to(observers)
     outcomes = []
     for index in range(n_objects):
         for o in observers:
@@ -51,12 +57,7 @@ def run_concurrently(scene: Any, executor: Executor, runner: ObjectRunner, recor
     from lamp.fleet.objects import object_main
 
     watchers = [recorder, *observers]
-
-    def observe(event: SegmentEvent) -> None:
-        for o in watchers:
-            o.segment(event)
-
-    fleet = Fleet(scene, executor, object_main(runner, observe), recorder.follow, watchers,
-                  row_step=MAX_STEP)
+    fleet = Fleet(scene, executor, object_main(runner, _segments_to(watchers)),
+                  recorder.follow, watchers, row_step=MAX_STEP)
     outcomes = fleet.run()
     return outcomes, fleet.stats()
