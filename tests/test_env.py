@@ -241,7 +241,7 @@ def test_object_outside_the_workspace_ends_the_episode(open_scene):
 def test_shaping_rewards_telescope(seed, n_steps):
     """Without success or leaving, the return is the weighted change of distance, angle
     error and robot gap minus the time cost (a check of every reward term at once)."""
-    w = RewardWeights(progress=3.0, rotation=0.7, approach=1.3, time=0.05)
+    w = RewardWeights(progress=3.0, rotation=0.7, approach=1.3, time=0.05, behind=0.9)
     env = PushEnv("random-03", reward=w, position_tolerance=1e-3, orientation_tolerance=1e-3)
     _, info0 = env.reset()
     actions = np.random.default_rng(seed).uniform(-1, 1, (n_steps, 3, 2))
@@ -253,9 +253,17 @@ def test_shaping_rewards_telescope(seed, n_steps):
         w.progress * (info0["position_error"] - info["position_error"])
         + w.rotation * (info0["orientation_error"] - info["orientation_error"])
         + w.approach * (info0["robot_gap"] - info["robot_gap"])
+        + w.behind * (info["robots_behind"] - info0["robots_behind"])
         - w.time * n_steps
     )
     assert total == pytest.approx(expected, abs=1e-9)
+    # the behind term against its definition: mean cosine of (robot - object, object - goal)
+    core = env.unwrapped.core
+    pose, goal = core.object_poses()[0], core.goals[0]
+    back = (pose[:2] - goal[:2]) / np.linalg.norm(pose[:2] - goal[:2])
+    cos = [np.dot(p - pose[:2], back) / np.linalg.norm(p - pose[:2])
+           for p in core.robot_positions()]
+    assert info["robots_behind"] == pytest.approx(float(np.mean(cos)), abs=1e-9)
 
 
 def test_observation_is_in_the_common_frame(open_scene):

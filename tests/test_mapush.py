@@ -8,7 +8,6 @@ import math
 import numpy as np
 import pytest
 import torch
-from gymnasium import spaces
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from typer.testing import CliRunner
@@ -20,16 +19,20 @@ from lamp.env import PushEnv
 from lamp.geometry.object_space import ObjectSpace
 from lamp.pipeline.execute import execute
 from lamp.pipeline.request import RunRequest
+from lamp.rl.agents import agent_dim, agent_rows
+from lamp.rl.evaluate import evaluate
 from lamp.rl.policy import load_policy
-from lamp.rl.train import (
+from lamp.rl.tasks import (
+    ROBOT_SCATTER,
     SUBGOAL_TOLERANCE,
-    SubgoalEnv,
-    SubgoalSampler,
-    TrainSettings,
-    export_actor,
-    info_kwargs,
-    train,
+    Curriculum,
+    EpisodeSampler,
+    Stage,
+    mid_level_config,
+    task_stage,
 )
+from lamp.rl.train import TrainSettings, export_actor, info_kwargs, train
+from lamp.rl.vec import TeamVecEnv
 from lamp.scene import scene_from_dict
 
 SHORT = {
@@ -47,23 +50,37 @@ SHORT = {
 def ppo_env():
     from stable_baselines3 import PPO
 
-    env = SubgoalEnv(["maze-02", "random-02"], seed=0)
-    model = PPO("MlpPolicy", env, seed=0, device="cpu", n_steps=64, batch_size=32,
+    from lamp.suites.registry import resolve_scene
+
+    env = TeamVecEnv([resolve_scene("maze-02"), resolve_scene("random-02")], 2, 0,
+                     mid_level_config(), total_steps=1000)
+    model = PPO("MlpPolicy", env, seed=0, device="cpu", n_steps=16, batch_size=32,
                 policy_kwargs={"net_arch": [16, 16]})
     return model, env
 
 
+def _export(model, env, training=None):
+    return export_actor(model, info_kwargs(env.n_robots, env.observation_space.shape[0],
+                                           env.config, TrainSettings(hidden=(16, 16)),
+                                           training or {}))
+
+
 def test_exported_actor_matches_ppo_and_survives_a_file_round_trip(ppo_env, tmp_path):
     model, env = ppo_env
-    actor = export_actor(model, info_kwargs(env, TrainSettings(hidden=(16, 16)), {"x": 1}))
+    actor = _export(model, env, {"x": 1})
     actor.save(tmp_path / "p.pt")
     loaded = load_policy(tmp_path / "p.pt")
-    assert loaded.info == actor.info
+    assert loaded.info == actor.info and loaded.info.layout == "per-robot"
+    obs = env.reset()
     for _ in range(5):
-        obs, _ = env.reset()
         want, _ = model.predict(obs, deterministic=True)
-        got = loaded.act_flat(obs)
+        got = loaded.act_rows(obs)
         assert np.allclose(got, np.clip(want, -1, 1), atol=1e-6)
+        obs, *_ = env.step(want)
+    # the team action is every robot's own row through the shared actor
+    core = env.current[0]
+    team = loaded.act(None, core.observe())
+    assert np.allclose(team, loaded.act_rows(agent_rows(core.observe())))
     # the weights file holds tensors only: a weights-only load reads it
     tensors = torch.load(tmp_path / "p.pt", weights_only=True)
     assert set(tensors) == {f"layer{k}.{w}" for k in range(3) for w in ("weight", "bias")}
@@ -83,14 +100,15 @@ def test_bad_policy_files_are_clear_errors(tmp_path):
 
 
 @settings(max_examples=8, deadline=None)
-@given(st.integers(0, 2**31 - 1))
-def test_sampled_episodes_are_valid(seed):
+@given(st.integers(0, 2**31 - 1), st.sampled_from(["open", "maps"]))
+def test_sampled_episodes_are_valid(seed, task):
     """Object pose on its path and collision-free, subgoal farther than the tolerance,
-    robots free of obstacles and objects and of each other."""
+    robots free of obstacles and objects, of each other and within the scatter; open-space
+    episodes have no obstacles."""
     sampler = _SAMPLER
     sampler.rng = np.random.default_rng(seed)
-    k, opts = sampler.sample()
-    scene = sampler.scenes[k]
+    scene, opts = sampler.sample(task_stage(task))
+    assert (len(scene.obstacles) == 0) == (task == "open")
     pose, goal, robots = opts["object_poses"][0], opts["goal"], opts["robot_positions"]
     assert math.hypot(*(goal[:2] - pose[:2])) > SUBGOAL_TOLERANCE
     space = ObjectSpace.from_scene(scene, 0, opts["object_poses"], 0.0)
@@ -98,6 +116,8 @@ def test_sampled_episodes_are_valid(seed):
     r = scene.robot_radius
     d = np.hypot(*(robots[:, None] - robots[None]).transpose(2, 0, 1))
     assert (d[np.triu_indices(len(robots), 1)] >= 2 * r).all()
+    reach = scene.objects[0].shape.bounding_radius + r + ROBOT_SCATTER
+    assert (np.hypot(*(robots - pose[:2]).T) <= reach + 1e-9).all()
     from lamp.geometry.robot_space import RobotSpace
 
     free = RobotSpace.from_scene(scene, object_poses=opts["object_poses"]).is_free(robots,
@@ -105,28 +125,81 @@ def test_sampled_episodes_are_valid(seed):
     assert free.all()
 
 
-_SAMPLER = SubgoalSampler(["maze-02", "warehouse-02"], seed=0)
+def _scenes(*names):
+    from lamp.suites.registry import resolve_scene
+
+    return [resolve_scene(n) for n in names]
+
+
+_SAMPLER = EpisodeSampler(_scenes("maze-02", "warehouse-02"), seed=0)
+
+
+@given(st.floats(0, 1), st.floats(0, 1))
+def test_curriculum_only_gets_harder_and_ends_at_the_full_task(f, g):
+    c = Curriculum()
+    a, b = c.stage(min(f, g)), c.stage(max(f, g))
+    assert a.scatter <= b.scatter and a.maps_share <= b.maps_share
+    assert c.stage(0).scatter == c.scatter0 and c.stage(0).maps_share == 0
+    assert c.stage(1) == Stage(ROBOT_SCATTER, c.maps_share)
+
+
+@settings(max_examples=20, deadline=None)
+@given(st.permutations(range(3)), st.integers(0, 2**31 - 1))
+def test_agent_rows_follow_their_definition_and_robot_order(perm, seed):
+    rng = np.random.default_rng(seed)
+    obs = {"robots": rng.uniform(-1, 1, (3, 2)).astype(np.float32),
+           "object": rng.uniform(-1, 1, 2).astype(np.float32),
+           "goal": rng.uniform(-1, 1, 4).astype(np.float32),
+           "extent": rng.uniform(0, 1, 2).astype(np.float32),
+           "patch": rng.uniform(0, 1, (3, 5, 5)).astype(np.float32)}
+    rows = agent_rows(obs)
+    assert rows.shape == (3, agent_dim(3, 5))
+    for i in range(3):  # a plain reference of the documented layout
+        others = sorted((j for j in range(3) if j != i),
+                        key=lambda j: (np.hypot(*(obs["robots"][j] - obs["robots"][i])), j))
+        want = np.concatenate([obs["robots"][i]]
+                              + [obs["robots"][j] - obs["robots"][i] for j in others]
+                              + [obs["object"], obs["goal"], obs["extent"],
+                                 obs["patch"][i].ravel()])
+        assert np.allclose(rows[i], want)
+    p = list(perm)
+    moved = dict(obs, robots=obs["robots"][p], patch=obs["patch"][p])
+    assert np.allclose(agent_rows(moved), rows[p])
 
 
 def test_training_writes_a_loadable_policy_and_curve(tmp_path):
-    settings = TrainSettings(steps=64, eval_every=64, eval_episodes=1, hidden=(8,), rollout=64)
-    rec = train(tmp_path, settings, scenes=["maze-02"])
-    again = train(tmp_path / "again", settings, scenes=["maze-02"])
-    assert (tmp_path / "policy.pt").exists()
+    settings = TrainSettings(steps=96, eval_every=96, eval_episodes=2, hidden=(8,), n_sims=2,
+                             rollout=16, batch=32)
+    scenes = _scenes("maze-02", "random-02")
+    rec = train(tmp_path, settings, scenes=scenes)
+    again = train(tmp_path / "again", settings, scenes=scenes)
     a = torch.load(tmp_path / "policy.pt", weights_only=True)
     b = torch.load(tmp_path / "again" / "policy.pt", weights_only=True)
     assert all(torch.equal(a[k], b[k]) for k in a)  # same seed, same weights
-    assert again["curve"][-1]["success_rate"] == rec["curve"][-1]["success_rate"]
-    assert [c["steps"] for c in rec["curve"]][0] == 0 and rec["steps"] >= 64
-    assert all(0.0 <= c["success_rate"] <= 1.0 for c in rec["curve"])
+    untimed = [{k: v for k, v in c.items() if k != "wall_s"} for c in rec["curve"]]
+    assert untimed == [{k: v for k, v in c.items() if k != "wall_s"} for c in again["curve"]]
+    assert rec["steps"] >= 96 and rec["curve"][-1]["steps"] == rec["steps"]
+    assert all(0.0 <= c[k] <= 1.0 for c in rec["curve"] for k in ("success_open", "success_maps"))
     policy = load_policy(tmp_path / "policy.pt")
     assert policy.info.n_robots == 3 and policy.info.hidden == (8,)
+    assert policy.info.training["steps"] == rec["steps"]
     assert json.loads((tmp_path / "curve.json").read_text())["curve"] == rec["curve"]
+
+
+def test_evaluation_is_deterministic_and_counts_every_episode(tmp_path, ppo_env):
+    model, env = ppo_env
+    policy = _export(model, env)
+    scenes = _scenes("random-02", "maze-02")
+    a = evaluate(policy, "open", 3, seed=5, scenes=scenes)
+    assert a == evaluate(policy, "open", 3, seed=5, scenes=scenes)
+    assert a.episodes == 3 and round(a.success_rate * 3, 9) in (0, 1, 2, 3)
+    assert a.mean_distance >= 0 and 0 < a.mean_time <= mid_level_config().time_limit + 1e-9
+    assert a.success_rate < 1 or a.mean_distance <= SUBGOAL_TOLERANCE
 
 
 def _tiny_policy(tmp_path, ppo_env):
     model, env = ppo_env
-    actor = export_actor(model, info_kwargs(env, TrainSettings(hidden=(16, 16)), {}))
+    actor = _export(model, env)
     actor.save(tmp_path / "tiny.pt")
     return load_policy(tmp_path / "tiny.pt")
 
@@ -167,7 +240,6 @@ def test_scene_with_other_robot_count_is_rejected(tmp_path, ppo_env):
     env = PushEnv(scene)
     with pytest.raises(ValueError, match="has 4 robots, but the policy was trained for 3"):
         policy.check_env(4, env.observation_space, "scene 'x'")
-    assert spaces.flatdim(env.observation_space) != policy.info.obs_dim
 
 
 def test_cli_run_mapush_and_bad_robot_count(tmp_path, ppo_env, monkeypatch):
@@ -193,6 +265,24 @@ def test_cli_run_mapush_and_bad_robot_count(tmp_path, ppo_env, monkeypatch):
     assert res["planner"] == "mapush" and "mapush_success" in res["stats"]
     assert lamp.solve(scene_from_dict(SHORT), planner="mapush").to_dict()["objects"][0][
         "final_pose"] == res["objects"][0]["final_pose"]
+
+
+def test_rl_eval_cli_prints_success_and_refuses_bad_input(tmp_path, ppo_env, monkeypatch):
+    import lamp.rl.evaluate as ev
+
+    _tiny_policy(tmp_path, ppo_env)
+    monkeypatch.setattr(ev, "suite_scenes", lambda: _scenes("random-02"))
+    runner = CliRunner()
+    ok = runner.invoke(app, ["rl", "eval", str(tmp_path / "tiny.pt"), "--episodes", "2"])
+    assert ok.exit_code == 0, ok.output
+    assert "subgoal success: " in ok.output and "mean final distance" in ok.output
+    again = runner.invoke(app, ["rl", "eval", str(tmp_path / "tiny.pt"), "--episodes", "2"])
+    assert again.output == ok.output
+    for args, msg in ((["--task", "nope"], "--task 'nope'"), (["--episodes", "0"], "--episodes"),
+                      ([], "policy file not found")):
+        target = str(tmp_path / ("missing.pt" if not args else "tiny.pt"))
+        bad = runner.invoke(app, ["rl", "eval", target, *args])
+        assert bad.exit_code == 2 and msg in bad.output, bad.output
 
 
 def test_rl_train_cli_rejects_bad_settings(tmp_path):

@@ -5,7 +5,7 @@ High level (per subgoal): an obstacle-aware object path from the object's curren
 its goal on the object lattice (GCo's weighted A*, ``lamp.search.gco_lattice``, no
 inflation; a footprint shrunk by 2 cm as fallback next to obstacles), and the subgoal the
 *lookahead* distance along it (the goal itself once the rest of the path is shorter).
-Adaptive subgoal choice: the lookahead starts at ``lamp.rl.train.SUBGOAL_AHEAD``, halves
+Adaptive subgoal choice: the lookahead starts at ``lamp.rl.tasks.SUBGOAL_AHEAD``, halves
 (down to ``LOOKAHEAD_MIN``) after a subgoal the policy did not reach in its time and grows
 by half again (up to the start value) after one it reached.
 
@@ -126,7 +126,7 @@ def run_object(scene: Scene, index: int, sim, policy, record: MapushRecord,
     (see the module docstring)."""
     from lamp.env.core import PushConfig, PushCore
     from lamp.env.gym_env import observation_space
-    from lamp.rl.train import SUBGOAL_AHEAD, SUBGOAL_TIME, SUBGOAL_TOLERANCE, along, pose_at
+    from lamp.rl.tasks import SUBGOAL_AHEAD, SUBGOAL_TIME, SUBGOAL_TOLERANCE, along, pose_at
 
     settings = {k: v for k, v in policy.info.env_settings.items()
                 if k in ("frame_skip", "max_speed", "patch_size", "patch_spacing",

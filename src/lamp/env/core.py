@@ -36,11 +36,13 @@ that has succeeded is not checked again. The episode
 - is truncated when ``time_limit`` simulated seconds have passed.
 
 Reward of one step (weights in ``RewardWeights``, all non-negative):
-``progress * (d_prev - d) + rotation * (e_prev - e) + approach * (c_prev - c) - time
-+ success * [object succeeded] - leave * [object left the workspace]``, where d is the
-active object's distance to its goal position, e its wrapped orientation error (0 when
-orientation is ignored) and c the mean gap between the robots and the active object's
-bounding circle. When the active object changes, the differences restart from the new
+``progress * (d_prev - d) + rotation * (e_prev - e) + approach * (c_prev - c)
++ behind * (b - b_prev) - time + success * [object succeeded] - leave * [object left the
+workspace]``, where d is the active object's distance to its goal position, e its wrapped
+orientation error (0 when orientation is ignored), c the mean gap between the robots and
+the active object's bounding circle and b the mean over robots of the cosine between
+(robot - object) and (object - goal): 1 for a robot straight behind the object, where it
+pushes towards the goal (MAPush's "optimal contact behaviour" term, as a potential). When the active object changes, the differences restart from the new
 object's values, so the sum of the shaping terms over an episode telescopes.
 
 Determinism: the same scene, configuration, reset options and actions give bit-identical
@@ -85,6 +87,7 @@ class RewardWeights:
     time: float = 0.01  # cost of every step
     success: float = 10.0  # once per object that reaches its goal
     leave: float = 10.0  # once when an object leaves the workspace
+    behind: float = 0.0  # per unit rise of the mean "behind the object" cosine
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -288,7 +291,9 @@ class PushCore:
         self._patch_shift = pad
         self._prev = self._measures(poses)
 
-    def _measures(self, poses: np.ndarray) -> tuple[float, float, float]:
+    def _measures(self, poses: np.ndarray) -> tuple[float, float, float, float]:
+        """(distance, orientation error, mean robot gap, mean behind-cosine) of the active
+        object (see the module docstring)."""
         k = min(self.active, self.n_objects - 1)
         pose, goal = poses[k], self.goals[k]
         dist = math.hypot(pose[0] - goal[0], pose[1] - goal[1])
@@ -299,7 +304,11 @@ class PushCore:
         rob = self.robot_positions()
         gap = np.hypot(rob[:, 0] - pose[0], rob[:, 1] - pose[1]) - self._bounds[k]
         gap = float(np.maximum(gap - self.scene.robot_radius, 0.0).mean())
-        return dist, err, gap
+        back = np.array([pose[0] - goal[0], pose[1] - goal[1]]) / max(dist, 1e-9)
+        rel = rob - pose[:2]
+        cos = (rel @ back) / np.maximum(np.hypot(rel[:, 0], rel[:, 1]), 1e-9)
+        behind = float(cos.mean()) if dist > 1e-9 else 0.0
+        return dist, err, gap, behind
 
     # ------------------------------------------------------------------ step
     def check_action(self, action: ArrayLike, name: str = "action") -> np.ndarray:
@@ -338,11 +347,11 @@ class PushCore:
 
         poses = self.object_poses()
         w = self.config.reward
-        dist, err, gap = self._measures(poses)
-        d0, e0, g0 = self._prev
+        dist, err, gap, behind = self._measures(poses)
+        d0, e0, g0, b0 = self._prev
         reward = w.progress * (d0 - dist) + w.rotation * (e0 - err) + w.approach * (g0 - gap)
-        reward -= w.time
-        self._prev = (dist, err, gap)
+        reward += w.behind * (behind - b0) - w.time
+        self._prev = (dist, err, gap, behind)
         # outside at the start or the end of the step (see the module docstring)
         now = self._outside(poses)
         self.left = self._outside_now | now
@@ -366,6 +375,7 @@ class PushCore:
             "position_error": dist,
             "orientation_error": err,
             "robot_gap": gap,
+            "robots_behind": behind,
             "placed": placed,
             "left_workspace": bool(self.left.any()),
             "is_success": self.active >= self.n_objects,
@@ -402,12 +412,13 @@ class PushCore:
 
     def info(self) -> dict[str, Any]:
         """Info of the current state (what ``reset`` returns)."""
-        dist, err, gap = self._prev
+        dist, err, gap, behind = self._prev
         return {
             "object": min(self.active, self.n_objects - 1),
             "position_error": dist,
             "orientation_error": err,
             "robot_gap": gap,
+            "robots_behind": behind,
             "placed": -1,
             "left_workspace": bool(self.left.any()),
             "is_success": self.active >= self.n_objects,

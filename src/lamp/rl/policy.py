@@ -3,9 +3,15 @@
 A policy file is a pair: ``NAME.pt`` holds only tensors (the actor's weights, read with
 ``torch.load(weights_only=True)``, so loading runs no pickled code) and ``NAME.json`` its
 description (layer sizes, the environment settings it was trained with, the number of
-robots, the training run's figures). The actor maps the flattened ``lamp/Push-v0``
-observation (``gymnasium.spaces.flatten`` of its Dict space) through Linear + Tanh layers to
-the mean action; acting is deterministic (the mean, clipped to [-1, 1]).
+robots, the training run's figures, the input ``layout``). Two layouts:
+
+* ``"team"`` (the first policies): one actor maps the flattened ``lamp/Push-v0``
+  observation (``gymnasium.spaces.flatten`` of its Dict space) to all robots' commands;
+* ``"per-robot"`` (``lamp.rl.agents``): one actor, shared by every robot, maps each
+  robot's own row to that robot's command.
+
+Either way the layers are Linear + Tanh and acting is deterministic (the mean action,
+clipped to [-1, 1]).
 """
 
 from __future__ import annotations
@@ -21,8 +27,13 @@ import numpy as np
 import torch
 from gymnasium import spaces
 
+from lamp.rl.agents import LAYOUT as AGENT_LAYOUT
+from lamp.rl.agents import agent_dim, agent_rows
+
 #: The shipped policy (``lamp rl train`` writes the same pair of files).
 DEFAULT_POLICY = Path(str(resources.files("lamp.rl") / "checkpoints" / "mapush_policy.pt"))
+#: Input layouts (see the module docstring).
+LAYOUTS = ("team", AGENT_LAYOUT)
 
 
 @dataclass(frozen=True)
@@ -34,6 +45,11 @@ class PolicyInfo:
     hidden: tuple[int, ...]
     env_settings: dict[str, Any]
     training: dict[str, Any]
+    layout: str = "team"
+
+    def __post_init__(self) -> None:
+        if self.layout not in LAYOUTS:
+            raise ValueError(f"layout = {self.layout!r}: must be one of {', '.join(LAYOUTS)}")
 
 
 class PushPolicy:
@@ -64,7 +80,10 @@ class PushPolicy:
                 f"{what}: has {n_robots} robots, but the policy was trained for "
                 f"{self.info.n_robots}"
             )
-        dim = spaces.flatdim(obs_space)
+        if self.info.layout == AGENT_LAYOUT:
+            dim = agent_dim(n_robots, int(obs_space["patch"].shape[-1]))
+        else:
+            dim = spaces.flatdim(obs_space)
         if dim != self.info.obs_dim:
             raise ValueError(
                 f"{what}: observation has {dim} values, the policy takes {self.info.obs_dim} "
@@ -73,7 +92,17 @@ class PushPolicy:
 
     def act(self, obs_space: spaces.Dict, obs: dict[str, np.ndarray]) -> np.ndarray:
         """(N, 2) commands for one centralised observation."""
+        if self.info.layout == AGENT_LAYOUT:
+            return self.act_rows(agent_rows(obs))
         return self.act_flat(spaces.flatten(obs_space, obs))
+
+    def act_rows(self, rows: np.ndarray) -> np.ndarray:
+        """(M, 2) commands of a per-robot policy for M per-robot rows (any robots, any
+        simulations: the actor is shared)."""
+        x = torch.as_tensor(np.asarray(rows, np.float32))
+        with torch.no_grad():
+            a = self.net(x).numpy()
+        return np.clip(a, -1.0, 1.0)
 
     def act_flat(self, flat_obs: np.ndarray) -> np.ndarray:
         """(N, 2) commands for one flattened observation."""
@@ -98,7 +127,7 @@ class PushPolicy:
         write_json_atomic(path.with_suffix(".json"), {
             "format": "lamp-push-policy/1", "n_robots": info.n_robots, "obs_dim": info.obs_dim,
             "hidden": list(info.hidden), "env_settings": info.env_settings,
-            "training": info.training,
+            "training": info.training, "layout": info.layout,
         })
 
 
@@ -122,7 +151,7 @@ def load_policy(path: str | Path | None = None) -> PushPolicy:
         ]
         info = PolicyInfo(int(meta["n_robots"]), int(meta["obs_dim"]),
                           tuple(int(h) for h in meta["hidden"]), dict(meta["env_settings"]),
-                          dict(meta.get("training", {})))
+                          dict(meta.get("training", {})), str(meta.get("layout", "team")))
         return PushPolicy(layers, info)
     except (KeyError, TypeError, ValueError, RuntimeError, EOFError, OSError,
             pickle.UnpicklingError) as exc:
