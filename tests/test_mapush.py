@@ -186,6 +186,25 @@ def test_training_writes_a_loadable_policy_and_curve(tmp_path):
     assert json.loads((tmp_path / "curve.json").read_text())["curve"] == rec["curve"]
 
 
+def test_training_resumes_from_its_last_evaluation(tmp_path):
+    small = TrainSettings(steps=96, eval_every=96, eval_episodes=1, hidden=(8,), n_sims=2,
+                          rollout=16, batch=32)
+    scenes = _scenes("random-02")
+    first = train(tmp_path, small, scenes=scenes)
+    other = TrainSettings(**{**small.__dict__, "batch": 16})
+    with pytest.raises(ValueError, match="the run to resume has settings"):
+        train(tmp_path, other, scenes=scenes, resume=True)
+    longer = TrainSettings(**{**small.__dict__, "steps": 192})
+    more = train(tmp_path, longer, scenes=scenes, resume=True)
+    assert more["curve"][: len(first["curve"])] == first["curve"]
+    assert more["steps"] >= 192 and more["curve"][-1]["steps"] == more["steps"]
+    assert load_policy(tmp_path / "policy.pt").info.training["steps"] == more["steps"]
+    with pytest.raises(ValueError, match="nothing to resume"):
+        train(tmp_path / "empty", small, scenes=scenes, resume=True)
+    res = CliRunner().invoke(app, ["rl", "train", "--resume", "--out", str(tmp_path / "none")])
+    assert res.exit_code == 2 and "nothing to resume" in res.output
+
+
 def test_evaluation_is_deterministic_and_counts_every_episode(tmp_path, ppo_env):
     model, env = ppo_env
     policy = _export(model, env)

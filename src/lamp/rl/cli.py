@@ -36,8 +36,11 @@ def train_cmd(
     eval_episodes: int = typer.Option(50, help="Held-out episodes per evaluation and task."),
     sims: int = typer.Option(16, help="Simulations stepped together."),
     threads: int = typer.Option(1, help="Torch threads."),
+    resume: bool = typer.Option(False, "--resume", help="Continue the run in OUT from its "
+                                "last evaluation (same settings)."),
 ) -> None:
-    """Train with PPO; write OUT/policy.pt, OUT/policy.json, OUT/curve.json, OUT/curve.png."""
+    """Train with PPO; write OUT/policy.pt, OUT/policy.json, OUT/curve.json, OUT/curve.png
+    (and OUT/ppo.zip, the state --resume continues from)."""
     from lamp.cli_support import fail_input
 
     _threads(threads)
@@ -54,7 +57,12 @@ def train_cmd(
                    f"{e['wall_s']:>6.0f} s)  subgoal success open {e['success_open']:.0%}, "
                    f"maps {e['success_maps']:.0%}")
 
-    record = train(out, settings, progress=show)
+    try:
+        record = train(out, settings, progress=show, resume=resume)
+    except ValueError as exc:
+        if not resume:
+            raise
+        fail_input(str(exc))
     from lamp.rl.curve import plot_curve
 
     plot_curve(record, out / "curve.png")

@@ -95,9 +95,18 @@ def info_kwargs(n_robots: int, obs_dim: int, config, settings: TrainSettings,
     }
 
 
-def train(out: str | Path, settings: TrainSettings, scenes=None, progress=None) -> dict[str, Any]:
+def train(out: str | Path, settings: TrainSettings, scenes=None, progress=None,
+          resume: bool = False) -> dict[str, Any]:
     """Train, evaluate along the way and write the policy and curve into ``out``; returns
-    the curve record. ``progress(entry)`` is called with every curve entry."""
+    the curve record. ``progress(entry)`` is called with every curve entry.
+
+    ``resume``: continue the run in ``out`` from its last evaluation (the PPO state saved
+    there, ``ppo.zip``) instead of starting again; its settings must be these, except
+    ``steps``, which may grow (the curriculum then follows the new total). The step count
+    carries on; the episodes after the resumption are drawn from
+    a stream of their own (seeded by the seed and the step count), so a resumed run is
+    reproducible but not identical to an uninterrupted one. ValueError naming the file
+    when there is nothing to resume or the settings differ."""
     import torch
     from stable_baselines3 import PPO
     from stable_baselines3.common.callbacks import BaseCallback
@@ -111,18 +120,22 @@ def train(out: str | Path, settings: TrainSettings, scenes=None, progress=None) 
     env = TeamVecEnv(scenes, settings.n_sims, settings.seed, config, Curriculum(),
                      total_steps=settings.steps)
     n = env.n_robots
-    model = PPO("MlpPolicy", env, seed=settings.seed, device="cpu", n_steps=settings.rollout,
-                batch_size=settings.batch, n_epochs=settings.epochs,
-                learning_rate=settings.learning_rate, gamma=0.99, gae_lambda=0.95,
-                ent_coef=0.0, policy_kwargs={"net_arch": list(settings.hidden)}, verbose=0)
     out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    curve: list[dict[str, Any]] = []
     head = {"seed": settings.seed, "settings": {**asdict(settings), "hidden": list(settings.hidden)},
             "robots": n, "scenes": len(scenes), "subgoal_ahead": SUBGOAL_AHEAD,
             "subgoal_tolerance": SUBGOAL_TOLERANCE, "subgoal_time": SUBGOAL_TIME,
             "frame_skip": config.frame_skip, "reward": MID_REWARD}
-    t0 = time.perf_counter()
+    curve: list[dict[str, Any]] = []
+    if resume:
+        curve, model = _resumed(out, head, env)
+    else:
+        model = PPO("MlpPolicy", env, seed=settings.seed, device="cpu",
+                    n_steps=settings.rollout, batch_size=settings.batch,
+                    n_epochs=settings.epochs, learning_rate=settings.learning_rate, gamma=0.99,
+                    gae_lambda=0.95, ent_coef=0.0,
+                    policy_kwargs={"net_arch": list(settings.hidden)}, verbose=0)
+    out.mkdir(parents=True, exist_ok=True)
+    t0 = time.perf_counter() - (curve[-1]["wall_s"] if curve else 0.0)
     seen = [0]
 
     def actor(training: dict[str, Any]):
@@ -148,6 +161,7 @@ def train(out: str | Path, settings: TrainSettings, scenes=None, progress=None) 
                  "wall_s": round(time.perf_counter() - t0, 1)}
         curve.append(entry)
         policy.save(out / "policy.pt")  # an interrupted run keeps its latest policy
+        model.save(out / "ppo.zip")  # ... and can resume from here
         write_json_atomic(out / "curve.json", {**head, "partial": True, "curve": curve})
         if progress is not None:
             progress(entry)
@@ -155,7 +169,7 @@ def train(out: str | Path, settings: TrainSettings, scenes=None, progress=None) 
     class Every(BaseCallback):
         def __init__(self) -> None:
             super().__init__()
-            self.next = settings.eval_every
+            self.next = (model.num_timesteps // settings.eval_every + 1) * settings.eval_every
 
         def _on_step(self) -> bool:
             if self.num_timesteps >= self.next:
@@ -163,7 +177,9 @@ def train(out: str | Path, settings: TrainSettings, scenes=None, progress=None) 
                 self.next += settings.eval_every
             return True
 
-    model.learn(total_timesteps=settings.steps, callback=Every())
+    if model.num_timesteps < settings.steps:
+        model.learn(total_timesteps=settings.steps - model.num_timesteps, callback=Every(),
+                    reset_num_timesteps=not resume)
     if not curve or curve[-1]["steps"] != model.num_timesteps:
         run_eval(model.num_timesteps)
     wall = time.perf_counter() - t0
@@ -173,3 +189,30 @@ def train(out: str | Path, settings: TrainSettings, scenes=None, progress=None) 
     actor(final).save(out / "policy.pt")
     write_json_atomic(out / "curve.json", record)
     return record
+
+
+def _resumed(out: Path, head: dict[str, Any], env):
+    """(curve so far, PPO model) of the run in ``out`` (see ``train``'s ``resume``)."""
+    import json
+
+    import numpy as np
+    from stable_baselines3 import PPO
+
+    for name in ("curve.json", "ppo.zip"):
+        if not (out / name).is_file():
+            raise ValueError(f"{out / name}: not found; nothing to resume")
+    old = json.loads((out / "curve.json").read_text())
+    def same(key: str, value: Any) -> Any:  # the step budget may grow
+        if key == "settings" and isinstance(value, dict):
+            return {k: v for k, v in value.items() if k != "steps"}
+        return value
+
+    for key in ("seed", "settings", "robots", "scenes"):
+        if same(key, old.get(key)) != same(key, head[key]):
+            raise ValueError(f"{out / 'curve.json'}: the run to resume has {key} = "
+                             f"{old.get(key)!r}, this one {head[key]!r}")
+    model = PPO.load(out / "ppo.zip", env=env, device="cpu")
+    env.robot_steps = int(model.num_timesteps)
+    for e, sampler in enumerate(env.samplers):
+        sampler.rng = np.random.default_rng([head["seed"], e, env.robot_steps])
+    return list(old["curve"]), model
