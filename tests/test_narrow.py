@@ -18,7 +18,13 @@ from lamp.scene.model import Circle, Polygon, Rectangle
 from lamp.search.dstar_lite import DStarLite
 from lamp.search.lattice import ObjectLattice
 from lamp.search.narrow import aligned_headings, narrow_poses
-from lamp.search.refined_lattice import LINK_CLEARANCE, TIGHT_LINK_COST, RefinedLattice
+from lamp.search.refined_lattice import (
+    EDGE_OVERHEAD,
+    LINK_CLEARANCE,
+    TIGHT_LINK_COST,
+    TIGHT_TURN,
+    RefinedLattice,
+)
 from lamp.suites.corridor_layout import wall_polygons
 
 
@@ -85,6 +91,19 @@ def test_narrow_poses_are_free_centred_and_aligned(angle):
     assert dth.max() < math.radians(1.5)  # long side along the corridor
 
 
+def _refined_cost(refined, a, v, cost):
+    """(turns where tight, the cost the module promises, ``cost``) of the motion from pose
+    ``a`` to extra vertex ``v``: the metric plus ``EDGE_OVERHEAD``, plus ``TIGHT_LINK_COST``
+    when it turns by more than ``TIGHT_TURN`` where either end is tighter than
+    ``LINK_CLEARANCE``."""
+    b = refined.pose(v)
+    turn = abs(math.remainder(b[2] - a[2], 2 * math.pi))
+    tight = min(refined.exact.clearance(a), refined.exact.clearance(b)) < LINK_CLEARANCE
+    tight_turn = bool(tight and turn > TIGHT_TURN)
+    want = float(refined.distance(a, b)) + EDGE_OVERHEAD + (TIGHT_LINK_COST if tight_turn else 0.0)
+    return tight_turn, want, cost
+
+
 def test_refined_lattice_is_the_lattice_until_refined_then_passes_the_corridor():
     scene = scene_from_dict(corridor_scene(17.0, 0.02))
     space = ObjectSpace.from_scene(scene, 0)
@@ -107,6 +126,20 @@ def test_refined_lattice_is_the_lattice_until_refined_then_passes_the_corridor()
             if v < refined.n_nodes and refined.exact.clearance(refined.pose(u)) < LINK_CLEARANCE:
                 metric = float(refined.distance(refined.pose(u), refined.pose(v)))
                 assert c >= metric + TIGHT_LINK_COST  # turning in the passage costs more
+            if v >= refined.n_nodes:  # extra <-> extra: the tight-turn cost, exactly
+                _, want, _ = _refined_cost(refined, refined.pose(u), v, c)
+                assert c == pytest.approx(want, abs=1e-9)
+    # a start off the refined poses (turned 0.1 rad) joins them at the same costs
+    rng = np.random.default_rng(0)
+    extra = np.array([refined.pose(u) for u in range(refined.n_nodes,
+                                                     refined.n_nodes + refined.n_extra)])
+    costs = []
+    for k in rng.choice(len(extra), 40, replace=False):
+        a = extra[k] + np.array([0.0, 0.0, rng.choice([-0.1, 0.1])])
+        costs += [_refined_cost(refined, a, v, c) for v, c in refined.start_connections(a)
+                  if v >= refined.n_nodes]
+    assert sum(tight for tight, _, _ in costs) > 0 and sum(not t for t, _, _ in costs) > 0
+    assert all(c == pytest.approx(want, abs=1e-9) for _, want, c in costs)
     d = DStarLite(refined)
     d.initialize(refined.goal_node)
     path = d.plan_shortest_path(*join_lattice(refined, start))

@@ -13,6 +13,11 @@ edge to or from an extra vertex is valid when ``ObjectSpace.motions_free`` or, w
 grid's conservative answer is "not free", ``ExactSpace.motion_free`` says so; it costs the
 lattice's metric (``distance``) plus ``EDGE_OVERHEAD``, so the heuristic stays admissible
 and consistent, and chains of short refined edges are not preferred to the coarse lattice.
+Where the object is tight (less exact clearance than ``LINK_CLEARANCE`` at either end) an
+edge that joins the lattice, or turns the object by more than ``TIGHT_TURN``, costs
+``TIGHT_LINK_COST`` more (also from a start off the graph, ``start_connections``): the
+search turns the object in the open and enters a passage straight. Costs only grow, so
+the heuristic stays admissible.
 """
 
 from __future__ import annotations
@@ -40,6 +45,13 @@ MAX_LATTICE_LINKS = 8
 #: allowed, but the search prefers to do it in the open.
 LINK_CLEARANCE = 0.03
 TIGHT_LINK_COST = 1.0
+#: An edge between two extra vertices that turns the object by more than this (rad) while
+#: either end has less exact clearance than ``LINK_CLEARANCE`` also costs
+#: ``TIGHT_LINK_COST`` more: a turning push in a passage's mouth catches a corner and turns
+#: the object the wrong way (corridor-08, seed 1: planned 2.33 -> 2.51 rad at 9 mm of
+#: clearance, reached 2.06, then wedged), so the search turns in the open and enters
+#: straight (along the extension poses of ``narrow_poses``) whenever it can.
+TIGHT_TURN = 0.02
 
 
 class RefinedLattice(ObjectLattice):
@@ -51,6 +63,8 @@ class RefinedLattice(ObjectLattice):
         (default: one built on first use)."""
         super().__init__(*args, **kwargs)
         self._extra = np.zeros((0, 3))
+        #: exact clearance (m) of each extra vertex
+        self._clearance = np.zeros(0)
         self._adj: dict[Node, list[tuple[Node, float]]] = {}
         self._tree: cKDTree | None = None
         self._exact = exact
@@ -131,7 +145,9 @@ class RefinedLattice(ObjectLattice):
         ok = np.asarray(self.in_model_range(p, targets), dtype=bool).reshape(-1)
         idx = [i for i, k in zip(idx, ok, strict=True) if k]
         links = self._free_links(p, [self.n_nodes + i for i in idx], tolerance)
-        out.extend((v, float(self.distance(p, self.pose(v))) + EDGE_OVERHEAD) for v in links)
+        start_tight = float(self.exact.clearance(p)) < LINK_CLEARANCE if links else False
+        out.extend((v, float(self.distance(p, self.pose(v))) + EDGE_OVERHEAD
+                    + self._turn_cost(p, v, start_tight)) for v in links)
         out.sort(key=lambda r: r[1])
         return out
 
@@ -180,6 +196,8 @@ class RefinedLattice(ObjectLattice):
             return 0
         first = self.n_nodes + len(self._extra)
         self._extra = np.concatenate([self._extra, new])
+        self._clearance = np.concatenate(
+            [self._clearance, [float(self.exact.clearance(q)) for q in new]])
         self._tree = cKDTree(self._extra[:, :2])
         reach = self.max_translation * math.sqrt(2.0)
         for i in range(len(new)):
@@ -189,15 +207,16 @@ class RefinedLattice(ObjectLattice):
             cand = [self.n_nodes + int(j) for j in self._tree.query_ball_point(q[:2], reach)
                     if self.n_nodes + int(j) != u]
             cand = [v for v in cand if v < first or v > u]
+            tight = self._clearance[u - self.n_nodes] < LINK_CLEARANCE
             if cand:
                 ok = np.asarray(self.in_model_range(q, self.poses(cand)), dtype=bool).reshape(-1)
                 for v in self._free_links(q, [v for v, k in zip(cand, ok, strict=True) if k]):
-                    self._link(u, v)
+                    self._link(u, v, self._turn_cost(q, v, tight))
             # extra <-> lattice; where the object is still in the passage such a link costs
             # TIGHT_LINK_COST more, so that it turns onto (or off) the lattice in the open
             # and enters the passage straight whenever it can
             nodes = self._candidates(q, reach, math.ceil(self.max_rotation / self.dtheta))
-            extra_cost = 0.0 if self.exact.clearance(q) >= LINK_CLEARANCE else TIGHT_LINK_COST
+            extra_cost = 0.0 if not tight else TIGHT_LINK_COST
             if len(nodes):
                 nodes = nodes[np.asarray(self.in_model_range(q, super().poses(nodes)), bool)]
                 self._ensure_nodes(nodes)
@@ -206,6 +225,15 @@ class RefinedLattice(ObjectLattice):
                 for v in self._free_links(q, [int(n) for n in nodes[order][:MAX_LATTICE_LINKS]]):
                     self._link(u, v, extra_cost)
         return len(new)
+
+    def _turn_cost(self, q: np.ndarray, v: Node, q_tight: bool) -> float:
+        """``TIGHT_LINK_COST`` for a motion from pose ``q`` to extra vertex ``v`` that turns
+        by more than ``TIGHT_TURN`` where either end is tight (``q_tight``, or ``v``'s
+        clearance below ``LINK_CLEARANCE``), else 0."""
+        i = int(v) - self.n_nodes
+        turn = abs(float(se2.wrap_angle(self._extra[i][2] - q[2])))
+        pinched = q_tight or self._clearance[i] < LINK_CLEARANCE
+        return TIGHT_LINK_COST if pinched and turn > TIGHT_TURN else 0.0
 
     def _circle_headings(self, around: np.ndarray) -> np.ndarray:
         """The headings a circle's passage poses take (any heading fits a circle): the
