@@ -10,27 +10,17 @@ Run: ``python scripts/mapush_criteria.py OUT/results.jsonl``
 
 from __future__ import annotations
 
-import json
 import sys
 from collections import defaultdict
 
-
-def newest_runs(path: str) -> dict[tuple[str, str, int], dict]:
-    """The newest ``ok`` record of each mapush job (suite, scene, seed): a results file
-    that ``--rerun mapush`` appended to holds the older runs too."""
-    runs: dict[tuple[str, str, int], dict] = {}
-    with open(path, encoding="utf-8") as f:
-        for line in f:
-            rec = json.loads(line)
-            if rec.get("planner") != "mapush" or rec.get("status") != "ok":
-                continue
-            runs[(rec.get("suite", "?"), rec["scene"], rec.get("seed", 0))] = rec
-    return runs
+from lamp.bench.jobs import latest_by_key, read_records
 
 
 def main(path: str) -> None:
     rows: dict[str, list[tuple[int, int, int]]] = defaultdict(list)
-    for (suite, _, _), rec in newest_runs(path).items():
+    for (suite, _, planner, _), rec in latest_by_key(read_records(path)).items():
+        if planner != "mapush" or rec.get("status") != "ok":
+            continue
         per_object = rec.get("stats", {}).get("mapush_objects", [])
         loose = sum(bool(o.get("mapush_success")) for o in per_object)
         strict = sum(bool(o["success"]) for o in rec["objects"])

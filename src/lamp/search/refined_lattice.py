@@ -45,8 +45,9 @@ MAX_LATTICE_LINKS = 8
 #: allowed, but the search prefers to do it in the open.
 LINK_CLEARANCE = 0.03
 TIGHT_LINK_COST = 1.0
-#: An edge between two extra vertices that turns the object by more than this (rad) while
-#: either end has less exact clearance than ``LINK_CLEARANCE`` also costs
+#: An edge to an extra vertex (from another, or from a start off the graph) that turns the
+#: object by more than this (rad) while either end has less exact clearance than
+#: ``LINK_CLEARANCE`` also costs
 #: ``TIGHT_LINK_COST`` more: a turning push in a passage's mouth catches a corner and turns
 #: the object the wrong way (corridor-08, seed 1: planned 2.33 -> 2.51 rad at 9 mm of
 #: clearance, reached 2.06, then wedged), so the search turns in the open and enters
@@ -216,7 +217,7 @@ class RefinedLattice(ObjectLattice):
             # TIGHT_LINK_COST more, so that it turns onto (or off) the lattice in the open
             # and enters the passage straight whenever it can
             nodes = self._candidates(q, reach, math.ceil(self.max_rotation / self.dtheta))
-            extra_cost = 0.0 if not tight else TIGHT_LINK_COST
+            extra_cost = TIGHT_LINK_COST if tight else 0.0
             if len(nodes):
                 nodes = nodes[np.asarray(self.in_model_range(q, super().poses(nodes)), bool)]
                 self._ensure_nodes(nodes)
