@@ -84,6 +84,38 @@ def test_take_long_push_stops_at_the_length_and_the_formation():
     assert take_long_push(chain[5], pending, 0.02, 5.0) == [chain[5]]
 
 
+def _turns(n: int, dtheta: float) -> list[Transition]:
+    """``n`` turns in place by ``dtheta`` each, two robots on the box's corners."""
+    out, q, r = [], np.array([0.75, 1.0, 0.0]), ROBOTS.copy()
+    for _ in range(n):
+        q_to = q + np.array([0.0, 0.0, dtheta])
+        c, s = np.cos(dtheta), np.sin(dtheta)
+        ends = r.copy()
+        ends[:2] = q[:2] + (r[:2] - q[:2]) @ np.array([[c, s], [-s, c]])
+        manip = straight_moves(r, ends)
+        t = Transition(q, q_to, r[:2].copy(), se2.inverse_transform_points(q, manip[:2]),
+                       straight_moves(r, r), manip, edge=(0, 1))
+        out.append(t)
+        q, r = t.q_to, t.robot_end
+    return out
+
+
+@settings(max_examples=25, deadline=None)
+@given(n=st.integers(1, 6), dtheta=st.floats(-0.8, 0.8).filter(lambda v: abs(v) > 1e-3),
+       max_turn=st.floats(0.0, 2.0))
+def test_take_long_push_bounds_the_summed_turn(n, dtheta, max_turn):
+    """A turn in place moves the origin by nothing: the length bound alone would take
+    every turn; the turn bound takes the longest head whose summed |turn| fits (at least
+    the first)."""
+    chain = _turns(n, dtheta)
+    assert all(continues(a, b, 0.02) for a, b in zip(chain, chain[1:]))
+    pending = chain[1:]
+    taken = take_long_push(chain[0], pending, 0.02, 1.0, max_turn)
+    fits = max(1, min(n, int((max_turn + 1e-9) // abs(dtheta))))
+    assert len(taken) == fits and len(pending) == n - fits
+    assert len(take_long_push(chain[0], chain[1:], 0.02, 1.0)) == n  # no turn bound
+
+
 def test_long_pushes_mean_fewer_segments_on_a_suite_scene():
     scene = next(iter(suite_scenes("random")))
     whole = solve(scene, "lazy", 0, model="geometric")

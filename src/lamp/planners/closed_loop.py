@@ -250,7 +250,7 @@ class ClosedLoop:
         chain = [adapted]
         if cfg.long_push_length > 0:  # one approach, then every push that continues it
             chain = take_long_push(adapted, st.pending, cfg.continuous_push_gap,
-                                   cfg.long_push_length)
+                                   cfg.long_push_length, cfg.long_push_turn)
             adapted = merge(chain)
         paths = adapted.robot_paths
         announce = getattr(self.executor, "announce", None)

@@ -82,6 +82,12 @@ class PlannerConfig:
     #: ``long_push_length`` m of planned object motion; 0 executes every transition alone.
     long_push_length: float = param(1.0, "Planned object motion executed as one long push "
                                     "at most (m); 0: every transition alone.", low=0.0)
+    #: A bound on the turn left unobserved: a turn in place moves the origin by nothing, so
+    #: ``long_push_length`` alone let three 0.39 rad turns run as one push. 0.4 rad is one
+    #: heading bin of the default lattice (0.393 rad) plus slack: a long push turns the
+    #: object by at most one bin.
+    long_push_turn: float = param(0.4, "Planned object turn executed as one long push at "
+                                  "most (rad, summed over its parts).", low=0.0)
     continuous_push_gap: float = param(0.02, "Approach moves up to this (m) continue a long "
                                        "push.", low=0.0)
     lattice_step: float = param(0.1, "Object lattice translation step (m).", low=0.0,
@@ -154,7 +160,8 @@ class PlannerConfig:
 #: Which parameters each consumer reads; a planner declares the union of its groups
 #: (``PlannerSpec.params``).
 LOOP_PARAMS = ("planning_time_limit", "max_segments", "drift_position", "drift_orientation",
-               "stop_position", "stop_orientation", "long_push_length", "continuous_push_gap",
+               "stop_position", "stop_orientation", "long_push_length", "long_push_turn",
+               "continuous_push_gap",
                "sensing_sigma", "sensing_readings", "space_cache_mb")
 VERIFY_PARAMS = ("k", "max_budget", "gspi_attempts_per_budget", "gspi_time_limit",
                  "contact_tolerance")

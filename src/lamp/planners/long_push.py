@@ -8,7 +8,11 @@ same robots stay at the same contacts, up to centimetres), executing them one by
 adds a stop, a settle and a new "segment" between two pushes that are really one. The
 closed loop therefore executes such a run of transitions as a single segment: one
 approach, then the pushes back to back, up to ``PlannerConfig.long_push_length`` metres of
-planned object motion (a bound on how long the loop goes without observing drift).
+planned object motion and ``PlannerConfig.long_push_turn`` radians of planned turn (bounds
+on how long the loop goes without observing drift: a pure rotation moves the object's
+origin by nothing, so without the second bound a turn in place of any size ran unobserved;
+corridor-01, seed 2: three 0.39 rad turns in a bay ran as one push, the box slid instead
+of turning, and the object was lost).
 
 :func:`merge` builds the one transition that stands for the run: its approach is the
 first one's, its push the concatenation of the rest (trivial approaches included, so the
@@ -61,17 +65,25 @@ def merge(chain: list[Transition]) -> Transition:
                       manip, first.edge)
 
 
+def _motion(trans: Transition) -> tuple[float, float]:
+    """(distance the object's origin travels, |turn|) of ``trans``'s planned motion."""
+    a, b = np.asarray(trans.q_from, float), np.asarray(trans.q_to, float)
+    return float(np.hypot(*(b[:2] - a[:2]))), abs(float(se2.wrap_angle(b[2] - a[2])))
+
+
 def take_long_push(first: Transition, pending: list[Transition], max_gap: float,
-                   max_length: float) -> list[Transition]:
+                   max_length: float, max_turn: float = float("inf")) -> list[Transition]:
     """``first`` and the transitions at the head of ``pending`` that continue it, while the
-    planned object motion stays within ``max_length`` (they are removed from ``pending``)."""
+    planned object motion stays within ``max_length`` (m, summed) and its turn within
+    ``max_turn`` (rad, summed |turn| of the parts); they are removed from ``pending``.
+    ``first`` is always taken, whatever its own length and turn."""
     chain = [first]
-    length = float(np.hypot(*(np.asarray(first.q_to[:2]) - np.asarray(first.q_from[:2]))))
+    length, turn = _motion(first)
     while pending and continues(chain[-1], pending[0], max_gap):
-        step = float(np.hypot(*(np.asarray(pending[0].q_to[:2])
-                                - np.asarray(pending[0].q_from[:2]))))
-        if length + step > max_length + 1e-9:
+        step, dturn = _motion(pending[0])
+        if length + step > max_length + 1e-9 or turn + dturn > max_turn + 1e-9:
             break
         length += step
+        turn += dturn
         chain.append(pending.pop(0))
     return chain
