@@ -108,7 +108,7 @@ def test_take_long_push_bounds_the_summed_turn(n, dtheta, max_turn):
     every turn; the turn bound takes the longest head whose summed |turn| fits (at least
     the first)."""
     chain = _turns(n, dtheta)
-    assert all(continues(a, b, 0.02) for a, b in zip(chain, chain[1:]))
+    assert all(continues(a, b, 0.02) for a, b in zip(chain, chain[1:], strict=False))
     pending = chain[1:]
     taken = take_long_push(chain[0], pending, 0.02, 1.0, max_turn)
     fits = max(1, min(n, int((max_turn + 1e-9) // abs(dtheta))))

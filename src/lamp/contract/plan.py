@@ -31,6 +31,9 @@ class PlanStatus(str, Enum):
     START_BLOCKED = "start_blocked"
     #: No object route to the goal remains (every route is blocked or was exhausted).
     NO_PATH = "no_path"
+    #: Proven before any search: no gap lets the object through to its goal
+    #: (``lamp.search.connectivity``).
+    SEPARATED = "separated"
     #: A deterministic count ran out (plan iterations, Verify calls, search expansions):
     #: ``Plan.limit`` names it.
     BUDGET_EXHAUSTED = "budget_exhausted"
@@ -48,6 +51,7 @@ _REASONS = {
     PlanStatus.SOLVED: "",
     PlanStatus.START_BLOCKED: "no plan found: the object's pose cannot join the lattice",
     PlanStatus.NO_PATH: "no plan found",
+    PlanStatus.SEPARATED: "no plan found: no gap lets the object through to its goal",
     PlanStatus.BUDGET_EXHAUSTED: "no plan found: a search budget exhausted",
     PlanStatus.TIME_LIMIT: "planning time limit",
     PlanStatus.PUSH_UNREACHABLE: "robots cannot reach the push",

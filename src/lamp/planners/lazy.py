@@ -13,6 +13,11 @@ Departure: when re-routing a cached push fails, the paper only raises the edge's
 same unreachable push again (in a tight spot, until the plan iterations run out). Here the
 entry is dropped as well: the next plan through the pose verifies the motion afresh (with
 the next attempt's model samples, ``failures`` counts them) or goes another way.
+
+Departure: a goal that no gap leads to (``lamp.search.connectivity``: the disk inscribed in
+the footprint cannot get there in the plane) ends ``plan`` at once with ``SEPARATED``,
+where the paper's search would exhaust the lattice to prove it (and ours then refine it
+over ever larger windows): a fleet object walled in by others waits cheaply.
 """
 
 from __future__ import annotations
@@ -31,6 +36,7 @@ from lamp.planners.config import PlannerConfig
 from lamp.planners.recovery import recovery_push
 from lamp.planners.task import ManipulationTask
 from lamp.planners.verifier import Verifier
+from lamp.search.connectivity import PlaneConnectivity
 from lamp.search.dstar_lite import DStarLite
 from lamp.search.lattice import ObjectLattice
 from lamp.search.refined_lattice import RefinedLattice
@@ -101,6 +107,7 @@ class LazyPlanner:
         self.lattice = lattice
         self.verifier = verifier
         self.config = config
+        self._plane: PlaneConnectivity | None = None
         self.clear()
 
     @classmethod
@@ -117,6 +124,15 @@ class LazyPlanner:
         self.penalised: list[tuple[np.ndarray, np.ndarray]] = []
         self.recoveries = 0
         self.calls = 0
+
+    @property
+    def plane(self) -> PlaneConnectivity:
+        """The plane's verdict on whether the object can reach its goal at all
+        (``lamp.search.connectivity``), for the footprint shrunk as far as a tolerant
+        join shrinks it; built on first use."""
+        if self._plane is None:
+            self._plane = PlaneConnectivity(self.lattice.space, slack=max(JOIN_TOLERANCES))
+        return self._plane
 
     def _recover(self, q_O: np.ndarray, q_R: np.ndarray, failed: Plan) -> Plan:
         """Departure: before giving up (or after ``RECOVER_AFTER`` failed iterations), when
@@ -182,6 +198,11 @@ class LazyPlanner:
         self.calls += 1
         goal = self.lattice.goal_node
         stats = self.verifier.stats
+        # departure: a goal no gap leads to is refused before any search (an exhaustive
+        # search, then refinement over ever larger windows, would prove it at length)
+        if self.plane.separated(q_O_now, self.lattice.pose(goal)):
+            return self._recover(q_O_now, q_R_now, Plan.failed(PlanStatus.SEPARATED,
+                                                               self.penalised))
         verify_cap = stats.verify_calls + cfg.max_verify_calls
         for iteration in range(cfg.max_plan_iterations):
             if iteration == RECOVER_AFTER and self.calls > 1:  # a replan that keeps failing
