@@ -150,3 +150,31 @@ def test_bench_schedule_is_checked_and_recorded(tmp_path: Path) -> None:
     assert [j.scene.schedule for j in jobs] == ["sequential", "sequential"]
     kept = enumerate_jobs([load_suite("fleet")], ["lazy"], [0], scenes_per_suite=2)
     assert [j.scene.schedule for j in kept] == ["concurrent", "concurrent"]
+
+
+def test_a_failed_robot_leaves_its_sub_team_and_a_free_one_takes_its_place() -> None:
+    """Concurrent schedule, robot 1 (object 0's sub-team) fails at 2 s: it holds where it
+    stopped, never pushes again, the spare robot 6 joins object 0's sub-team, and both
+    objects are placed safely."""
+    import numpy as np
+
+    from lamp.contract.disturb import Disturbances
+
+    d = copy.deepcopy(ROOMS)
+    d["robots"]["starts"].append([0.2, 0.2])  # robot 6: a spare, in no sub-team at first
+    scene = scene_from_dict(d)
+    res = lamp.solve(scene, "lazy", 0, disturbances=Disturbances(robot_failures=((1, 2.0),)))
+    out = res.to_dict()
+    assert res.success, [o.failure_reason for o in res.objects]
+    _safe(res)
+    fleet = out["stats"]["fleet"]
+    assert set(fleet["robots_failed_at_s"]) == {"1"}
+    assert set(out["stats"]["failed_robots"]) == {"1"}
+    rec = res.recording.arrays
+    team = recorded_teams(res.recording)
+    after = rec["times"] > fleet["robots_failed_at_s"]["1"] + 1e-6
+    assert np.all(team[after, 1] == -1)  # in no sub-team once it failed
+    assert np.any(team[~after, 1] == 0) and np.any(team[after, 6] == 0)  # the spare joined
+    place = np.array(out["stats"]["failed_robots"]["1"])
+    later = rec["robots"][rec["times"] > 2.5, 1]
+    assert np.all(np.linalg.norm(later - place, axis=1) < 0.02)

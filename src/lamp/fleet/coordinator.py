@@ -30,6 +30,10 @@ Design (``docs/fleet.md``):
   waiting segment is admitted against standing bodies only (counted as ``forced``), and
   planners waiting on a change plan in the world as it is (like the sequential schedule).
 
+- **Failures.** A robot that fails (``executor.failed``) leaves its sub-team for good
+  (``FAILED``), replaced by the nearest free robot when there is one; its team's loop ends
+  after its segment (``team_changed``) and plans anew.
+
 Robots are allocated by ``lamp.fleet.teams``. The recorder follows the shared clock.
 """
 
@@ -56,6 +60,9 @@ from lamp.sim.simulator import SETTLE_TIME, Simulator
 
 __all__ = ["BLOCKED_WAKE_EVENTS", "Fleet"]
 
+#: ``Fleet.owner`` of a robot in no sub-team, and of one that failed (it stays where it
+#: stopped, an obstacle to every plan, and is never given to a team again).
+FREE, FAILED = -1, -2
 #: A planner that found no plan while others moved plans again after this many events
 #: (segments ending) at the latest, sooner when an object is placed or given up.
 BLOCKED_WAKE_EVENTS = 6
@@ -115,7 +122,9 @@ class Fleet:
         n = scene.n_robots
         #: robot-seconds by state (``_account``)
         self.time_s = {k: np.zeros(n) for k in ("working", "moving", "waiting", "idle")}
-        self.owner = np.full(n, -1)  # robot -> object of its team (-1: free)
+        self.owner = np.full(n, FREE)  # robot -> object of its team (FREE, FAILED)
+        #: robots that failed (``executor.failed``: a ``DisturbedExecutor``'s), and when
+        self.failed_at: dict[int, float] = {}
 
     # ------------------------------------------------------------------ the schedule
     def run(self) -> list[ObjectOutcome]:
@@ -155,7 +164,7 @@ class Fleet:
                     ready.append(o.index)
         if not ready:
             return
-        free = [i for i in range(self.scene.n_robots) if self.owner[i] < 0]
+        free = self._free()
         active = any(o.status == "active" and o.team for o in self.objects)
         teams = allocate(ready, free, self.executor.robot_positions,
                          self.executor.object_poses, active)
@@ -179,7 +188,7 @@ class Fleet:
         if o.status == "placed":
             o.placed_at_s = self.clock
         o.claim = None
-        self.owner[o.team] = -1
+        self.owner[o.team] = FREE
         self.finished += 1
         for obs in self.observers:
             obs.object_finished(k, len(self.objects), o.outcome.result)
@@ -271,7 +280,7 @@ class Fleet:
         if blocked:
             first = blocked[0]
             pool = sorted({i for o in blocked for i in o.team}
-                          | {i for i in range(self.scene.n_robots) if self.owner[i] < 0})
+                          | set(self._free()))
             merge = len(pool) > len(first.team)
             for o in blocked:
                 o.blocked_at, o.wake, o.ready = None, merge, True
@@ -320,8 +329,9 @@ class Fleet:
             stopped_s = out.stopped_at * float(out.sim_time) / max(1, int(out.steps))
             done = int(np.clip(np.searchsorted(tau, stopped_s + 1e-9, side="right"), 0, n_rows))
         self._account(running, paths, float(out.sim_time))
-        self.timeline(out.trace, float(out.sim_time), self.owner.copy())
+        self.timeline(out.trace, float(out.sim_time), np.maximum(self.owner, FREE))
         self.clock += float(out.sim_time)
+        self._note_failures()
         self.counts["events"] += 1
         left = np.asarray(getattr(out, "objects_left", np.zeros(len(self.objects), bool)))
         for s in running:
@@ -338,6 +348,35 @@ class Fleet:
                                          s.left, None, s.stopped_at, s.sim_time)
                 o.ready = True
         self._wake_blocked()
+
+    def _free(self) -> list[int]:
+        """The robots in no sub-team that have not failed (ascending)."""
+        return [int(i) for i in np.flatnonzero(self.owner == FREE)]
+
+    def _note_failures(self) -> None:
+        """Robots that failed during the last stretch (``executor.failed``) leave their
+        sub-teams for good, each replaced by the free robot nearest to its object when
+        there is one: the team's loop sees ``team_changed`` after its segment and plans
+        anew with its robots (``lamp.fleet.objects``); every later plan has the failed
+        robot as an obstacle where it stopped."""
+        for i in sorted(getattr(self.executor, "failed", {})):
+            if i in self.failed_at:
+                continue
+            self.failed_at[i] = self.clock
+            k = int(self.owner[i])
+            self.owner[i] = FAILED
+            self.log.append((self.clock, "failed", k, f"robot {i}"))
+            if k >= 0:
+                o = self.objects[k]
+                o.team = [j for j in o.team if j != i]
+                free = self._free()
+                if free:  # the nearest robot nobody needs takes its place
+                    centre = np.asarray(self.executor.object_poses[k][:2], float)
+                    pos = np.asarray(self.executor.robot_positions, float)
+                    sub = min(free, key=lambda j: (float(np.hypot(*(pos[j] - centre))), j))
+                    o.team = sorted([*o.team, sub])
+                    self.owner[sub] = k
+                    self.log.append((self.clock, "replaced", k, f"robot {i} by {sub}"))
 
     def _wake_blocked(self) -> None:
         """Planners waiting on a change plan again once an object was placed or given up,
@@ -359,7 +398,7 @@ class Fleet:
             working[s.team] = True
         self.time_s["working"][working] += sim_time
         self.time_s["waiting"][~working & (self.owner >= 0)] += sim_time
-        self.time_s["idle"][~working & (self.owner < 0)] += sim_time
+        self.time_s["idle"][~working & (self.owner < 0)] += sim_time  # failed ones too
         steps = np.hypot(*np.moveaxis(np.diff(paths, axis=1), 2, 0)).sum(axis=1)
         self.time_s["moving"][working & (steps > 1e-6)] += sim_time
 
@@ -396,7 +435,7 @@ class Fleet:
         anew), else wait for the world to change (True: it did) unless nothing else can
         change it (False: go on as alone)."""
         o = self.objects[k]
-        free = [i for i in range(self.scene.n_robots) if self.owner[i] < 0]
+        free = self._free()
         if free:  # robots nobody needs: they join (and stand in nobody's way)
             o.team = sorted([*o.team, *free])
             self.owner[free] = k
@@ -428,6 +467,7 @@ class Fleet:
             **self.counts,
             "placed_at_s": [None if o.placed_at_s is None else round(o.placed_at_s, 4)
                             for o in self.objects],
+            "robots_failed_at_s": {str(i): round(t, 4) for i, t in sorted(self.failed_at.items())},
             "utilisation": {k: round(float(v.sum()) / total, 4)
                             for k, v in self.time_s.items()},
         }

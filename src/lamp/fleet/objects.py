@@ -5,7 +5,8 @@ world changed around its plan.
 :class:`~lamp.planners.runner.ClosedLoopRunner` loop on the object's sub-team
 (``Fleet.view``), in the world as it is when the loop starts (``sub_scene``: every other
 robot a disk obstacle where it stands). A loop that ends with ``WORLD_CHANGED`` (its
-segment was declined, or it found no plan while others moved) is followed by a new one,
+segment was declined, or it found no plan while others moved) or ``TEAM_CHANGED`` (a robot
+of its sub-team failed: ``Fleet`` took it out of the team) is followed by a new one,
 within the object's segment limit and cumulative planning limit; the object's outcome
 merges every loop's (``runner.merged``: each new loop counts as a replan). The objects
 moving at once share ``FLEET_SPACE_CACHE_MB`` of robot-space cache.
@@ -21,7 +22,7 @@ import numpy as np
 
 from lamp.contract.events import SegmentEvent
 from lamp.contract.runner import ObjectOutcome
-from lamp.planners.closed_loop import WORLD_CHANGED
+from lamp.planners.closed_loop import TEAM_CHANGED, WORLD_CHANGED
 from lamp.planners.config import segment_limit
 from lamp.planners.runner import ClosedLoopRunner, judged, merged
 from lamp.planners.team import team_scene
@@ -71,7 +72,8 @@ def object_main(runner: ClosedLoopRunner, observe: Callable[[SegmentEvent], None
             scene_k = sub_scene(scene, view.team, fleet.executor.robot_positions)
             parts.append(runner.loop(scene_k, k, view, config, observe))
             r = parts[-1].result
-            if (r.failure_reason != WORLD_CHANGED or used + r.segments >= limit
+            if (r.failure_reason not in (WORLD_CHANGED, TEAM_CHANGED)
+                    or used + r.segments >= limit
                     or len(parts) > limit or spent + r.planning_time_s >= cfg.planning_time_limit):
                 break
         truth = getattr(fleet.executor, "true_object_poses", fleet.executor.object_poses)

@@ -53,6 +53,12 @@ class FleetView:
     def robot_positions(self) -> np.ndarray:
         return np.asarray(self.fleet.executor.robot_positions, float)[self.team]
 
+    @property
+    def team_changed(self) -> bool:
+        """Whether a robot of this view's team has failed (its loop then ends with
+        ``TEAM_CHANGED`` and the object plans anew with its new team)."""
+        return any(i in self.fleet.failed_at for i in self.team)
+
     def announce(self, segment: np.ndarray, rest: np.ndarray) -> None:
         self.fleet.announce(self.k, segment, rest)
 

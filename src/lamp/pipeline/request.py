@@ -65,13 +65,9 @@ class RunRequest:
         if self.disturbances.active and not spec.closed_loop:
             raise InputError(f"planner {spec.name}: disturbances are supported for the "
                              "closed-loop planners only")
-        if self.scene.schedule == "concurrent":
-            if spec.factory is None:
-                raise InputError(f"planner {spec.name}: the concurrent schedule runs the "
-                                 "closed-loop planners only (use --schedule sequential)")
-            if self.disturbances.robot_failures:
-                raise InputError("robot failures are not supported with the concurrent "
-                                 "schedule yet (use --schedule sequential)")
+        if self.scene.schedule == "concurrent" and spec.factory is None:
+            raise InputError(f"planner {spec.name}: the concurrent schedule runs the "
+                             "closed-loop planners only (use --schedule sequential)")
         if spec.check_scene is not None:
             try:
                 spec.check_scene(self.scene)
