@@ -65,6 +65,7 @@ def env_rate(env, steps: int) -> float:
 def train_rate_now(sims: int, scenes, steps: int) -> float:
     """PPO steps (per robot slot) per second with ``lamp rl train``'s settings."""
     from stable_baselines3 import PPO
+    from stable_baselines3.common.logger import Logger
 
     from lamp.rl.train import TrainSettings
 
@@ -75,6 +76,7 @@ def train_rate_now(sims: int, scenes, steps: int) -> float:
                 batch_size=rollout * env.num_envs // 6, n_epochs=s.epochs,
                 policy_kwargs={"net_arch": list(s.hidden)})
     t = time.perf_counter()
+    model.set_logger(Logger(None, []))  # no SB3-<date> log folder
     model.learn(total_timesteps=steps)
     return model.num_timesteps / (time.perf_counter() - t)
 
@@ -92,11 +94,13 @@ def _before_env(scenes):
 
 def train_rate_before(scenes, steps: int) -> float:
     from stable_baselines3 import PPO
+    from stable_baselines3.common.logger import Logger
 
     env = _before_env(scenes)
     model = PPO("MlpPolicy", env, seed=0, device="cpu", n_steps=min(2048, steps),
                 batch_size=256, policy_kwargs={"net_arch": [64, 64]})
     t = time.perf_counter()
+    model.set_logger(Logger(None, []))  # no SB3-<date> log folder
     model.learn(total_timesteps=steps)
     return model.num_timesteps / (time.perf_counter() - t)
 

@@ -110,6 +110,7 @@ def train(out: str | Path, settings: TrainSettings, scenes=None, progress=None,
     import torch
     from stable_baselines3 import PPO
     from stable_baselines3.common.callbacks import BaseCallback
+    from stable_baselines3.common.logger import Logger
 
     from lamp.io import write_json_atomic
     from lamp.rl.vec import TeamVecEnv
@@ -177,6 +178,8 @@ def train(out: str | Path, settings: TrainSettings, scenes=None, progress=None,
                 self.next += settings.eval_every
             return True
 
+    # no log folder: SB3's default logger makes an empty SB3-<date> folder per run
+    model.set_logger(Logger(None, []))
     if model.num_timesteps < settings.steps:
         model.learn(total_timesteps=settings.steps - model.num_timesteps, callback=Every(),
                     reset_num_timesteps=not resume)
