@@ -23,12 +23,12 @@ from lamp.search.lattice import ObjectLattice
 BOX = Rectangle((0.4, 0.2))  # inscribed radius 0.1
 
 
-def walled(gap: float, width: float = 4.0) -> ObjectSpace:
+def walled(gap: float) -> ObjectSpace:
     """A 4 x 3 m map cut at x = 2 by a wall 0.1 m thick with one gap of ``gap`` m."""
     lo = 1.5 - gap / 2
     wall = [Obstacle(Rectangle((0.1, lo)), (2.0, lo / 2, 0.0)),
             Obstacle(Rectangle((0.1, 3.0 - lo - gap)), (2.0, (lo + gap + 3.0) / 2, 0.0))]
-    return ObjectSpace(BOX, (width, 3.0), wall)
+    return ObjectSpace(BOX, (4.0, 3.0), wall)
 
 
 @pytest.mark.parametrize(("gap", "separated"), [(0.15, True), (0.19, True), (0.3, False),

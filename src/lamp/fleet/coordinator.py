@@ -52,7 +52,7 @@ from lamp.contract.runner import ObjectOutcome
 from lamp.fleet.admission import meets_moving, meets_standing
 from lamp.fleet.regions import claim
 from lamp.fleet.segments import Segment, on_grid
-from lamp.fleet.teams import allocate
+from lamp.fleet.teams import allocate, nearest
 from lamp.fleet.turns import Turns
 from lamp.fleet.view import FleetExecution, FleetView
 from lamp.scene.model import Scene
@@ -371,9 +371,8 @@ class Fleet:
                 o.team = [j for j in o.team if j != i]
                 free = self._free()
                 if free:  # the nearest robot nobody needs takes its place
-                    centre = np.asarray(self.executor.object_poses[k][:2], float)
-                    pos = np.asarray(self.executor.robot_positions, float)
-                    sub = min(free, key=lambda j: (float(np.hypot(*(pos[j] - centre))), j))
+                    sub = nearest(free, self.executor.robot_positions,
+                                  self.executor.object_poses[k], 1)[0]
                     o.team = sorted([*o.team, sub])
                     self.owner[sub] = k
                     self.log.append((self.clock, "replaced", k, f"robot {i} by {sub}"))

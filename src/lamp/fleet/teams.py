@@ -16,10 +16,18 @@ import numpy as np
 
 from lamp.contract.model import MAX_ROBOTS
 
-__all__ = ["MIN_TEAM", "allocate"]
+__all__ = ["MIN_TEAM", "allocate", "nearest"]
 
 #: The smallest sub-team an object starts with while other objects are moving.
 MIN_TEAM = 2
+
+
+def nearest(pool: Sequence[int], robot_positions: np.ndarray, centre: np.ndarray,
+            n: int) -> list[int]:
+    """The ``n`` robots of ``pool`` nearest to ``centre`` (ties by index), nearest first."""
+    c = np.asarray(centre, float)[:2]
+    d = [float(np.hypot(*(np.asarray(robot_positions[i], float) - c))) for i in pool]
+    return [pool[j] for j in sorted(range(len(pool)), key=lambda j: (d[j], pool[j]))[:n]]
 
 
 def allocate(ready: Sequence[int], free: Sequence[int], robot_positions: np.ndarray,
@@ -36,9 +44,7 @@ def allocate(ready: Sequence[int], free: Sequence[int], robot_positions: np.ndar
         need = MAX_ROBOTS if len(pool) >= MAX_ROBOTS else len(pool)
         if need < (MIN_TEAM if moving else 1):
             break
-        centre = np.asarray(object_poses[k][:2], float)
-        d = [float(np.hypot(*(np.asarray(robot_positions[i], float) - centre))) for i in pool]
-        chosen = [pool[j] for j in sorted(range(len(pool)), key=lambda j: (d[j], pool[j]))[:need]]
+        chosen = nearest(pool, robot_positions, object_poses[k], need)
         teams[k] = sorted(chosen)
         pool = [i for i in pool if i not in chosen]
         moving = True
