@@ -26,7 +26,9 @@ fresh model sample, no ``Collide``.
 
 from __future__ import annotations
 
+import copy
 import time
+from collections import Counter
 from collections.abc import Callable
 from typing import Any
 
@@ -37,6 +39,7 @@ from lamp.contract.transition import Transition
 from lamp.geometry import se2
 from lamp.geometry.shapes import signed_distance
 from lamp.mrmp.gspi import GspiStatus
+from lamp.planners.bystanders import BYSTANDER_GAP, bystanders, standing_on_goal
 from lamp.planners.verify import assign_to_contacts, push_paths
 from lamp.planners.verify_parts import (  # noqa: F401  (re-exported: their old home)
     FreeSpace,
@@ -175,20 +178,30 @@ class Verifier:
         return [p for _, _, p in kept]
 
     def _unreachable(self, q_from: np.ndarray, q_R: np.ndarray) -> Callable[[np.ndarray], bool]:
-        """For push paths (B, H, 2, object frame at ``q_from``): whether some contact lies in
-        a free region of the robots' space (object at ``q_from``, the first window
-        ``approach`` plans in) that holds no robot, so that no approach inside that window
-        reaches it. Always False for a space that cannot tell its regions apart."""
+        """For push paths (B, H, 2, object frame at ``q_from``): whether the contacts cannot
+        each get a robot of their own inside the robots' space (object at ``q_from``, the
+        first window ``approach`` plans in): some free region of it holds more contacts
+        than robots (Hall's condition; a robot reaches exactly the contacts of its region),
+        so that no approach inside that window reaches them all. Always False for a space
+        that cannot tell its regions apart."""
         space = self.robots.robot_space_at(q_from, self.robots.window(q_from, q_R))
         components = getattr(space, "components", None)
         if components is None:
             return lambda pushes_local: False
-        held = set(components(q_R).tolist())
+        held = Counter(components(q_R).tolist())
 
         def unreachable(pushes_local: np.ndarray) -> bool:
             contacts = se2.transform_points(q_from, np.asarray(pushes_local)[:, 0])
-            return any(c not in held for c in components(contacts).tolist())
+            need = Counter(components(contacts).tolist())
+            return any(n > held.get(c, 0) for c, n in need.items())
         return unreachable
+
+    def _window_final(self, q_from: np.ndarray, q_R: np.ndarray) -> bool:
+        """Whether ``approach`` would plan only in the first window for robots at ``q_R``
+        because the robots stand so far apart that the doubled one would exceed
+        ``max_window_side``."""
+        x0, y0, x1, y1 = self.robots.window(q_from, q_R, 2.0)
+        return max(x1 - x0, y1 - y0) > self.robots.max_window_side
 
     def can_reach(self, q_from: np.ndarray, q_to: np.ndarray, q_R: np.ndarray,
                   attempt: int = 0) -> bool:
@@ -222,8 +235,9 @@ class Verifier:
         if b == n:
             return goals
         rows, _ = assign_to_contacts(q_R, contacts)
-        unpaired = [i for i in range(n) if i not in set(rows.tolist())]
-        space = self.robots.robot_space_at(q_from, self.robots.window(q_from, q_R))
+        paired = np.zeros(n, bool)
+        paired[rows] = True
+        unpaired = [i for i in range(n) if not paired[i]]
         r = self.robot_radius
         swept = se2.interpolate(q_from, q_to, np.linspace(0.0, 1.0, 5))
         keep_out = [pushes_world.reshape(-1, 2)]
@@ -240,7 +254,15 @@ class Verifier:
                 ok &= d.min(axis=1) >= 3 * r
             return ok
 
+        # departure: an unpaired robot clear of the push and far from the motion keeps
+        # its place and is left out of the window (``lamp.planners.bystanders``)
+        far = bystanders(lambda pts: self.robots.window(q_from, pts), q_R, paired,
+                         ~paired & clear_of_push(q_R), 2 * r + BYSTANDER_GAP)
+        space = self.robots.robot_space_at(q_from, self.robots.window(q_from, q_R[~far]))
         for slot, i in enumerate(unpaired):
+            if far[i]:
+                goals[b + slot] = q_R[i]
+                continue
             spot = space.nearest_free(q_R[i], accept=clear_of_push,
                                       max_distance=WAIT_SEARCH_RADIUS)
             if spot is None:
@@ -285,18 +307,24 @@ class Verifier:
         self.stats.gspi_calls += 1
         t_end = time.perf_counter() + self.params.gspi_time_limit
         scale = 1.0
+        own_goal = standing_on_goal(starts, goals)
+        pad = 2 * self.robot_radius + BYSTANDER_GAP
         while True:
-            space = robots.robot_space_at(q_from, robots.window(q_from, q_R, scale))
+            # departure: robots standing on their goal far outside the window the others
+            # need hold still and are left out of routing (``lamp.planners.bystanders``)
+            held = bystanders(lambda pts, s=scale: robots.window(q_from, pts, s), q_R,
+                              own_goal < 0, own_goal >= 0, pad)
+            space = robots.robot_space_at(q_from, robots.window(q_from, q_R[~held], scale))
             # Contacts deeper than the tolerance or robots left overlapping come back as a
             # failed plan (status INVALID_GOAL / INVALID_START), like any other infeasible
             # approach.
-            plan = self.route(q_from, starts, goals, space,
-                              max(1e-3, t_end - time.perf_counter()))
+            plan = self._route_movers(q_from, starts, goals, own_goal, held, space,
+                                      max(1e-3, t_end - time.perf_counter()))
             if plan.success:
                 break
             if plan.status is GspiStatus.TIME_LIMIT:
                 self.stats.gspi_timeouts += 1
-            wider = robots.window(q_from, q_R, 2.0 * scale)
+            wider = robots.window(q_from, q_R[~held], 2.0 * scale)
             if (space.covers_workspace or plan.status not in _WINDOW_BOUND
                     or max(wider[2] - wider[0], wider[3] - wider[1]) > robots.max_window_side
                     or time.perf_counter() >= t_end):
@@ -304,6 +332,26 @@ class Verifier:
             scale *= 2.0
         self.stats.gspi_success += 1
         return concat(backoff, plan.paths), np.asarray(plan.goal_of)
+
+    def _route_movers(self, q_from: np.ndarray, starts: np.ndarray, goals: np.ndarray,
+                      own_goal: np.ndarray, held: np.ndarray, space: Any,
+                      time_limit: float) -> Any:
+        """``route`` for the robots not ``held``, to the goals not held; the held robots'
+        rows repeat where they stand and keep their own goal in ``goal_of``."""
+        if not held.any():
+            return self.route(q_from, starts, goals, space, time_limit)
+        kept = np.ones(len(goals), bool)
+        kept[own_goal[held]] = False
+        goal_ids = np.flatnonzero(kept)
+        plan = self.route(q_from, starts[~held], goals[kept], space, time_limit)
+        paths = np.repeat(starts[:, None, :], plan.paths.shape[1], axis=1)
+        paths[~held] = plan.paths
+        goal_of = own_goal.copy()
+        sub = np.asarray(plan.goal_of)
+        goal_of[~held] = np.where(sub >= 0, goal_ids[np.maximum(sub, 0)], -1)
+        out = copy.copy(plan)
+        out.paths, out.goal_of = paths, goal_of
+        return out
 
     def route_push(self, q_from: np.ndarray, q_to: np.ndarray, q_R: np.ndarray,
                    pushes_local: np.ndarray, *, edge: tuple | None = None,
@@ -342,9 +390,16 @@ class Verifier:
         q_R = np.asarray(q_R, float)
         motion = se2.relative(q_from, q_to)
         top = min(self.n_robots, self.params.max_budget)
-        unreachable = None
+        # departure: when the first window is the only one (robots far apart),
+        # proposals whose contacts cannot each get a robot in it are dropped
+        # before any approach is planned: Gspi could only fail on them
+        unreachable = (self._unreachable(q_from, q_R) if self._window_final(q_from, q_R)
+                       else None)
+        final = unreachable is not None
         for budget in range(top, 0, -1):  # line 19: budgets N down to 1
             queue = self._usable_proposals(q_from, q_R, motion, budget, attempt)
+            if final:
+                queue = [p for p in queue if not unreachable(p)]
             for _ in range(min(len(queue), self.params.gspi_attempts_per_budget)):
                 pushes_local = queue.pop(0)
                 trans = self.route_push(q_from, q_to, q_R, pushes_local)  # lines 22-23: Reassign, Gspi
