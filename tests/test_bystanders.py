@@ -43,13 +43,15 @@ def test_bystanders_hold_outside_the_movers_window(n, margin, pad, seed) -> None
     window = window_of(pos[~out])
     for i in np.flatnonzero(out):  # the guarantee: farther than pad from the window
         assert box_distance(window, pos[i]) > pad - 1e-12
-    # and the movers are the least closed set: each one left in is a mover, not a
-    # candidate, or within pad of the window of the movers before it joined (checked
-    # by replaying the closure one robot at a time)
+    # and the movers are the least closed set: each one is a mover, not a candidate, or
+    # inside the window of the movers before it joined grown by pad on every side
+    # (Chebyshev distance below pad; replayed one step at a time)
     moving = movers | ~candidates
     while True:
-        w = window_of(pos[moving])
-        near = np.array([box_distance(w, p) <= pad + 1e-12 for p in pos]) & ~moving
+        x0, y0, x1, y1 = window_of(pos[moving])
+        cheb = np.maximum.reduce([x0 - pos[:, 0], pos[:, 0] - x1, y0 - pos[:, 1],
+                                  pos[:, 1] - y1])
+        near = (cheb < pad) & ~moving
         if not near.any():
             break
         moving |= near
