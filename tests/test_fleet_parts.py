@@ -118,7 +118,8 @@ def test_on_grid_keeps_the_route_and_steps_at_most_a_row(steps) -> None:
 
 @settings(max_examples=80)
 @given(st.integers(0, 2**31 - 1), st.integers(1, 5), st.integers(0, 12), st.booleans())
-def test_allocate_gives_nearest_free_robots_in_priority_order(seed, n_obj, n_free, moving):
+def test_allocate_shares_the_nearest_free_robots_in_priority_order(seed, n_obj, n_free,
+                                                                   moving):
     rng = np.random.default_rng(seed)
     robots = rng.uniform(0, 10, (14, 2))
     objects = np.c_[rng.uniform(0, 10, (n_obj, 2)), np.zeros(n_obj)]
@@ -126,15 +127,26 @@ def test_allocate_gives_nearest_free_robots_in_priority_order(seed, n_obj, n_fre
     teams = allocate(list(range(n_obj)), free, robots, objects, moving)
     # reference: the same greedy rule written plainly
     pool, expect, busy = list(free), {}, moving
+    share = min(MAX_ROBOTS, max(MIN_TEAM, n_free // n_obj))
     for k in range(n_obj):
-        want = min(MAX_ROBOTS, len(pool))
+        want = min(share, len(pool))
         if want < (MIN_TEAM if busy else 1):
             break
         order = sorted(pool, key=lambda i: (math.dist(robots[i], objects[k][:2]), i))
         expect[k] = sorted(order[:want])
         pool = [i for i in pool if i not in expect[k]]
         busy = True
+    if len(expect) < n_obj:
+        for i in pool:  # leftovers join the nearest team with room
+            room = [k for k in expect if len(expect[k]) < MAX_ROBOTS]
+            if room:
+                k = min(room, key=lambda k: (math.dist(robots[i], objects[k][:2]), k))
+                expect[k] = sorted(expect[k] + [i])
     assert teams == expect
+    sizes = [len(t) for t in teams.values()]
+    assert all(s <= MAX_ROBOTS for s in sizes)
+    if len(teams) == n_obj:  # everyone started: the split is as equal as the order allows
+        assert max(sizes, default=0) <= max(MIN_TEAM, min(MAX_ROBOTS, n_free // n_obj))
     used = [i for t in teams.values() for i in t]
     assert len(used) == len(set(used)) and set(used) <= set(free)
 
