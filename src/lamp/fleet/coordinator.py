@@ -118,7 +118,7 @@ class Fleet:
         #: (simulated time, what, object, detail) of every decision: for the curious
         self.log: list[tuple[float, str, int, str]] = []
         self.counts = dict.fromkeys(("admitted", "declined", "waited", "forced", "blocked",
-                                     "merged", "grown", "events"), 0)
+                                     "merged", "grown", "events", "transit_hops"), 0)
         n = scene.n_robots
         #: robot-seconds by state (``_account``)
         self.time_s = {k: np.zeros(n) for k in ("working", "moving", "waiting", "idle")}

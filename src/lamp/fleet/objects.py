@@ -4,7 +4,8 @@ world changed around its plan.
 :func:`object_main` is what ``Fleet`` runs in object ``k``'s thread: a
 :class:`~lamp.planners.runner.ClosedLoopRunner` loop on the object's sub-team
 (``Fleet.view``), in the world as it is when the loop starts (``sub_scene``: every other
-robot a disk obstacle where it stands). A loop that ends with ``WORLD_CHANGED`` (its
+robot a disk obstacle where it stands). A team that stands far from its object first
+drives to it (``lamp.fleet.transit``). A loop that ends with ``WORLD_CHANGED`` (its
 segment was declined, or it found no plan while others moved) or ``TEAM_CHANGED`` (a robot
 of its sub-team failed: ``Fleet`` took it out of the team) is followed by a new one,
 within the object's segment limit and cumulative planning limit; the object's outcome
@@ -22,6 +23,7 @@ import numpy as np
 
 from lamp.contract.events import SegmentEvent
 from lamp.contract.runner import ObjectOutcome
+from lamp.fleet.transit import transit
 from lamp.planners.closed_loop import TEAM_CHANGED, WORLD_CHANGED
 from lamp.planners.config import segment_limit
 from lamp.planners.runner import ClosedLoopRunner, judged, merged
@@ -69,7 +71,12 @@ def object_main(runner: ClosedLoopRunner, observe: Callable[[SegmentEvent], None
             while not fleet.objects[k].team:  # its robots went to another object
                 fleet.wait_for_team(k)
             view = fleet.view(k)
-            scene_k = sub_scene(scene, view.team, fleet.executor.robot_positions)
+
+            def world(team: list[int] = view.team) -> Scene:
+                return sub_scene(scene, team, fleet.executor.robot_positions)
+
+            fleet.counts["transit_hops"] += transit(view, world, k, runner.seed * 1000 + k)
+            scene_k = world()
             parts.append(runner.loop(scene_k, k, view, config, observe))
             r = parts[-1].result
             if (r.failure_reason not in (WORLD_CHANGED, TEAM_CHANGED)

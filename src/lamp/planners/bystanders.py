@@ -18,11 +18,13 @@ robot left out would not reach another robot.
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
-__all__ = ["BYSTANDER_GAP", "bystanders", "standing_on_goal"]
+__all__ = ["BYSTANDER_GAP", "bystanders", "route_movers", "standing_on_goal"]
 
 #: Clearance (m) beyond robot contact between a bystander and the movers' window.
 BYSTANDER_GAP = 0.05
@@ -66,4 +68,27 @@ def standing_on_goal(positions: np.ndarray, goals: np.ndarray) -> np.ndarray:
                 out[i] = j
                 taken.add(j)
                 break
+    return out
+
+
+def route_movers(route: Callable[..., Any], q_object: np.ndarray, starts: np.ndarray,
+                 goals: np.ndarray, own_goal: np.ndarray, held: np.ndarray, space: Any,
+                 time_limit: float) -> Any:
+    """``route`` (a ``MultiRobotPlanner``) for the robots not ``held`` to the goals not
+    held; each held robot's rows repeat where it stands and ``goal_of`` gives it its own
+    goal ``own_goal[i]``. Without held robots, ``route``'s answer unchanged."""
+    held = np.asarray(held, bool)
+    if not held.any():
+        return route(q_object, starts, goals, space, time_limit)
+    kept = np.ones(len(goals), bool)
+    kept[own_goal[held]] = False
+    goal_ids = np.flatnonzero(kept)
+    plan = route(q_object, starts[~held], goals[kept], space, time_limit)
+    paths = np.repeat(starts[:, None, :], plan.paths.shape[1], axis=1)
+    paths[~held] = plan.paths
+    goal_of = own_goal.copy()
+    sub = np.asarray(plan.goal_of)
+    goal_of[~held] = np.where(sub >= 0, goal_ids[np.maximum(sub, 0)], -1)
+    out = copy.copy(plan)
+    out.paths, out.goal_of = paths, goal_of
     return out

@@ -26,7 +26,6 @@ fresh model sample, no ``Collide``.
 
 from __future__ import annotations
 
-import copy
 import time
 from collections import Counter
 from collections.abc import Callable
@@ -39,7 +38,12 @@ from lamp.contract.transition import Transition
 from lamp.geometry import se2
 from lamp.geometry.shapes import signed_distance
 from lamp.mrmp.gspi import GspiStatus
-from lamp.planners.bystanders import BYSTANDER_GAP, bystanders, standing_on_goal
+from lamp.planners.bystanders import (
+    BYSTANDER_GAP,
+    bystanders,
+    route_movers,
+    standing_on_goal,
+)
 from lamp.planners.verify import assign_to_contacts, push_paths
 from lamp.planners.verify_parts import (  # noqa: F401  (re-exported: their old home)
     FreeSpace,
@@ -318,8 +322,8 @@ class Verifier:
             # Contacts deeper than the tolerance or robots left overlapping come back as a
             # failed plan (status INVALID_GOAL / INVALID_START), like any other infeasible
             # approach.
-            plan = self._route_movers(q_from, starts, goals, own_goal, held, space,
-                                      max(1e-3, t_end - time.perf_counter()))
+            plan = route_movers(self.route, q_from, starts, goals, own_goal, held, space,
+                                max(1e-3, t_end - time.perf_counter()))
             if plan.success:
                 break
             if plan.status is GspiStatus.TIME_LIMIT:
@@ -332,26 +336,6 @@ class Verifier:
             scale *= 2.0
         self.stats.gspi_success += 1
         return concat(backoff, plan.paths), np.asarray(plan.goal_of)
-
-    def _route_movers(self, q_from: np.ndarray, starts: np.ndarray, goals: np.ndarray,
-                      own_goal: np.ndarray, held: np.ndarray, space: Any,
-                      time_limit: float) -> Any:
-        """``route`` for the robots not ``held``, to the goals not held; the held robots'
-        rows repeat where they stand and keep their own goal in ``goal_of``."""
-        if not held.any():
-            return self.route(q_from, starts, goals, space, time_limit)
-        kept = np.ones(len(goals), bool)
-        kept[own_goal[held]] = False
-        goal_ids = np.flatnonzero(kept)
-        plan = self.route(q_from, starts[~held], goals[kept], space, time_limit)
-        paths = np.repeat(starts[:, None, :], plan.paths.shape[1], axis=1)
-        paths[~held] = plan.paths
-        goal_of = own_goal.copy()
-        sub = np.asarray(plan.goal_of)
-        goal_of[~held] = np.where(sub >= 0, goal_ids[np.maximum(sub, 0)], -1)
-        out = copy.copy(plan)
-        out.paths, out.goal_of = paths, goal_of
-        return out
 
     def route_push(self, q_from: np.ndarray, q_to: np.ndarray, q_R: np.ndarray,
                    pushes_local: np.ndarray, *, edge: tuple | None = None,

@@ -1,0 +1,249 @@
+"""Transit: a sub-team that stands far from its object drives to it before it pushes.
+
+Verify plans the robots' approach in a window around the object and the robots. A team
+drawn from across the map (robots freed by an object placed 35 m away) makes that window
+the strip between them: every robot space and every Gspi lattice is the strip's size,
+and when the way round leaves the strip (a wall in between) no approach exists inside it
+and every Verify fails (fleet-20: one object's 337 Verify calls in 300 s, none passed).
+
+Before its closed loop starts, a team with robots whose route to the object is longer
+than ``TRANSIT_RADIUS`` therefore drives there in hops:
+
+1. **Route.** Shortest routes for a robot's disk grown by ``TRANSIT_MARGIN`` to the
+   object's staging area (the free cells within ``STAGING`` of the object's footprint's
+   bounding circle), on a ``TRANSIT_CELL`` grid of the world as the team plans in it
+   (obstacles, every object where it stands, every other robot as a disk): one
+   multi-source Dijkstra (SciPy) over the 8-connected free cells, no corner cutting.
+   The free cells come from Shapely (the workspace shrunk by the grown radius minus the
+   obstacles grown by it), so a route is a guide, not a proof: Gspi checks every motion.
+2. **Hop.** Each far robot's waypoint is ``HOP_LENGTH`` along its route (or its end); its
+   goal is the free spot nearest the waypoint. The others keep their place. Gspi plans
+   the hop in the robot space over the route parts' bounding box grown by
+   ``WINDOW_MARGIN``; robots standing far outside it hold still
+   (``lamp.planners.bystanders``). A hop Gspi cannot plan is tried once at half the
+   length; then transit ends and the loop starts from where the team stands.
+3. **Run.** The hop is submitted as a segment of the object (its object stays where it
+   is), admitted beside the other sub-teams' segments like any other; a declined hop
+   (the world changed) is planned again. At most ``MAX_HOPS`` hops.
+
+Deterministic: counts bound everything; Gspi's ``TRANSIT_TIME_LIMIT`` is an outer cap.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import shapely
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import dijkstra
+
+from lamp.geometry.robot_space import RobotSpace
+from lamp.geometry.shapes import obstacle_geometry, to_shapely
+from lamp.mrmp import plan_paths
+from lamp.planners.bystanders import BYSTANDER_GAP, bystanders, route_movers, standing_on_goal
+from lamp.planners.task import WINDOW_MARGIN, WINDOW_SNAP
+from lamp.scene.model import Scene
+
+__all__ = ["HOP_LENGTH", "TRANSIT_RADIUS", "Routes", "far_robots", "hop", "routes", "transit"]
+
+#: A robot whose route to its object's staging area is longer than this (m) drives there
+#: before its team pushes.
+TRANSIT_RADIUS = 4.0
+#: Route length (m) one hop covers.
+HOP_LENGTH = 5.0
+#: Grid cell (m) of the routes.
+TRANSIT_CELL = 0.1
+#: Clearance (m) beyond the robot radius the routes keep from everything.
+TRANSIT_MARGIN = 0.05
+#: The staging area: free cells within this (m) of the object's bounding circle.
+STAGING = 1.0
+#: Hops one transit may take (declined ones included).
+MAX_HOPS = 40
+#: Outer wall-clock cap (s) of one hop's Gspi call.
+TRANSIT_TIME_LIMIT = 10.0
+#: How far (m) from its waypoint a robot's goal may be.
+SPOT_SEARCH = 1.0
+
+
+@dataclass(frozen=True)
+class Routes:
+    """Shortest routes on a grid of ``cell`` metres (cell (i, j) centred at ((i + 0.5) *
+    cell, (j + 0.5) * cell)) from every free cell to the staging area: ``pred`` is the
+    flat index of the next cell towards it (-9999 at the area or where none leads)."""
+
+    cell: float
+    shape: tuple[int, int]  # (ny, nx)
+    free: np.ndarray  # (ny, nx) bool
+    pred: np.ndarray  # (ny * nx,) int
+    dist: np.ndarray  # (ny * nx,) metres to the area (inf: none)
+
+    def cell_of(self, xy: np.ndarray) -> int | None:
+        """The free cell nearest ``xy`` within two cells (flat index), or None."""
+        ny, nx = self.shape
+        ci, cj = (int(math.floor(v / self.cell)) for v in np.asarray(xy, float)[:2])
+        best: tuple[float, int] | None = None
+        for j in range(max(0, cj - 2), min(ny, cj + 3)):
+            for i in range(max(0, ci - 2), min(nx, ci + 3)):
+                if self.free[j, i] and math.isfinite(self.dist[j * nx + i]):
+                    d = math.hypot((i + 0.5) * self.cell - xy[0], (j + 0.5) * self.cell - xy[1])
+                    if best is None or d < best[0]:
+                        best = (d, j * nx + i)
+        return None if best is None else best[1]
+
+    def path(self, xy: np.ndarray) -> np.ndarray | None:
+        """(M, 2) cell centres from ``xy``'s cell to the staging area, or None when no
+        route leads there."""
+        v = self.cell_of(xy)
+        if v is None:
+            return None
+        nx = self.shape[1]
+        out = [v]
+        while self.pred[out[-1]] >= 0:
+            out.append(int(self.pred[out[-1]]))
+        idx = np.asarray(out)
+        return np.c_[(idx % nx + 0.5) * self.cell, (idx // nx + 0.5) * self.cell]
+
+
+def routes(scene: Scene, k: int, object_poses: np.ndarray, cell: float = TRANSIT_CELL
+           ) -> Routes:
+    """The :class:`Routes` to object ``k``'s staging area in ``scene`` with its objects at
+    ``object_poses``."""
+    W, H = (float(v) for v in scene.workspace)
+    grown = float(scene.robot_radius) + TRANSIT_MARGIN
+    poses = np.asarray(object_poses, float).reshape(-1, 3)
+    bodies = [obstacle_geometry(o) for o in scene.obstacles]
+    bodies += [to_shapely(o.shape, q) for o, q in zip(scene.objects, poses, strict=True)]
+    free_poly = shapely.box(0.0, 0.0, W, H).buffer(-grown, join_style="mitre")
+    if bodies:
+        free_poly = free_poly.difference(shapely.union_all(bodies).buffer(grown))
+    shapely.prepare(free_poly)
+    nx, ny = max(1, int(W / cell)), max(1, int(H / cell))
+    X, Y = np.meshgrid((np.arange(nx) + 0.5) * cell, (np.arange(ny) + 0.5) * cell)
+    free = shapely.contains_xy(free_poly, X.ravel(), Y.ravel()).reshape(ny, nx)
+    flat = np.arange(ny * nx).reshape(ny, nx)
+    us, vs, ws = [], [], []
+    for dj, di in ((0, 1), (1, 0), (1, 1), (1, -1)):
+        here = (slice(0, ny - dj), slice(max(0, -di), nx - max(0, di)))
+        there = (slice(dj, ny), slice(max(0, di), nx - max(0, -di)))
+        ok = free[here] & free[there]
+        if dj and di:  # no corner cutting: both side cells free
+            ok &= free[there[0], here[1]] & free[here[0], there[1]]
+        us.append(flat[here][ok])
+        vs.append(flat[there][ok])
+        ws.append(np.full(int(ok.sum()), cell * math.hypot(di, dj)))
+    graph = coo_matrix((np.concatenate(ws), (np.concatenate(us), np.concatenate(vs))),
+                       shape=(ny * nx, ny * nx)).tocsr()
+    q = poses[k]
+    reach = float(scene.objects[k].shape.bounding_radius) + STAGING
+    near = free & (np.hypot(X - q[0], Y - q[1]) <= reach)
+    sources = flat[near]
+    if len(sources) == 0:
+        empty = np.full(ny * nx, -9999)
+        return Routes(cell, (ny, nx), free, empty, np.full(ny * nx, np.inf))
+    dist, pred = dijkstra(graph, directed=False, indices=sources, min_only=True,
+                          return_predecessors=True)[:2]
+    return Routes(cell, (ny, nx), free, np.asarray(pred), np.asarray(dist))
+
+
+def _window(points: np.ndarray, scene: Scene) -> tuple[float, float, float, float]:
+    """The points' bounding box grown by ``WINDOW_MARGIN``, snapped outward to
+    ``WINDOW_SNAP``, inside the map."""
+    W, H = (float(v) for v in scene.workspace)
+    lo = np.asarray(points, float).min(axis=0) - WINDOW_MARGIN
+    hi = np.asarray(points, float).max(axis=0) + WINDOW_MARGIN
+    return (max(0.0, WINDOW_SNAP * math.floor(lo[0] / WINDOW_SNAP)),
+            max(0.0, WINDOW_SNAP * math.floor(lo[1] / WINDOW_SNAP)),
+            min(W, WINDOW_SNAP * math.ceil(hi[0] / WINDOW_SNAP)),
+            min(H, WINDOW_SNAP * math.ceil(hi[1] / WINDOW_SNAP)))
+
+
+def hop(scene: Scene, k: int, object_poses: np.ndarray, positions: np.ndarray,
+        far: np.ndarray, field: Routes, length: float = HOP_LENGTH, seed: int = 0) -> Any:
+    """Gspi's plan (``MRMPPlan``; ``paths`` (N, T, 2)) that takes the ``far`` robots of
+    ``scene`` (at ``positions``) ``length`` metres along their routes, the others keeping
+    their place, or None when a far robot has no route or no free goal spot."""
+    pos = np.asarray(positions, float).reshape(-1, 2)
+    r = float(scene.robot_radius)
+    goals = pos.copy()
+    parts = [pos[far]]
+    for i in np.flatnonzero(far):
+        route = field.path(pos[i])
+        if route is None:
+            return None
+        steps = np.hypot(*np.diff(np.vstack([pos[i], route]), axis=0).T)
+        along = np.cumsum(steps)
+        n = int(np.searchsorted(along, length, side="right"))
+        n = min(max(n, 1), len(route))
+        goals[i] = route[n - 1]
+        parts.append(route[:n])
+    route_parts = np.vstack(parts)
+    space = RobotSpace.from_scene(scene, object_poses=object_poses,
+                                  window=_window(route_parts, scene))
+    spots: list[np.ndarray] = [pos[i] for i in np.flatnonzero(~far)]
+
+    def apart(points: np.ndarray) -> np.ndarray:
+        if not spots:
+            return np.ones(len(points), bool)
+        d = np.linalg.norm(points[:, None] - np.asarray(spots)[None], axis=2)
+        return d.min(axis=1) >= 2 * r + BYSTANDER_GAP
+
+    for i in np.flatnonzero(far):
+        spot = space.nearest_free(goals[i], accept=apart, max_distance=SPOT_SEARCH)
+        if spot is None:
+            return None
+        goals[i] = spot
+        spots.append(np.asarray(spot, float))
+    own = standing_on_goal(pos, goals)
+
+    def window_of(points: np.ndarray) -> tuple[float, float, float, float]:
+        return _window(np.vstack([points, route_parts, goals[far]]), scene)
+
+    held = bystanders(window_of, pos, own < 0, own >= 0, 2 * r + BYSTANDER_GAP)
+    space = RobotSpace.from_scene(scene, object_poses=object_poses,
+                                  window=window_of(pos[~held]))
+
+    def gspi(q_object, starts, goals_, space_, time_limit):
+        return plan_paths(space_, starts, goals_, time_limit=time_limit, seed=seed)
+
+    return route_movers(gspi, object_poses[k], pos, goals, own, held, space,
+                        TRANSIT_TIME_LIMIT)
+
+
+def far_robots(field: Routes, positions: np.ndarray) -> np.ndarray:
+    """Mask of the robots whose route to the staging area is longer than
+    ``TRANSIT_RADIUS`` (robots without a route are not far: they cannot transit)."""
+    out = []
+    for p in np.asarray(positions, float).reshape(-1, 2):
+        v = field.cell_of(p)
+        out.append(v is not None and float(field.dist[v]) > TRANSIT_RADIUS)
+    return np.asarray(out, bool)
+
+
+def transit(view: Any, world: Callable[[], Scene], k: int, seed: int = 0) -> int:
+    """Drive object ``k``'s sub-team (``view``: its executor; ``world()``: the world as the
+    team plans in it now, its robots where they stand) to the object, hop by hop (module
+    docstring); returns the hops run."""
+    runs = 0
+    for _ in range(MAX_HOPS):
+        poses = np.asarray(view.object_poses, float)
+        pos = np.asarray(view.robot_positions, float)
+        if not (np.hypot(*(pos - poses[k][:2]).T) > TRANSIT_RADIUS).any():
+            break  # every route is at least as long as the straight line
+        scene = world()
+        field = routes(scene, k, poses)
+        far = far_robots(field, pos)
+        if not far.any():
+            break
+        plan = hop(scene, k, poses, pos, far, field, seed=seed)
+        if plan is None or not plan.success:
+            plan = hop(scene, k, poses, pos, far, field, HOP_LENGTH / 2, seed=seed)
+        if plan is None or not plan.success:
+            break
+        reply = view.execute(plan.paths)
+        if not getattr(reply, "declined", False):
+            runs += 1
+    return runs
