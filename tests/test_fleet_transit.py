@@ -121,7 +121,8 @@ FAR_TEAM = {
 def test_a_team_behind_a_wall_drives_round_it_and_places_its_object_safely() -> None:
     result = lamp.solve(scene_from_dict(copy.deepcopy(FAR_TEAM)), "lazy", 0)
     assert result.success
-    assert result.to_dict()["stats"]["fleet"]["transit_hops"] >= 2
+    fleet = result.to_dict()["stats"]["fleet"]
+    assert fleet["transit_hops"] >= 2 and fleet["transit_planning_s"] > 0
     rec = result.recording
     report = check_recording(rec.scene_model(), rec.arrays["times"], rec.arrays["robots"],
                              rec.arrays["objects"], robot_team=recorded_teams(rec))

@@ -119,6 +119,8 @@ class Fleet:
         self.log: list[tuple[float, str, int, str]] = []
         self.counts = dict.fromkeys(("admitted", "declined", "waited", "forced", "blocked",
                                      "merged", "grown", "events", "transit_hops"), 0)
+        #: wall-clock seconds spent planning transit hops (``lamp.fleet.transit``)
+        self.transit_planning_s = 0.0
         n = scene.n_robots
         #: robot-seconds by state (``_account``)
         self.time_s = {k: np.zeros(n) for k in ("working", "moving", "waiting", "idle")}
@@ -467,6 +469,7 @@ class Fleet:
             "placed_at_s": [None if o.placed_at_s is None else round(o.placed_at_s, 4)
                             for o in self.objects],
             "robots_failed_at_s": {str(i): round(t, 4) for i, t in sorted(self.failed_at.items())},
+            "transit_planning_s": round(self.transit_planning_s, 4),
             "utilisation": {k: round(float(v.sum()) / total, 4)
                             for k, v in self.time_s.items()},
         }

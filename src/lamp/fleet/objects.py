@@ -75,7 +75,9 @@ def object_main(runner: ClosedLoopRunner, observe: Callable[[SegmentEvent], None
             def world(team: list[int] = view.team) -> Scene:
                 return sub_scene(scene, team, fleet.executor.robot_positions)
 
-            fleet.counts["transit_hops"] += transit(view, world, k, runner.seed * 1000 + k)
+            hops, planning = transit(view, world, k, runner.seed * 1000 + k)
+            fleet.counts["transit_hops"] += hops
+            fleet.transit_planning_s += planning
             scene_k = world()
             parts.append(runner.loop(scene_k, k, view, config, observe))
             r = parts[-1].result

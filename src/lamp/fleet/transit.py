@@ -32,6 +32,7 @@ Deterministic: counts bound everything; Gspi's ``TRANSIT_TIME_LIMIT`` is an oute
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -223,27 +224,30 @@ def far_robots(field: Routes, positions: np.ndarray) -> np.ndarray:
     return np.asarray(out, bool)
 
 
-def transit(view: Any, world: Callable[[], Scene], k: int, seed: int = 0) -> int:
+def transit(view: Any, world: Callable[[], Scene], k: int, seed: int = 0
+            ) -> tuple[int, float]:
     """Drive object ``k``'s sub-team (``view``: its executor; ``world()``: the world as the
     team plans in it now, its robots where they stand) to the object, hop by hop (module
-    docstring); returns the hops run."""
-    runs = 0
+    docstring); returns the hops run and the wall-clock seconds spent planning them."""
+    runs, planning = 0, 0.0
     for _ in range(MAX_HOPS):
         poses = np.asarray(view.object_poses, float)
         pos = np.asarray(view.robot_positions, float)
         if not (np.hypot(*(pos - poses[k][:2]).T) > TRANSIT_RADIUS).any():
             break  # every route is at least as long as the straight line
+        t0 = time.perf_counter()
         scene = world()
         field = routes(scene, k, poses)
         far = far_robots(field, pos)
-        if not far.any():
-            break
-        plan = hop(scene, k, poses, pos, far, field, seed=seed)
-        if plan is None or not plan.success:
-            plan = hop(scene, k, poses, pos, far, field, HOP_LENGTH / 2, seed=seed)
+        plan = None
+        if far.any():
+            plan = hop(scene, k, poses, pos, far, field, seed=seed)
+            if plan is None or not plan.success:
+                plan = hop(scene, k, poses, pos, far, field, HOP_LENGTH / 2, seed=seed)
+        planning += time.perf_counter() - t0
         if plan is None or not plan.success:
             break
         reply = view.execute(plan.paths)
         if not getattr(reply, "declined", False):
             runs += 1
-    return runs
+    return runs, planning
