@@ -118,8 +118,9 @@ class Fleet:
         #: (simulated time, what, object, detail) of every decision: for the curious
         self.log: list[tuple[float, str, int, str]] = []
         self.counts = dict.fromkeys(("admitted", "declined", "waited", "forced", "blocked",
-                                     "merged", "grown", "events", "transit_hops"), 0)
-        #: wall-clock seconds spent planning transit hops (``lamp.fleet.transit``)
+                                     "merged", "grown", "events", "transit_hops",
+                                     "parking_moves"), 0)
+        #: wall-clock seconds spent planning transit hops and parking moves
         self.transit_planning_s = 0.0
         n = scene.n_robots
         #: robot-seconds by state (``_account``)
@@ -187,7 +188,7 @@ class Fleet:
         o = self.objects[k]
         o.outcome = self.object_main(self, k)
         o.status = "placed" if o.outcome.result.success else "failed"
-        if o.status == "placed":
+        if o.status == "placed" and o.placed_at_s is None:
             o.placed_at_s = self.clock
         o.claim = None
         self.owner[o.team] = FREE
@@ -457,6 +458,16 @@ class Fleet:
         o.claim = None
         o.needs_team = True
         self.turns.pause(k)
+
+    def mark_placed(self, k: int) -> bool:
+        """Object ``k`` is placed (its time is now) and its plan claims nothing more;
+        True when its team should park (``fleet.parking``): other objects still move
+        and none waits for robots (they would go to it at once)."""
+        o = self.objects[k]
+        o.placed_at_s, o.claim = self.clock, None
+        others = [p for p in self.objects if p.index != k]
+        return (any(p.status == "active" for p in others)
+                and not any(p.status == "waiting" or p.needs_team for p in others))
 
     def stats(self) -> dict[str, Any]:
         """The schedule's figures for ``result.json``: counts, per-object placement times

@@ -5,7 +5,8 @@ world changed around its plan.
 :class:`~lamp.planners.runner.ClosedLoopRunner` loop on the object's sub-team
 (``Fleet.view``), in the world as it is when the loop starts (``sub_scene``: every other
 robot a disk obstacle where it stands). A team that stands far from its object first
-drives to it (``lamp.fleet.transit``). A loop that ends with ``WORLD_CHANGED`` (its
+drives to it (``lamp.fleet.transit``); a team whose object is placed moves out of the
+others' way before its robots go free (``lamp.fleet.parking``). A loop that ends with ``WORLD_CHANGED`` (its
 segment was declined, or it found no plan while others moved) or ``TEAM_CHANGED`` (a robot
 of its sub-team failed: ``Fleet`` took it out of the team) is followed by a new one,
 within the object's segment limit and cumulative planning limit; the object's outcome
@@ -23,6 +24,7 @@ import numpy as np
 
 from lamp.contract.events import SegmentEvent
 from lamp.contract.runner import ObjectOutcome
+from lamp.fleet.parking import needed_by_others, park
 from lamp.fleet.transit import transit
 from lamp.planners.closed_loop import TEAM_CHANGED, WORLD_CHANGED
 from lamp.planners.config import segment_limit
@@ -86,6 +88,12 @@ def object_main(runner: ClosedLoopRunner, observe: Callable[[SegmentEvent], None
                     or len(parts) > limit or spent + r.planning_time_s >= cfg.planning_time_limit):
                 break
         truth = getattr(fleet.executor, "true_object_poses", fleet.executor.object_poses)
-        return judged(merged(parts), np.asarray(truth[k], float), goal)
+        outcome = judged(merged(parts), np.asarray(truth[k], float), goal)
+        if outcome.result.success and fleet.mark_placed(k):
+            moves, planning = park(view, world, k, needed_by_others(fleet, k),
+                                   runner.seed * 1000 + k)
+            fleet.counts["parking_moves"] += moves
+            fleet.transit_planning_s += planning
+        return outcome
 
     return main

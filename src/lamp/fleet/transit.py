@@ -49,7 +49,8 @@ from lamp.planners.bystanders import BYSTANDER_GAP, bystanders, route_movers, st
 from lamp.planners.task import WINDOW_MARGIN, WINDOW_SNAP
 from lamp.scene.model import Scene
 
-__all__ = ["HOP_LENGTH", "TRANSIT_RADIUS", "Routes", "far_robots", "hop", "routes", "transit"]
+__all__ = ["HOP_LENGTH", "TRANSIT_RADIUS", "Grid", "Routes", "far_robots", "free_grid", "hop",
+           "routes", "team_moves", "transit"]
 
 #: A robot whose route to its object's staging area is longer than this (m) drives there
 #: before its team pushes.
@@ -109,10 +110,43 @@ class Routes:
         return np.c_[(idx % nx + 0.5) * self.cell, (idx // nx + 0.5) * self.cell]
 
 
-def routes(scene: Scene, k: int, object_poses: np.ndarray, cell: float = TRANSIT_CELL
-           ) -> Routes:
-    """The :class:`Routes` to object ``k``'s staging area in ``scene`` with its objects at
-    ``object_poses``."""
+@dataclass(frozen=True)
+class Grid:
+    """The free cells of a ``cell``-metre grid of a world for a robot's disk grown by
+    ``TRANSIT_MARGIN`` (cell centres ``X``, ``Y``; ``free`` (ny, nx)) and the graph of
+    8-connected free cells without corner cutting (edge lengths in metres)."""
+
+    cell: float
+    X: np.ndarray
+    Y: np.ndarray
+    free: np.ndarray
+    graph: Any  # scipy.sparse CSR (ny * nx, ny * nx)
+
+    @property
+    def flat(self) -> np.ndarray:
+        return np.arange(self.free.size).reshape(self.free.shape)
+
+    def nearest_free_cell(self, xy: np.ndarray, reach: int = 3) -> int | None:
+        """The free cell (flat index) nearest ``xy`` within ``reach`` cells (a robot that
+        touches an object stands inside the grid's margin), or None."""
+        ny, nx = self.free.shape
+        ci, cj = (int(math.floor(v / self.cell)) for v in np.asarray(xy, float)[:2])
+        j0, j1 = max(0, cj - reach), min(ny, cj + reach + 1)
+        i0, i1 = max(0, ci - reach), min(nx, ci + reach + 1)
+        if j0 >= j1 or i0 >= i1:
+            return None
+        sub = self.free[j0:j1, i0:i1]
+        if not sub.any():
+            return None
+        d = np.hypot(self.X[j0:j1, i0:i1] - xy[0], self.Y[j0:j1, i0:i1] - xy[1])
+        d = np.where(sub, d, np.inf)
+        j, i = np.unravel_index(int(np.argmin(d)), d.shape)
+        return int((j0 + j) * nx + i0 + i)
+
+
+def free_grid(scene: Scene, object_poses: np.ndarray, cell: float = TRANSIT_CELL) -> Grid:
+    """The :class:`Grid` of ``scene`` with its objects at ``object_poses`` (obstacles and
+    objects grown by the robot radius + ``TRANSIT_MARGIN`` with Shapely)."""
     W, H = (float(v) for v in scene.workspace)
     grown = float(scene.robot_radius) + TRANSIT_MARGIN
     poses = np.asarray(object_poses, float).reshape(-1, 3)
@@ -138,16 +172,23 @@ def routes(scene: Scene, k: int, object_poses: np.ndarray, cell: float = TRANSIT
         ws.append(np.full(int(ok.sum()), cell * math.hypot(di, dj)))
     graph = coo_matrix((np.concatenate(ws), (np.concatenate(us), np.concatenate(vs))),
                        shape=(ny * nx, ny * nx)).tocsr()
-    q = poses[k]
+    return Grid(cell, X, Y, free, graph)
+
+
+def routes(scene: Scene, k: int, object_poses: np.ndarray, cell: float = TRANSIT_CELL
+           ) -> Routes:
+    """The :class:`Routes` to object ``k``'s staging area in ``scene`` with its objects at
+    ``object_poses``."""
+    grid = free_grid(scene, object_poses, cell)
+    free, size = grid.free, grid.free.size
+    q = np.asarray(object_poses, float).reshape(-1, 3)[k]
     reach = float(scene.objects[k].shape.bounding_radius) + STAGING
-    near = free & (np.hypot(X - q[0], Y - q[1]) <= reach)
-    sources = flat[near]
+    sources = grid.flat[free & (np.hypot(grid.X - q[0], grid.Y - q[1]) <= reach)]
     if len(sources) == 0:
-        empty = np.full(ny * nx, -9999)
-        return Routes(cell, (ny, nx), free, empty, np.full(ny * nx, np.inf))
-    dist, pred = dijkstra(graph, directed=False, indices=sources, min_only=True,
+        return Routes(cell, free.shape, free, np.full(size, -9999), np.full(size, np.inf))
+    dist, pred = dijkstra(grid.graph, directed=False, indices=sources, min_only=True,
                           return_predecessors=True)[:2]
-    return Routes(cell, (ny, nx), free, np.asarray(pred), np.asarray(dist))
+    return Routes(cell, free.shape, free, np.asarray(pred), np.asarray(dist))
 
 
 def _window(points: np.ndarray, scene: Scene) -> tuple[float, float, float, float]:
@@ -168,7 +209,6 @@ def hop(scene: Scene, k: int, object_poses: np.ndarray, positions: np.ndarray,
     ``scene`` (at ``positions``) ``length`` metres along their routes, the others keeping
     their place, or None when a far robot has no route or no free goal spot."""
     pos = np.asarray(positions, float).reshape(-1, 2)
-    r = float(scene.robot_radius)
     goals = pos.copy()
     parts = [pos[far]]
     for i in np.flatnonzero(far):
@@ -181,10 +221,26 @@ def hop(scene: Scene, k: int, object_poses: np.ndarray, positions: np.ndarray,
         n = min(max(n, 1), len(route))
         goals[i] = route[n - 1]
         parts.append(route[:n])
-    route_parts = np.vstack(parts)
+    return team_moves(scene, k, object_poses, pos, goals, far, np.vstack(parts), seed)
+
+
+def team_moves(scene: Scene, k: int, object_poses: np.ndarray, positions: np.ndarray,
+               targets: np.ndarray, movers: np.ndarray, parts: np.ndarray, seed: int = 0
+               ) -> Any:
+    """Gspi's plan (``MRMPPlan``) that takes each of the ``movers`` (mask) of ``scene``'s
+    robots (at ``positions``) to the free spot nearest its target (within
+    ``SPOT_SEARCH``, kept apart from the others' places), the rest keeping their place;
+    planned in the robot space over ``parts`` (points the moves pass: routes, targets)
+    and the movers, grown by ``WINDOW_MARGIN``; robots far outside hold still
+    (``lamp.planners.bystanders``). None when a mover gets no spot."""
+    pos = np.asarray(positions, float).reshape(-1, 2)
+    movers = np.asarray(movers, bool)
+    r = float(scene.robot_radius)
+    goals = pos.copy()
+    route_parts = np.vstack([np.asarray(parts, float).reshape(-1, 2), pos[movers]])
     space = RobotSpace.from_scene(scene, object_poses=object_poses,
                                   window=_window(route_parts, scene))
-    spots: list[np.ndarray] = [pos[i] for i in np.flatnonzero(~far)]
+    spots: list[np.ndarray] = [pos[i] for i in np.flatnonzero(~movers)]
 
     def apart(points: np.ndarray) -> np.ndarray:
         if not spots:
@@ -192,8 +248,9 @@ def hop(scene: Scene, k: int, object_poses: np.ndarray, positions: np.ndarray,
         d = np.linalg.norm(points[:, None] - np.asarray(spots)[None], axis=2)
         return d.min(axis=1) >= 2 * r + BYSTANDER_GAP
 
-    for i in np.flatnonzero(far):
-        spot = space.nearest_free(goals[i], accept=apart, max_distance=SPOT_SEARCH)
+    for i in np.flatnonzero(movers):
+        spot = space.nearest_free(np.asarray(targets, float)[i], accept=apart,
+                                  max_distance=SPOT_SEARCH)
         if spot is None:
             return None
         goals[i] = spot
@@ -201,7 +258,7 @@ def hop(scene: Scene, k: int, object_poses: np.ndarray, positions: np.ndarray,
     own = standing_on_goal(pos, goals)
 
     def window_of(points: np.ndarray) -> tuple[float, float, float, float]:
-        return _window(np.vstack([points, route_parts, goals[far]]), scene)
+        return _window(np.vstack([points, route_parts, goals[movers]]), scene)
 
     held = bystanders(window_of, pos, own < 0, own >= 0, 2 * r + BYSTANDER_GAP)
     space = RobotSpace.from_scene(scene, object_poses=object_poses,
