@@ -1,6 +1,6 @@
-"""Parking (``lamp.fleet.parking``): the spots it picks keep what it promises, and a team
-whose object is placed beside another load's goal moves away, safely, without delaying
-its placement time."""
+"""Parking (``lamp.fleet.parking``): the spots it picks keep what it promises, and with
+``fleet_park_clear`` set (off by default) a team whose object is placed beside another
+load's goal moves away, safely, without delaying its placement time."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from scipy.ndimage import distance_transform_edt
 
 import lamp
-from lamp.fleet.parking import PARK_CLEAR, PARK_OPEN, in_the_way, parking_targets
+from lamp.fleet.parking import PARK_OPEN, in_the_way, parking_targets
 from lamp.fleet.transit import free_grid
 from lamp.planners.bystanders import BYSTANDER_GAP
 from lamp.record.safety import check_recording, recorded_teams
@@ -21,6 +21,7 @@ from lamp.scene import scene_from_dict
 from lamp.scene.model import Obstacle, Rectangle, Scene, SceneObject
 
 R = 0.1
+CLEAR = 1.0
 
 
 @settings(max_examples=30, deadline=None)
@@ -38,8 +39,8 @@ def test_parking_spots_are_open_clear_and_apart(robots, keep_box, wall_x) -> Non
     x, y, w, h = keep_box
     keep = shapely.box(x - w / 2, y - h / 2, x + w / 2, y + h / 2)
     pos = np.array(robots, float)
-    movers = in_the_way(keep, pos)
-    targets, moved, _ = parking_targets(grid, keep, pos, movers, R)
+    movers = in_the_way(keep, pos, CLEAR)
+    targets, moved, _ = parking_targets(grid, keep, pos, movers, R, CLEAR)
     assert not (moved & ~movers).any()
     np.testing.assert_array_equal(targets[~moved], pos[~moved])  # the others stay
     openness = distance_transform_edt(grid.free) * grid.cell
@@ -47,7 +48,7 @@ def test_parking_spots_are_open_clear_and_apart(robots, keep_box, wall_x) -> Non
         t = targets[i]
         j, c = int(t[1] // grid.cell), int(t[0] // grid.cell)
         assert grid.free[j, c] and openness[j, c] >= PARK_OPEN + grid.cell
-        assert keep.distance(shapely.Point(t)) >= PARK_CLEAR - 1e-9
+        assert keep.distance(shapely.Point(t)) >= CLEAR - 1e-9
         for m in range(len(pos)):  # apart from every spot taken and every robot staying
             if m != i and (moved[m] or not movers[m]):
                 assert np.linalg.norm(targets[m] - t) >= 2 * R + BYSTANDER_GAP - 1e-9
@@ -69,7 +70,9 @@ PARK = {
 
 
 def test_a_placed_objects_team_parks_out_of_the_next_goal_safely() -> None:
-    result = lamp.solve(scene_from_dict(copy.deepcopy(PARK)), "lazy", 0)
+    scene = scene_from_dict(copy.deepcopy(PARK))
+    assert lamp.solve(scene, "lazy", 0).to_dict()["stats"]["fleet"]["parking_moves"] == 0
+    result = lamp.solve(scene, "lazy", 0, params={"fleet_park_clear": CLEAR})
     assert result.success
     fleet = result.to_dict()["stats"]["fleet"]
     assert fleet["parking_moves"] >= 1

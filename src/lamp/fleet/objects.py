@@ -89,9 +89,9 @@ def object_main(runner: ClosedLoopRunner, observe: Callable[[SegmentEvent], None
                 break
         truth = getattr(fleet.executor, "true_object_poses", fleet.executor.object_poses)
         outcome = judged(merged(parts), np.asarray(truth[k], float), goal)
-        if outcome.result.success and fleet.mark_placed(k):
+        if outcome.result.success and fleet.mark_placed(k) and cfg.fleet_park_clear > 0:
             moves, planning = park(view, world, k, needed_by_others(fleet, k),
-                                   runner.seed * 1000 + k)
+                                   cfg.fleet_park_clear, runner.seed * 1000 + k)
             fleet.counts["parking_moves"] += moves
             fleet.transit_planning_s += planning
         return outcome
