@@ -6,9 +6,9 @@ budget: more would stand idle), at least ``MIN_TEAM``; a lone robot only when no
 object is moving (no robot will be freed); robots left over when the next object cannot
 start join the started teams. More objects moving at once, each with fewer robots, places
 them sooner: on IROS with 9 robots (``benchmarks/fleet_iros9.py``), teams of 2 and 3 (4
-objects at once) placed all 9 objects in 191 s, 3 teams of 3 in 249 s. A team keeps its robots until its object is placed or
-given up; then they are free for the next object. Robots no object needs stand still
-where they are (every plan sees them as obstacles).
+objects at once) placed all 9 objects in 191 s, 3 teams of 3 in 249 s. A team keeps its
+robots until its object is placed or given up; then they are free for the next object.
+Robots no object needs stand still where they are (every plan sees them as obstacles).
 """
 
 from __future__ import annotations
