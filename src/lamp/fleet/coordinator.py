@@ -167,6 +167,7 @@ class Fleet:
                     ready.append(o.index)
         if not ready:
             return
+        ready = self._least_conflict_first(ready)
         free = self._free()
         active = any(o.status == "active" and o.team for o in self.objects)
         teams = allocate(ready, free, self.executor.robot_positions,
@@ -183,6 +184,34 @@ class Fleet:
             for obs in self.observers:
                 obs.object_started(k, len(self.objects))
             self.turns.start(k, lambda k=k: self._main(k))
+
+    def _corridor(self, k: int) -> shapely.Geometry:
+        """Object ``k``'s way from where it is to its goal: the hull of its footprints
+        there, grown by a robot diameter."""
+        from lamp.geometry.shapes import to_shapely
+
+        shape = self.scene.objects[k].shape
+        pose = np.asarray(self.executor.object_poses[k], float)
+        hull = shapely.union_all([to_shapely(shape, pose),
+                                  to_shapely(shape, self.scene.objects[k].goal)]).convex_hull
+        return hull.buffer(2 * self.scene.robot_radius)
+
+    def _least_conflict_first(self, ready: list[int]) -> list[int]:
+        """``ready`` with the objects that wait for robots first (in order), then the
+        rest greedily: next the one whose corridor meets the fewest corridors of the
+        moving objects and of those already put before it (ties: file order)."""
+        first = [k for k in ready if self.objects[k].status == "active"]
+        rest = [k for k in ready if k not in first]
+        busy = [self._corridor(o.index) for o in self.objects
+                if o.status == "active" and o.team] + [self._corridor(k) for k in first]
+        cor = {k: self._corridor(k) for k in rest}
+        out = list(first)
+        while rest:
+            k = min(rest, key=lambda k: (sum(cor[k].intersects(b) for b in busy), k))
+            rest.remove(k)
+            out.append(k)
+            busy.append(cor[k])
+        return out
 
     def _main(self, k: int) -> None:
         o = self.objects[k]
