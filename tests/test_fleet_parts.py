@@ -18,7 +18,7 @@ from lamp.contract.model import MAX_ROBOTS
 from lamp.fleet.regions import OBJECT_MARGIN, ROBOT_MARGIN, claim, footprints
 from lamp.fleet.segments import Segment, on_grid
 from lamp.fleet.spacetime import compatible
-from lamp.fleet.teams import MIN_TEAM, allocate
+from lamp.fleet.teams import MIN_TEAM, allocate, least_conflict_order
 from lamp.fleet.turns import Turns
 from lamp.geometry.shapes import to_shapely
 from lamp.scene.model import Rectangle
@@ -149,6 +149,37 @@ def test_allocate_shares_the_nearest_free_robots_in_priority_order(seed, n_obj, 
         assert max(sizes, default=0) <= max(MIN_TEAM, min(MAX_ROBOTS, n_free // n_obj))
     used = [i for t in teams.values() for i in t]
     assert len(used) == len(set(used)) and set(used) <= set(free)
+
+
+@settings(max_examples=60)
+@given(st.integers(0, 2**31 - 1), st.integers(0, 6), st.integers(0, 3))
+def test_least_conflict_order_starts_the_least_crossed_ways_first(seed, n, n_busy):
+    rng = np.random.default_rng(seed)
+
+    def box():
+        x, y = rng.uniform(0, 10, 2)
+        return shapely.box(x, y, x + rng.uniform(0.5, 3), y + rng.uniform(0.5, 3))
+
+    cands = sorted(rng.choice(20, n, replace=False).tolist())
+    corridors = {k: box() for k in cands}
+    busy = [box() for _ in range(n_busy)]
+    order = least_conflict_order(cands, corridors, busy)
+    assert sorted(order) == cands
+    # each pick meets no more corridors (moving ones and those picked before) than any
+    # object still left, and the lowest index among the equals
+    taken = list(busy)
+    for i, k in enumerate(order):
+        count = {j: sum(corridors[j].intersects(b) for b in taken) for j in order[i:]}
+        assert count[k] == min(count.values())
+        assert k == min(j for j in count if count[j] == count[k])
+        taken.append(corridors[k])
+
+
+def test_least_conflict_order_keeps_file_order_when_no_ways_cross():
+    corridors = {k: shapely.box(3 * k, 0, 3 * k + 1, 1) for k in (4, 1, 7)}
+    assert least_conflict_order([4, 1, 7], corridors, []) == [1, 4, 7]
+    # the one crossing a moving object's way goes last
+    assert least_conflict_order([4, 1, 7], corridors, [shapely.box(2.5, 0, 4.5, 1)]) == [4, 7, 1]
 
 
 # ------------------------------------------------------------------ space-time

@@ -52,7 +52,7 @@ from lamp.contract.runner import ObjectOutcome
 from lamp.fleet.admission import meets_moving, meets_standing
 from lamp.fleet.regions import claim
 from lamp.fleet.segments import Segment, on_grid
-from lamp.fleet.teams import allocate, nearest
+from lamp.fleet.teams import allocate, least_conflict_order, nearest
 from lamp.fleet.turns import Turns
 from lamp.fleet.view import FleetExecution, FleetView
 from lamp.scene.model import Scene
@@ -198,20 +198,12 @@ class Fleet:
 
     def _least_conflict_first(self, ready: list[int]) -> list[int]:
         """``ready`` with the objects that wait for robots first (in order), then the
-        rest greedily: next the one whose corridor meets the fewest corridors of the
-        moving objects and of those already put before it (ties: file order)."""
+        rest in ``teams.least_conflict_order`` against the moving objects' corridors."""
         first = [k for k in ready if self.objects[k].status == "active"]
         rest = [k for k in ready if k not in first]
         busy = [self._corridor(o.index) for o in self.objects
                 if o.status == "active" and o.team] + [self._corridor(k) for k in first]
-        cor = {k: self._corridor(k) for k in rest}
-        out = list(first)
-        while rest:
-            k = min(rest, key=lambda k: (sum(cor[k].intersects(b) for b in busy), k))
-            rest.remove(k)
-            out.append(k)
-            busy.append(cor[k])
-        return out
+        return first + least_conflict_order(rest, {k: self._corridor(k) for k in rest}, busy)
 
     def _main(self, k: int) -> None:
         o = self.objects[k]

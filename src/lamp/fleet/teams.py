@@ -9,17 +9,20 @@ them sooner: on IROS with 9 robots (``benchmarks/fleet_iros9.py``), teams of 2 a
 objects at once) placed all 9 objects in 191 s, 3 teams of 3 in 249 s. A team keeps its
 robots until its object is placed or given up; then they are free for the next object.
 Robots no object needs stand still where they are (every plan sees them as obstacles).
+Which ready objects go first is :func:`least_conflict_order`: those whose way crosses the
+fewest ways of the objects moving (IROS with 9 robots: 191 s -> 164 s).
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
+import shapely
 
 from lamp.contract.model import MAX_ROBOTS
 
-__all__ = ["MIN_TEAM", "allocate", "nearest"]
+__all__ = ["MIN_TEAM", "allocate", "least_conflict_order", "nearest"]
 
 #: The smallest sub-team an object starts with while other objects are moving.
 MIN_TEAM = 2
@@ -69,3 +72,18 @@ def allocate(ready: Sequence[int], free: Sequence[int], robot_positions: np.ndar
                                           list(teams).index(k)))
             teams[k] = sorted(teams[k] + [i])
     return teams
+
+
+def least_conflict_order(candidates: Sequence[int], corridors: Mapping[int, shapely.Geometry],
+                         busy: Sequence[shapely.Geometry]) -> list[int]:
+    """``candidates`` in the order they should start: greedily, next the one whose
+    corridor (``corridors[k]``: the way it has to go) meets the fewest of ``busy`` (the
+    moving objects' corridors) and of the corridors of those put before it; ties by
+    index. Objects whose ways do not cross start together, and crossing ones wait."""
+    rest, taken, out = sorted(candidates), list(busy), []
+    while rest:
+        k = min(rest, key=lambda k: (sum(corridors[k].intersects(b) for b in taken), k))
+        rest.remove(k)
+        out.append(k)
+        taken.append(corridors[k])
+    return out
