@@ -52,7 +52,7 @@ from lamp.contract.runner import ObjectOutcome
 from lamp.fleet.admission import meets_moving, meets_standing
 from lamp.fleet.regions import claim
 from lamp.fleet.segments import Segment, on_grid
-from lamp.fleet.teams import allocate, least_conflict_order, nearest
+from lamp.fleet.teams import allocate, corridor, least_conflict_order, nearest
 from lamp.fleet.turns import Turns
 from lamp.fleet.view import FleetExecution, FleetView
 from lamp.scene.model import Scene
@@ -186,15 +186,8 @@ class Fleet:
             self.turns.start(k, lambda k=k: self._main(k))
 
     def _corridor(self, k: int) -> shapely.Geometry:
-        """Object ``k``'s way from where it is to its goal: the hull of its footprints
-        there, grown by a robot diameter."""
-        from lamp.geometry.shapes import to_shapely
-
-        shape = self.scene.objects[k].shape
-        pose = np.asarray(self.executor.object_poses[k], float)
-        hull = shapely.union_all([to_shapely(shape, pose),
-                                  to_shapely(shape, self.scene.objects[k].goal)]).convex_hull
-        return hull.buffer(2 * self.scene.robot_radius)
+        o = self.scene.objects[k]
+        return corridor(o.shape, self.executor.object_poses[k], o.goal, self.scene.robot_radius)
 
     def _least_conflict_first(self, ready: list[int]) -> list[int]:
         """``ready`` with the objects that wait for robots first (in order), then the

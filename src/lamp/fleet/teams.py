@@ -21,8 +21,10 @@ import numpy as np
 import shapely
 
 from lamp.contract.model import MAX_ROBOTS
+from lamp.geometry.shapes import to_shapely
+from lamp.scene.model import Shape
 
-__all__ = ["MIN_TEAM", "allocate", "least_conflict_order", "nearest"]
+__all__ = ["MIN_TEAM", "allocate", "corridor", "least_conflict_order", "nearest"]
 
 #: The smallest sub-team an object starts with while other objects are moving.
 MIN_TEAM = 2
@@ -87,3 +89,12 @@ def least_conflict_order(candidates: Sequence[int], corridors: Mapping[int, shap
         out.append(k)
         taken.append(corridors[k])
     return out
+
+
+def corridor(shape: Shape, pose: np.ndarray, goal: np.ndarray, robot_radius: float
+             ) -> shapely.Geometry:
+    """An object's way from ``pose`` to ``goal``: the convex hull of its footprints at
+    both, grown by a robot diameter."""
+    ends = shapely.union_all([to_shapely(shape, np.asarray(pose, float)),
+                              to_shapely(shape, np.asarray(goal, float))])
+    return ends.convex_hull.buffer(2 * float(robot_radius))
