@@ -60,6 +60,7 @@ def object_main(runner: ClosedLoopRunner, observe: Callable[[SegmentEvent], None
         scene, cfg = runner.scene, runner.config
         goal = np.asarray(scene.objects[k].goal, float)
         start = np.asarray(fleet.executor.object_poses[k], float)
+        seed = runner.seed * 1000 + k  # the object's tasks' seed (``ClosedLoopRunner.loop``)
         limit = segment_limit(cfg.max_segments, float(np.hypot(*(goal[:2] - start[:2]))))
         parts: list[ObjectOutcome] = []
         while True:
@@ -77,7 +78,7 @@ def object_main(runner: ClosedLoopRunner, observe: Callable[[SegmentEvent], None
             def world(team: list[int] = view.team) -> Scene:
                 return sub_scene(scene, team, fleet.executor.robot_positions)
 
-            hops, planning = transit(view, world, k, runner.seed * 1000 + k)
+            hops, planning = transit(view, world, k, seed)
             fleet.counts["transit_hops"] += hops
             fleet.transit_planning_s += planning
             scene_k = world()
@@ -91,7 +92,7 @@ def object_main(runner: ClosedLoopRunner, observe: Callable[[SegmentEvent], None
         outcome = judged(merged(parts), np.asarray(truth[k], float), goal)
         if outcome.result.success and fleet.mark_placed(k) and cfg.fleet_park_clear > 0:
             moves, planning = park(view, world, k, needed_by_others(fleet, k),
-                                   cfg.fleet_park_clear, runner.seed * 1000 + k)
+                                   cfg.fleet_park_clear, seed)
             fleet.counts["parking_moves"] += moves
             fleet.transit_planning_s += planning
         return outcome

@@ -89,7 +89,6 @@ def parking_targets(grid: Grid, keep: shapely.Geometry, positions: np.ndarray,
                                               clear), bool)).ravel()
     targets, moved, parts = pos.copy(), np.zeros(len(pos), bool), [pos[movers]]
     taken = [pos[i] for i in np.flatnonzero(~np.asarray(movers, bool))]
-    nx = grid.free.shape[1]
     for i in np.flatnonzero(movers):
         start = grid.nearest_free_cell(pos[i])
         if start is None:
@@ -98,17 +97,13 @@ def parking_targets(grid: Grid, keep: shapely.Geometry, positions: np.ndarray,
                               limit=PARK_REACH, return_predecessors=True)
         cand = np.flatnonzero(ok & np.isfinite(dist))
         if taken and len(cand):
-            xy = np.c_[grid.X.ravel()[cand], grid.Y.ravel()[cand]]
+            xy = grid.centres(cand)
             d = np.linalg.norm(xy[:, None] - np.asarray(taken)[None], axis=2).min(axis=1)
             cand = cand[d >= 2 * robot_radius + BYSTANDER_GAP + cell]
         if len(cand) == 0:
             continue
         best = int(cand[np.lexsort((cand, dist[cand]))[0]])
-        path = [best]
-        while pred[path[-1]] >= 0:
-            path.append(int(pred[path[-1]]))
-        idx = np.asarray(path)
-        parts.append(np.c_[(idx % nx + 0.5) * cell, (idx // nx + 0.5) * cell])
+        parts.append(grid.walk(pred, best))
         targets[i] = parts[-1][0]
         moved[i] = True
         taken.append(targets[i])

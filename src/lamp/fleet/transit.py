@@ -35,6 +35,7 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -72,49 +73,11 @@ SPOT_SEARCH = 1.0
 
 
 @dataclass(frozen=True)
-class Routes:
-    """Shortest routes on a grid of ``cell`` metres (cell (i, j) centred at ((i + 0.5) *
-    cell, (j + 0.5) * cell)) from every free cell to the staging area: ``pred`` is the
-    flat index of the next cell towards it (-9999 at the area or where none leads)."""
-
-    cell: float
-    shape: tuple[int, int]  # (ny, nx)
-    free: np.ndarray  # (ny, nx) bool
-    pred: np.ndarray  # (ny * nx,) int
-    dist: np.ndarray  # (ny * nx,) metres to the area (inf: none)
-
-    def cell_of(self, xy: np.ndarray) -> int | None:
-        """The free cell nearest ``xy`` within two cells (flat index), or None."""
-        ny, nx = self.shape
-        ci, cj = (int(math.floor(v / self.cell)) for v in np.asarray(xy, float)[:2])
-        best: tuple[float, int] | None = None
-        for j in range(max(0, cj - 2), min(ny, cj + 3)):
-            for i in range(max(0, ci - 2), min(nx, ci + 3)):
-                if self.free[j, i] and math.isfinite(self.dist[j * nx + i]):
-                    d = math.hypot((i + 0.5) * self.cell - xy[0], (j + 0.5) * self.cell - xy[1])
-                    if best is None or d < best[0]:
-                        best = (d, j * nx + i)
-        return None if best is None else best[1]
-
-    def path(self, xy: np.ndarray) -> np.ndarray | None:
-        """(M, 2) cell centres from ``xy``'s cell to the staging area, or None when no
-        route leads there."""
-        v = self.cell_of(xy)
-        if v is None:
-            return None
-        nx = self.shape[1]
-        out = [v]
-        while self.pred[out[-1]] >= 0:
-            out.append(int(self.pred[out[-1]]))
-        idx = np.asarray(out)
-        return np.c_[(idx % nx + 0.5) * self.cell, (idx // nx + 0.5) * self.cell]
-
-
-@dataclass(frozen=True)
 class Grid:
     """The free cells of a ``cell``-metre grid of a world for a robot's disk grown by
-    ``TRANSIT_MARGIN`` (cell centres ``X``, ``Y``; ``free`` (ny, nx)) and the graph of
-    8-connected free cells without corner cutting (edge lengths in metres)."""
+    ``TRANSIT_MARGIN`` (cell (i, j) centred at ((i + 0.5) * cell, (j + 0.5) * cell):
+    ``X``, ``Y``; ``free`` (ny, nx)) and the graph of 8-connected free cells without corner
+    cutting (edge lengths in metres). Cells are named by flat index ``j * nx + i``."""
 
     cell: float
     X: np.ndarray
@@ -126,9 +89,24 @@ class Grid:
     def flat(self) -> np.ndarray:
         return np.arange(self.free.size).reshape(self.free.shape)
 
-    def nearest_free_cell(self, xy: np.ndarray, reach: int = 3) -> int | None:
-        """The free cell (flat index) nearest ``xy`` within ``reach`` cells (a robot that
-        touches an object stands inside the grid's margin), or None."""
+    def centres(self, idx: np.ndarray) -> np.ndarray:
+        """(M, 2) centres of the cells ``idx`` (flat indices)."""
+        idx = np.asarray(idx, np.int64)
+        return np.c_[self.X.ravel()[idx], self.Y.ravel()[idx]]
+
+    def walk(self, pred: np.ndarray, v: int) -> np.ndarray:
+        """(M, 2) centres of the cells from ``v`` along ``pred`` (a Dijkstra predecessor
+        array: the next cell, negative at the end)."""
+        out = [int(v)]
+        while pred[out[-1]] >= 0:
+            out.append(int(pred[out[-1]]))
+        return self.centres(np.asarray(out))
+
+    def nearest_free_cell(self, xy: np.ndarray, reach: int = 3,
+                          allowed: np.ndarray | None = None) -> int | None:
+        """The free cell (flat index; also ``allowed``, a flat mask, when given) nearest
+        ``xy`` within ``reach`` cells (a robot that touches an object stands inside the
+        grid's margin), the lowest index among equals; or None."""
         ny, nx = self.free.shape
         ci, cj = (int(math.floor(v / self.cell)) for v in np.asarray(xy, float)[:2])
         j0, j1 = max(0, cj - reach), min(ny, cj + reach + 1)
@@ -136,12 +114,53 @@ class Grid:
         if j0 >= j1 or i0 >= i1:
             return None
         sub = self.free[j0:j1, i0:i1]
+        if allowed is not None:
+            sub = sub & np.asarray(allowed).reshape(ny, nx)[j0:j1, i0:i1]
         if not sub.any():
             return None
         d = np.hypot(self.X[j0:j1, i0:i1] - xy[0], self.Y[j0:j1, i0:i1] - xy[1])
         d = np.where(sub, d, np.inf)
         j, i = np.unravel_index(int(np.argmin(d)), d.shape)
         return int((j0 + j) * nx + i0 + i)
+
+
+@dataclass(frozen=True)
+class Routes:
+    """Shortest routes on ``grid`` from every free cell to the staging area: ``pred`` is
+    the flat index of the next cell towards it (-9999 at the area or where none leads),
+    ``dist`` the metres to it (inf: none)."""
+
+    grid: Grid
+    pred: np.ndarray  # (ny * nx,) int
+    dist: np.ndarray  # (ny * nx,) float
+
+    @property
+    def cell(self) -> float:
+        return self.grid.cell
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return self.grid.free.shape
+
+    @property
+    def free(self) -> np.ndarray:
+        return self.grid.free
+
+    @cached_property
+    def reachable(self) -> np.ndarray:
+        """Flat mask of the cells a route leads from."""
+        return np.isfinite(self.dist)
+
+    def cell_of(self, xy: np.ndarray) -> int | None:
+        """The free cell with a route nearest ``xy`` within two cells (flat index), or
+        None."""
+        return self.grid.nearest_free_cell(xy, 2, self.reachable)
+
+    def path(self, xy: np.ndarray) -> np.ndarray | None:
+        """(M, 2) cell centres from ``xy``'s cell to the staging area, or None when no
+        route leads there."""
+        v = self.cell_of(xy)
+        return None if v is None else self.grid.walk(self.pred, v)
 
 
 def free_grid(scene: Scene, object_poses: np.ndarray, cell: float = TRANSIT_CELL) -> Grid:
@@ -185,10 +204,10 @@ def routes(scene: Scene, k: int, object_poses: np.ndarray, cell: float = TRANSIT
     reach = float(scene.objects[k].shape.bounding_radius) + STAGING
     sources = grid.flat[free & (np.hypot(grid.X - q[0], grid.Y - q[1]) <= reach)]
     if len(sources) == 0:
-        return Routes(cell, free.shape, free, np.full(size, -9999), np.full(size, np.inf))
+        return Routes(grid, np.full(size, -9999), np.full(size, np.inf))
     dist, pred = dijkstra(grid.graph, directed=False, indices=sources, min_only=True,
                           return_predecessors=True)[:2]
-    return Routes(cell, free.shape, free, np.asarray(pred), np.asarray(dist))
+    return Routes(grid, np.asarray(pred), np.asarray(dist))
 
 
 def _window(points: np.ndarray, scene: Scene) -> tuple[float, float, float, float]:

@@ -200,12 +200,16 @@ class Verifier:
             return any(n > held.get(c, 0) for c, n in need.items())
         return unreachable
 
+    def _too_wide(self, window: Window) -> bool:
+        """Whether ``window`` exceeds ``max_window_side``: ``approach`` grows no window
+        past it."""
+        x0, y0, x1, y1 = window
+        return max(x1 - x0, y1 - y0) > self.robots.max_window_side
+
     def _window_final(self, q_from: np.ndarray, q_R: np.ndarray) -> bool:
         """Whether ``approach`` would plan only in the first window for robots at ``q_R``
-        because the robots stand so far apart that the doubled one would exceed
-        ``max_window_side``."""
-        x0, y0, x1, y1 = self.robots.window(q_from, q_R, 2.0)
-        return max(x1 - x0, y1 - y0) > self.robots.max_window_side
+        because the robots stand so far apart that the doubled one is too wide."""
+        return self._too_wide(self.robots.window(q_from, q_R, 2.0))
 
     def can_reach(self, q_from: np.ndarray, q_to: np.ndarray, q_R: np.ndarray,
                   attempt: int = 0) -> bool:
@@ -330,8 +334,7 @@ class Verifier:
                 self.stats.gspi_timeouts += 1
             wider = robots.window(q_from, q_R[~held], 2.0 * scale)
             if (space.covers_workspace or plan.status not in _WINDOW_BOUND
-                    or max(wider[2] - wider[0], wider[3] - wider[1]) > robots.max_window_side
-                    or time.perf_counter() >= t_end):
+                    or self._too_wide(wider) or time.perf_counter() >= t_end):
                 return None
             scale *= 2.0
         self.stats.gspi_success += 1
