@@ -6,6 +6,8 @@ robot and object clear)."""
 from __future__ import annotations
 
 import math
+import subprocess
+import sys
 import threading
 
 import numpy as np
@@ -78,6 +80,41 @@ def test_close_ends_paused_threads() -> None:
     turns.resume(0)
     turns.close()
     assert turns.finished(0) and reached == []
+
+
+_ARENAS_PROBE = r"""
+import ctypes, ctypes.util, os, sys, tempfile
+from lamp.fleet.turns import MALLOC_ARENAS, Turns
+turns = Turns()
+keep = []
+def body(k):
+    keep.append([bytearray(1000) for _ in range(2000)])  # malloc in this thread
+    turns.pause(k)  # alive, as a loop waiting on its executor
+for k in range(8):
+    turns.start(k, lambda k=k: body(k))
+    turns.resume(k)
+libc = ctypes.CDLL(ctypes.util.find_library("c"))
+libc.fopen.restype = ctypes.c_void_p
+libc.fopen.argtypes = [ctypes.c_char_p, ctypes.c_char_p]
+libc.malloc_info.argtypes = [ctypes.c_int, ctypes.c_void_p]
+libc.fclose.argtypes = [ctypes.c_void_p]
+path = os.path.join(tempfile.mkdtemp(), "malloc.xml")
+fp = libc.fopen(path.encode(), b"w")
+libc.malloc_info(0, fp)
+libc.fclose(fp)
+print(open(path).read().count("<heap nr="), MALLOC_ARENAS)
+turns.close()
+"""
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="glibc's malloc arenas")
+def test_fleet_threads_share_malloc_arenas() -> None:
+    """Eight live loop threads, each having allocated, leave the process with at most
+    ``MALLOC_ARENAS`` malloc heaps (glibc otherwise gives each thread its own)."""
+    out = subprocess.run([sys.executable, "-c", _ARENAS_PROBE], capture_output=True,
+                         text=True, check=True).stdout.split()
+    heaps, cap = int(out[0]), int(out[1])
+    assert 1 <= heaps <= cap
 
 
 # ------------------------------------------------------------------ the grid
