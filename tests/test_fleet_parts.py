@@ -20,10 +20,10 @@ from lamp.contract.model import MAX_ROBOTS
 from lamp.fleet.regions import OBJECT_MARGIN, ROBOT_MARGIN, claim, footprints
 from lamp.fleet.segments import Segment, on_grid
 from lamp.fleet.spacetime import compatible
-from lamp.fleet.teams import MIN_TEAM, allocate, least_conflict_order
+from lamp.fleet.teams import MIN_TEAM, allocate, least_conflict_order, start_order
 from lamp.fleet.turns import Turns
 from lamp.geometry.shapes import to_shapely
-from lamp.scene.model import Rectangle
+from lamp.scene.model import Obstacle, Rectangle, Scene, SceneObject
 
 R = 0.05
 STEP = 0.02
@@ -217,6 +217,36 @@ def test_least_conflict_order_keeps_file_order_when_no_ways_cross():
     assert least_conflict_order([4, 1, 7], corridors, []) == [1, 4, 7]
     # the one crossing a moving object's way goes last
     assert least_conflict_order([4, 1, 7], corridors, [shapely.box(2.5, 0, 4.5, 1)]) == [4, 7, 1]
+
+
+@settings(max_examples=60)
+@given(st.integers(0, 2**31 - 1), st.integers(1, 7))
+def test_an_object_whose_goal_bars_a_way_starts_after_that_object(seed, n):
+    """With ``blocks`` acyclic, every object starts after each one whose way its goal
+    lies in, whatever the corridors."""
+    rng = np.random.default_rng(seed)
+    cands = sorted(rng.choice(20, n, replace=False).tolist())
+    rank = {k: r for r, k in enumerate(rng.permutation(cands).tolist())}
+    blocks = {k: {j for j in cands if rank[j] < rank[k] and rng.random() < 0.4} for k in cands}
+    corridors = {k: shapely.box(*(xy := rng.uniform(0, 5, 2)), *(xy + 2)) for k in cands}
+    order = least_conflict_order(cands, corridors, [], blocks)
+    assert sorted(order) == cands
+    for k in cands:
+        assert all(order.index(j) < order.index(k) for j in blocks[k])
+
+
+def test_loads_into_a_dead_end_aisle_start_deepest_first():
+    """Three boxes go into an aisle closed at x = 0, their goals at x = 1, 2, 3, from
+    starts beyond its mouth; in whatever file order, the deepest goal starts first."""
+    walls = (Obstacle(Rectangle((8.0, 0.1)), (4.0, 0.45, 0.0)),
+             Obstacle(Rectangle((8.0, 0.1)), (4.0, 1.55, 0.0)))
+    for goals_x in ((3.0, 1.0, 2.0), (1.0, 2.0, 3.0), (2.0, 3.0, 1.0)):
+        objects = tuple(SceneObject(BOX, (5.0 + k, 1.0, 0.0), (gx, 1.0, 0.0))
+                        for k, gx in enumerate(goals_x))
+        scene = Scene("aisle", (9.0, 2.0), ((8.5, 0.3), (8.5, 1.7)), objects, walls, 0.05)
+        poses = np.array([o.start for o in objects])
+        order = start_order(scene, poses, [0, 1, 2], [])
+        assert [goals_x[k] for k in order] == [1.0, 2.0, 3.0]
 
 
 # ------------------------------------------------------------------ space-time

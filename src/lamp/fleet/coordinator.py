@@ -52,7 +52,7 @@ from lamp.contract.runner import ObjectOutcome
 from lamp.fleet.admission import meets_moving, meets_standing
 from lamp.fleet.regions import claim
 from lamp.fleet.segments import Segment, on_grid
-from lamp.fleet.teams import allocate, corridor, least_conflict_order, nearest
+from lamp.fleet.teams import allocate, nearest, start_order
 from lamp.fleet.turns import Turns
 from lamp.fleet.view import FleetExecution, FleetView
 from lamp.scene.model import Scene
@@ -185,18 +185,13 @@ class Fleet:
                 obs.object_started(k, len(self.objects))
             self.turns.start(k, lambda k=k: self._main(k))
 
-    def _corridor(self, k: int) -> shapely.Geometry:
-        o = self.scene.objects[k]
-        return corridor(o.shape, self.executor.object_poses[k], o.goal, self.scene.robot_radius)
-
     def _least_conflict_first(self, ready: list[int]) -> list[int]:
         """``ready`` with the objects that wait for robots first (in order), then the
-        rest in ``teams.least_conflict_order`` against the moving objects' corridors."""
+        rest in ``teams.start_order`` (the moving objects' ways busy)."""
         first = [k for k in ready if self.objects[k].status == "active"]
-        rest = [k for k in ready if k not in first]
-        busy = [self._corridor(o.index) for o in self.objects
-                if o.status == "active" and o.team] + [self._corridor(k) for k in first]
-        return first + least_conflict_order(rest, {k: self._corridor(k) for k in rest}, busy)
+        moving = [o.index for o in self.objects if o.status == "active" and o.team]
+        return first + start_order(self.scene, self.executor.object_poses,
+                                   [k for k in ready if k not in first], moving + first)
 
     def _main(self, k: int) -> None:
         o = self.objects[k]
