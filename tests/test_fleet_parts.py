@@ -20,7 +20,7 @@ from lamp.contract.model import MAX_ROBOTS
 from lamp.fleet.regions import OBJECT_MARGIN, ROBOT_MARGIN, claim, footprints
 from lamp.fleet.segments import Segment, on_grid
 from lamp.fleet.spacetime import compatible
-from lamp.fleet.teams import MIN_TEAM, allocate, least_conflict_order, start_order
+from lamp.fleet.teams import MIN_TEAM, allocate, least_conflict_order, reinforce, start_order
 from lamp.fleet.turns import Turns
 from lamp.geometry.shapes import to_shapely
 from lamp.scene.model import Obstacle, Rectangle, Scene, SceneObject
@@ -186,6 +186,36 @@ def test_allocate_shares_the_nearest_free_robots_in_priority_order(seed, n_obj, 
         assert max(sizes, default=0) <= max(MIN_TEAM, min(MAX_ROBOTS, n_free // n_obj))
     used = [i for t in teams.values() for i in t]
     assert len(used) == len(set(used)) and set(used) <= set(free)
+
+
+@settings(max_examples=80)
+@given(st.integers(0, 2**31 - 1), st.integers(0, 8), st.integers(0, 4),
+       st.sampled_from([math.inf, 2.0]))
+def test_reinforce_joins_each_robot_to_the_nearest_team_with_room(seed, n_pool, n_teams, reach):
+    rng = np.random.default_rng(seed)
+    n = n_pool + 3 * n_teams
+    pos = rng.uniform(0, 6, (n, 2))
+    poses = np.column_stack([rng.uniform(0, 6, (n_teams, 2)), np.zeros(n_teams)])
+    ids = rng.permutation(n).tolist()
+    pool, rest = ids[:n_pool], ids[n_pool:]
+    teams = {k: sorted(rest[3 * k:3 * k + int(rng.integers(1, MAX_ROBOTS + 1))])
+             for k in range(n_teams)}
+    out = reinforce(pool, pos, poses, teams, reach)
+    assert set(out) == set(teams)
+    sizes = dict((k, len(t)) for k, t in teams.items())
+    for i in pool:  # replay the rule robot by robot
+        d = {k: float(np.hypot(*(poses[k, :2] - pos[i]))) for k in teams
+             if sizes[k] < MAX_ROBOTS}
+        k = min(d, key=lambda k: (d[k], k)) if d else None
+        joined = [j for j in out if i in out[j]]
+        if k is None or d[k] > reach:
+            assert joined == []
+        else:
+            assert joined == [k]
+            sizes[k] += 1
+    for k in teams:
+        assert set(teams[k]) <= set(out[k]) and len(out[k]) == sizes[k] <= MAX_ROBOTS
+        assert out[k] == sorted(out[k])
 
 
 @settings(max_examples=60)

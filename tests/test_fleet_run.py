@@ -178,3 +178,29 @@ def test_a_failed_robot_leaves_its_sub_team_and_a_free_one_takes_its_place() -> 
     place = np.array(out["stats"]["failed_robots"]["1"])
     later = rec["robots"][rec["times"] > 2.5, 1]
     assert np.all(np.linalg.norm(later - place, axis=1) < 0.02)
+
+
+def test_robots_freed_by_a_placed_object_reinforce_a_moving_team() -> None:
+    """Two boxes, four robots: teams of two. The short push is placed first; nothing waits
+    to start, so its robots, within reach, join the other box's team up to the model's
+    three (``Fleet._reinforce``), whose loop plans anew with them; both placed safely."""
+    import numpy as np
+
+    d = {"format": "lamp-scene/1", "name": "help", "workspace": [5.0, 3.0],
+         "schedule": "concurrent",
+         "robots": {"starts": [[0.4, 0.6], [0.4, 1.0], [0.4, 2.0], [0.4, 2.4]]},
+         "objects": [{"type": "rectangle", "size": [0.4, 0.3], "start": [1.2, 0.8, 0.0],
+                      "goal": [1.8, 0.8, 0.0]},
+                     {"type": "rectangle", "size": [0.4, 0.3], "start": [1.2, 2.2, 0.0],
+                      "goal": [4.2, 2.2, 0.0]}]}
+    res = lamp.solve(scene_from_dict(d), "lazy", 0)
+    assert res.success, [o.failure_reason for o in res.objects]
+    _safe(res)
+    fleet = res.to_dict()["stats"]["fleet"]
+    first, last = fleet["placed_at_s"]
+    assert first < last and fleet["reinforced"] >= 1
+    team = recorded_teams(res.recording)
+    times = res.recording.arrays["times"]
+    assert np.all((team[times < first - 1e-6] == 1).sum(axis=1) <= 2)  # two while 0 moves
+    assert (team[-1] == 1).sum() == 3  # three at the end
+    assert res.objects[1].replans >= 1  # a new loop with the new team

@@ -52,8 +52,10 @@ from lamp.contract.runner import ObjectOutcome
 from lamp.fleet.admission import meets_moving, meets_standing
 from lamp.fleet.regions import claim
 from lamp.fleet.segments import Segment, on_grid
-from lamp.fleet.teams import allocate, nearest, start_order
+from lamp.fleet.teams import allocate, nearest, reinforce, start_order
+from lamp.fleet.transit import TRANSIT_RADIUS
 from lamp.fleet.turns import Turns
+from lamp.fleet.utilisation import RobotTime
 from lamp.fleet.view import FleetExecution, FleetView
 from lamp.scene.model import Scene
 from lamp.sim.simulator import SETTLE_TIME, Simulator
@@ -118,13 +120,12 @@ class Fleet:
         #: (simulated time, what, object, detail) of every decision: for the curious
         self.log: list[tuple[float, str, int, str]] = []
         self.counts = dict.fromkeys(("admitted", "declined", "waited", "forced", "blocked",
-                                     "merged", "grown", "events", "transit_hops",
+                                     "merged", "grown", "reinforced", "events", "transit_hops",
                                      "parking_moves"), 0)
         #: wall-clock seconds spent planning transit hops and parking moves
         self.transit_planning_s = 0.0
         n = scene.n_robots
-        #: robot-seconds by state (``_account``)
-        self.time_s = {k: np.zeros(n) for k in ("working", "moving", "waiting", "idle")}
+        self.robot_time = RobotTime(n)  # utilisation
         self.owner = np.full(n, FREE)  # robot -> object of its team (FREE, FAILED)
         #: robots that failed (``executor.failed``: a ``DisturbedExecutor``'s), and when
         self.failed_at: dict[int, float] = {}
@@ -153,7 +154,8 @@ class Fleet:
     def _release(self) -> None:
         """Start objects whose ``after`` objects are placed, and give robots to those
         that wait for a team, from the free robots (``teams.allocate``); fail those
-        waiting on an object that failed."""
+        waiting on an object that failed; when no object waits, free robots reinforce
+        the moving teams."""
         ready = []
         for o in self.objects:
             if o.status == "active" and o.needs_team:
@@ -165,12 +167,15 @@ class Fleet:
                                   "placed")
                 elif all(self.objects[k].status == "placed" for k in after):
                     ready.append(o.index)
-        if not ready:
-            return
-        ready = self._least_conflict_first(ready)
-        free = self._free()
+        if ready:
+            self._start(self._least_conflict_first(ready))
+        if not any(o.status == "waiting" or o.needs_team for o in self.objects):
+            self._reinforce()
+
+    def _start(self, ready: list[int]) -> None:
+        """Sub-teams for the ``ready`` objects (in order) from the free robots."""
         active = any(o.status == "active" and o.team for o in self.objects)
-        teams = allocate(ready, free, self.executor.robot_positions,
+        teams = allocate(ready, self._free(), self.executor.robot_positions,
                          self.executor.object_poses, active)
         for k, team in teams.items():
             o = self.objects[k]
@@ -184,6 +189,20 @@ class Fleet:
             for obs in self.observers:
                 obs.object_started(k, len(self.objects))
             self.turns.start(k, lambda k=k: self._main(k))
+
+    def _reinforce(self) -> None:
+        """No object waits to start: free robots join the moving teams below the model's
+        budget within ``TRANSIT_RADIUS`` (``teams.reinforce``; not a planner waiting on a
+        change, which takes them when it plans again); such a loop plans anew with them
+        after its segment."""
+        teams = {o.index: o.team for o in self._ranked() if o.status == "active" and o.team
+                 and o.blocked_at is None}
+        for k, team in reinforce(self._free(), self.executor.robot_positions,
+                                 self.executor.object_poses, teams, TRANSIT_RADIUS).items():
+            if team != self.objects[k].team:
+                self.objects[k].team = team
+                self.owner[team] = k
+                self.counts["reinforced"] += 1
 
     def _least_conflict_first(self, ready: list[int]) -> list[int]:
         """``ready`` with the objects that wait for robots first (in order), then the
@@ -340,7 +359,8 @@ class Fleet:
         if out.stopped_at is not None:  # the rows whose time had come
             stopped_s = out.stopped_at * float(out.sim_time) / max(1, int(out.steps))
             done = int(np.clip(np.searchsorted(tau, stopped_s + 1e-9, side="right"), 0, n_rows))
-        self._account(running, paths, float(out.sim_time))
+        self.robot_time.charge([s.team for s in running], self.owner, paths,
+                               float(out.sim_time))
         self.timeline(out.trace, float(out.sim_time), np.maximum(self.owner, FREE))
         self.clock += float(out.sim_time)
         self._note_failures()
@@ -399,19 +419,6 @@ class Fleet:
             finished, events = o.blocked_at
             if self.finished > finished or self.counts["events"] - events >= BLOCKED_WAKE_EVENTS:
                 o.blocked_at, o.wake, o.ready = None, True, True
-
-    def _account(self, running: list[Segment], paths: np.ndarray, sim_time: float) -> None:
-        """Charge ``sim_time`` of every robot: working (its sub-team's segment runs; of
-        that, moving when its rows moved it), waiting (in a sub-team whose segment does not
-        run) or idle (in none)."""
-        working = np.zeros(self.scene.n_robots, bool)
-        for s in running:
-            working[s.team] = True
-        self.time_s["working"][working] += sim_time
-        self.time_s["waiting"][~working & (self.owner >= 0)] += sim_time
-        self.time_s["idle"][~working & (self.owner < 0)] += sim_time  # failed ones too
-        steps = np.hypot(*np.moveaxis(np.diff(paths, axis=1), 2, 0)).sum(axis=1)
-        self.time_s["moving"][working & (steps > 1e-6)] += sim_time
 
     # ------------------------------------------------------------------ a loop's executor
     def view(self, k: int) -> FleetView:
@@ -483,13 +490,11 @@ class Fleet:
         and the robots' utilisation: shares of robot-time working (their sub-team's
         segment runs), moving (working and driven), waiting (in a sub-team, its segment
         not running) and idle (in no sub-team); working + waiting + idle = 1."""
-        total = max(self.clock, 1e-9) * max(1, self.scene.n_robots)
         return {
             **self.counts,
             "placed_at_s": [None if o.placed_at_s is None else round(o.placed_at_s, 4)
                             for o in self.objects],
             "robots_failed_at_s": {str(i): round(t, 4) for i, t in sorted(self.failed_at.items())},
             "transit_planning_s": round(self.transit_planning_s, 4),
-            "utilisation": {k: round(float(v.sum()) / total, 4)
-                            for k, v in self.time_s.items()},
+            "utilisation": self.robot_time.shares(self.clock),
         }

@@ -17,6 +17,7 @@ objects moving (IROS with 9 robots: 191 s -> 164 s).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence, Set
 
 import numpy as np
@@ -27,7 +28,7 @@ from lamp.geometry.shapes import to_shapely
 from lamp.scene.model import Scene, Shape
 
 __all__ = ["MIN_TEAM", "allocate", "corridor", "in_the_way", "least_conflict_order", "nearest",
-           "start_order"]
+           "reinforce", "start_order"]
 
 #: The smallest sub-team an object starts with while other objects are moving.
 MIN_TEAM = 2
@@ -67,16 +68,28 @@ def allocate(ready: Sequence[int], free: Sequence[int], robot_positions: np.ndar
         pool = [i for i in pool if i not in chosen]
         moving = True
     if len(teams) < len(ready):  # the next object cannot start: help the started ones
-        for i in list(pool):
-            open_ = [k for k in teams if len(teams[k]) < MAX_ROBOTS]
-            if not open_:
-                break
-            p = np.asarray(robot_positions[i], float)
-            k = min(open_, key=lambda k: (float(np.hypot(*(np.asarray(object_poses[k][:2],
-                                                                    float) - p))),
-                                          list(teams).index(k)))
-            teams[k] = sorted(teams[k] + [i])
+        teams = reinforce(pool, robot_positions, object_poses, teams)
     return teams
+
+
+def reinforce(pool: Sequence[int], robot_positions: np.ndarray, object_poses: np.ndarray,
+              teams: Mapping[int, list[int]], reach: float = math.inf) -> dict[int, list[int]]:
+    """``teams`` (object -> robots, in priority order) with the robots of ``pool`` (in
+    order) joined: each the team of the nearest object among those below ``MAX_ROBOTS``
+    and within ``reach`` of it (ties by priority), until none has room. Deterministic;
+    robots ascending."""
+    out = {k: sorted(t) for k, t in teams.items()}
+    order = list(out)
+    for i in pool:
+        p = np.asarray(robot_positions[i], float)
+        dist = {k: float(np.hypot(*(np.asarray(object_poses[k][:2], float) - p)))
+                for k in order if len(out[k]) < MAX_ROBOTS}
+        if not dist:
+            break
+        k = min(dist, key=lambda k: (dist[k], order.index(k)))
+        if dist[k] <= reach:
+            out[k] = sorted(out[k] + [i])
+    return out
 
 
 def least_conflict_order(candidates: Sequence[int], corridors: Mapping[int, shapely.Geometry],
