@@ -182,8 +182,9 @@ def test_a_failed_robot_leaves_its_sub_team_and_a_free_one_takes_its_place() -> 
 
 def test_robots_freed_by_a_placed_object_reinforce_a_moving_team() -> None:
     """Two boxes, four robots: teams of two. The short push is placed first; nothing waits
-    to start, so its robots, within reach, join the other box's team up to the model's
-    three (``Fleet._reinforce``), whose loop plans anew with them; both placed safely."""
+    to start, so with ``fleet_reinforce_reach`` set its robots, within reach, join the
+    other box's team up to the model's three (``Fleet._reinforce``), whose loop plans anew
+    with them; both placed safely. Off (the default), nobody joins."""
     import numpy as np
 
     d = {"format": "lamp-scene/1", "name": "help", "workspace": [5.0, 3.0],
@@ -193,7 +194,9 @@ def test_robots_freed_by_a_placed_object_reinforce_a_moving_team() -> None:
                       "goal": [1.8, 0.8, 0.0]},
                      {"type": "rectangle", "size": [0.4, 0.3], "start": [1.2, 2.2, 0.0],
                       "goal": [4.2, 2.2, 0.0]}]}
-    res = lamp.solve(scene_from_dict(d), "lazy", 0)
+    off = lamp.solve(scene_from_dict(d), "lazy", 0)
+    assert off.success and off.to_dict()["stats"]["fleet"]["reinforced"] == 0
+    res = lamp.solve(scene_from_dict(d), "lazy", 0, params={"fleet_reinforce_reach": 4.0})
     assert res.success, [o.failure_reason for o in res.objects]
     _safe(res)
     fleet = res.to_dict()["stats"]["fleet"]

@@ -48,12 +48,13 @@ import numpy as np
 import shapely
 
 from lamp.contract.events import TRACE_EVERY, RunObserver
+from lamp.contract.goals import goal_errors
+from lamp.contract.result import ObjectResult
 from lamp.contract.runner import ObjectOutcome
 from lamp.fleet.admission import meets_moving, meets_standing
 from lamp.fleet.regions import claim
 from lamp.fleet.segments import Segment, on_grid
 from lamp.fleet.teams import allocate, nearest, reinforce, start_order
-from lamp.fleet.transit import TRANSIT_RADIUS
 from lamp.fleet.turns import Turns
 from lamp.fleet.utilisation import RobotTime
 from lamp.fleet.view import FleetExecution, FleetView
@@ -102,16 +103,18 @@ class Fleet:
 
     def __init__(self, scene: Scene, executor: Any, object_main: Callable[[Fleet, int],
                  ObjectOutcome], timeline: Callable[[Any, float, np.ndarray], None],
-                 observers: Sequence[RunObserver] = (), row_step: float = 0.02) -> None:
+                 observers: Sequence[RunObserver] = (), row_step: float = 0.02,
+                 reinforce_reach: float = 0.0) -> None:
         self.scene = scene
         self.executor = executor
         self.object_main = object_main
         self.timeline = timeline
         self.observers = list(observers)
         self.grid = float(row_step)
+        self.reinforce_reach = float(reinforce_reach)  # 0: off (``_reinforce``)
         #: rows a segment's robots hold at its end while others move: the settle time
-        row_s = self.grid / float(scene.physics.robot_speed)
-        self.hold_rows = math.ceil(SETTLE_TIME / row_s - 1e-9)
+        self.hold_rows = math.ceil(SETTLE_TIME * float(scene.physics.robot_speed) / self.grid
+                                   - 1e-9)
         self.objects = [_Object(k) for k in range(len(scene.objects))]
         self.turns = Turns()
         self.started = 0  # objects started so far (their ranks)
@@ -124,9 +127,8 @@ class Fleet:
                                      "parking_moves"), 0)
         #: wall-clock seconds spent planning transit hops and parking moves
         self.transit_planning_s = 0.0
-        n = scene.n_robots
-        self.robot_time = RobotTime(n)  # utilisation
-        self.owner = np.full(n, FREE)  # robot -> object of its team (FREE, FAILED)
+        self.robot_time = RobotTime(scene.n_robots)  # utilisation
+        self.owner = np.full(scene.n_robots, FREE)  # robot -> object of its team (FREE, FAILED)
         #: robots that failed (``executor.failed``: a ``DisturbedExecutor``'s), and when
         self.failed_at: dict[int, float] = {}
 
@@ -169,7 +171,8 @@ class Fleet:
                     ready.append(o.index)
         if ready:
             self._start(self._least_conflict_first(ready))
-        if not any(o.status == "waiting" or o.needs_team for o in self.objects):
+        if self.reinforce_reach > 0 and all(o.status != "waiting" and not o.needs_team
+                                            for o in self.objects):
             self._reinforce()
 
     def _start(self, ready: list[int]) -> None:
@@ -191,14 +194,14 @@ class Fleet:
             self.turns.start(k, lambda k=k: self._main(k))
 
     def _reinforce(self) -> None:
-        """No object waits to start: free robots join the moving teams below the model's
-        budget within ``TRANSIT_RADIUS`` (``teams.reinforce``; not a planner waiting on a
-        change, which takes them when it plans again); such a loop plans anew with them
-        after its segment."""
+        """Free robots join the moving teams with room within ``reinforce_reach``
+        (``teams.reinforce``; not a blocked planner's: it takes them when it plans again),
+        whose loops plan anew with them after their segment."""
         teams = {o.index: o.team for o in self._ranked() if o.status == "active" and o.team
                  and o.blocked_at is None}
         for k, team in reinforce(self._free(), self.executor.robot_positions,
-                                 self.executor.object_poses, teams, TRANSIT_RADIUS).items():
+                                 self.executor.object_poses, teams,
+                                 self.reinforce_reach).items():
             if team != self.objects[k].team:
                 self.objects[k].team = team
                 self.owner[team] = k
@@ -225,9 +228,6 @@ class Fleet:
             obs.object_finished(k, len(self.objects), o.outcome.result)
 
     def _give_up(self, o: _Object, why: str) -> None:
-        from lamp.contract.goals import goal_errors
-        from lamp.contract.result import ObjectResult
-
         pose = np.asarray(self.executor.object_poses[o.index], float)
         goal = np.asarray(self.scene.objects[o.index].goal, float)
         pos_err, rot_err = goal_errors(pose, goal)

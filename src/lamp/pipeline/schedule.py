@@ -58,6 +58,7 @@ def run_concurrently(scene: Any, executor: Executor, runner: ObjectRunner, recor
 
     watchers = [recorder, *observers]
     fleet = Fleet(scene, executor, object_main(runner, _segments_to(watchers)),
-                  recorder.follow, watchers, row_step=MAX_STEP)
+                  recorder.follow, watchers, row_step=MAX_STEP,
+                  reinforce_reach=runner.config.fleet_reinforce_reach)
     outcomes = fleet.run()
     return outcomes, fleet.stats()
