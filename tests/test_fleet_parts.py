@@ -275,7 +275,7 @@ def test_loads_into_a_dead_end_aisle_start_deepest_first():
                         for k, gx in enumerate(goals_x))
         scene = Scene("aisle", (9.0, 2.0), ((8.5, 0.3), (8.5, 1.7)), objects, walls, 0.05)
         poses = np.array([o.start for o in objects])
-        order = start_order(scene, poses, [0, 1, 2], [])
+        order, _ = start_order(scene, poses, [0, 1, 2], [])
         assert [goals_x[k] for k in order] == [1.0, 2.0, 3.0]
 
 

@@ -28,7 +28,7 @@ from lamp.geometry.shapes import to_shapely
 from lamp.scene.model import Scene, Shape
 
 __all__ = ["MIN_TEAM", "allocate", "corridor", "in_the_way", "least_conflict_order", "nearest",
-           "reinforce", "start_order"]
+           "clear_ways", "reinforce", "start_order"]
 
 #: The smallest sub-team an object starts with while other objects are moving.
 MIN_TEAM = 2
@@ -43,11 +43,14 @@ def nearest(pool: Sequence[int], robot_positions: np.ndarray, centre: np.ndarray
 
 
 def allocate(ready: Sequence[int], free: Sequence[int], robot_positions: np.ndarray,
-             object_poses: np.ndarray, others_moving: bool) -> dict[int, list[int]]:
+             object_poses: np.ndarray, others_moving: bool,
+             ways: int | None = None) -> dict[int, list[int]]:
     """Sub-teams for the ``ready`` objects (priority order) from the ``free`` robots.
 
-    The free robots are shared equally among the ready objects: each gets ``share`` =
-    ``len(free) // len(ready)`` of the free robots nearest to its centre (ties by index),
+    The free robots are shared equally among the ready objects, or among ``ways`` of them
+    when given (the number that can move without crossing each other's way,
+    :func:`clear_ways`; at least 1): each gets ``share`` =
+    ``len(free) // min(len(ready), ways)`` of the free robots nearest to its centre (ties by index),
     at least ``MIN_TEAM`` and at most ``MAX_ROBOTS``; an object that would get fewer than
     ``MIN_TEAM`` (1 when nothing else moves and it is the first) waits, and so do those
     after it. Robots left over when no further object can start join the teams, each the
@@ -57,7 +60,8 @@ def allocate(ready: Sequence[int], free: Sequence[int], robot_positions: np.ndar
     teams: dict[int, list[int]] = {}
     if not ready:
         return teams
-    share = max(MIN_TEAM, min(MAX_ROBOTS, len(pool) // len(ready)))
+    split = len(ready) if ways is None else max(1, min(len(ready), ways))
+    share = max(MIN_TEAM, min(MAX_ROBOTS, len(pool) // split))
     moving = others_moving
     for k in ready:
         need = min(share, len(pool))
@@ -138,14 +142,27 @@ def corridor(shape: Shape, pose: np.ndarray, goal: np.ndarray, robot_radius: flo
 
 
 def start_order(scene: Scene, poses: np.ndarray, candidates: Sequence[int],
-                moving: Sequence[int]) -> list[int]:
+                moving: Sequence[int]) -> tuple[list[int], int]:
     """``candidates`` (objects of ``scene`` at ``poses``) in :func:`least_conflict_order`,
     the corridors of the ``moving`` objects busy and :func:`in_the_way` taken among the
-    candidates."""
+    candidates; and how many of them, in that order, :func:`clear_ways` counts."""
     objs, r = scene.objects, scene.robot_radius
     ways = {k: corridor(objs[k].shape, poses[k], objs[k].goal, r) for k in candidates}
     busy = [corridor(objs[k].shape, poses[k], objs[k].goal, r) for k in moving]
     blocks = in_the_way(ways, {k: to_shapely(objs[k].shape, np.asarray(objs[k].goal, float))
                                for k in candidates},
                         {k: poses[k] for k in candidates}, {k: objs[k].goal for k in candidates})
-    return least_conflict_order(candidates, ways, busy, blocks)
+    order = least_conflict_order(candidates, ways, busy, blocks)
+    return order, clear_ways([ways[k] for k in order], busy)
+
+
+def clear_ways(corridors: Sequence[shapely.Geometry], busy: Sequence[shapely.Geometry]) -> int:
+    """How many of ``corridors`` (in order) are clear: greedily, those that meet none of
+    ``busy`` and none of the clear ones before them."""
+    taken = list(busy)
+    n = 0
+    for c in corridors:
+        if not any(c.intersects(b) for b in taken):
+            taken.append(c)
+            n += 1
+    return n
