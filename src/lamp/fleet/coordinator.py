@@ -170,16 +170,21 @@ class Fleet:
                 elif all(self.objects[k].status == "placed" for k in after):
                     ready.append(o.index)
         if ready:
-            self._start(*self._least_conflict_first(ready))
+            self._start(ready)
         if self.reinforce_reach > 0 and all(o.status != "waiting" and not o.needs_team
                                             for o in self.objects):
             self._reinforce()
 
-    def _start(self, ready: list[int], ways: int) -> None:
-        """Sub-teams for the ``ready`` objects (in order; ``ways`` of them clear)."""
-        active = any(o.status == "active" and o.team for o in self.objects)
-        teams = allocate(ready, self._free(), self.executor.robot_positions,
-                         self.executor.object_poses, active, ways)
+    def _start(self, ready: list[int]) -> None:
+        """Sub-teams for the ``ready`` objects: those waiting for robots first, then the
+        rest in ``teams.start_order`` (the moving objects' ways busy); the robots shared
+        among those with a clear way (``teams.allocate``)."""
+        first = [k for k in ready if self.objects[k].status == "active"]
+        moving = [o.index for o in self.objects if o.status == "active" and o.team]
+        order, ways = start_order(self.scene, self.executor.object_poses,
+                                  [k for k in ready if k not in first], moving + first)
+        teams = allocate(first + order, self._free(), self.executor.robot_positions,
+                         self.executor.object_poses, bool(moving), len(first) + ways)
         for k, team in teams.items():
             o = self.objects[k]
             o.team, o.ready = team, True
@@ -206,16 +211,6 @@ class Fleet:
                 self.objects[k].team = team
                 self.owner[team] = k
                 self.counts["reinforced"] += 1
-
-    def _least_conflict_first(self, ready: list[int]) -> tuple[list[int], int]:
-        """``ready`` with the objects that wait for robots first (in order), then the
-        rest in ``teams.start_order`` (the moving objects' ways busy); and how many of
-        them have a clear way (those waiting for robots count as clear)."""
-        first = [k for k in ready if self.objects[k].status == "active"]
-        moving = [o.index for o in self.objects if o.status == "active" and o.team]
-        order, ways = start_order(self.scene, self.executor.object_poses,
-                                  [k for k in ready if k not in first], moving + first)
-        return first + order, len(first) + ways
 
     def _main(self, k: int) -> None:
         o = self.objects[k]
