@@ -20,7 +20,14 @@ from lamp.contract.model import MAX_ROBOTS
 from lamp.fleet.regions import OBJECT_MARGIN, ROBOT_MARGIN, claim, footprints
 from lamp.fleet.segments import Segment, on_grid
 from lamp.fleet.spacetime import compatible
-from lamp.fleet.teams import MIN_TEAM, allocate, least_conflict_order, reinforce, start_order
+from lamp.fleet.teams import (
+    MIN_TEAM,
+    allocate,
+    clear_ways,
+    least_conflict_order,
+    reinforce,
+    start_order,
+)
 from lamp.fleet.turns import Turns
 from lamp.geometry.shapes import to_shapely
 from lamp.scene.model import Obstacle, Rectangle, Scene, SceneObject
@@ -154,17 +161,19 @@ def test_on_grid_keeps_the_route_and_steps_at_most_a_row(steps) -> None:
 
 
 @settings(max_examples=80)
-@given(st.integers(0, 2**31 - 1), st.integers(1, 5), st.integers(0, 12), st.booleans())
+@given(st.integers(0, 2**31 - 1), st.integers(1, 5), st.integers(0, 12), st.booleans(),
+       st.one_of(st.none(), st.integers(0, 6)))
 def test_allocate_shares_the_nearest_free_robots_in_priority_order(seed, n_obj, n_free,
-                                                                   moving):
+                                                                   moving, ways):
     rng = np.random.default_rng(seed)
     robots = rng.uniform(0, 10, (14, 2))
     objects = np.c_[rng.uniform(0, 10, (n_obj, 2)), np.zeros(n_obj)]
     free = sorted(rng.choice(14, n_free, replace=False).tolist())
-    teams = allocate(list(range(n_obj)), free, robots, objects, moving)
-    # reference: the same greedy rule written plainly
+    teams = allocate(list(range(n_obj)), free, robots, objects, moving, ways)
+    # reference: the same greedy rule written plainly; shared among the clear ways
     pool, expect, busy = list(free), {}, moving
-    share = min(MAX_ROBOTS, max(MIN_TEAM, n_free // n_obj))
+    split = n_obj if ways is None else min(n_obj, max(1, ways))
+    share = min(MAX_ROBOTS, max(MIN_TEAM, n_free // split))
     for k in range(n_obj):
         want = min(share, len(pool))
         if want < (MIN_TEAM if busy else 1):
@@ -183,7 +192,7 @@ def test_allocate_shares_the_nearest_free_robots_in_priority_order(seed, n_obj, 
     sizes = [len(t) for t in teams.values()]
     assert all(s <= MAX_ROBOTS for s in sizes)
     if len(teams) == n_obj:  # everyone started: the split is as equal as the order allows
-        assert max(sizes, default=0) <= max(MIN_TEAM, min(MAX_ROBOTS, n_free // n_obj))
+        assert max(sizes, default=0) <= max(MIN_TEAM, min(MAX_ROBOTS, n_free // split))
     used = [i for t in teams.values() for i in t]
     assert len(used) == len(set(used)) and set(used) <= set(free)
 
@@ -240,6 +249,24 @@ def test_least_conflict_order_starts_the_least_crossed_ways_first(seed, n, n_bus
         assert count[k] == min(count.values())
         assert k == min(j for j in count if count[j] == count[k])
         taken.append(corridors[k])
+
+
+@settings(max_examples=60)
+@given(st.integers(0, 2**31 - 1), st.integers(0, 7), st.integers(0, 3))
+def test_clear_ways_counts_the_greedy_set_of_ways_that_cross_nothing(seed, n, n_busy):
+    rng = np.random.default_rng(seed)
+    boxes = [shapely.box(*(xy := rng.uniform(0, 8, 2)), *(xy + rng.uniform(0.3, 3, 2)))
+             for _ in range(n + n_busy)]
+    ways, busy = boxes[:n], boxes[n:]
+    count = clear_ways(ways, busy)
+    clear = [w for i, w in enumerate(ways)  # a plain greedy pass, by indices
+             if not any(w.intersects(b) for b in busy)]
+    picked: list = []
+    for w in clear:
+        if not any(w.intersects(p) for p in picked):
+            picked.append(w)
+    assert count == len(picked)
+    assert 0 <= count <= n and (n_busy or n == 0 or count >= 1)
 
 
 def test_least_conflict_order_keeps_file_order_when_no_ways_cross():
