@@ -23,6 +23,7 @@ from lamp.fleet.spacetime import compatible
 from lamp.fleet.teams import (
     MIN_TEAM,
     allocate,
+    chain_depths,
     clear_ways,
     least_conflict_order,
     reinforce,
@@ -290,6 +291,50 @@ def test_an_object_whose_goal_bars_a_way_starts_after_that_object(seed, n):
     assert sorted(order) == cands
     for k in cands:
         assert all(order.index(j) < order.index(k) for j in blocks[k])
+
+
+@settings(max_examples=80)
+@given(st.integers(0, 2**31 - 1), st.integers(1, 7), st.booleans())
+def test_chain_depths_are_the_longest_chains(seed, n, acyclic):
+    """Against a plain search of every chain: on an acyclic relation the depth is the
+    most objects on a chain from the object; on any relation, objects on one cycle share
+    a depth at least the cycle's length, and an object is deeper than what follows it
+    off its cycle."""
+    rng = np.random.default_rng(seed)
+    cands = sorted(rng.choice(30, n, replace=False).tolist())
+    rank = {k: r for r, k in enumerate(rng.permutation(cands).tolist())}
+    blocks = {j: {k for k in cands if k != j and rng.random() < 0.35
+                  and (not acyclic or rank[k] < rank[j])} for j in cands}
+    depth = chain_depths(cands, blocks)
+    follows = {k: {j for j in cands if k in blocks[j]} for k in cands}
+
+    def longest(k, seen):
+        return 1 + max((longest(j, seen | {j}) for j in follows[k] if j not in seen), default=0)
+
+    def reaches(a, b):
+        todo, seen = [a], {a}
+        while todo:
+            for j in follows[todo.pop()] - seen:
+                seen.add(j)
+                todo.append(j)
+        return b in seen
+
+    for k in cands:
+        if acyclic:
+            assert depth[k] == longest(k, {k})
+        for j in follows[k]:
+            if reaches(j, k):  # on one cycle
+                assert depth[j] == depth[k] >= 2
+            else:
+                assert depth[k] > depth[j]
+
+
+def test_the_head_of_the_longest_chain_starts_first():
+    """Three objects whose ways do not cross; object 2's goal lies in object 1's way, so
+    object 1 heads a chain of two and starts before object 0 (file order otherwise)."""
+    corridors = {k: shapely.box(3 * k, 0, 3 * k + 1, 1) for k in (0, 1, 2)}
+    assert least_conflict_order([0, 1, 2], corridors, []) == [0, 1, 2]
+    assert least_conflict_order([0, 1, 2], corridors, [], {2: {1}}) == [1, 0, 2]
 
 
 def test_loads_into_a_dead_end_aisle_start_deepest_first():

@@ -22,13 +22,15 @@ from collections.abc import Mapping, Sequence, Set
 
 import numpy as np
 import shapely
+from scipy.sparse import csr_array
+from scipy.sparse.csgraph import connected_components
 
 from lamp.contract.model import MAX_ROBOTS
 from lamp.geometry.shapes import to_shapely
 from lamp.scene.model import Scene, Shape
 
 __all__ = ["MIN_TEAM", "allocate", "corridor", "in_the_way", "least_conflict_order", "nearest",
-           "clear_ways", "reinforce", "start_order"]
+           "chain_depths", "clear_ways", "reinforce", "start_order"]
 
 #: The smallest sub-team an object starts with while other objects are moving.
 MIN_TEAM = 2
@@ -101,20 +103,54 @@ def least_conflict_order(candidates: Sequence[int], corridors: Mapping[int, shap
                          blocks: Mapping[int, Set[int]] | None = None) -> list[int]:
     """``candidates`` in the order they should start: greedily, next the one whose goal
     lies in the way of the fewest candidates not yet put (``blocks[k]``: the objects whose
-    way ``k``'s goal lies in, :func:`in_the_way`; none when ``blocks`` is None), then whose
-    corridor (``corridors[k]``: the way it has to go) meets the fewest of ``busy`` (the
-    moving objects' corridors) and of the corridors of those put before it; ties by
-    index. Objects whose ways do not cross start together, crossing ones wait, and an
-    object whose goal would bar another's way starts after it."""
+    way ``k``'s goal lies in, :func:`in_the_way`; none when ``blocks`` is None), then
+    that heads the longest chain of objects that must start after it (:func:`chain_depths`:
+    the critical path first), then whose corridor (``corridors[k]``: the way it has to go)
+    meets the fewest of ``busy`` (the moving objects' corridors) and of the corridors of
+    those put before it; ties by index. Objects whose ways do not cross start together,
+    crossing ones wait, and an object whose goal would bar another's way starts after
+    it."""
     rest, taken, out = sorted(candidates), list(busy), []
     blocks = blocks or {}
+    depth = chain_depths(rest, blocks)
     while rest:
-        k = min(rest, key=lambda k: (len(blocks.get(k, set()) & (set(rest) - {k})),
+        k = min(rest, key=lambda k: (len(blocks.get(k, set()) & (set(rest) - {k})), -depth[k],
                                      sum(corridors[k].intersects(b) for b in taken), k))
         rest.remove(k)
         out.append(k)
         taken.append(corridors[k])
     return out
+
+
+def chain_depths(candidates: Sequence[int], blocks: Mapping[int, Set[int]]) -> dict[int, int]:
+    """For each of ``candidates``: how many candidates the longest chain starting at it
+    holds, where ``j`` follows ``k`` when ``j``'s goal lies in ``k``'s way (``k`` in
+    ``blocks[j]``: ``j`` should start after ``k``). Objects on a cycle of that relation
+    count as one link of the size of their strongly connected component (SciPy), so
+    those on one cycle get the same depth. An object nothing follows has depth 1."""
+    cands = sorted(candidates)
+    index = {k: i for i, k in enumerate(cands)}
+    edges = [(index[k], index[j]) for j in cands for k in blocks.get(j, ()) if k in index
+             and k != j]
+    n = len(cands)
+    if not edges:
+        return dict.fromkeys(cands, 1)
+    rows, cols = zip(*edges, strict=True)
+    graph = csr_array((np.ones(len(edges)), (rows, cols)), shape=(n, n))
+    _, label = connected_components(graph, directed=True, connection="strong")
+    size = np.bincount(label)
+    after: dict[int, set[int]] = {c: set() for c in range(len(size))}
+    for a, b in edges:
+        if label[a] != label[b]:
+            after[int(label[a])].add(int(label[b]))
+    depth: dict[int, int] = {}
+
+    def visit(c: int) -> int:  # the condensation is acyclic: plain memoised recursion
+        if c not in depth:
+            depth[c] = int(size[c]) + max((visit(d) for d in after[c]), default=0)
+        return depth[c]
+
+    return {k: visit(int(label[index[k]])) for k in cands}
 
 
 def in_the_way(corridors: Mapping[int, shapely.Geometry],
