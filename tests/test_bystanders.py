@@ -107,3 +107,41 @@ def test_verify_leaves_the_far_robot_out_of_the_approach() -> None:
     assert verifier.stats.gspi_calls == 1 == verifier.stats.gspi_success
     for n, window in spaces:
         assert n == 1 and window[1] > 2.0 + 2 * task.robot_radius
+
+
+def test_unreachable_is_the_wide_windows_answer_and_builds_it_only_when_needed() -> None:
+    """``Verifier._unreachable`` answers as Hall's condition over the window of all the
+    robots does (a plain reference below), for contacts all round the box; a proposal
+    whose contacts the robot beside the box covers never builds that wide window's space
+    (the far robot, behind the wall, would widen it to 25 m of strip)."""
+    from collections import Counter
+
+    task = strip_task()
+    verifier = task.verifier
+    q_from = np.array([1.5, 27.0, 0.0])
+    q_R = np.array(task.scene.robot_starts, float)
+    wide = task.window(q_from, q_R)
+    asked = []
+    real = task.robot_space_at
+
+    def spy(q_object, window=None):
+        asked.append(window)
+        return real(q_object, window)
+
+    task.robot_space_at = spy  # type: ignore[method-assign]
+    unreachable = verifier._unreachable(q_from, q_R)
+    one = np.array([[[-0.26, 0.0], [-0.2, 0.0]]])  # one contact, left of the box
+    assert not unreachable(one) and wide not in asked
+    space = real(q_from, wide)
+    held = Counter(space.components(q_R).tolist())
+    rng = np.random.default_rng(0)
+    for _ in range(40):
+        b = int(rng.integers(1, 4))
+        angles = rng.uniform(0, 2 * np.pi, b)
+        contacts = np.c_[0.3 * np.cos(angles), 0.25 * np.sin(angles)]
+        pushes = np.repeat(contacts[:, None, :], 2, axis=1)
+        world = contacts + q_from[:2]  # the box stands unrotated
+        need = Counter(space.components(world).tolist())
+        expect = any(n > held.get(c, 0) for c, n in need.items())
+        assert unreachable(pushes) == expect
+    assert asked.count(wide) <= 1  # built at most once, for the proposals that needed it

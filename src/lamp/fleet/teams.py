@@ -1,18 +1,19 @@
 """Who pushes what: robots split into sub-teams, one per moving object.
 
-:func:`allocate` shares the free robots equally among the objects ready to move (in
-priority order, each the robots nearest to it): at most ``MAX_ROBOTS`` each (the model's
-budget: more would stand idle), at least ``MIN_TEAM``; a lone robot only when no other
-object is moving (no robot will be freed); robots left over when the next object cannot
-start join the started teams. More objects moving at once, each with fewer robots, places
-them sooner: on IROS with 9 robots (``benchmarks/fleet_iros9.py``), teams of 2 and 3 (4
-objects at once) placed all 9 objects in 191 s, 3 teams of 3 in 249 s. A team keeps its
-robots until its object is placed or given up; then they are free for the next object.
-Robots no object needs stand still where they are (every plan sees them as obstacles).
-Which ready objects go first is :func:`least_conflict_order`: those whose goal lies in the
-way of no other object still to start (:func:`in_the_way`: placed early, it would make
-that object go round it or wait), then those whose way crosses the fewest ways of the
-objects moving (IROS with 9 robots: 191 s -> 164 s).
+Which ready objects go first is :func:`start_order` (:func:`least_conflict_order`):
+those whose goal lies in the way of no other object still to start (:func:`in_the_way`:
+placed early, it would make that object go round it or wait), then the head of the
+longest chain of such objects (:func:`chain_depths`: the critical path), then those whose
+way crosses the fewest ways of the objects moving. :func:`allocate` shares the free
+robots equally among the ready objects whose ways are clear of each other
+(:func:`clear_ways`: the others would wait for them anyway), each the robots nearest to
+it: at most ``MAX_ROBOTS`` each (the model's budget: more would stand idle), at least
+``MIN_TEAM``; a lone robot only when no other object is moving (no robot will be
+freed); robots left over when the next object cannot start join the started teams
+(:func:`reinforce`). A team keeps its robots until its object is placed or given up;
+then they are free for the next object. Robots no object needs stand still where they
+are (every plan sees them as obstacles). Measured on IROS with 9 robots
+(``benchmarks/fleet_iros9.py``) and the ``fleet`` family: ``docs/fleet.md``.
 """
 
 from __future__ import annotations

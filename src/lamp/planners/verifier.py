@@ -187,17 +187,36 @@ class Verifier:
         first window ``approach`` plans in): some free region of it holds more contacts
         than robots (Hall's condition; a robot reaches exactly the contacts of its region),
         so that no approach inside that window reaches them all. Always False for a space
-        that cannot tell its regions apart."""
-        space = self.robots.robot_space_at(q_from, self.robots.window(q_from, q_R))
-        components = getattr(space, "components", None)
-        if components is None:
-            return lambda pushes_local: False
-        held = Counter(components(q_R).tolist())
+        that cannot tell its regions apart.
+
+        The answer is that window's, but it is first sought in the object's own window
+        (``robots.window(q_from)``, the robots inside it): regions only merge as a window
+        grows, so contacts that each get a robot there get one in the larger window too.
+        The larger window's space (over the robots' whole spread: a map-sized field for a
+        team spread over a large map) is built only for proposals that fail there."""
+        x0, y0, x1, y1 = self.robots.window(q_from)
+        near = ((q_R[:, 0] >= x0) & (q_R[:, 0] <= x1) & (q_R[:, 1] >= y0)
+                & (q_R[:, 1] <= y1))
+        spaces = [lambda: self.robots.robot_space_at(q_from, self.robots.window(q_from)),
+                  lambda: self.robots.robot_space_at(q_from, self.robots.window(q_from, q_R))]
+        robots = [q_R[near], q_R]
+        tests: list[Callable[[np.ndarray], bool] | None] = [None, None]
+
+        def hall(level: int) -> Callable[[np.ndarray], bool]:
+            if tests[level] is None:
+                components = getattr(spaces[level](), "components", None)
+                if components is None:
+                    tests[level] = lambda contacts: True
+                else:
+                    held = Counter(components(robots[level]).tolist())
+                    tests[level] = lambda contacts: all(
+                        n <= held.get(c, 0)
+                        for c, n in Counter(components(contacts).tolist()).items())
+            return tests[level]  # type: ignore[return-value]
 
         def unreachable(pushes_local: np.ndarray) -> bool:
             contacts = se2.transform_points(q_from, np.asarray(pushes_local)[:, 0])
-            need = Counter(components(contacts).tolist())
-            return any(n > held.get(c, 0) for c, n in need.items())
+            return not (hall(0)(contacts) or hall(1)(contacts))
         return unreachable
 
     def _too_wide(self, window: Window) -> bool:
@@ -285,9 +304,17 @@ class Verifier:
         After a push the robots stand touching the object; drift can leave one a few mm
         inside its configuration-space obstacle. Such a robot first backs off to the nearest
         free configuration (a move of at most a few centimetres, away from the object).
+        Departure: only robots in the object's own window (``robots.window(q_from)``: its
+        bounding box grown by ``WINDOW_MARGIN``) are looked at; one beyond it took no
+        part in the push and stays where it stands (a space over the whole team's spread
+        cost a map-sized field per Verify on large maps).
         """
-        space = self.robots.robot_space_at(q_from, self.robots.window(q_from, q_R))
-        free = space.is_free(q_R)
+        x0, y0, x1, y1 = self.robots.window(q_from)
+        near = ((q_R[:, 0] >= x0) & (q_R[:, 0] <= x1) & (q_R[:, 1] >= y0)
+                & (q_R[:, 1] <= y1))
+        space = self.robots.robot_space_at(q_from, self.robots.window(q_from, q_R[near]))
+        free = np.ones(len(q_R), bool)
+        free[near] = space.is_free(q_R[near])
         if np.all(free):
             return q_R[:, None, :].copy()
         ends = q_R.copy()
