@@ -194,9 +194,7 @@ class Verifier:
         grows, so contacts that each get a robot there get one in the larger window too.
         The larger window's space (over the robots' whole spread: a map-sized field for a
         team spread over a large map) is built only for proposals that fail there."""
-        x0, y0, x1, y1 = self.robots.window(q_from)
-        near = ((q_R[:, 0] >= x0) & (q_R[:, 0] <= x1) & (q_R[:, 1] >= y0)
-                & (q_R[:, 1] <= y1))
+        near = self._near(q_from, q_R)
         spaces = [lambda: self.robots.robot_space_at(q_from, self.robots.window(q_from)),
                   lambda: self.robots.robot_space_at(q_from, self.robots.window(q_from, q_R))]
         robots = [q_R[near], q_R]
@@ -218,6 +216,12 @@ class Verifier:
             contacts = se2.transform_points(q_from, np.asarray(pushes_local)[:, 0])
             return not (hall(0)(contacts) or hall(1)(contacts))
         return unreachable
+
+    def _near(self, q_from: np.ndarray, q_R: np.ndarray) -> np.ndarray:
+        """(N,) whether each robot stands in the object's own window at ``q_from``
+        (``robots.window(q_from)``: its bounding box grown by the window margin)."""
+        x0, y0, x1, y1 = self.robots.window(q_from)
+        return (q_R[:, 0] >= x0) & (q_R[:, 0] <= x1) & (q_R[:, 1] >= y0) & (q_R[:, 1] <= y1)
 
     def _too_wide(self, window: Window) -> bool:
         """Whether ``window`` exceeds ``max_window_side``: ``approach`` grows no window
@@ -309,9 +313,7 @@ class Verifier:
         part in the push and stays where it stands (a space over the whole team's spread
         cost a map-sized field per Verify on large maps).
         """
-        x0, y0, x1, y1 = self.robots.window(q_from)
-        near = ((q_R[:, 0] >= x0) & (q_R[:, 0] <= x1) & (q_R[:, 1] >= y0)
-                & (q_R[:, 1] <= y1))
+        near = self._near(q_from, q_R)
         space = self.robots.robot_space_at(q_from, self.robots.window(q_from, q_R[near]))
         free = np.ones(len(q_R), bool)
         free[near] = space.is_free(q_R[near])
