@@ -194,27 +194,27 @@ class Verifier:
         grows, so contacts that each get a robot there get one in the larger window too.
         The larger window's space (over the robots' whole spread: a map-sized field for a
         team spread over a large map) is built only for proposals that fail there."""
-        near = self._near(q_from, q_R)
-        spaces = [lambda: self.robots.robot_space_at(q_from, self.robots.window(q_from)),
-                  lambda: self.robots.robot_space_at(q_from, self.robots.window(q_from, q_R))]
-        robots = [q_R[near], q_R]
-        tests: list[Callable[[np.ndarray], bool] | None] = [None, None]
+        def hall(space: Any, robots: np.ndarray) -> Callable[[np.ndarray], bool]:
+            """Whether contacts each get a robot of ``robots`` in their region of ``space``."""
+            components = getattr(space, "components", None)
+            if components is None:
+                return lambda contacts: True
+            held = Counter(components(robots).tolist())
+            return lambda contacts: all(n <= held.get(c, 0) for c, n in
+                                        Counter(components(contacts).tolist()).items())
 
-        def hall(level: int) -> Callable[[np.ndarray], bool]:
-            if tests[level] is None:
-                components = getattr(spaces[level](), "components", None)
-                if components is None:
-                    tests[level] = lambda contacts: True
-                else:
-                    held = Counter(components(robots[level]).tolist())
-                    tests[level] = lambda contacts: all(
-                        n <= held.get(c, 0)
-                        for c, n in Counter(components(contacts).tolist()).items())
-            return tests[level]  # type: ignore[return-value]
+        own = hall(self.robots.robot_space_at(q_from, self.robots.window(q_from)),
+                   q_R[self._near(q_from, q_R)])
+        wide: list[Callable[[np.ndarray], bool]] = []  # built on first need
 
         def unreachable(pushes_local: np.ndarray) -> bool:
             contacts = se2.transform_points(q_from, np.asarray(pushes_local)[:, 0])
-            return not (hall(0)(contacts) or hall(1)(contacts))
+            if own(contacts):
+                return False
+            if not wide:
+                wide.append(hall(self.robots.robot_space_at(
+                    q_from, self.robots.window(q_from, q_R)), q_R))
+            return not wide[0](contacts)
         return unreachable
 
     def _near(self, q_from: np.ndarray, q_R: np.ndarray) -> np.ndarray:
