@@ -171,9 +171,13 @@ class Fleet:
                     ready.append(o.index)
         if ready:
             self._start(ready)
-        if self.reinforce_reach > 0 and all(o.status != "waiting" and not o.needs_team
-                                            for o in self.objects):
+        if self.reinforce_reach > 0 and not self._any_waits():
             self._reinforce()
+
+    def _any_waits(self, but: int | None = None) -> bool:
+        """Whether an object (other than ``but``) waits to start or waits for robots."""
+        return any(o.status == "waiting" or o.needs_team for o in self.objects
+                   if o.index != but)
 
     def _start(self, ready: list[int]) -> None:
         """Sub-teams for the ``ready`` objects: those waiting for robots first, then the
@@ -478,9 +482,8 @@ class Fleet:
         and none waits for robots (they would go to it at once)."""
         o = self.objects[k]
         o.placed_at_s, o.claim = self.clock, None
-        others = [p for p in self.objects if p.index != k]
-        return (any(p.status == "active" for p in others)
-                and not any(p.status == "waiting" or p.needs_team for p in others))
+        return (any(p.status == "active" for p in self.objects if p.index != k)
+                and not self._any_waits(but=k))
 
     def stats(self) -> dict[str, Any]:
         """The schedule's figures for ``result.json``: counts, per-object placement times

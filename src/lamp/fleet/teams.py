@@ -31,17 +31,21 @@ from lamp.geometry.shapes import to_shapely
 from lamp.scene.model import Scene, Shape
 
 __all__ = ["MIN_TEAM", "allocate", "corridor", "in_the_way", "least_conflict_order", "nearest",
-           "chain_depths", "clear_ways", "reinforce", "start_order"]
+           "chain_depths", "clear_ways", "planar_distance", "reinforce", "start_order"]
 
 #: The smallest sub-team an object starts with while other objects are moving.
 MIN_TEAM = 2
 
 
+def planar_distance(a: np.ndarray, b: np.ndarray) -> float:
+    """Distance in the plane between the (x, y) of ``a`` and of ``b`` (points or poses)."""
+    return float(np.hypot(*(np.asarray(a, float)[:2] - np.asarray(b, float)[:2])))
+
+
 def nearest(pool: Sequence[int], robot_positions: np.ndarray, centre: np.ndarray,
             n: int) -> list[int]:
     """The ``n`` robots of ``pool`` nearest to ``centre`` (ties by index), nearest first."""
-    c = np.asarray(centre, float)[:2]
-    d = [float(np.hypot(*(np.asarray(robot_positions[i], float) - c))) for i in pool]
+    d = [planar_distance(robot_positions[i], centre) for i in pool]
     return [pool[j] for j in sorted(range(len(pool)), key=lambda j: (d[j], pool[j]))[:n]]
 
 
@@ -88,8 +92,7 @@ def reinforce(pool: Sequence[int], robot_positions: np.ndarray, object_poses: np
     out = {k: sorted(t) for k, t in teams.items()}
     order = list(out)
     for i in pool:
-        p = np.asarray(robot_positions[i], float)
-        dist = {k: float(np.hypot(*(np.asarray(object_poses[k][:2], float) - p)))
+        dist = {k: planar_distance(robot_positions[i], object_poses[k])
                 for k in order if len(out[k]) < MAX_ROBOTS}
         if not dist:
             break
@@ -161,11 +164,9 @@ def in_the_way(corridors: Mapping[int, shapely.Geometry],
     ``k``'s footprint at its goal (``goals[k]``) meets ``j``'s corridor and its goal lies
     nearer ``j``'s pose than ``j``'s own goal does (before ``j``'s goal on its way, not
     beside or beyond it). Placed before ``j`` moves, ``k`` would stand in its way."""
-    def dist(a: np.ndarray, b: np.ndarray) -> float:
-        return float(np.hypot(*(np.asarray(a, float)[:2] - np.asarray(b, float)[:2])))
-
     return {k: {j for j in corridors if j != k and goals[k].intersects(corridors[j])
-                and dist(poses[j], goal_poses[k]) < dist(poses[j], goal_poses[j])}
+                and planar_distance(poses[j], goal_poses[k])
+                < planar_distance(poses[j], goal_poses[j])}
             for k in goals}
 
 
