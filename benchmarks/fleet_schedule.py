@@ -24,6 +24,7 @@ import statistics
 from pathlib import Path
 
 from lamp.contract.model import MAX_ROBOTS
+from lamp.scene.loader import load_scene
 from lamp.suites.registry import resolve_scene
 
 
@@ -46,6 +47,12 @@ def _collisions(folder: Path, rec: dict) -> int | None:
     return len(check_run_dir(run).violations)
 
 
+def _scene(rec: dict):
+    """The job's scene: its file when the suite was a folder, else the built-in one."""
+    return load_scene(rec["scene_file"]) if rec.get("scene_file") else resolve_scene(
+        rec["scene"])
+
+
 def _f(x: float | None, fmt: str = ".1f") -> str:
     return "-" if x is None else format(x, fmt)
 
@@ -60,7 +67,7 @@ def table(seq: Path, con: Path, peer: Path | None) -> str:
     ratios, big, ok, hits, checked = [], [], 0, 0, 0
     for name in sorted(c_recs):
         c, s, p = c_recs[name], s_recs.get(name), p_recs.get(name)
-        scene = resolve_scene(name)
+        scene = _scene(c)
         ratio = None
         if s and c["success"] and s["success"]:
             ratio = c["makespan_s"] / s["makespan_s"]

@@ -102,6 +102,19 @@ def test_generator_rejects_bad_index():
             F.generate_scene(bad)  # type: ignore[arg-type]
 
 
+def test_held_out_scenes_continue_the_family_under_their_own_names():
+    """Held-out indices run on past the family (its kinds, levels and checks) and are
+    named apart from it; family indices are refused there and held-out ones here."""
+    a, b = F.generate_scene(34, held_out=True), F.generate_scene(34, held_out=True)
+    assert a.scene_dict == b.scene_dict
+    assert a.scene.name == "fleet-heldout-34" and a.scene.schedule == "concurrent"
+    assert (a.kind, a.layout_info["level"]) == (F.scene_kind(34), F.scene_level(34))
+    assert a.scene_dict["name"] not in {F.scene_name(k) for k in range(F.N_SCENES)}
+    for bad in (0, 24, True, 30.0):
+        with pytest.raises(ValueError, match="index"):
+            F.generate_scene(bad, held_out=True)  # type: ignore[arg-type]
+
+
 def test_lamp_validate_accepts_every_scene():
     from lamp.cli import app
 

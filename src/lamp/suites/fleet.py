@@ -183,19 +183,26 @@ def resolution_for(workspace: tuple[float, float]) -> float:
     return COARSE_RESOLUTION if max(workspace) > COARSE_ABOVE else RESOLUTION
 
 
-def generate_scene(index: int) -> GeneratedFleet:
+def generate_scene(index: int, held_out: bool = False) -> GeneratedFleet:
     """Generate scene ``index`` (0-based); deterministic in ``index``. The accepted scene
     has every guarantee of the module docstring; RuntimeError (with the rejection counts)
-    when ``MAX_ATTEMPTS`` draws fail."""
-    if not (isinstance(index, int) and 0 <= index < N_SCENES):
-        raise ValueError(f"index must be an int in [0, {N_SCENES}), got {index!r}")
+    when ``MAX_ATTEMPTS`` draws fail.
+
+    With ``held_out`` the index runs on past the family (``index >= N_SCENES``, named
+    ``fleet-heldout-NN``): scenes of the same kinds, levels and checks that no default
+    was ever tuned on (``benchmarks/fleet_heldout.py``)."""
+    low, high = (N_SCENES, None) if held_out else (0, N_SCENES)
+    if not (isinstance(index, int) and not isinstance(index, bool) and index >= low
+            and (high is None or index < high)):
+        span = f"[{low}, {high})" if high is not None else f">= {low}"
+        raise ValueError(f"index must be an int {span}, got {index!r}")
     rng = np.random.default_rng([SUITE_SEED, STREAM, index])
     kind, level = scene_kind(index), scene_level(index)
     ws = _workspace(rng, level)
     n_obj = int(rng.integers(OBJECTS[level][0], OBJECTS[level][1] + 1))
     objects = sample_objects(rng, kind, n_obj)
     n_robots = team_size(rng, n_obj)
-    name = scene_name(index)
+    name = f"{NAME}-heldout-{index:02d}" if held_out else scene_name(index)
     rejected: dict[str, int] = {}
 
     def reject(why: str) -> None:
