@@ -152,6 +152,22 @@ def test_bench_schedule_is_checked_and_recorded(tmp_path: Path) -> None:
     assert [j.scene.schedule for j in kept] == ["concurrent", "concurrent"]
 
 
+def test_a_disturbance_that_never_fires_changes_nothing(rooms_runs) -> None:
+    """A robot failure scheduled after the run ends: the disturbed executor runs the fleet
+    exactly as the plain simulator does (the same settle between stretches: it was
+    settling 0.2 s at every event before), so the result is the undisturbed one."""
+    from lamp.contract.disturb import Disturbances
+
+    plain = rooms_runs[0]
+    late = lamp.solve(scene_from_dict(copy.deepcopy(ROOMS)), "lazy", 0,
+                      disturbances=Disturbances(robot_failures=((0, 1e5),)))
+    assert late.success
+    assert late.makespan_s == plain.makespan_s
+    assert [o.segments for o in late.objects] == [o.segments for o in plain.objects]
+    assert late.to_dict()["stats"]["fleet"]["placed_at_s"] == \
+        plain.to_dict()["stats"]["fleet"]["placed_at_s"]
+
+
 def test_a_failed_robot_leaves_its_sub_team_and_a_free_one_takes_its_place() -> None:
     """Concurrent schedule, robot 1 (object 0's sub-team) fails at 2 s: it holds where it
     stopped, never pushes again, the spare robot 6 joins object 0's sub-team, and both

@@ -59,7 +59,7 @@ from lamp.fleet.turns import Turns
 from lamp.fleet.utilisation import RobotTime
 from lamp.fleet.view import FleetExecution, FleetView
 from lamp.scene.model import Scene
-from lamp.sim.simulator import SETTLE_TIME, Simulator
+from lamp.sim.simulator import SETTLE_TIME
 
 __all__ = ["BLOCKED_WAKE_EVENTS", "Fleet"]
 
@@ -93,7 +93,8 @@ class _Object:
 
 class Fleet:
     """Moves a scene's objects concurrently on ``executor`` (see the module docstring): a
-    ``Simulator`` or an executor wrapping one, with its ``row_durations``.
+    ``Simulator`` or an executor wrapping one, with its ``row_durations`` and the
+    ``settle_time`` of its ``execute``.
 
     ``object_main(fleet, k)`` runs in object ``k``'s thread and returns its outcome; it
     drives its closed loops on ``fleet.view(k)``. ``timeline(trace, sim_time, team)``
@@ -350,12 +351,11 @@ class Fleet:
 
         watched = any(s.stop is not None for s in running)
         tau = np.cumsum(self.executor.row_durations(paths))  # when each row is reached
-        # objects come to rest while their robots hold the rows ``submit`` appended; the
-        # simulator's own settle only when nobody moves on
+        # the simulator's own settle only when nobody moves on (else the held rows settle)
         every = all(s.remaining == n_rows for s in running)
-        settle = {} if every or not isinstance(self.executor, Simulator) else {"settle_time": 0.0}
         out = self.executor.execute(paths, record_every=TRACE_EVERY,
-                                    stop=stop if watched else None, **settle)
+                                    stop=stop if watched else None,
+                                    settle_time=SETTLE_TIME if every else 0.0)
         done = n_rows
         if out.stopped_at is not None:  # the rows whose time had come
             stopped_s = out.stopped_at * float(out.sim_time) / max(1, int(out.steps))

@@ -24,7 +24,7 @@ import numpy as np
 
 from lamp.contract.disturb import HEADING_PER_METRE, Disturbances
 from lamp.contract.trajectory import densify
-from lamp.sim.simulator import ExecutionResult, Simulator, Trace
+from lamp.sim.simulator import SETTLE_TIME, ExecutionResult, Simulator, Trace
 
 __all__ = ["DisturbedExecutor"]
 
@@ -70,18 +70,23 @@ class DisturbedExecutor:
 
     # --------------------------------------------------------------------- execution
     def execute(self, robot_paths: np.ndarray, record_every: int | None = None,
-                stop: Callable[[np.ndarray], bool] | None = None) -> ExecutionResult:
+                stop: Callable[[np.ndarray], bool] | None = None,
+                settle_time: float = SETTLE_TIME) -> ExecutionResult:
         """Run ``robot_paths`` with the robots' imprecision and failures, and knock the
-        pushed object once; the result's ``object_poses`` are observed ones, its trace true."""
+        pushed object once; the result's ``object_poses`` are observed ones, its trace true.
+        ``settle_time`` as in ``Simulator.execute`` (the fleet schedule holds no settle
+        while other sub-teams move on)."""
         paths = np.asarray(robot_paths, float)
         if not self.disturbances.active:
-            return self.sim.execute(paths, record_every=record_every, stop=stop)
+            return self.sim.execute(paths, record_every=record_every, stop=stop,
+                                    settle_time=settle_time)
         paths = self._imprecise(paths)
         paths = self._fail(paths)
         if self.disturbances.push_disturbance > 0 and paths.shape[1] > 2:
-            out = self._knocked(paths, record_every, stop)
+            out = self._knocked(paths, record_every, stop, settle_time)
         else:
-            out = self.sim.execute(paths, record_every=record_every, stop=stop)
+            out = self.sim.execute(paths, record_every=record_every, stop=stop,
+                                   settle_time=settle_time)
         return replace(out, object_poses=self._observe())
 
     def _imprecise(self, paths: np.ndarray) -> np.ndarray:
@@ -128,7 +133,8 @@ class DisturbedExecutor:
         return paths
 
     def _knocked(self, paths: np.ndarray, record_every: int | None,
-                 stop: Callable[[np.ndarray], bool] | None) -> ExecutionResult:
+                 stop: Callable[[np.ndarray], bool] | None, settle_time: float
+                 ) -> ExecutionResult:
         """The paths in two parts with an impulse on the pushed object in between (the one
         that moved most in the first part; none when nothing moved)."""
         cut = int(self.rng.integers(1, paths.shape[1] - 1))
@@ -146,7 +152,8 @@ class DisturbedExecutor:
         # target by more than the simulator's start gap)
         rest = densify(np.concatenate([self.sim.robot_positions[:, None], paths[:, cut + 1:]],
                                       axis=1))
-        second = self.sim.execute(rest, record_every=record_every, stop=stop)
+        second = self.sim.execute(rest, record_every=record_every, stop=stop,
+                                  settle_time=settle_time)
         return _joined(first, second)
 
     def _kick(self, k: int, impulse: np.ndarray) -> None:
