@@ -156,6 +156,44 @@ def test_the_loop_does_not_replan_on_noise_alone(sigma_known, thrash):
     assert (drifts >= 2) if thrash else (drifts == 0)
 
 
+class _ScriptedSensor(_StillExecutor):
+    """An exact object whose readings are the truth plus ``script``'s offsets in turn
+    (then the truth); ``reads`` counts them."""
+
+    def __init__(self, start, script):
+        super().__init__(0.0)
+        self.true = np.array([start], float)
+        self.script, self.reads = [np.asarray(o, float) for o in script], 0
+
+    @property
+    def object_poses(self):
+        self.reads += 1
+        return self.true + (self.script.pop(0) if self.script else np.zeros(3))
+
+
+@pytest.mark.parametrize("sigma", [0.0, 0.01])
+def test_a_noisy_sensor_stops_the_loop_only_when_a_closer_look_agrees(sigma):
+    """The object is at its goal and the first reading says so. An exact sensor (sigma 0)
+    stops there. A noisy one takes ``CONFIRM_FACTOR * sensing_readings`` more readings:
+    when they agree it stops with them (no segment), when they see the object 0.3 m short
+    it goes on pushing."""
+    from test_closed_loop import DRIFT_ONLY, GOAL, StraightPlanner
+
+    from lamp.planners.closed_loop import CONFIRM_FACTOR
+
+    config = PlannerConfig(long_push_length=0.0, planning_time_limit=60.0,
+                           sensing_sigma=sigma, sensing_readings=4)
+    look = CONFIRM_FACTOR * config.sensing_readings
+    for short, pushes in ((0.0, False), (-0.3, bool(sigma))):
+        ex = _ScriptedSensor(GOAL, [[0, 0, 0]] + [[short, 0, 0]] * look)
+        loop = ClosedLoop(StraightPlanner(GOAL, step=0.1), DRIFT_ONLY, ex, index=0, goal=GOAL,
+                          config=config, reroute=lambda t, q: t, record=LoopRecord())
+        result = loop.run()
+        assert (result.segments > 0) == pushes, (short, result)
+        if not pushes:
+            assert ex.reads == 1 + (look if sigma else 0)
+
+
 def test_disturbed_runs_are_deterministic_and_judged_on_the_truth(scene):
     d = Disturbances(sensing_noise=0.01, actuation_noise=0.1, push_disturbance=0.3)
     a = lamp.solve(scene, "lazy", 1, model=GeometricProposer(), disturbances=d)
