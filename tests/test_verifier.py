@@ -149,6 +149,43 @@ def test_approach_widens_the_window_on_a_window_bound_failure() -> None:
     assert v.stats.gspi_calls == 1 and v.stats.gspi_success == 0
 
 
+def test_a_robot_routed_from_beyond_the_objects_window_is_backed_off_first() -> None:
+    """A robot outside the object's own window (``leave_contact`` does not look there)
+    but inside the routing window stands a few mm inside a body: ``approach`` backs it
+    off to the nearest free spot of the routing space before Gspi is asked (which refuses
+    a start that is not free), and the path starts where the robot stands."""
+    stuck_at, spot = np.array([5.0, 1.0]), np.array([5.03, 1.0])
+
+    class Wide(Plane):
+        def window(self, q_object, points=None, scale=1.0):
+            side = 4.0 if points is None else 8.0 * scale  # the object's own: 4 m
+            return (0.0, 0.0, side, side)
+
+        def _space(self):
+            space = super()._space()
+            space.nearest_free = lambda p, accept=None, max_distance=None: (
+                spot.copy() if np.allclose(p, stuck_at) else np.asarray(p, float))
+            return space
+
+    def free(p):
+        return np.linalg.norm(p - stuck_at, axis=1) > 0.01
+
+    class Refusing(StraightRouter):
+        def __call__(self, q_object, starts, goals, space, time_limit):
+            if not space.is_free(starts).all():
+                return SimpleNamespace(success=False, status=GspiStatus.INVALID_START)
+            return super().__call__(q_object, starts, goals, space, time_limit)
+
+    robots = np.array([[1.2, 1.5], [1.3, 2.8], stuck_at])
+    v = make(robots=Wide(free=free), router=Refusing())
+    routed = v.approach(Q_FROM, robots, robots + [0.0, 0.1])
+    assert routed is not None
+    paths, _ = routed
+    assert np.allclose(paths[:, 0], robots, atol=MAX_STEP)
+    assert np.any(np.linalg.norm(paths[2] - spot, axis=1) < 1e-9)  # it passed the spot
+    assert np.all(np.linalg.norm(np.diff(paths, axis=1), axis=2) <= MAX_STEP + 1e-9)
+
+
 def test_params_are_validated() -> None:
     for bad in ({"k": 0}, {"max_budget": 1.5}, {"gspi_time_limit": 0.0},
                 {"contact_tolerance": -1.0}):

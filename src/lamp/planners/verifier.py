@@ -326,6 +326,25 @@ class Verifier:
                 ends[i] = spot
         return straight_moves(q_R, ends)
 
+    @staticmethod
+    def _off_obstacles(space: Any, backoff: np.ndarray, starts: np.ndarray,
+                       routed: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``backoff`` and ``starts`` with every ``routed`` robot that is not free in the
+        routing ``space`` first backed off to its nearest free spot there (a move of a few
+        cm). ``leave_contact`` looks only in the object's own window; a robot routed from
+        beyond it may stand touching another body (a team that placed its object last,
+        under actuation noise), and Gspi would refuse its start on every call."""
+        idx = np.flatnonzero(routed)
+        stuck = idx[~space.is_free(starts[idx])] if len(idx) else idx
+        if len(stuck) == 0:
+            return backoff, starts
+        ends = starts.copy()
+        for i in stuck:
+            spot = space.nearest_free(starts[i])
+            if spot is not None:
+                ends[i] = spot
+        return concat(backoff, straight_moves(starts, ends)), ends
+
     # ------------------------------------------------------------------ approach
     def approach(self, q_from: np.ndarray, q_R: np.ndarray,
                  goals: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
@@ -352,6 +371,7 @@ class Verifier:
             held = bystanders(lambda pts, s=scale: robots.window(q_from, pts, s), q_R,
                               own_goal < 0, own_goal >= 0, pad)
             space = robots.robot_space_at(q_from, robots.window(q_from, q_R[~held], scale))
+            backoff, starts = self._off_obstacles(space, backoff, starts, ~held)
             # Contacts deeper than the tolerance or robots left overlapping come back as a
             # failed plan (status INVALID_GOAL / INVALID_START), like any other infeasible
             # approach.
