@@ -48,9 +48,10 @@ def _collisions(folder: Path, rec: dict) -> int | None:
 
 
 def _scene(rec: dict):
-    """The job's scene: its file when the suite was a folder, else the built-in one."""
-    return load_scene(rec["scene_file"]) if rec.get("scene_file") else resolve_scene(
-        rec["scene"])
+    """The job's scene: its file when the suite was a folder (the recorded path exists),
+    else the built-in scene of that name (built-in records name a package-relative file)."""
+    path = Path(rec.get("scene_file") or "")
+    return load_scene(path) if path.is_file() else resolve_scene(rec["scene"])
 
 
 def _f(x: float | None, fmt: str = ".1f") -> str:
