@@ -315,35 +315,27 @@ class Verifier:
         """
         near = self._near(q_from, q_R)
         space = self.robots.robot_space_at(q_from, self.robots.window(q_from, q_R[near]))
-        free = np.ones(len(q_R), bool)
-        free[near] = space.is_free(q_R[near])
-        if np.all(free):
-            return q_R[:, None, :].copy()
-        ends = q_R.copy()
-        for i in np.flatnonzero(~free):
-            spot = space.nearest_free(q_R[i])
-            if spot is not None:
-                ends[i] = spot
-        return straight_moves(q_R, ends)
+        ends = self._freed(space, q_R, near)
+        return q_R[:, None, :].copy() if ends is None else straight_moves(q_R, ends)
 
     @staticmethod
-    def _off_obstacles(space: Any, backoff: np.ndarray, starts: np.ndarray,
-                       routed: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """``backoff`` and ``starts`` with every ``routed`` robot that is not free in the
-        routing ``space`` first backed off to its nearest free spot there (a move of a few
-        cm). ``leave_contact`` looks only in the object's own window; a robot routed from
-        beyond it may stand touching another body (a team that placed its object last,
-        under actuation noise), and Gspi would refuse its start on every call."""
-        idx = np.flatnonzero(routed)
-        stuck = idx[~space.is_free(starts[idx])] if len(idx) else idx
+    def _freed(space: Any, points: np.ndarray, which: np.ndarray) -> np.ndarray | None:
+        """``points`` with each of ``which`` that is not free in ``space`` moved to its
+        nearest free spot there (kept where none is found); None when all of them are
+        free. ``leave_contact`` asks it in the object's own window; ``approach`` again in
+        the routing space, for a robot routed from beyond that window that stands touching
+        another body (a team that placed its object last, under actuation noise): Gspi
+        would refuse its start on every call."""
+        idx = np.flatnonzero(which)
+        stuck = idx[~space.is_free(points[idx])] if len(idx) else idx
         if len(stuck) == 0:
-            return backoff, starts
-        ends = starts.copy()
+            return None
+        ends = points.copy()
         for i in stuck:
-            spot = space.nearest_free(starts[i])
+            spot = space.nearest_free(points[i])
             if spot is not None:
                 ends[i] = spot
-        return concat(backoff, straight_moves(starts, ends)), ends
+        return ends
 
     # ------------------------------------------------------------------ approach
     def approach(self, q_from: np.ndarray, q_R: np.ndarray,
@@ -371,7 +363,9 @@ class Verifier:
             held = bystanders(lambda pts, s=scale: robots.window(q_from, pts, s), q_R,
                               own_goal < 0, own_goal >= 0, pad)
             space = robots.robot_space_at(q_from, robots.window(q_from, q_R[~held], scale))
-            backoff, starts = self._off_obstacles(space, backoff, starts, ~held)
+            freed = self._freed(space, starts, ~held)
+            if freed is not None:
+                backoff, starts = concat(backoff, straight_moves(starts, freed)), freed
             # Contacts deeper than the tolerance or robots left overlapping come back as a
             # failed plan (status INVALID_GOAL / INVALID_START), like any other infeasible
             # approach.
