@@ -137,6 +137,34 @@ def test_recording_keeps_the_sub_teams_and_the_viewer_shows_them(rooms_runs,
     assert payload(sequential.recording)["robot_team"] is None
 
 
+def test_timeline_shows_the_sub_teams_time_and_the_placements(rooms_runs,
+                                                              tmp_path: Path) -> None:
+    from lamp.record.format import save_recording
+    from lamp.viz.timeline import IDLE, placement_times, robot_spans
+
+    concurrent, _, sequential = rooms_runs
+    rec = concurrent.recording
+    fleet = concurrent.to_dict()["stats"]["fleet"]
+    assert placement_times(rec) == dict(enumerate(fleet["placed_at_s"]))
+    seq = placement_times(sequential.recording)  # from the segments: one after another
+    assert set(seq) == {0, 1} and seq[0] < seq[1]
+    assert seq[1] == pytest.approx(sequential.makespan_s, abs=0.1)
+    # the share of robot-time in a sub-team agrees with the schedule's own accounting
+    spans = robot_spans(rec.arrays["times"], rec.arrays["robots"], rec.arrays["robot_team"],
+                        rec.scene_model().physics.robot_speed)
+    total = 6 * (rec.arrays["times"][-1] - rec.arrays["times"][0])
+    busy = sum(s.end - s.start for row in spans for s in row if s.object != IDLE) / total
+    share = fleet["utilisation"]
+    assert busy == pytest.approx(share["working"] + share["waiting"], abs=0.01)
+    save_recording(rec, tmp_path)
+    out = tmp_path / "timeline.png"
+    res = CliRunner().invoke(app, ["timeline", str(tmp_path), "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    assert out.read_bytes()[:4] == b"\x89PNG"
+    bad = CliRunner().invoke(app, ["timeline", str(tmp_path), "--out", str(tmp_path / "t.gif")])
+    assert bad.exit_code == 2 and "--out" in bad.output and not (tmp_path / "t.gif").exists()
+
+
 def test_bench_schedule_is_checked_and_recorded(tmp_path: Path) -> None:
     bad = CliRunner().invoke(app, ["bench", "--suites", "fleet", "--planners", "lazy",
                                    "--schedule", "parallel", "--dry-run",

@@ -366,6 +366,29 @@ def render_command(
     typer.echo(f"wrote {out}{frames} in {stats.seconds:.1f} s")
 
 
+@app.command("timeline")
+def timeline_command(
+    run_dir: Path = typer.Argument(..., help="A run folder holding recording.json + .npz."),
+    out: Path = typer.Option(..., "--out", "-o", help="Picture to write: .png, .svg or .pdf."),
+    width: float = typer.Option(10.0, "--width", help="Picture width in inches."),
+) -> None:
+    """Draw where a run's robot-time went: one bar per robot over simulated time, coloured
+    by the object its sub-team pushes (moving, holding, idle), objects' placements marked."""
+    from lamp.record import RecordingError, load_recording
+    from lamp.viz.timeline import save_timeline
+
+    image_format(out)
+    check_writable_file(out)
+    try:
+        recording = load_recording(run_dir)
+        save_timeline(recording, out, width_in=width)
+    except RecordingError as exc:
+        fail_input(str(exc))
+    except ValueError as exc:  # "field: problem" -> "--field: problem"
+        fail_input(f"--{exc}")
+    typer.echo(f"wrote {out}")
+
+
 def _register_groups() -> None:
     from lamp.scene.cli import schema_command, validate_command
     from lamp.suites.cli import suite_app
