@@ -251,3 +251,28 @@ def test_robots_freed_by_a_placed_object_reinforce_a_moving_team() -> None:
     assert np.all((team[times < first - 1e-6] == 1).sum(axis=1) <= 2)  # two while 0 moves
     assert (team[-1] == 1).sum() == 3  # three at the end
     assert res.objects[1].replans >= 1  # a new loop with the new team
+
+
+def test_a_team_reinforced_while_it_drives_to_its_object_keeps_its_robots_apart() -> None:
+    """Object 1 lies 8 m from its team, which drives there in transit hops; object 0 is
+    placed meanwhile and its robots join object 1's team (``fleet_reinforce_reach``). A hop
+    planned for the team as it was runs with exactly those robots (the joiners hold: the
+    hop's paths once went to the grown team, and the run stopped with an internal error),
+    and the box is placed safely with three robots."""
+    import numpy as np
+
+    d = {"format": "lamp-scene/1", "name": "help-far", "workspace": [12.0, 3.0],
+         "schedule": "concurrent",
+         "robots": {"starts": [[0.4, 0.6], [0.4, 1.0], [0.4, 2.0], [0.4, 2.4]]},
+         "objects": [{"type": "rectangle", "size": [0.4, 0.3], "start": [1.2, 0.8, 0.0],
+                      "goal": [1.8, 0.8, 0.0]},
+                     {"type": "rectangle", "size": [0.4, 0.3], "start": [9.0, 2.2, 0.0],
+                      "goal": [10.5, 2.2, 0.0]}]}
+    res = lamp.solve(scene_from_dict(d), "lazy", 0, params={"fleet_reinforce_reach": 20.0})
+    assert res.success, [o.failure_reason for o in res.objects]
+    _safe(res)
+    fleet = res.to_dict()["stats"]["fleet"]
+    assert fleet["reinforced"] >= 1 and fleet["transit_hops"] >= 1
+    team = recorded_teams(res.recording)
+    assert (team[-1] == 1).sum() == 3
+    assert np.all((team == 1).sum(axis=1) <= 3)

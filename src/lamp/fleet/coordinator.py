@@ -9,10 +9,10 @@ Design (``docs/fleet.md``):
   other object a body where it stands. Loops run as coroutines (``lamp.fleet.turns``):
   one at a time, in priority order, so a run is deterministic.
 - **Priority.** Objects rank in the order they started (the scene's order among those
-  that start together); an object with ``after`` starts once those objects are placed. A lower-priority segment may not end with its object and
-  robots deeper in a higher-priority object's *claim* (the rest of its plan,
-  ``regions.claim``) than they began (crossing one, or leaving it, is allowed): loads
-  never meet head-on in a door.
+  that start together); one with ``after`` starts once those objects are placed. A
+  lower-priority segment may not end with its object and robots deeper in a higher
+  object's *claim* (the rest of its plan, ``regions.claim``) than they began (crossing
+  one, or leaving it, is allowed): loads never meet head-on in a door.
 - **Admission.** A segment a loop hands its executor starts only if it is compatible
   with every running segment (robots row by row on the shared clock, objects by the
   space they may take: ``spacetime.compatible``) and respects higher claims; and its
@@ -29,7 +29,6 @@ Design (``docs/fleet.md``):
 - **Liveness.** When nothing runs and nothing waits on a change, the highest-priority
   waiting segment is admitted against standing bodies only (counted as ``forced``), and
   planners waiting on a change plan in the world as it is (like the sequential schedule).
-
 - **Failures.** A robot that fails (``executor.failed``) leaves its sub-team for good
   (``FAILED``), replaced by the nearest free robot when there is one; its team's loop ends
   after its segment (``team_changed``) and plans anew.
@@ -426,15 +425,16 @@ class Fleet:
         """Object ``k``'s sub-team's executor, for its closed loop."""
         return FleetView(self, k)
 
-    def submit(self, k: int, paths: np.ndarray, stop: Callable[[np.ndarray], bool] | None
-               ) -> FleetExecution:
+    def submit(self, k: int, paths: np.ndarray, stop: Callable[[np.ndarray], bool] | None,
+               team: Sequence[int]) -> FleetExecution:
+        """Run ``paths`` of ``team`` (its view's; robots that joined since hold still)."""
         o = self.objects[k]
         poses = o.announced if o.announced is not None else np.asarray(
             self.executor.object_poses[k], float)[None]
-        start = np.asarray(self.executor.robot_positions, float)[o.team]
+        start = np.asarray(self.executor.robot_positions, float)[list(team)]
         rows = on_grid(start, paths, self.grid)
         rows = np.concatenate([rows, np.repeat(rows[:, -1:], self.hold_rows, axis=1)], axis=1)
-        o.request = Segment(k, list(o.team), rows, poses, stop, self.scene.objects[k].shape,
+        o.request = Segment(k, list(team), rows, poses, stop, self.scene.objects[k].shape,
                             self.scene.robot_radius)
         o.announced = None
         self.turns.pause(k)

@@ -70,4 +70,4 @@ class FleetView:
 
     def execute(self, robot_paths: np.ndarray, record_every: int | None = None,
                 stop: Callable[[np.ndarray], bool] | None = None) -> FleetExecution:
-        return self.fleet.submit(self.k, np.asarray(robot_paths, float), stop)
+        return self.fleet.submit(self.k, np.asarray(robot_paths, float), stop, self.team)
