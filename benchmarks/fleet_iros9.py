@@ -5,7 +5,7 @@ The six robots are placed deterministically at the free spots of a 0.2 m grid ne
 three robots' centre (clear of obstacles and of every object's start and goal by 0.1 m,
 0.2 m apart). ``--write FILE`` saves the scene.
 
-    python benchmarks/fleet_iros9.py [--write iros9.yaml]
+    python benchmarks/fleet_iros9.py [--seeds 0 1 2] [--write iros9.yaml]
 """
 
 from __future__ import annotations
@@ -49,20 +49,28 @@ def with_robots(scene: Scene, extra: int) -> Scene:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--write", help="also save the scene to this file")
+    ap.add_argument("--seeds", type=int, nargs="+", default=[0],
+                    help="planner seeds to run (default: 0); several print each and the median")
     args = ap.parse_args()
     scene = with_robots(resolve_scene("iros-01"), 6)
     if args.write:
         save_scene(scene, args.write)
-    spans = {}
-    for schedule in ("sequential", "concurrent"):
-        t0 = time.perf_counter()
-        result = lamp.solve(scene, "lazy", 0, schedule=schedule)
-        spans[schedule] = result.makespan_s
-        placed = sum(o.success for o in result.objects)
-        print(f"{schedule:10s} success {result.success} ({placed}/9 placed)  makespan "
-              f"{result.makespan_s:.1f} s  planning {result.total_planning_time_s:.1f} s  "
-              f"wall {time.perf_counter() - t0:.0f} s")
-    print(f"makespan concurrent / sequential: {spans['concurrent'] / spans['sequential']:.2f}")
+    ratios = []
+    for seed in args.seeds:
+        spans = {}
+        for schedule in ("sequential", "concurrent"):
+            t0 = time.perf_counter()
+            result = lamp.solve(scene, "lazy", seed, schedule=schedule)
+            spans[schedule] = result.makespan_s
+            placed = sum(o.success for o in result.objects)
+            print(f"seed {seed} {schedule:10s} success {result.success} ({placed}/9 placed)  "
+                  f"makespan {result.makespan_s:.1f} s  planning "
+                  f"{result.total_planning_time_s:.1f} s  wall {time.perf_counter() - t0:.0f} s")
+        ratios.append(spans["concurrent"] / spans["sequential"])
+        print(f"seed {seed} makespan concurrent / sequential: {ratios[-1]:.2f}")
+    if len(ratios) > 1:
+        print(f"median over seeds {args.seeds}: {float(np.median(ratios)):.2f} "
+              f"({min(ratios):.2f}-{max(ratios):.2f})")
 
 
 if __name__ == "__main__":

@@ -81,6 +81,8 @@ def object_main(runner: ClosedLoopRunner, observe: Callable[[SegmentEvent], None
             hops, planning = transit(view, world, k, seed)
             fleet.counts["transit_hops"] += hops
             fleet.transit_planning_s += planning
+            if view.team_changed:  # a robot failed or joined during transit
+                continue
             scene_k = world()
             parts.append(runner.loop(scene_k, k, view, config, observe))
             r = parts[-1].result

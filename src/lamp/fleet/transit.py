@@ -326,4 +326,6 @@ def transit(view: Any, world: Callable[[], Scene], k: int, seed: int = 0
         reply = view.execute(plan.paths)
         if not getattr(reply, "declined", False):
             runs += 1
+        if getattr(view, "team_changed", False):
+            break  # a robot failed or joined: the caller drives the new team
     return runs, planning
