@@ -128,7 +128,31 @@ def seeds_summary(folder: Path) -> str:
             if n is not None:
                 checked, hits = checked + 1, hits + n
     lines.append(f"- collisions found by the safety check: {hits} in {checked} recordings")
-    return "\n".join(lines) + "\n"
+    return "\n".join(lines + _spread(by_seed)) + "\n"
+
+
+def _spread(by_seed: dict[int, list[dict]]) -> list[str]:
+    """Per scene, the makespan of each seed and how far apart they lie (max / min over the
+    seeds that solved it)."""
+    seeds = sorted(by_seed)
+    spans: dict[str, dict[int, float]] = {}
+    for seed, recs in by_seed.items():
+        for r in recs:
+            if r["success"] and r.get("makespan_s") is not None:
+                spans.setdefault(r["scene"], {})[seed] = float(r["makespan_s"])
+    if len(seeds) < 2 or not spans:
+        return []
+    rows = ["", "| scene | " + " | ".join(f"seed {s} (s)" for s in seeds) + " | max / min |",
+            "|---|" + "---|" * (len(seeds) + 1)]
+    ratios = {}
+    for scene, got in sorted(spans.items()):
+        ratios[scene] = max(got.values()) / min(got.values())
+        rows.append(f"| {scene} | " + " | ".join(_f(got.get(s), ".1f") for s in seeds)
+                    + f" | {ratios[scene]:.2f} |")
+    worst = max(ratios, key=lambda k: ratios[k])
+    rows += ["", f"- makespan max / min over the seeds, per scene: median "
+             f"{statistics.median(ratios.values()):.2f}, largest {ratios[worst]:.2f} ({worst})"]
+    return rows
 
 
 def main() -> None:
