@@ -140,12 +140,14 @@ def timeline_figure(recording: Recording, width_in: float = 10.0, dpi: float = 1
     fig = Figure(figsize=(width_in, height), dpi=dpi)
     FigureCanvasAgg(fig)
     ax = fig.add_subplot()
-    for i, row in enumerate(spans):
+    for i, row in enumerate(spans):  # one collection per robot and kind
+        kinds: dict[tuple[int, bool], list[tuple[float, float]]] = {}
         for s in row:
-            colour = IDLE_COLOR if s.object == IDLE else object_color(s.object)
-            alpha = 1.0 if s.moving or s.object == IDLE else HOLD_ALPHA
-            ax.broken_barh([(s.start, s.end - s.start)], (i - 0.4, 0.8), facecolors=colour,
-                           alpha=alpha, linewidth=0)
+            kinds.setdefault((s.object, s.moving), []).append((s.start, s.end - s.start))
+        for (k, moving), ranges in kinds.items():
+            ax.broken_barh(ranges, (i - 0.4, 0.8), linewidth=0,
+                           facecolors=IDLE_COLOR if k == IDLE else object_color(k),
+                           alpha=1.0 if moving or k == IDLE else HOLD_ALPHA)
     for k, t in sorted(placement_times(recording).items()):
         ax.axvline(t, color=object_color(k), lw=1.0, ls="--")
         ax.annotate(f"{k}", (t, 1.0), xycoords=("data", "axes fraction"), ha="center",
