@@ -224,6 +224,18 @@ def test_a_failed_robot_leaves_its_sub_team_and_a_free_one_takes_its_place() -> 
     assert np.all(np.linalg.norm(later - place, axis=1) < 0.02)
 
 
+def _two_boxes(width: float, far_start: tuple[float, float], far_goal_x: float) -> dict:
+    """Four robots at the left of a ``width`` x 3 m room; box 0 a short push from them,
+    box 1 from ``far_start`` to ``far_goal_x`` along its row."""
+    box = {"type": "rectangle", "size": [0.4, 0.3]}
+    return {"format": "lamp-scene/1", "name": "help", "workspace": [width, 3.0],
+            "schedule": "concurrent",
+            "robots": {"starts": [[0.4, 0.6], [0.4, 1.0], [0.4, 2.0], [0.4, 2.4]]},
+            "objects": [{**box, "start": [1.2, 0.8, 0.0], "goal": [1.8, 0.8, 0.0]},
+                        {**box, "start": [*far_start, 0.0],
+                         "goal": [far_goal_x, far_start[1], 0.0]}]}
+
+
 def test_robots_freed_by_a_placed_object_reinforce_a_moving_team() -> None:
     """Two boxes, four robots: teams of two. The short push is placed first; nothing waits
     to start, so with ``fleet_reinforce_reach`` set its robots, within reach, join the
@@ -231,13 +243,7 @@ def test_robots_freed_by_a_placed_object_reinforce_a_moving_team() -> None:
     with them; both placed safely. Off (the default), nobody joins."""
     import numpy as np
 
-    d = {"format": "lamp-scene/1", "name": "help", "workspace": [5.0, 3.0],
-         "schedule": "concurrent",
-         "robots": {"starts": [[0.4, 0.6], [0.4, 1.0], [0.4, 2.0], [0.4, 2.4]]},
-         "objects": [{"type": "rectangle", "size": [0.4, 0.3], "start": [1.2, 0.8, 0.0],
-                      "goal": [1.8, 0.8, 0.0]},
-                     {"type": "rectangle", "size": [0.4, 0.3], "start": [1.2, 2.2, 0.0],
-                      "goal": [4.2, 2.2, 0.0]}]}
+    d = _two_boxes(5.0, (1.2, 2.2), 4.2)
     off = lamp.solve(scene_from_dict(d), "lazy", 0)
     assert off.success and off.to_dict()["stats"]["fleet"]["reinforced"] == 0
     res = lamp.solve(scene_from_dict(d), "lazy", 0, params={"fleet_reinforce_reach": 4.0})
@@ -261,13 +267,7 @@ def test_a_team_reinforced_while_it_drives_to_its_object_keeps_its_robots_apart(
     and the box is placed safely with three robots."""
     import numpy as np
 
-    d = {"format": "lamp-scene/1", "name": "help-far", "workspace": [12.0, 3.0],
-         "schedule": "concurrent",
-         "robots": {"starts": [[0.4, 0.6], [0.4, 1.0], [0.4, 2.0], [0.4, 2.4]]},
-         "objects": [{"type": "rectangle", "size": [0.4, 0.3], "start": [1.2, 0.8, 0.0],
-                      "goal": [1.8, 0.8, 0.0]},
-                     {"type": "rectangle", "size": [0.4, 0.3], "start": [9.0, 2.2, 0.0],
-                      "goal": [10.5, 2.2, 0.0]}]}
+    d = _two_boxes(12.0, (9.0, 2.2), 10.5)
     res = lamp.solve(scene_from_dict(d), "lazy", 0, params={"fleet_reinforce_reach": 20.0})
     assert res.success, [o.failure_reason for o in res.objects]
     _safe(res)
