@@ -267,6 +267,17 @@ def _legend(fig: Figure) -> None:
 SCENE_IMAGE_FORMATS = {".png": "png", ".svg": "svg", ".pdf": "pdf"}
 
 
+def image_format_of(path: str | Path) -> str:
+    """The :data:`SCENE_IMAGE_FORMATS` format of ``path``'s extension; ``ValueError``
+    naming the path for any other extension."""
+    path = Path(path)
+    fmt = SCENE_IMAGE_FORMATS.get(path.suffix.lower())
+    if fmt is None:
+        raise ValueError(f"{path}: unsupported image extension {path.suffix!r}; expected "
+                         f"one of {', '.join(SCENE_IMAGE_FORMATS)}")
+    return fmt
+
+
 def save_scene_png(scene: Scene, path: str | Path, dpi: int = 120) -> Path:
     """Write a PNG of ``scene`` at its start state, titled with the scene name; returns the path.
 
@@ -282,10 +293,7 @@ def save_scene_image(scene: Scene, path: str | Path, dpi: int = 120,
     unless ``fmt`` names one; ``ValueError`` for any other extension, before drawing."""
     path = Path(path)
     if fmt is None:
-        fmt = SCENE_IMAGE_FORMATS.get(path.suffix.lower())
-        if fmt is None:
-            raise ValueError(f"{path}: unsupported image extension {path.suffix!r}; expected "
-                             f"one of {', '.join(SCENE_IMAGE_FORMATS)}")
+        fmt = image_format_of(path)
     if dpi <= 0:
         raise ValueError(f"dpi: must be > 0, got {dpi}")
     fig, ax = new_figure(scene, 6.0, dpi)

@@ -26,11 +26,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from lamp.viz.scene_plot import SCENE_IMAGE_FORMATS, atomic_output, object_color
+from lamp.viz.scene_plot import atomic_output, image_format_of, object_color
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -73,8 +73,7 @@ def robot_spans(times: np.ndarray, positions: np.ndarray, team: np.ndarray,
     dt = np.diff(times)
     keep = dt > 0
     step = np.hypot(*np.moveaxis(np.diff(positions, axis=0), -1, 0))  # (S-1, N)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        fast = step > MOVING_FRACTION * speed * dt[:, None]
+    fast = step > MOVING_FRACTION * speed * dt[:, None]
     owner = team[1:]
     moving = fast & (owner >= 0)
     owner = np.where(owner >= 0, owner, IDLE)
@@ -175,13 +174,10 @@ def save_timeline(recording: Recording, path: str | Path, width_in: float = 10.0
     """Write :func:`timeline_figure` to ``path`` (PNG, SVG or PDF by its extension;
     ``ValueError`` for another, before drawing), atomically; returns the path."""
     path = Path(path)
-    fmt = SCENE_IMAGE_FORMATS.get(path.suffix.lower())
-    if fmt is None:
-        raise ValueError(f"out: unsupported image extension {path.suffix!r}; expected one of "
-                         f"{', '.join(SCENE_IMAGE_FORMATS)}")
+    fmt = image_format_of(path)
     if not width_in > 0:
         raise ValueError(f"width: must be > 0, got {width_in}")
-    fig: Any = timeline_figure(recording, width_in, dpi)
+    fig = timeline_figure(recording, width_in, dpi)
     with atomic_output(path) as tmp:
         fig.savefig(tmp, format=fmt, dpi=dpi)
     return path
