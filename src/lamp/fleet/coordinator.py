@@ -1,7 +1,5 @@
 """The fleet schedule: several objects moved at once, each by its own sub-team, in one
-simulator.
-
-Design (``docs/fleet.md``):
+simulator. Design (``docs/fleet.md``):
 
 - **Loops.** Every object runs LAMP's own closed loop (planning, Verify, drift and stall
   handling, recovery: ``lamp.planners``) in the world as it is when the loop starts: its
@@ -13,27 +11,25 @@ Design (``docs/fleet.md``):
   lower-priority segment may not end with its object and robots deeper in a higher
   object's *claim* (the rest of its plan, ``regions.claim``) than they began (crossing
   one, or leaving it, is allowed): loads never meet head-on in a door.
-- **Admission.** A segment a loop hands its executor starts only if it is compatible
-  with every running segment (robots row by row on the shared clock, objects by the
-  space they may take: ``spacetime.compatible``) and respects higher claims; and its
-  bodies as planned overlap no body standing still
-  (a standing overlap means the world changed since the plan: the segment is declined
-  and the loop plans anew, ``WORLD_CHANGED``). Otherwise it waits for the next event. A
-  planner that finds no plan while other objects still move waits for a change too.
+- **Admission.** A segment starts only if it is compatible with every running segment
+  (robots row by row on the shared clock, objects by the space they may take:
+  ``spacetime.compatible``), respects higher claims, and its bodies as planned overlap
+  no body standing still (else the world changed since the plan: it is declined and the
+  loop plans anew, ``WORLD_CHANGED``). Otherwise it waits for the next event. A planner
+  that finds no plan while other objects still move waits for a change too.
 - **Clock.** Admitted segments are re-timed on a common row grid (``segments.on_grid``),
   with rows appended in which their robots hold for the simulator's settle time, and run
-  together; the simulator runs until the first of them ends (or a push watch stops one),
-  that loop gets its result and plans its next segment while the others hold their place
-  in their rows (simulated time stands still while loops plan). Only when every running
-  segment ends together does the simulator settle as it does after a sequential segment.
+  together until the first ends (or a push watch stops one); that loop plans its next
+  segment while the others hold their place in their rows (simulated time stands still
+  while loops plan). Only when every running segment ends together does the simulator
+  settle as it does after a sequential segment.
 - **Liveness.** When nothing runs and nothing waits on a change, the highest-priority
-  waiting segment is admitted against standing bodies only (counted as ``forced``), and
-  planners waiting on a change plan in the world as it is (like the sequential schedule).
-- **Failures.** A robot that fails (``executor.failed``) leaves its sub-team for good
-  (``FAILED``), replaced by the nearest free robot when there is one; its team's loop ends
-  after its segment (``team_changed``) and plans anew.
-
-Robots are allocated by ``lamp.fleet.teams``. The recorder follows the shared clock.
+  waiting segment is admitted against standing bodies only (``forced``), and planners
+  waiting on a change plan in the world as it is (like the sequential schedule).
+- **Teams.** Allocated by ``lamp.fleet.teams``. A robot that fails (``executor.failed``)
+  leaves its sub-team for good (``FAILED``), replaced by the nearest free robot if any;
+  far robots hand over to free ones nearer (``lamp.fleet.handover``). The team's loop
+  ends after its segment (``team_changed``) and plans anew.
 """
 
 from __future__ import annotations
@@ -47,10 +43,10 @@ import numpy as np
 import shapely
 
 from lamp.contract.events import TRACE_EVERY, RunObserver
-from lamp.contract.goals import goal_errors
-from lamp.contract.result import ObjectResult
 from lamp.contract.runner import ObjectOutcome
 from lamp.fleet.admission import meets_moving, meets_standing
+from lamp.fleet.handover import better_team
+from lamp.fleet.objects import given_up
 from lamp.fleet.regions import claim
 from lamp.fleet.segments import Segment, on_grid
 from lamp.fleet.teams import allocate, nearest, reinforce, start_order
@@ -123,8 +119,9 @@ class Fleet:
         #: (simulated time, what, object, detail) of every decision: for the curious
         self.log: list[tuple[float, str, int, str]] = []
         self.counts = dict.fromkeys(("admitted", "declined", "waited", "forced", "blocked",
-                                     "merged", "grown", "reinforced", "events", "transit_hops",
-                                     "parking_moves"), 0)
+                                     "merged", "grown", "reinforced", "replaced", "handed_over",
+                                     "events", "transit_hops", "parking_moves"), 0)
+        self._handover_checked: set[tuple[int, tuple[int, ...], tuple[int, ...]]] = set()
         #: wall-clock seconds spent planning transit hops and parking moves
         self.transit_planning_s = 0.0
         self.robot_time = RobotTime(scene.n_robots)  # utilisation
@@ -155,9 +152,9 @@ class Fleet:
 
     def _release(self) -> None:
         """Start objects whose ``after`` objects are placed, and give robots to those
-        that wait for a team, from the free robots (``teams.allocate``); fail those
-        waiting on an object that failed; when no object waits, free robots reinforce
-        the moving teams."""
+        that wait for a team (``teams.allocate``); fail those waiting on an object that
+        failed; free robots reinforce moving teams (when no object waits) and take far
+        team robots' places."""
         ready = []
         for o in self.objects:
             if o.status == "active" and o.needs_team:
@@ -173,6 +170,7 @@ class Fleet:
             self._start(ready)
         if self.reinforce_reach > 0 and not self._any_waits():
             self._reinforce()
+        self._hand_over()
 
     def _any_waits(self, but: int | None = None) -> bool:
         """Whether an object (other than ``but``) waits to start or waits for robots."""
@@ -212,9 +210,28 @@ class Fleet:
                                  self.executor.object_poses, teams,
                                  self.reinforce_reach).items():
             if team != self.objects[k].team:
-                self.objects[k].team = team
-                self.owner[team] = k
-                self.counts["reinforced"] += 1
+                self._reteam(self.objects[k], team, "reinforced")
+
+    def _hand_over(self) -> None:
+        """Between its segments (a reply waits), a team's far robots give their places to
+        free robots nearer by route (``handover.better_team``; checked once per team)."""
+        for o in self._ranked():
+            key = (o.index, tuple(o.team), tuple(self._free()))
+            if o.status != "active" or o.reply is None or key in self._handover_checked:
+                continue
+            self._handover_checked.add(key)
+            team = better_team(self.scene, o.index, o.team, key[2],
+                               self.executor.robot_positions, self.executor.object_poses)
+            if team is not None:
+                self._reteam(o, team, "handed_over")
+
+    def _reteam(self, o: _Object, team: Sequence[int], what: str) -> None:
+        """``o``'s sub-team becomes ``team`` (robots it loses go free); counted as ``what``."""
+        self.log.append((self.clock, what, o.index, f"{o.team} -> {sorted(team)}"))
+        self.owner[[i for i in o.team if self.owner[i] == o.index]] = FREE
+        o.team = sorted(team)
+        self.owner[o.team] = o.index
+        self.counts[what] += 1
 
     def _main(self, k: int) -> None:
         o = self.objects[k]
@@ -229,15 +246,8 @@ class Fleet:
             obs.object_finished(k, len(self.objects), o.outcome.result)
 
     def _give_up(self, o: _Object, why: str) -> None:
-        pose = np.asarray(self.executor.object_poses[o.index], float)
-        goal = np.asarray(self.scene.objects[o.index].goal, float)
-        pos_err, rot_err = goal_errors(pose, goal)
         o.status = "failed"
-        o.outcome = ObjectOutcome(ObjectResult(
-            success=False, final_pose=[float(v) for v in pose], goal=[float(v) for v in goal],
-            position_error=pos_err, orientation_error=rot_err, left_workspace=False,
-            segments=0, full_horizon_plan=False, failure_reason=why, replans=0,
-            planning_time_s=0.0))
+        o.outcome = given_up(self.scene, o.index, self.executor.object_poses[o.index], why)
         for obs in self.observers:
             obs.object_started(o.index, len(self.objects))
             obs.object_finished(o.index, len(self.objects), o.outcome.result)
@@ -270,7 +280,10 @@ class Fleet:
                              f"standing={hit_standing} moving={hit_moving}"))
             if hit_standing and not force:
                 if not hit_moving:
-                    o.request, o.reply, o.ready = None, self._declined(o), True
+                    o.request, o.ready = None, True
+                    o.reply = FleetExecution(np.asarray(self.executor.object_poses, float),
+                                             np.asarray(self.executor.robot_positions,
+                                                        float)[seg.team], declined=True)
                     self.counts["declined"] += 1
                 continue
             if hit_moving:
@@ -298,11 +311,6 @@ class Fleet:
             self.log.append((self.clock, "meets", seg.index, why))
         return why is not None
 
-    def _declined(self, o: _Object) -> FleetExecution:
-        return FleetExecution(np.asarray(self.executor.object_poses, float),
-                              np.asarray(self.executor.robot_positions, float)[o.team],
-                              declined=True)
-
     def _unstick(self) -> bool:
         """Nothing runs and no loop can go on. Planners that wait for a change: the first
         gets the robots of all of them (like the sequential schedule, where the whole
@@ -319,10 +327,7 @@ class Fleet:
                 if merge and o is not first:
                     o.team = []
             if merge:
-                first.team = pool
-                self.owner[pool] = first.index
-                self.counts["merged"] += 1
-                self.log.append((self.clock, "merge", first.index, f"robots {pool}"))
+                self._reteam(first, pool, "merged")
             return True
         if any(o.request is not None for o in self.objects):
             self._admit(force=True)
@@ -401,13 +406,10 @@ class Fleet:
             if k >= 0:
                 o = self.objects[k]
                 o.team = [j for j in o.team if j != i]
-                free = self._free()
-                if free:  # the nearest robot nobody needs takes its place
-                    sub = nearest(free, self.executor.robot_positions,
-                                  self.executor.object_poses[k], 1)[0]
-                    o.team = sorted([*o.team, sub])
-                    self.owner[sub] = k
-                    self.log.append((self.clock, "replaced", k, f"robot {i} by {sub}"))
+                if free := self._free():  # the nearest robot nobody needs takes its place
+                    self._reteam(o, [*o.team, *nearest(free, self.executor.robot_positions,
+                                                       self.executor.object_poses[k], 1)],
+                                 "replaced")
 
     def _wake_blocked(self) -> None:
         """Planners waiting on a change plan again once an object was placed or given up,
@@ -456,9 +458,7 @@ class Fleet:
         o = self.objects[k]
         free = self._free()
         if free:  # robots nobody needs: they join (and stand in nobody's way)
-            o.team = sorted([*o.team, *free])
-            self.owner[free] = k
-            self.counts["grown"] += 1
+            self._reteam(o, [*o.team, *free], "grown")
             return True
         if not any(other.index != k and other.status in ("active", "waiting")
                    for other in self.objects):

@@ -23,6 +23,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from lamp.contract.events import SegmentEvent
+from lamp.contract.goals import goal_errors
+from lamp.contract.result import ObjectResult
 from lamp.contract.runner import ObjectOutcome
 from lamp.fleet.parking import needed_by_others, park
 from lamp.fleet.transit import transit
@@ -35,7 +37,7 @@ from lamp.scene.model import Scene
 if TYPE_CHECKING:
     from lamp.fleet.coordinator import Fleet
 
-__all__ = ["FLEET_SPACE_CACHE_MB", "MIN_SPACE_CACHE_MB", "object_main", "sub_scene"]
+__all__ = ["FLEET_SPACE_CACHE_MB", "MIN_SPACE_CACHE_MB", "given_up", "object_main", "sub_scene"]
 
 #: Robot-space cache (MB) the objects moving at once share (``space_cache_mb`` each
 #: gets its part, at least ``MIN_SPACE_CACHE_MB``): memory stays near one sequential
@@ -50,6 +52,17 @@ def sub_scene(scene: Scene, team: list[int], robot_positions: np.ndarray) -> Sce
     pos = np.asarray(robot_positions, float)
     others = {i: pos[i] for i in range(scene.n_robots) if i not in team}
     return team_scene(scene, list(team), others).with_robot_starts(pos[list(team)])
+
+
+def given_up(scene: Scene, k: int, pose: np.ndarray, why: str) -> ObjectOutcome:
+    """The outcome of object ``k``, never started, standing at ``pose``: failed ``why``."""
+    pose = np.asarray(pose, float)
+    goal = np.asarray(scene.objects[k].goal, float)
+    pos_err, rot_err = goal_errors(pose, goal)
+    return ObjectOutcome(ObjectResult(
+        success=False, final_pose=[float(v) for v in pose], goal=[float(v) for v in goal],
+        position_error=pos_err, orientation_error=rot_err, left_workspace=False, segments=0,
+        full_horizon_plan=False, failure_reason=why, replans=0, planning_time_s=0.0))
 
 
 def object_main(runner: ClosedLoopRunner, observe: Callable[[SegmentEvent], None]

@@ -55,12 +55,12 @@ class FleetView:
 
     @property
     def team_changed(self) -> bool:
-        """Whether a robot of this view's team has failed or robots joined it
-        (``Fleet._reinforce``): its loop then ends with ``TEAM_CHANGED`` and the object
-        plans anew with its new team."""
+        """Whether a robot of this view's team has failed, robots joined it
+        (``Fleet._reinforce``) or took the places of far ones (``Fleet._hand_over``): its
+        loop then ends with ``TEAM_CHANGED`` and the object plans anew with its new team."""
         now = self.fleet.objects[self.k].team
         return (any(i in self.fleet.failed_at for i in self.team)
-                or set(now) > set(self.team))
+                or set(now) != set(self.team))
 
     def announce(self, segment: np.ndarray, rest: np.ndarray) -> None:
         self.fleet.announce(self.k, segment, rest)
