@@ -58,6 +58,12 @@ def _f(x: float | None, fmt: str = ".1f") -> str:
     return "-" if x is None else format(x, fmt)
 
 
+def _makespan(rec: dict | None) -> str:
+    """A run's makespan, or "-" when it did not place every object (a failed run's
+    clock stops where it gave up: no makespan to compare)."""
+    return _f(rec["makespan_s"]) if rec and rec["success"] and rec.get("makespan_s") else "-"
+
+
 def table(seq: Path, con: Path, peer: Path | None) -> str:
     s_recs, c_recs = _records(seq), _records(con)
     p_recs = _records(peer) if peer else {}
@@ -85,13 +91,13 @@ def table(seq: Path, con: Path, peer: Path | None) -> str:
             name, str(scene.n_robots), str(len(scene.objects)),
             f"{scene.workspace[0]:.0f} x {scene.workspace[1]:.0f}",
             "-" if s is None else ("yes" if s["success"] else "no"),
-            _f(s and s.get("makespan_s")), "yes" if c["success"] else "no", _f(c.get("makespan_s")),
+            _makespan(s), "yes" if c["success"] else "no", _makespan(c),
             _f(ratio, ".2f"), _f(s and s.get("planning_time_per_segment_s"), ".3f"),
             _f(c.get("planning_time_per_segment_s"), ".3f"),
             _f(fleet.get("utilisation", {}).get("working"), ".2f"),
             "-" if n_hits is None else str(n_hits),
             "-" if p is None else ("yes" if p["success"] else "no"),
-            _f(p and p.get("makespan_s"))]) + " |")
+            _makespan(p)]) + " |")
     n = len(c_recs)
     seq_ok = sum(bool(r["success"]) for r in s_recs.values())
     summary = [

@@ -10,8 +10,9 @@ robots equally among the ready objects whose ways are clear of each other
 it: at most ``MAX_ROBOTS`` each (the model's budget: more would stand idle), at least
 ``MIN_TEAM``; a lone robot only when no other object is moving (no robot will be
 freed); robots left over when the next object cannot start join the started teams
-(:func:`reinforce`). A team keeps its robots until its object is placed or given up;
-then they are free for the next object. Robots no object needs stand still where they
+(:func:`reinforce`). A team keeps its robots until its object is placed or given up
+(then they are free for the next object), but for a far robot whose place a free robot
+nearer the object takes (``fleet.handover``). Robots no object needs stand still where they
 are (every plan sees them as obstacles). Measured on IROS with 9 robots
 (``benchmarks/fleet_iros9.py``) and the ``fleet`` family: ``docs/fleet.md``.
 """
