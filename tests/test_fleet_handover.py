@@ -60,23 +60,34 @@ def _hall(wall: bool) -> dict:
                          "goal": [18.5, 3.0, 0.0]}]}
 
 
+def _better(scene, team, free, pos, poses):
+    """``better_team`` for object 0, counting the readings it takes."""
+    reads = []
+
+    def observe():
+        reads.append(1)
+        return poses
+
+    return better_team(scene, 0, team, free, pos, poses[0], observe), len(reads)
+
+
 def test_a_far_team_robot_gives_its_place_to_the_free_robot_nearest_by_route() -> None:
     for wall, expected in ((False, [1]), (True, [2])):
         scene = scene_from_dict(_hall(wall))
         pos = np.asarray(scene.robot_starts, float)
         poses = np.asarray([o.start for o in scene.objects], float)
-        assert better_team(scene, 0, [0], [1, 2], pos, poses) == expected
+        assert _better(scene, [0], [1, 2], pos, poses) == (expected, 1)
     scene = scene_from_dict(_hall(False))
     pos = np.asarray(scene.robot_starts, float)
     poses = np.asarray([o.start for o in scene.objects], float)
     near = pos.copy()
     near[0] = [18.0 - TRANSIT_RADIUS + 0.5, 3.0]  # within the transit radius: stays
-    assert better_team(scene, 0, [0], [1, 2], near, poses) is None
-    assert better_team(scene, 0, [0], [], pos, poses) is None
+    assert _better(scene, [0], [1, 2], near, poses) == (None, 0)  # and reads nothing
+    assert _better(scene, [0], [], pos, poses) == (None, 0)
     # a free robot only a little nearer (less than the gain) takes no place
     close = pos.copy()
     close[1], close[2] = [4.0 + HANDOVER_GAIN - 1.0, 3.0], [1.0, 3.0]
-    assert better_team(scene, 0, [0], [1, 2], close, poses) is None
+    assert _better(scene, [0], [1, 2], close, poses) == (None, 1)
 
 
 def test_robots_freed_beside_an_object_take_over_from_its_team_on_the_way() -> None:

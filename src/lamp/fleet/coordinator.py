@@ -220,8 +220,8 @@ class Fleet:
             if o.status != "active" or o.reply is None or key in self._handover_checked:
                 continue
             self._handover_checked.add(key)
-            team = better_team(self.scene, o.index, o.team, key[2],
-                               self.executor.robot_positions, self.executor.object_poses)
+            team = better_team(self.scene, o.index, o.team, key[2], self.executor.robot_positions,
+                               o.reply.object_poses[o.index], lambda: self.executor.object_poses)
             if team is not None:
                 self._reteam(o, team, "handed_over")
 

@@ -21,7 +21,7 @@ route (tested against a brute force).
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -62,18 +62,21 @@ def swaps(team_routes: Sequence[float], free_routes: Sequence[float],
 
 
 def better_team(scene: Scene, k: int, team: Sequence[int], free: Sequence[int],
-                robot_positions: np.ndarray, object_poses: np.ndarray) -> list[int] | None:
+                robot_positions: np.ndarray, pose: np.ndarray,
+                observe: Callable[[], np.ndarray]) -> list[int] | None:
     """Object ``k``'s team with its far robots handed over to nearer ``free`` ones
-    (module docstring; ascending), or None when nothing changes. Routes are computed only
-    when a team robot stands farther than ``TRANSIT_RADIUS`` from the object."""
+    (module docstring; ascending), or None when nothing changes. ``pose`` is the object's
+    pose as its loop last saw it; ``observe()`` reads every object's pose, and is called
+    (as the routes are computed) only when a team robot stands farther than
+    ``TRANSIT_RADIUS`` from ``pose``: under sensing noise a reading is a draw of the
+    sensor's, so a check that finds nothing draws none."""
     if not free or len(team) > MAX_ROBOTS:
         return None
     pos = np.asarray(robot_positions, float)
-    q = np.asarray(object_poses, float)[k]
-    far = [i for i in team if planar_distance(pos[i], q) > TRANSIT_RADIUS]
+    far = [i for i in team if planar_distance(pos[i], pose) > TRANSIT_RADIUS]
     if not far:
         return None
-    field = routes(sub_scene(scene, [*team, *free], pos), k, object_poses)
+    field = routes(sub_scene(scene, [*team, *free], pos), k, observe())
 
     def route(i: int) -> float:
         v = field.cell_of(pos[i])
