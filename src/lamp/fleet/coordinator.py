@@ -151,10 +151,9 @@ class Fleet:
         return [o.outcome for o in self.objects]  # type: ignore[misc]
 
     def _release(self) -> None:
-        """Start objects whose ``after`` objects are placed, and give robots to those
-        that wait for a team (``teams.allocate``); fail those waiting on an object that
-        failed; free robots reinforce moving teams (when no object waits) and take far
-        team robots' places."""
+        """Start objects whose ``after`` objects are placed, give robots to those waiting
+        for a team (``teams.allocate``), fail those waiting on a failed object; free robots
+        reinforce moving teams (when no object waits) and take far team robots' places."""
         ready = []
         for o in self.objects:
             if o.status == "active" and o.needs_team:
@@ -280,10 +279,7 @@ class Fleet:
                              f"standing={hit_standing} moving={hit_moving}"))
             if hit_standing and not force:
                 if not hit_moving:
-                    o.request, o.ready = None, True
-                    o.reply = FleetExecution(np.asarray(self.executor.object_poses, float),
-                                             np.asarray(self.executor.robot_positions,
-                                                        float)[seg.team], declined=True)
+                    o.request, o.reply, o.ready = None, self._reply(seg.team, declined=True), True
                     self.counts["declined"] += 1
                 continue
             if hit_moving:
@@ -380,11 +376,15 @@ class Fleet:
             if s.done:
                 o = self.objects[s.index]
                 o.running = None
-                o.reply = FleetExecution(np.asarray(self.executor.object_poses, float),
-                                         np.asarray(self.executor.robot_positions, float)[s.team],
-                                         s.left, None, s.stopped_at, s.sim_time)
+                o.reply = self._reply(s.team, left_workspace=s.left, stopped_at=s.stopped_at,
+                                      sim_time=s.sim_time)
                 o.ready = True
         self._wake_blocked()
+
+    def _reply(self, team: Sequence[int], **outcome: Any) -> FleetExecution:
+        """A loop's reply: the objects as observed now and ``team``'s robots."""
+        return FleetExecution(np.asarray(self.executor.object_poses, float),
+                              np.asarray(self.executor.robot_positions, float)[team], **outcome)
 
     def _free(self) -> list[int]:
         """The robots in no sub-team that have not failed (ascending)."""

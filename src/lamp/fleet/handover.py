@@ -77,12 +77,7 @@ def better_team(scene: Scene, k: int, team: Sequence[int], free: Sequence[int],
     if not far:
         return None
     field = routes(sub_scene(scene, [*team, *free], pos), k, observe())
-
-    def route(i: int) -> float:
-        v = field.cell_of(pos[i])
-        return math.inf if v is None else float(field.dist[v])
-
-    pairs = swaps([route(i) for i in far], [route(i) for i in free])
+    pairs = swaps([field.length(pos[i]) for i in far], [field.length(pos[i]) for i in free])
     if not pairs:
         return None
     out = set(team) - {far[t] for t, _ in pairs}

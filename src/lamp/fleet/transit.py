@@ -156,6 +156,12 @@ class Routes:
         None."""
         return self.grid.nearest_free_cell(xy, 2, self.reachable)
 
+    def length(self, xy: np.ndarray) -> float:
+        """Metres from ``xy``'s cell (``cell_of``) to the staging area; inf when no route
+        leads there."""
+        v = self.cell_of(xy)
+        return math.inf if v is None else float(self.dist[v])
+
     def path(self, xy: np.ndarray) -> np.ndarray | None:
         """(M, 2) cell centres from ``xy``'s cell to the staging area, or None when no
         route leads there."""
@@ -293,11 +299,8 @@ def team_moves(scene: Scene, k: int, object_poses: np.ndarray, positions: np.nda
 def far_robots(field: Routes, positions: np.ndarray) -> np.ndarray:
     """Mask of the robots whose route to the staging area is longer than
     ``TRANSIT_RADIUS`` (robots without a route are not far: they cannot transit)."""
-    out = []
-    for p in np.asarray(positions, float).reshape(-1, 2):
-        v = field.cell_of(p)
-        out.append(v is not None and float(field.dist[v]) > TRANSIT_RADIUS)
-    return np.asarray(out, bool)
+    lengths = [field.length(p) for p in np.asarray(positions, float).reshape(-1, 2)]
+    return np.asarray([math.isfinite(d) and d > TRANSIT_RADIUS for d in lengths], bool)
 
 
 def transit(view: Any, world: Callable[[], Scene], k: int, seed: int = 0
