@@ -228,21 +228,56 @@ def test_door_swap(generated):
 def test_clearances_of_starts_goals_and_robots(generated):
     """Shapely, independently of the generator's kernels."""
     for g in generated:
-        sc = g.scene
-        r = sc.robot_radius
-        walls = shapely.union_all([obstacle_geometry(o) for o in sc.obstacles])
-        feet = [to_shapely(o.shape, p) for o in sc.objects for p in (o.start, o.goal)]
-        for i, f in enumerate(feet):
-            assert walls.distance(f) >= F.END_CLEARANCE - 2e-3, (sc.name, i)
-            for j in range(i):
-                assert f.distance(feet[j]) >= F.OBJECT_GAP - 2e-3, (sc.name, i, j)
-        zones = [shapely.box(*b) for b in g.keep_out]
-        robots = [shapely.Point(p) for p in sc.robot_starts_array]
-        for i, p in enumerate(robots):
-            assert walls.distance(p) >= r + 0.03 - 1e-6
-            assert min(f.distance(p) for f in feet) >= r + 0.03 - 2e-3
-            assert all(z.distance(p) >= r - 1e-6 for z in zones), (sc.name, i)
-            assert all(p.distance(q) >= 2 * r + 0.05 - 1e-6 for q in robots[:i])
+        _assert_clearances(g)
+
+
+def _assert_clearances(g: F.GeneratedFleet) -> None:
+    """Shapely, independently of the generator's kernels."""
+    sc = g.scene
+    r = sc.robot_radius
+    walls = shapely.union_all([obstacle_geometry(o) for o in sc.obstacles])
+    feet = [to_shapely(o.shape, p) for o in sc.objects for p in (o.start, o.goal)]
+    for i, f in enumerate(feet):
+        assert walls.distance(f) >= F.END_CLEARANCE - 2e-3, (sc.name, i)
+        for j in range(i):
+            assert f.distance(feet[j]) >= F.OBJECT_GAP - 2e-3, (sc.name, i, j)
+    zones = [shapely.box(*b) for b in g.keep_out]
+    robots = [shapely.Point(p) for p in sc.robot_starts_array]
+    for i, p in enumerate(robots):
+        assert walls.distance(p) >= r + 0.03 - 1e-6
+        assert min(f.distance(p) for f in feet) >= r + 0.03 - 2e-3
+        assert all(z.distance(p) >= r - 1e-6 for z in zones), (sc.name, i)
+        assert all(p.distance(q) >= 2 * r + 0.05 - 1e-6 for q in robots[:i])
+
+
+@pytest.mark.parametrize(("kind", "size", "n_objects", "n_robots"), [
+    ("aisles", (14.0, 10.0), 5, 15), ("yard", (9.0, 7.0), 3, 4), ("after", (10.0, 8.0), 4, 12)])
+def test_custom_scenes_at_any_size_keep_the_guarantees(kind, size, n_objects, n_robots):
+    """``generate_custom``: the counts asked for, deterministic in its arguments, every
+    clearance re-checked with Shapely, every object's route certified."""
+    g = F.generate_custom(kind, size, n_objects, n_robots)
+    again = F.generate_custom(kind, size, n_objects, n_robots)
+    assert g.scene_dict == again.scene_dict
+    assert F.generate_custom(kind, size, n_objects, n_robots, seed=1).scene_dict != g.scene_dict
+    sc = g.scene
+    assert (sc.n_robots, len(sc.objects), sc.workspace) == (n_robots, n_objects, size)
+    assert sc.schedule == "concurrent" and g.kind == kind
+    assert g.scene_dict["name"] not in {F.scene_name(k) for k in range(F.N_SCENES)}
+    _assert_clearances(g)
+    assert len(g.reports) == n_objects
+    for rep in g.reports:
+        assert rep.route.min_clearance >= C.ROBOT_ROOM and rep.reach.all_reach
+    if kind == "after":
+        assert any(o.after for o in sc.objects)
+
+
+@pytest.mark.parametrize(("args", "what"), [
+    (("hall", (10, 8), 2, 6), "kind"), (("yard", (5, 8), 2, 6), "workspace"),
+    (("yard", (10, 200), 2, 6), "workspace"), (("yard", (10, 8), 0, 6), "n_objects"),
+    (("after", (10, 8), 1, 6), "n_objects"), (("yard", (10, 8), 4, 3), "n_robots")])
+def test_custom_scenes_refuse_bad_arguments_by_name(args, what):
+    with pytest.raises(ValueError, match=what):
+        F.generate_custom(*args)
 
 
 def test_object_reports(generated):

@@ -80,7 +80,8 @@ REACH_RING_WIDTH = 0.06
 MAX_ATTEMPTS = 30
 
 __all__ = ["END_CLEARANCE", "KINDS", "LEVELS", "NAME", "N_SCENES", "OBJECTS", "OBJECT_GAP",
-           "GeneratedFleet", "generate_scene", "manifest_entry", "scene_name"]
+           "GeneratedFleet", "generate_custom", "generate_scene", "manifest_entry",
+           "scene_name"]
 
 
 def scene_name(index: int) -> str:
@@ -203,6 +204,40 @@ def generate_scene(index: int, held_out: bool = False) -> GeneratedFleet:
     objects = sample_objects(rng, kind, n_obj)
     n_robots = team_size(rng, n_obj)
     name = f"{NAME}-heldout-{index:02d}" if held_out else scene_name(index)
+    return _draw(rng, index, name, kind, {"level": level}, ws, objects, n_robots)
+
+
+def generate_custom(kind: str, workspace: tuple[float, float], n_objects: int,
+                    n_robots: int, seed: int = 0) -> GeneratedFleet:
+    """A scene of the family's ``kind`` at any size: ``n_objects`` objects and
+    ``n_robots`` robots on a ``workspace`` map (m), with every guarantee of the module
+    docstring; deterministic in its arguments (its own random stream, apart from the
+    family's). For fleets beyond the family's 24 robots and 12 objects
+    (``benchmarks/bench_fleet_scale.py``). ValueError names a bad argument; RuntimeError
+    as :func:`generate_scene` when no draw passes the checks."""
+    if kind not in KINDS:
+        raise ValueError(f"kind must be one of {', '.join(KINDS)}, got {kind!r}")
+    W, H = (float(v) for v in workspace)
+    if not (LEVELS[0][0] <= min(W, H) and max(W, H) <= 150.0):
+        raise ValueError(f"workspace sides must be 6-150 m, got {W} x {H}")
+    if not 1 <= n_objects <= 200 or (kind == "after" and n_objects < 2):
+        raise ValueError(f"n_objects must be 1-200 (2+ for 'after'), got {n_objects}")
+    if not n_objects <= n_robots <= 1000:
+        raise ValueError(f"n_robots must be {n_objects}-1000 (one per object at least), "
+                         f"got {n_robots}")
+    rng = np.random.default_rng([SUITE_SEED, STREAM, 1_000_000 + seed,
+                                 KINDS.index(kind), int(W * 10), int(H * 10), n_objects,
+                                 n_robots])
+    objects = sample_objects(rng, kind, n_objects)
+    name = f"{NAME}-{kind}-{W:g}x{H:g}-{n_robots}r{n_objects}o-s{seed}"
+    return _draw(rng, -1, name, kind, {"custom": True}, (W, H), objects, n_robots)
+
+
+def _draw(rng: np.random.Generator, index: int, name: str, kind: str, tag: dict[str, Any],
+          ws: tuple[float, float], objects: list[FL.FleetObject],
+          n_robots: int) -> GeneratedFleet:
+    """Lay out ``objects`` and ``n_robots`` robots on a ``kind`` map until a draw passes
+    every check (at most ``MAX_ATTEMPTS``, each from ``rng`` onwards)."""
     rejected: dict[str, int] = {}
 
     def reject(why: str) -> None:
@@ -228,7 +263,7 @@ def generate_scene(index: int, held_out: bool = False) -> GeneratedFleet:
         if isinstance(reports, str):
             reject(reports.split(" object ")[0] if " object " in reports else reports)
             continue
-        info = {"kind": kind, "level": level, "workspace": list(ws), **lay.info}
+        info = {"kind": kind, **tag, "workspace": list(ws), **lay.info}
         return GeneratedFleet(index, kind, d, scene, reports, attempt, info,
                               list(lay.placer.zone_boxes))
     raise RuntimeError(
