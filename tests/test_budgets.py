@@ -140,6 +140,41 @@ def test_astar_budget_is_per_object_and_follows_the_limit(proposer):
         30 * ASTAR_EXPANSION_RATE)
     assert PlannerConfig(planning_time_limit=float("inf")).astar_expansions > 10**9
 
+def test_lazy_expansion_budget_is_per_object_and_names_itself(proposer):
+    """D* Lite's expansions over all of one object's plan calls add up in
+    ``stats.search_expansions``; a budget one short of what a plan needs ends the call
+    on the count (never past it), and by default the budget is ``LAZY_EXPANSION_RATE``
+    per second of the planning limit."""
+    from lamp.pipeline.registry import get
+    from lamp.planners.config import LAZY_EXPANSION_RATE
+
+    task = _task(proposer, PlannerConfig())
+    q_O, q_R = task.object_poses[0], task.scene.robot_starts_array
+    ref = LazyPlanner.from_task(task).plan(q_O, q_R)
+    used = task.stats.search_expansions
+    assert ref.solved and used > 0
+    exact = _task(proposer, PlannerConfig(lazy_max_expansions=used))
+    plan = LazyPlanner.from_task(exact).plan(q_O, q_R)
+    assert plan.solved and exact.stats.search_expansions == used
+    assert [t.q_to.tolist() for t in plan.transitions] == [t.q_to.tolist() for t in ref.transitions]
+    short = _task(proposer, PlannerConfig(lazy_max_expansions=used - 1))
+    planner = LazyPlanner.from_task(short)
+    plan = planner.plan(q_O, q_R)
+    assert plan.status is PlanStatus.BUDGET_EXHAUSTED and plan.limit == "lazy_max_expansions"
+    assert plan.reason == "no plan found: lazy_max_expansions exhausted"
+    assert short.stats.search_expansions == used - 1
+    assert planner.plan(q_O, q_R).limit == "lazy_max_expansions"  # nothing left: no search
+    assert short.stats.search_expansions == used - 1
+    assert get("lazy").default_config().lazy_expansions == round(
+        get("lazy").default_config().planning_time_limit * LAZY_EXPANSION_RATE)
+    assert PlannerConfig(planning_time_limit=30.0).lazy_expansions == round(
+        30 * LAZY_EXPANSION_RATE)
+    assert PlannerConfig(planning_time_limit=float("inf")).lazy_expansions > 10**9
+    res = lamp.solve(scene_from_dict(SCENE), "lazy", seed=1, model=proposer,
+                     config=PlannerConfig(lazy_max_expansions=1)).to_dict()
+    assert res["objects"][0]["failure_reason"] == "no plan found: lazy_max_expansions exhausted"
+
+
 def test_solve_time_limit_sets_the_astar_budget(proposer, monkeypatch):
     """``lamp.solve``'s ``time_limit`` stands for a budget of expansions: with the clock
     stopped (so that no wall-clock limit can fire) a limit worth one expansion ends the
@@ -154,6 +189,7 @@ def test_solve_time_limit_sets_the_astar_budget(proposer, monkeypatch):
 
 
 @pytest.mark.parametrize("field, value", [("max_verify_calls", 0), ("astar_max_expansions", -1),
+                                          ("lazy_max_expansions", 0),
                                           ("max_plan_iterations", 1.5),
                                           ("gspi_time_limit", 0.0)])
 def test_config_rejects_bad_budgets(field, value):

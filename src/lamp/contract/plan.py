@@ -72,7 +72,7 @@ class Plan:
     penalised_edges: list[Edge] = field(default_factory=list)
     #: Which limit ended a ``BUDGET_EXHAUSTED`` or ``TIME_LIMIT`` call: the name of the
     #: ``PlannerConfig`` count that ran out (``max_plan_iterations``, ``max_verify_calls``,
-    #: ``astar_max_expansions``) or ``"deadline"`` (wall clock); "" otherwise.
+    #: ``astar_max_expansions``, ``lazy_max_expansions``) or ``"deadline"`` (wall clock); "" otherwise.
     limit: str = ""
     #: The transitions do not reach the goal (a recovery push): the loop plans again
     #: after them, and the object's plan does not count as full-horizon.

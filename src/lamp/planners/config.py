@@ -24,6 +24,14 @@ DEFAULT_PLANNING_LIMIT = 300.0
 #: With the first 4 scenes per family and a 20 s limit it plans 15 of 16, as the wall-clock
 #: limit did (at 4: 14 of 16; `benchmarks/bench_lamp_astar.py --scenes 4 --limit 20`).
 ASTAR_EXPANSION_RATE = 8.0
+#: LAMP-Lazy's default D* Lite expansion budget per second of planning limit. D* Lite
+#: expands about 9-10 k vertices/s on a 24 m ``fleet`` map (AMD EPYC, 2 cores), so at 5 k
+#: a search that floods the lattice (every failed Verify near a tight goal adds
+#: ``edge_penalty`` to an edge, and D* Lite re-expands everything cheaper than the detour:
+#: 40-200 k vertices per replan, ``fleet-11`` under ``noise-high``) ends on the count at
+#: about half the wall-clock limit; an ordinary object needs a few thousand to a few tens
+#: of thousands of expansions in all (``stats.search_expansions``).
+LAZY_EXPANSION_RATE = 5000.0
 
 
 #: The paper's limit: at most 100 executed segments ("execution iterations") per object.
@@ -116,6 +124,11 @@ class PlannerConfig:
                                              "ASTAR_EXPANSION_RATE per second of "
                                              "planning_time_limit.", kind=int, low=1,
                                              optional=True)
+    lazy_max_expansions: int | None = param(None, "Most D* Lite expansions LAMP-Lazy makes "
+                                            "per object, over all its plan calls; none: "
+                                            "LAZY_EXPANSION_RATE per second of "
+                                            "planning_time_limit.", kind=int, low=1,
+                                            optional=True)
     #: Wall clock, so an outer cap: the counts (plan iterations, Verify calls, expansions)
     #: end a search first on an unloaded machine.
     planning_time_limit: float = param(500.0, "Cumulative planning limit per object (s), an "
@@ -169,6 +182,16 @@ class PlannerConfig:
             return sys.maxsize
         return max(1, round(ASTAR_EXPANSION_RATE * self.planning_time_limit))
 
+    @property
+    def lazy_expansions(self) -> int:
+        """LAMP-Lazy's D* Lite expansion budget per object (``lazy_max_expansions`` or its
+        default)."""
+        if self.lazy_max_expansions is not None:
+            return self.lazy_max_expansions
+        if not math.isfinite(self.planning_time_limit):
+            return sys.maxsize
+        return max(1, round(LAZY_EXPANSION_RATE * self.planning_time_limit))
+
 
 #: Which parameters each consumer reads; a planner declares the union of its groups
 #: (``PlannerSpec.params``).
@@ -180,6 +203,6 @@ LOOP_PARAMS = ("planning_time_limit", "max_segments", "drift_position", "drift_o
 VERIFY_PARAMS = ("k", "max_budget", "gspi_attempts_per_budget", "gspi_time_limit",
                  "contact_tolerance")
 LATTICE_PARAMS = ("lattice_step", "n_headings", "robot_match_tolerance")
-LAZY_PARAMS = ("edge_penalty", "max_plan_iterations", "max_verify_calls")
+LAZY_PARAMS = ("edge_penalty", "max_plan_iterations", "max_verify_calls", "lazy_max_expansions")
 ASTAR_PARAMS = ("astar_reinsert_penalty", "astar_heuristic_weight", "astar_states_per_node",
                 "astar_max_expansions")

@@ -37,7 +37,7 @@ from lamp.planners.recovery import recovery_push
 from lamp.planners.task import ManipulationTask
 from lamp.planners.verifier import Verifier
 from lamp.search.connectivity import PlaneConnectivity
-from lamp.search.dstar_lite import DStarLite
+from lamp.search.dstar_lite import DStarLite, SearchStatus
 from lamp.search.lattice import ObjectLattice
 from lamp.search.refined_lattice import RefinedLattice
 
@@ -190,9 +190,10 @@ class LazyPlanner:
 
         Departure: the paper's loop (lines 10-40) runs until a plan is found; here it runs at
         most ``max_plan_iterations`` times and makes at most ``max_verify_calls`` Verify
-        calls (both ``BUDGET_EXHAUSTED``, ``Plan.limit`` naming the count): counts, so
-        the result does not depend on the machine's speed; ``deadline`` (``TIME_LIMIT``) is
-        only an outer cap.
+        calls, and D* Lite expands at most ``lazy_expansions`` vertices over all the
+        object's calls (each ``BUDGET_EXHAUSTED``, ``Plan.limit`` naming the count): counts,
+        so the result does not depend on the machine's speed; ``deadline``
+        (``TIME_LIMIT``) is only an outer cap.
         """
         cfg = self.config
         self.calls += 1
@@ -220,7 +221,14 @@ class LazyPlanner:
                     continue
                 return self._recover(q_O_now, q_R_now,
                                      Plan.failed(PlanStatus.START_BLOCKED, self.penalised))
-            path = self.dstar.plan_shortest_path(start, edges)  # line 11: PlanShortestPath
+            left = self.config.lazy_expansions - stats.search_expansions
+            if left > 0:
+                self.dstar.max_expansions = left
+                path = self.dstar.plan_shortest_path(start, edges)  # line 11: PlanShortestPath
+                stats.search_expansions += self.dstar.stats.last_expansions
+            if left <= 0 or self.dstar.status is SearchStatus.EXPANSION_LIMIT:
+                return self._recover(q_O_now, q_R_now, Plan.failed(
+                    PlanStatus.BUDGET_EXHAUSTED, self.penalised, "lazy_max_expansions"))
             if not path:
                 if self._refine(q_O_now):
                     continue

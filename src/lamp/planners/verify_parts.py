@@ -137,6 +137,8 @@ class TaskStats:
     #: machine: then no result depended on the clock).
     gspi_timeouts: int = 0
     cache_hits: int = 0
+    #: vertices LAMP-Lazy's D* Lite expanded (its budget: ``lazy_max_expansions``)
+    search_expansions: int = 0
 
     def add(self, other: TaskStats) -> None:
         for k, v in vars(other).items():
