@@ -429,3 +429,14 @@ def test_claim_covers_the_planned_footprints_and_room_for_pushers() -> None:
     for q in poses:
         assert c.contains(to_shapely(BOX, q).buffer(2 * R))
     assert claim(BOX, np.zeros((0, 3)), R) is None
+
+
+def test_limit_reached_names_the_limit_that_ends_an_object() -> None:
+    """An object whose last loop ended only for the world or the team (so another would
+    follow) fails by the limit it ran out of, planning time first."""
+    from lamp.fleet.objects import limit_reached
+
+    assert limit_reached(50, 10, 3, 12.0, 300.0) == ""
+    assert limit_reached(50, 50, 3, 12.0, 300.0) == "segment limit reached (50)"
+    assert limit_reached(50, 10, 51, 12.0, 300.0) == "plan-anew limit reached (50 loops)"
+    assert limit_reached(50, 60, 60, 300.0, 300.0) == "planning time limit"

@@ -9,7 +9,8 @@ drives to it (``lamp.fleet.transit``); a team whose object is placed moves out o
 others' way before its robots go free (``lamp.fleet.parking``). A loop that ends with ``WORLD_CHANGED`` (its
 segment was declined, or it found no plan while others moved) or ``TEAM_CHANGED`` (a robot
 of its sub-team failed: ``Fleet`` took it out of the team) is followed by a new one,
-within the object's segment limit and cumulative planning limit; the object's outcome
+within the object's segment limit and cumulative planning limit (when one of them ends it,
+the object's failure names that limit, :func:`limit_reached`); the object's outcome
 merges every loop's (``runner.merged``: each new loop counts as a replan). The objects
 moving at once share ``FLEET_SPACE_CACHE_MB`` of robot-space cache.
 """
@@ -37,7 +38,8 @@ from lamp.scene.model import Scene
 if TYPE_CHECKING:
     from lamp.fleet.coordinator import Fleet
 
-__all__ = ["FLEET_SPACE_CACHE_MB", "MIN_SPACE_CACHE_MB", "given_up", "object_main", "sub_scene"]
+__all__ = ["FLEET_SPACE_CACHE_MB", "MIN_SPACE_CACHE_MB", "given_up", "limit_reached",
+           "object_main", "sub_scene"]
 
 #: Robot-space cache (MB) the objects moving at once share (``space_cache_mb`` each
 #: gets its part, at least ``MIN_SPACE_CACHE_MB``): memory stays near one sequential
@@ -63,6 +65,19 @@ def given_up(scene: Scene, k: int, pose: np.ndarray, why: str) -> ObjectOutcome:
         success=False, final_pose=[float(v) for v in pose], goal=[float(v) for v in goal],
         position_error=pos_err, orientation_error=rot_err, left_workspace=False, segments=0,
         full_horizon_plan=False, failure_reason=why, replans=0, planning_time_s=0.0))
+
+
+def limit_reached(segment_limit: int, segments: int, loops: int, planning_s: float,
+                  planning_limit: float) -> str:
+    """Which of an object's limits its loops have reached ("" if none): its segments, as
+    many loops as segments, or its cumulative planning time."""
+    if planning_s >= planning_limit:
+        return "planning time limit"
+    if segments >= segment_limit:
+        return f"segment limit reached ({segment_limit})"
+    if loops > segment_limit:
+        return f"plan-anew limit reached ({segment_limit} loops)"
+    return ""
 
 
 def object_main(runner: ClosedLoopRunner, observe: Callable[[SegmentEvent], None]
@@ -99,9 +114,12 @@ def object_main(runner: ClosedLoopRunner, observe: Callable[[SegmentEvent], None
             scene_k = world()
             parts.append(runner.loop(scene_k, k, view, config, observe))
             r = parts[-1].result
-            if (r.failure_reason not in (WORLD_CHANGED, TEAM_CHANGED)
-                    or used + r.segments >= limit
-                    or len(parts) > limit or spent + r.planning_time_s >= cfg.planning_time_limit):
+            if r.failure_reason not in (WORLD_CHANGED, TEAM_CHANGED):
+                break
+            ran_out = limit_reached(limit, used + r.segments, len(parts),
+                                    spent + r.planning_time_s, cfg.planning_time_limit)
+            if ran_out:  # the object's verdict names the limit, not the last loop's end
+                parts[-1] = replace(parts[-1], result=replace(r, failure_reason=ran_out))
                 break
         truth = getattr(fleet.executor, "true_object_poses", fleet.executor.object_poses)
         outcome = judged(merged(parts), np.asarray(truth[k], float), goal)
