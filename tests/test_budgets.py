@@ -152,7 +152,7 @@ def test_lazy_expansion_budget_is_per_object_and_names_itself(proposer):
     q_O, q_R = task.object_poses[0], task.scene.robot_starts_array
     ref = LazyPlanner.from_task(task).plan(q_O, q_R)
     used = task.stats.search_expansions
-    assert ref.solved and used > 0
+    assert ref.solved and used > 0 and task.stats.max_plan_expansions == used
     exact = _task(proposer, PlannerConfig(lazy_max_expansions=used))
     plan = LazyPlanner.from_task(exact).plan(q_O, q_R)
     assert plan.solved and exact.stats.search_expansions == used
@@ -164,7 +164,11 @@ def test_lazy_expansion_budget_is_per_object_and_names_itself(proposer):
     assert plan.reason == "no plan found: lazy_max_expansions exhausted"
     assert short.stats.search_expansions == used - 1
     assert planner.plan(q_O, q_R).limit == "lazy_max_expansions"  # nothing left: no search
-    assert short.stats.search_expansions == used - 1
+    assert short.stats.search_expansions == short.stats.max_plan_expansions == used - 1
+    total = type(task.stats)()
+    total.add(task.stats)
+    total.add(short.stats)  # counts add up, maxima stay maxima
+    assert total.search_expansions == 2 * used - 1 and total.max_plan_expansions == used
     assert get("lazy").default_config().lazy_expansions == round(
         get("lazy").default_config().planning_time_limit * LAZY_EXPANSION_RATE)
     assert PlannerConfig(planning_time_limit=30.0).lazy_expansions == round(

@@ -24,14 +24,16 @@ DEFAULT_PLANNING_LIMIT = 300.0
 #: With the first 4 scenes per family and a 20 s limit it plans 15 of 16, as the wall-clock
 #: limit did (at 4: 14 of 16; `benchmarks/bench_lamp_astar.py --scenes 4 --limit 20`).
 ASTAR_EXPANSION_RATE = 8.0
-#: LAMP-Lazy's default D* Lite expansion budget per second of planning limit. D* Lite
-#: expands about 9-10 k vertices/s on a 24 m ``fleet`` map (AMD EPYC, 2 cores), so at 5 k
-#: a search that floods the lattice (every failed Verify near a tight goal adds
-#: ``edge_penalty`` to an edge, and D* Lite re-expands everything cheaper than the detour:
-#: 40-200 k vertices per replan, ``fleet-11`` under ``noise-high``) ends on the count at
-#: about half the wall-clock limit; an ordinary object needs a few thousand to a few tens
-#: of thousands of expansions in all (``stats.search_expansions``).
-LAZY_EXPANSION_RATE = 5000.0
+#: LAMP-Lazy's default D* Lite expansion budget per second of planning limit (300 k for
+#: the default 300 s). A search that floods the lattice (every failed Verify near a tight
+#: goal adds ``edge_penalty`` to an edge, and D* Lite re-expands everything cheaper than
+#: the detour: 40-200 k vertices per replan, ``fleet-11`` under ``noise-high``) expands
+#: 1.2 M vertices in the 300 s, the clock deciding; D* Lite runs about 8-10 k vertices/s
+#: there (AMD EPYC VM), so at 1000 the count ends it after some 30-40 s of search. An
+#: ordinary run needs far less (``stats.search_expansions``): at most 9.3 k for a paper
+#: benchmark scene (``maze-16``) and 151 k for a whole ``fleet`` run (``fleet-20``, 10
+#: objects), the same runs to the millisecond with the budget as without.
+LAZY_EXPANSION_RATE = 1000.0
 
 
 #: The paper's limit: at most 100 executed segments ("execution iterations") per object.

@@ -195,16 +195,27 @@ class LazyPlanner:
         so the result does not depend on the machine's speed; ``deadline``
         (``TIME_LIMIT``) is only an outer cap.
         """
-        cfg = self.config
         self.calls += 1
-        goal = self.lattice.goal_node
         stats = self.verifier.stats
         # departure: a goal no gap leads to is refused before any search (an exhaustive
         # search, then refinement over ever larger windows, would prove it at length)
-        if self.plane.separated(q_O_now, self.lattice.pose(goal)):
+        if self.plane.separated(q_O_now, self.lattice.pose(self.lattice.goal_node)):
             return self._recover(q_O_now, q_R_now, Plan.failed(PlanStatus.SEPARATED,
                                                                self.penalised))
-        verify_cap = stats.verify_calls + cfg.max_verify_calls
+        verify_cap = stats.verify_calls + self.config.max_verify_calls
+        expanded_before = stats.search_expansions
+        try:
+            return self._plan(q_O_now, q_R_now, deadline, verify_cap)
+        finally:
+            stats.max_plan_expansions = max(stats.max_plan_expansions,
+                                            stats.search_expansions - expanded_before)
+
+    def _plan(self, q_O_now: np.ndarray, q_R_now: np.ndarray, deadline: float | None,
+              verify_cap: int) -> Plan:
+        """:meth:`plan`'s loop (lines 10-42), its Verify calls capped at ``verify_cap``."""
+        cfg = self.config
+        goal = self.lattice.goal_node
+        stats = self.verifier.stats
         for iteration in range(cfg.max_plan_iterations):
             if iteration == RECOVER_AFTER and self.calls > 1:  # a replan that keeps failing
                 rescue = self._recover(q_O_now, q_R_now, Plan.failed(PlanStatus.NO_PATH))

@@ -139,10 +139,13 @@ class TaskStats:
     cache_hits: int = 0
     #: vertices LAMP-Lazy's D* Lite expanded (its budget: ``lazy_max_expansions``)
     search_expansions: int = 0
+    #: the most of them in one LAMP-Lazy ``plan`` call (a maximum: ``add`` keeps the larger)
+    max_plan_expansions: int = 0
 
     def add(self, other: TaskStats) -> None:
         for k, v in vars(other).items():
-            setattr(self, k, getattr(self, k) + v)
+            setattr(self, k, max(getattr(self, k), v) if k.startswith("max_")
+                    else getattr(self, k) + v)
 
 
 @dataclass(frozen=True)
