@@ -24,7 +24,6 @@ from lamp.fleet.teams import (
     MIN_TEAM,
     allocate,
     chain_depths,
-    clear_ways,
     least_conflict_order,
     reinforce,
     start_order,
@@ -162,18 +161,17 @@ def test_on_grid_keeps_the_route_and_steps_at_most_a_row(steps) -> None:
 
 
 @settings(max_examples=80)
-@given(st.integers(0, 2**31 - 1), st.integers(1, 5), st.integers(0, 12), st.booleans(),
-       st.one_of(st.none(), st.integers(0, 6)))
+@given(st.integers(0, 2**31 - 1), st.integers(1, 5), st.integers(0, 12), st.booleans())
 def test_allocate_shares_the_nearest_free_robots_in_priority_order(seed, n_obj, n_free,
-                                                                   moving, ways):
+                                                                   moving):
     rng = np.random.default_rng(seed)
     robots = rng.uniform(0, 10, (14, 2))
     objects = np.c_[rng.uniform(0, 10, (n_obj, 2)), np.zeros(n_obj)]
     free = sorted(rng.choice(14, n_free, replace=False).tolist())
-    teams = allocate(list(range(n_obj)), free, robots, objects, moving, ways)
-    # reference: the same greedy rule written plainly; shared among the clear ways
+    teams = allocate(list(range(n_obj)), free, robots, objects, moving)
+    # reference: the same greedy rule written plainly
     pool, expect, busy = list(free), {}, moving
-    split = n_obj if ways is None else min(n_obj, max(1, ways))
+    split = n_obj
     share = min(MAX_ROBOTS, max(MIN_TEAM, n_free // split))
     for k in range(n_obj):
         want = min(share, len(pool))
@@ -250,24 +248,6 @@ def test_least_conflict_order_starts_the_least_crossed_ways_first(seed, n, n_bus
         assert count[k] == min(count.values())
         assert k == min(j for j in count if count[j] == count[k])
         taken.append(corridors[k])
-
-
-@settings(max_examples=60)
-@given(st.integers(0, 2**31 - 1), st.integers(0, 7), st.integers(0, 3))
-def test_clear_ways_counts_the_greedy_set_of_ways_that_cross_nothing(seed, n, n_busy):
-    rng = np.random.default_rng(seed)
-    boxes = [shapely.box(*(xy := rng.uniform(0, 8, 2)), *(xy + rng.uniform(0.3, 3, 2)))
-             for _ in range(n + n_busy)]
-    ways, busy = boxes[:n], boxes[n:]
-    count = clear_ways(ways, busy)
-    clear = [w for i, w in enumerate(ways)  # a plain greedy pass, by indices
-             if not any(w.intersects(b) for b in busy)]
-    picked: list = []
-    for w in clear:
-        if not any(w.intersects(p) for p in picked):
-            picked.append(w)
-    assert count == len(picked)
-    assert 0 <= count <= n and (n_busy or n == 0 or count >= 1)
 
 
 def test_least_conflict_order_keeps_file_order_when_no_ways_cross():
@@ -347,7 +327,7 @@ def test_loads_into_a_dead_end_aisle_start_deepest_first():
                         for k, gx in enumerate(goals_x))
         scene = Scene("aisle", (9.0, 2.0), ((8.5, 0.3), (8.5, 1.7)), objects, walls, 0.05)
         poses = np.array([o.start for o in objects])
-        order, _ = start_order(scene, poses, [0, 1, 2], [])
+        order = start_order(scene, poses, [0, 1, 2], [])
         assert [goals_x[k] for k in order] == [1.0, 2.0, 3.0]
 
 

@@ -179,13 +179,13 @@ class Fleet:
     def _start(self, ready: list[int]) -> None:
         """Sub-teams for the ``ready`` objects: those waiting for robots first, then the
         rest in ``teams.start_order`` (the moving objects' ways busy); the robots shared
-        among those with a clear way (``teams.allocate``)."""
+        among them (``teams.allocate``)."""
         first = [k for k in ready if self.objects[k].status == "active"]
         moving = [o.index for o in self.objects if o.status == "active" and o.team]
-        order, ways = start_order(self.scene, self.executor.object_poses,
-                                  [k for k in ready if k not in first], moving + first)
+        order = start_order(self.scene, self.executor.object_poses,
+                            [k for k in ready if k not in first], moving + first)
         teams = allocate(first + order, self._free(), self.executor.robot_positions,
-                         self.executor.object_poses, bool(moving), len(first) + ways)
+                         self.executor.object_poses, bool(moving))
         for k, team in teams.items():
             o = self.objects[k]
             o.team, o.ready = team, True

@@ -5,9 +5,7 @@ those whose goal lies in the way of no other object still to start (:func:`in_th
 placed early, it would make that object go round it or wait), then the head of the
 longest chain of such objects (:func:`chain_depths`: the critical path), then those whose
 way crosses the fewest ways of the objects moving. :func:`allocate` shares the free
-robots equally among the ready objects whose ways are clear of each other
-(:func:`clear_ways`: the others would wait for them anyway), each the robots nearest to
-it: at most ``MAX_ROBOTS`` each (the model's budget: more would stand idle), at least
+robots equally among the ready objects, each the robots nearest to it: at most ``MAX_ROBOTS`` each (the model's budget: more would stand idle), at least
 ``MIN_TEAM``; a lone robot only when no other object is moving (no robot will be
 freed); robots left over when the next object cannot start join the started teams
 (:func:`reinforce`). A team keeps its robots until its object is placed or given up
@@ -32,7 +30,7 @@ from lamp.geometry.shapes import to_shapely
 from lamp.scene.model import Scene, Shape
 
 __all__ = ["MIN_TEAM", "allocate", "corridor", "in_the_way", "least_conflict_order", "nearest",
-           "chain_depths", "clear_ways", "planar_distance", "reinforce", "start_order"]
+           "chain_depths", "planar_distance", "reinforce", "start_order"]
 
 #: The smallest sub-team an object starts with while other objects are moving.
 MIN_TEAM = 2
@@ -51,14 +49,11 @@ def nearest(pool: Sequence[int], robot_positions: np.ndarray, centre: np.ndarray
 
 
 def allocate(ready: Sequence[int], free: Sequence[int], robot_positions: np.ndarray,
-             object_poses: np.ndarray, others_moving: bool,
-             ways: int | None = None) -> dict[int, list[int]]:
+             object_poses: np.ndarray, others_moving: bool) -> dict[int, list[int]]:
     """Sub-teams for the ``ready`` objects (priority order) from the ``free`` robots.
 
-    The free robots are shared equally among the ready objects, or among ``ways`` of them
-    when given (the number that can move without crossing each other's way,
-    :func:`clear_ways`; at least 1): each gets ``share`` =
-    ``len(free) // min(len(ready), ways)`` of the free robots nearest to its centre (ties by index),
+    The free robots are shared equally among the ready objects: each gets ``share`` =
+    ``len(free) // len(ready)`` of the free robots nearest to its centre (ties by index),
     at least ``MIN_TEAM`` and at most ``MAX_ROBOTS``; an object that would get fewer than
     ``MIN_TEAM`` (1 when nothing else moves and it is the first) waits, and so do those
     after it. Robots left over when no further object can start join the teams, each the
@@ -68,8 +63,7 @@ def allocate(ready: Sequence[int], free: Sequence[int], robot_positions: np.ndar
     teams: dict[int, list[int]] = {}
     if not ready:
         return teams
-    split = len(ready) if ways is None else max(1, min(len(ready), ways))
-    share = max(MIN_TEAM, min(MAX_ROBOTS, len(pool) // split))
+    share = max(MIN_TEAM, min(MAX_ROBOTS, len(pool) // len(ready)))
     moving = others_moving
     for k in ready:
         need = min(share, len(pool))
@@ -181,27 +175,16 @@ def corridor(shape: Shape, pose: np.ndarray, goal: np.ndarray, robot_radius: flo
 
 
 def start_order(scene: Scene, poses: np.ndarray, candidates: Sequence[int],
-                moving: Sequence[int]) -> tuple[list[int], int]:
+                moving: Sequence[int]) -> list[int]:
     """``candidates`` (objects of ``scene`` at ``poses``) in :func:`least_conflict_order`,
     the corridors of the ``moving`` objects busy and :func:`in_the_way` taken among the
-    candidates; and how many of them, in that order, :func:`clear_ways` counts."""
+    candidates."""
     objs, r = scene.objects, scene.robot_radius
     ways = {k: corridor(objs[k].shape, poses[k], objs[k].goal, r) for k in candidates}
     busy = [corridor(objs[k].shape, poses[k], objs[k].goal, r) for k in moving]
     blocks = in_the_way(ways, {k: to_shapely(objs[k].shape, np.asarray(objs[k].goal, float))
                                for k in candidates},
                         {k: poses[k] for k in candidates}, {k: objs[k].goal for k in candidates})
-    order = least_conflict_order(candidates, ways, busy, blocks)
-    return order, clear_ways([ways[k] for k in order], busy)
+    return least_conflict_order(candidates, ways, busy, blocks)
 
 
-def clear_ways(corridors: Sequence[shapely.Geometry], busy: Sequence[shapely.Geometry]) -> int:
-    """How many of ``corridors`` (in order) are clear: greedily, those that meet none of
-    ``busy`` and none of the clear ones before them."""
-    taken = list(busy)
-    n = 0
-    for c in corridors:
-        if not any(c.intersects(b) for b in taken):
-            taken.append(c)
-            n += 1
-    return n
