@@ -342,16 +342,19 @@ def _segment(index: int, start_xy, rows: np.ndarray, poses: np.ndarray, cursor: 
 
 def _brute_force_clear(a: Segment, b: Segment) -> bool:
     """Row by row: robots (holding their last row) at least 2R + 2*ROBOT_MARGIN apart, and
-    each robot ROBOT_MARGIN clear of the other's object wherever it may be (the planned
-    poses while its segment runs, the last one after)."""
+    each robot ROBOT_MARGIN clear of the other's object wherever it may be (its first
+    pose until a robot may touch it, the planned poses while its segment runs, the last
+    one after), and the two objects apart."""
     n = max(a.remaining, b.remaining)
     def at(seg, t):
         return seg.rows[:, min(seg.cursor + t, seg.rows.shape[1] - 1)]
-    def obj(seg, t):
-        poses = seg.poses if t < seg.remaining else seg.poses[-1:]
+    def obj(seg, t):  # at its first pose until touched, along its motion, at its last
+        poses = (seg.poses[:1] if seg.cursor + t < seg.touch else
+                 seg.poses if t < seg.remaining else seg.poses[-1:])
         return footprints(seg.shape, poses, OBJECT_MARGIN)
-    if obj(a, 0).intersects(obj(b, 0)):
-        return False
+    for t in range(n + 1):
+        if obj(a, t).intersects(obj(b, t)):
+            return False
     for t in range(n):
         pa, pb = at(a, t), at(b, t)
         if min(math.dist(p, q) for p in pa for q in pb) < 2 * R + 2 * ROBOT_MARGIN - 1e-9:
@@ -401,6 +404,47 @@ def test_far_apart_segments_are_compatible_and_crossing_robots_are_not() -> None
     ahead = _segment(0, None, np.linspace([0.9, 0.0], [3.0, 0.0], 50)[None],
                      np.array([[5.0, 1.0, 0.0], [5.5, 1.0, 0.0]]))
     assert compatible(ahead, later)
+
+
+def _approach_then_push(index: int, y: float, approach: int) -> Segment:
+    """A robot that drives ``approach`` rows towards a box at (1, y) from the left, then
+    pushes it 0.4 m to the right."""
+    box_x = 1.0
+    contact = box_x - BOX.size[0] / 2 - R
+    rows = np.concatenate([np.linspace([contact - 0.02 * approach, y], [contact, y], approach),
+                           np.linspace([contact, y], [contact + 0.4, y], 20)[1:]])[None]
+    return _segment(index, None, rows, np.array([[box_x, y, 0.0], [box_x + 0.4, y, 0.0]]))
+
+
+def test_first_touch_is_where_a_robot_comes_near_the_object() -> None:
+    seg = _approach_then_push(0, 1.0, 40)
+    d = [to_shapely(BOX, seg.poses[0]).distance(shapely.Point(p)) - R for p in seg.rows[0]]
+    g = seg.touch
+    assert 0 < g < 40 and d[g + 1] < OBJECT_MARGIN <= d[g - 1]  # the move from row g comes near
+    # robots left in contact that move away (or along) push nothing; coming nearer does
+    away = seg.rows[:, ::-1].copy()
+    back = _segment(0, None, away, seg.poses[::-1])
+    assert back.touch == 0  # starts pushing at once: the push is at the front, reversed
+    leave = _segment(0, None, np.linspace([0.75, 1.0], [0.2, 1.0], 30)[None],
+                     np.array([[1.0, 1.0, 0.0]]))
+    assert leave.touch == 0  # nobody comes near: nothing known, moving from the start
+    stay = np.concatenate([np.linspace([0.8 - R, 1.0], [0.8 - R, 0.6], 20),
+                           np.linspace([0.8 - R, 0.6], [0.8 - R + 0.05, 0.6], 5)[1:]])[None]
+    slide = _segment(0, None, stay, np.array([[1.0, 1.0, 0.0], [1.0, 1.0, 0.0]]))
+    assert slide.touch == 0 or slide.touch >= 19
+
+
+def test_an_object_not_yet_touched_leaves_its_future_way_free() -> None:
+    """B's robot crosses where A's box will be pushed, but leaves it before A's robot
+    reaches the box: compatible now; a B that stays on A's way is not."""
+    a = _approach_then_push(0, 1.0, 60)
+    cross = np.linspace([1.3, 0.2], [1.3, 1.8], 30)[None]  # across x = 1.3 in 30 rows
+    b = _segment(1, None, cross, np.array([[3.0, 3.0, 0.0], [3.2, 3.0, 0.0]]))
+    assert a.touch > 30 and compatible(a, b) and compatible(b, a)
+    lingering = _segment(1, None, np.concatenate([cross, np.repeat(cross[:, 15:16], 60, axis=1)],
+                                                 axis=1),
+                         np.array([[3.0, 3.0, 0.0], [3.2, 3.0, 0.0]]))
+    assert not compatible(a, lingering)
 
 
 def test_claim_covers_the_planned_footprints_and_room_for_pushers() -> None:

@@ -13,17 +13,21 @@ paths in which every sub-team moves as it would alone, and no row steps further 
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import shapely
 
 from lamp.contract.trajectory import straight_moves
-from lamp.fleet.regions import swept
+from lamp.fleet.regions import OBJECT_MARGIN, swept
+from lamp.geometry.shapes import to_shapely
 from lamp.scene.model import Shape
 
-__all__ = ["REJOIN_GAP", "Segment", "on_grid"]
+__all__ = ["REJOIN_GAP", "Segment", "TOUCH_TOLERANCE", "on_grid"]
 
+#: A robot that starts a segment near its object (left in contact by the last push) counts
+#: as pushing once it comes this much (m) nearer than it stood.
+TOUCH_TOLERANCE = 0.002
 #: A robot farther than this (m) from its next row moves back to it first (the simulator
 #: takes paths that start within ``MAX_START_GAP`` = 0.05 m of the robots).
 REJOIN_GAP = 0.03
@@ -64,6 +68,31 @@ class Segment:
     sim_time: float = 0.0
     left: bool = False
     stopped_at: int | None = None
+    #: the first row at which a robot may touch the object (:meth:`first_touch`); before
+    #: it the object stands at its first planned pose
+    touch: int = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.touch = self.first_touch()
+
+    def first_touch(self) -> int:
+        """The first row from which the segment's robots may move the object: the start
+        of the first row-to-row move (a straight line) on which a robot comes closer to
+        the object at its first planned pose than ``OBJECT_MARGIN`` beyond its radius and
+        than ``TOUCH_TOLERANCE`` nearer than it stood at row 0 (a robot left in contact
+        by the last push, moving away or along, pushes nothing). Before that row the
+        object stands where it stood (within the margin a drifted start has). 0 when no
+        robot comes near (nothing known: the object may move from the start)."""
+        rows = self.rows
+        if rows.shape[1] < 2:
+            return 0
+        body = to_shapely(self.shape, self.poses[0])
+        d0 = shapely.distance(body, shapely.points(rows[:, 0]))
+        limit = np.minimum(self.robot_radius + OBJECT_MARGIN, d0 - TOUCH_TOLERANCE)
+        moves = shapely.linestrings(np.stack([rows[:, :-1], rows[:, 1:]], axis=2).reshape(-1, 2, 2))
+        dist = shapely.distance(body, moves).reshape(rows.shape[0], -1)
+        hit = np.flatnonzero((dist < limit[:, None]).any(axis=0))
+        return int(hit[0]) if hit.size else 0
 
     @property
     def remaining(self) -> int:
@@ -81,6 +110,10 @@ class Segment:
             return
         back = straight_moves(np.asarray(positions, float), self.rows[:, self.cursor], row_step)
         self.rows = np.concatenate([back, self.rows[:, self.cursor:]], axis=1)
+        # a push under way goes on moving the object; one not begun begins as late as the
+        # inserted rows delay it, or as early as they come near the object
+        self.touch = 0 if self.touch <= self.cursor else min(
+            back.shape[1] + self.touch - self.cursor, self.first_touch())
         self.cursor = 0
 
     def ends(self) -> tuple[shapely.Geometry, shapely.Geometry]:

@@ -3,9 +3,11 @@ by row, objects by the space they may take.
 
 Both segments' rows are on the common grid (``segments.on_grid``) and aligned from now
 (row ``cursor`` of a running segment and row 0 of a new one run together); a segment's
-robots hold their last row once it ends. The object a segment pushes may be anywhere
-along its planned motion (grown by ``OBJECT_MARGIN``) until the segment ends, and at its
-last planned pose after.
+robots hold their last row once it ends. The object a segment pushes stands at its first
+planned pose until a robot may touch it (``Segment.touch``), may then be anywhere along
+its planned motion until the segment ends, and is at its last planned pose after (each
+grown by ``OBJECT_MARGIN``: :func:`object_phases`). Objects and robots are checked against
+the other's object phase by phase.
 
 Guarantee (``tests/test_fleet_regions.py``): when :func:`compatible` holds, at every row of
 the shared clock each robot of one segment is at least ``2 * ROBOT_MARGIN`` farther than a
@@ -15,19 +17,37 @@ of the other's object space, and the two object spaces do not meet.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import shapely
 
 from lamp.fleet.regions import OBJECT_MARGIN, ROBOT_MARGIN, footprints
 from lamp.fleet.segments import Segment
 
-__all__ = ["compatible", "object_space"]
+__all__ = ["compatible", "object_phases", "object_space"]
 
 
 def object_space(seg: Segment, final: bool = False) -> shapely.Geometry:
     """Where ``seg``'s object may be while it runs (``final``: once it has ended)."""
     poses = seg.poses[-1:] if final else seg.poses
     return footprints(seg.shape, poses, OBJECT_MARGIN)
+
+
+def object_phases(seg: Segment) -> list[tuple[float, shapely.Geometry]]:
+    """Where ``seg``'s object may be from now on, as (until row, space) in time order, the
+    rows counted from now: at its first planned pose until a robot may touch it
+    (``Segment.touch``), anywhere along its planned motion until the segment ends, at its
+    last planned pose after (until ``inf``); empty phases left out."""
+    touch = max(0, seg.touch - seg.cursor)
+    out = []
+    if touch > 0:
+        out.append((float(min(touch, seg.remaining)), footprints(seg.shape, seg.poses[:1],
+                                                                 OBJECT_MARGIN)))
+    if touch < seg.remaining:
+        out.append((float(seg.remaining), object_space(seg)))
+    out.append((math.inf, object_space(seg, final=True)))
+    return out
 
 
 def _rows(seg: Segment, n: int) -> np.ndarray:
@@ -38,16 +58,33 @@ def _rows(seg: Segment, n: int) -> np.ndarray:
     return np.concatenate([rows, np.repeat(rows[:, -1:], n - rows.shape[1], axis=1)], axis=1)
 
 
-def _robots_clear(rows: np.ndarray, moving_until: int, during: shapely.Geometry,
-                  after: shapely.Geometry, clearance: float) -> bool:
-    """Robots along ``rows`` stay ``clearance`` from ``during`` for rows before
-    ``moving_until`` and from ``after`` from then on."""
-    for region, part in ((during, rows[:, :moving_until]), (after, rows[:, moving_until:])):
+def _robots_clear(rows: np.ndarray, phases: list[tuple[float, shapely.Geometry]],
+                  clearance: float) -> bool:
+    """Robots along ``rows`` stay ``clearance`` from each phase's space in its rows."""
+    begin = 0
+    for until, region in phases:
+        end = int(min(until, rows.shape[1]))
+        part = rows[:, begin:end]
+        begin = max(begin, end)
         if part.size == 0:
             continue
         pts = shapely.points(part.reshape(-1, 2))
         if np.min(shapely.distance(region, pts)) < clearance:
             return False
+    return True
+
+
+def _objects_clear(pa: list[tuple[float, shapely.Geometry]],
+                   pb: list[tuple[float, shapely.Geometry]]) -> bool:
+    """No two phases of the two objects that overlap in time meet in space."""
+    start_a = 0.0
+    for until_a, space_a in pa:
+        start_b = 0.0
+        for until_b, space_b in pb:
+            if start_a < until_b and start_b < until_a and space_a.intersects(space_b):
+                return False
+            start_b = until_b
+        start_a = until_a
     return True
 
 
@@ -59,9 +96,8 @@ def compatible(a: Segment, b: Segment) -> bool:
     gap = np.hypot(*np.moveaxis(ra[:, None] - rb[None], -1, 0))  # (na, nb, n)
     if gap.size and gap.min() < 2.0 * r + 2.0 * ROBOT_MARGIN:
         return False
-    space_a, space_b = object_space(a), object_space(b)
-    if space_a.intersects(space_b):
+    phases_a, phases_b = object_phases(a), object_phases(b)
+    if not _objects_clear(phases_a, phases_b):
         return False
     clear = r + ROBOT_MARGIN
-    return (_robots_clear(rb, a.remaining, space_a, object_space(a, final=True), clear)
-            and _robots_clear(ra, b.remaining, space_b, object_space(b, final=True), clear))
+    return _robots_clear(rb, phases_a, clear) and _robots_clear(ra, phases_b, clear)
