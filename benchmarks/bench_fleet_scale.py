@@ -28,7 +28,17 @@ from pathlib import Path
 
 from lamp.record.safety import check_run_dir
 from lamp.scene.save import save_scene
-from lamp.suites.fleet import generate_custom
+from lamp.suites.fleet import KINDS, generate_custom
+
+
+def point(text: str) -> tuple[int, int]:
+    """``ROBOTSxOBJECTS`` as (robots, objects)."""
+    try:
+        n_robots, n_objects = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected ROBOTSxOBJECTS such as 24x8, got {text!r}") from None
+    return n_robots, n_objects
 
 
 def run_point(scene: Path, out: Path, time_cap: float) -> tuple[float, float]:
@@ -51,10 +61,11 @@ def run_point(scene: Path, out: Path, time_cap: float) -> tuple[float, float]:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--kind", default="aisles", help="fleet map kind (default: aisles)")
+    ap.add_argument("--kind", default="aisles", choices=KINDS,
+                    help="fleet map kind (default: aisles)")
     ap.add_argument("--size", type=float, nargs=2, default=[40.0, 30.0], metavar=("W", "H"),
                     help="map size in metres (default: 40 30)")
-    ap.add_argument("--points", nargs="+", default=["12x4", "24x8", "48x16", "96x32"],
+    ap.add_argument("--points", nargs="+", type=point, default=["12x4", "24x8", "48x16", "96x32"],
                     help="ROBOTSxOBJECTS per point (default: 12x4 24x8 48x16 96x32)")
     ap.add_argument("--time-cap", type=float, default=1800.0,
                     help="wall-clock cap per run in seconds (default: 1800)")
@@ -65,13 +76,15 @@ def main() -> None:
     print("robots | objects | placed | makespan (s) | wall (s) | plan/seg (s) | "
           "plan total (s) | peak RSS (GB) | safety violations")
     first = None
-    for point in args.points:
-        n_robots, n_objects = (int(v) for v in point.lower().split("x"))
+    for n_robots, n_objects in (point(p) if isinstance(p, str) else p for p in args.points):
         folder = args.out / f"{n_robots}r{n_objects}o"
         done = folder / "point.json"
         if not done.exists():
+            try:
+                gen = generate_custom(args.kind, tuple(args.size), n_objects, n_robots)
+            except ValueError as err:
+                ap.error(str(err))
             folder.mkdir(exist_ok=True)
-            gen = generate_custom(args.kind, tuple(args.size), n_objects, n_robots)
             save_scene(gen.scene, folder / "scene.yaml")
             wall, rss = run_point(folder / "scene.yaml", folder / "run", args.time_cap)
             done.write_text(json.dumps({"wall_s": wall, "peak_rss_gb": rss}))
