@@ -78,6 +78,29 @@ def test_cli_lists_and_exports(tmp_path):
     assert (tmp_path / "manifest.json").is_file()
 
 
+def test_cli_writes_a_fleet_scene_of_any_size_and_refuses_bad_input(tmp_path):
+    from lamp.cli import app
+
+    out = tmp_path / "yard.yaml"
+    args = ["suite", "fleet-scene", str(out), "--kind", "yard", "--size", "9", "7",
+            "--objects", "3", "--robots", "4", "--seed", "2"]
+    res = CliRunner().invoke(app, args)
+    assert res.exit_code == 0, res.output
+    scene = load_scene(out)
+    assert scene.to_dict() == F.generate_custom("yard", (9.0, 7.0), 3, 4, seed=2).scene.to_dict()
+    assert scene.schedule == "concurrent" and scene.n_robots == 4 and len(scene.objects) == 3
+    for bad, what in ((["--kind", "hall"], "kind"), (["--size", "3", "7"], "workspace"),
+                      (["--robots", "2"], "n_robots")):
+        target = tmp_path / f"bad-{what}.yaml"
+        res = CliRunner().invoke(app, ["suite", "fleet-scene", str(target), *bad,
+                                       "--objects", "3"])
+        assert res.exit_code == 2 and what in res.output and not target.exists(), res.output
+    res = CliRunner().invoke(app, ["suite", "fleet-scene", str(tmp_path / "x.txt"),
+                                   "--kind", "yard", "--size", "9", "7", "--objects", "3",
+                                   "--robots", "4"])
+    assert res.exit_code == 2 and "extension" in res.output
+
+
 # --------------------------------------------------------------------------- generation
 def test_generated_scenes_are_the_committed_files(generated, manifest):
     files = suite_files(F.NAME)

@@ -1,4 +1,5 @@
-"""``lamp suite``: list and export the built-in benchmark suites."""
+"""``lamp suite``: list and export the built-in benchmark suites, and generate a ``fleet``
+scene of any size."""
 
 from __future__ import annotations
 
@@ -40,3 +41,33 @@ def export_command(
     except OSError as exc:
         fail_input(f"cannot write to {directory}: {exc.strerror or exc}")
     typer.echo(f"wrote {len(written) - 1} scene file(s) and manifest.json to {directory}")
+
+
+@suite_app.command("fleet-scene")
+def fleet_scene_command(
+    out: Path = typer.Argument(..., help="Scene file to write (.yaml, .yml or .json)."),
+    kind: str = typer.Option("aisles", "--kind", help="Map kind: rooms, aisles, yard, swap "
+                             "or after (the fleet family's)."),
+    size: tuple[float, float] = typer.Option((40.0, 30.0), "--size",
+                                             help="Map width and height (m), 6-150 each."),
+    objects: int = typer.Option(16, "--objects", help="Objects to move."),
+    robots: int = typer.Option(48, "--robots", help="Robots (at least one per object)."),
+    seed: int = typer.Option(0, "--seed", help="Generator seed."),
+) -> None:
+    """Generate a scene of the ``fleet`` family's kinds at any size (its generator and
+    checks: every object has a certified route and reachable contacts) and write it to
+    OUT, with ``schedule: concurrent``."""
+    from lamp.scene.save import save_scene
+    from lamp.suites.fleet import generate_custom
+
+    try:
+        gen = generate_custom(kind, size, objects, robots, seed)
+        save_scene(gen.scene, out)
+    except ValueError as exc:
+        fail_input(str(exc))
+    except RuntimeError as exc:  # no draw passed the checks: too many objects for the map
+        fail_input(f"{exc}; try a larger --size or fewer --objects")
+    except OSError as exc:
+        fail_input(f"cannot write {out}: {exc.strerror or exc}")
+    typer.echo(f"wrote {out}: {gen.scene.name}, {robots} robots, {objects} objects, "
+               f"{size[0]:g} x {size[1]:g} m")
