@@ -17,7 +17,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from lamp.contract.model import MAX_ROBOTS
-from lamp.fleet.regions import OBJECT_MARGIN, ROBOT_MARGIN, claim, footprints
+from lamp.fleet.regions import OBJECT_MARGIN, ROBOT_MARGIN, claim, footprints, swept
 from lamp.fleet.segments import Segment, on_grid
 from lamp.fleet.spacetime import compatible
 from lamp.fleet.teams import (
@@ -445,6 +445,41 @@ def test_an_object_not_yet_touched_leaves_its_future_way_free() -> None:
                                                  axis=1),
                          np.array([[3.0, 3.0, 0.0], [3.2, 3.0, 0.0]]))
     assert not compatible(a, lingering)
+
+
+@settings(max_examples=120)
+@given(st.integers(0, 2**31 - 1), st.floats(0.0, 2.0))
+def test_disjoint_swept_regions_keep_the_bodies_apart_whatever_their_timing(seed, apart):
+    """``regions.swept``'s guarantee: when two segments' swept regions do not meet, every
+    robot of one (anywhere on its path) stays 2 * ROBOT_MARGIN beyond a robot diameter from
+    every robot of the other, robots ROBOT_MARGIN + OBJECT_MARGIN beyond the radius from
+    the other's object at any planned pose, and the objects 2 * OBJECT_MARGIN apart; up
+    to the polygon approximation of the disks and of a turn between sampled poses
+    (TOL)."""
+    tol = 3e-3
+    rng = np.random.default_rng(seed)
+    a = _random_segment(rng, 0, (0.0, 0.0))
+    b = _random_segment(rng, 1, (apart, 0.3))
+    if swept(BOX, a.poses, a.rows, R).intersects(swept(BOX, b.poses, b.rows, R)):
+        return
+
+    def path_points(seg):  # rows and the midpoints between them
+        rows = seg.rows
+        return np.concatenate([rows, (rows[:, 1:] + rows[:, :-1]) / 2], axis=1).reshape(-1, 2)
+
+    def bodies(seg):
+        return [to_shapely(BOX, q) for q in np.linspace(seg.poses[0], seg.poses[-1], 9)]
+
+    pa, pb = path_points(a), path_points(b)
+    gap = np.hypot(*(pa[:, None] - pb[None]).T)
+    assert gap.min() >= 2 * R + 2 * ROBOT_MARGIN - tol
+    for robots, objects in ((pa, bodies(b)), (pb, bodies(a))):
+        pts = shapely.points(robots)
+        for body in objects:
+            assert shapely.distance(body, pts).min() >= R + ROBOT_MARGIN + OBJECT_MARGIN - tol
+    for x in bodies(a):
+        for y in bodies(b):
+            assert x.distance(y) >= 2 * OBJECT_MARGIN - tol
 
 
 def test_claim_covers_the_planned_footprints_and_room_for_pushers() -> None:

@@ -15,7 +15,7 @@ A segment that may start must keep out of the space every other body needs while
   (``swept(..., margins=False)``): the planner saw them, so only a real overlap (the
   world changed since the plan) counts.
 
-Guarantee (``tests/test_fleet_regions.py``): two segments whose swept regions do not
+Guarantee (``tests/test_fleet_parts.py``): two segments whose swept regions do not
 intersect keep every robot disk and object footprint of one at least ``2 * ROBOT_MARGIN``
 (robots) / ``2 * OBJECT_MARGIN`` (objects, as planned) from the other's at all times,
 whatever their timing.

@@ -9,10 +9,11 @@ its planned motion until the segment ends, and is at its last planned pose after
 grown by ``OBJECT_MARGIN``: :func:`object_phases`). Objects and robots are checked against
 the other's object phase by phase.
 
-Guarantee (``tests/test_fleet_regions.py``): when :func:`compatible` holds, at every row of
-the shared clock each robot of one segment is at least ``2 * ROBOT_MARGIN`` farther than a
-robot diameter from each robot of the other, each robot at least ``ROBOT_MARGIN`` clear
-of the other's object space, and the two object spaces do not meet.
+Guarantee (``tests/test_fleet_parts.py``, against a row-by-row brute force): when
+:func:`compatible` holds, at every row of the shared clock each robot of one segment is at
+least ``2 * ROBOT_MARGIN`` farther than a robot diameter from each robot of the other, each
+robot at least ``ROBOT_MARGIN`` clear of the other's object space at that row (its phase),
+and the two objects' spaces do not meet while both hold them.
 """
 
 from __future__ import annotations
