@@ -65,7 +65,8 @@ def main() -> None:
                     help="fleet map kind (default: aisles)")
     ap.add_argument("--size", type=float, nargs=2, default=[40.0, 30.0], metavar=("W", "H"),
                     help="map size in metres (default: 40 30)")
-    ap.add_argument("--points", nargs="+", type=point, default=["12x4", "24x8", "48x16", "96x32"],
+    ap.add_argument("--points", nargs="+", type=point,
+                    default=[(12, 4), (24, 8), (48, 16), (96, 32)],
                     help="ROBOTSxOBJECTS per point (default: 12x4 24x8 48x16 96x32)")
     ap.add_argument("--time-cap", type=float, default=1800.0,
                     help="wall-clock cap per run in seconds (default: 1800)")
@@ -76,7 +77,7 @@ def main() -> None:
     print("robots | objects | placed | makespan (s) | wall (s) | plan/seg (s) | "
           "plan total (s) | peak RSS (GB) | safety violations")
     first = None
-    for n_robots, n_objects in (point(p) if isinstance(p, str) else p for p in args.points):
+    for n_robots, n_objects in args.points:
         folder = args.out / f"{n_robots}r{n_objects}o"
         done = folder / "point.json"
         if not done.exists():

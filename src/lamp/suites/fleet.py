@@ -78,6 +78,10 @@ N_HEADINGS = 8
 REACH_RESOLUTION = 0.05
 REACH_RING_WIDTH = 0.06
 MAX_ATTEMPTS = 30
+#: what ``generate_custom`` accepts: the longest map side (m), objects and robots
+CUSTOM_MAX_SIDE = 150.0
+CUSTOM_MAX_OBJECTS = 200
+CUSTOM_MAX_ROBOTS = 1000
 
 __all__ = ["END_CLEARANCE", "KINDS", "LEVELS", "NAME", "N_SCENES", "OBJECTS", "OBJECT_GAP",
            "GeneratedFleet", "generate_custom", "generate_scene", "manifest_entry",
@@ -218,13 +222,16 @@ def generate_custom(kind: str, workspace: tuple[float, float], n_objects: int,
     if kind not in KINDS:
         raise ValueError(f"kind must be one of {', '.join(KINDS)}, got {kind!r}")
     W, H = (float(v) for v in workspace)
-    if not (LEVELS[0][0] <= min(W, H) and max(W, H) <= 150.0):
-        raise ValueError(f"workspace sides must be 6-150 m, got {W} x {H}")
-    if not 1 <= n_objects <= 200 or (kind == "after" and n_objects < 2):
-        raise ValueError(f"n_objects must be 1-200 (2+ for 'after'), got {n_objects}")
-    if not n_objects <= n_robots <= 1000:
-        raise ValueError(f"n_robots must be {n_objects}-1000 (one per object at least), "
-                         f"got {n_robots}")
+    low = LEVELS[0][0]
+    if not (low <= min(W, H) and max(W, H) <= CUSTOM_MAX_SIDE):
+        raise ValueError(f"workspace sides must be {low:g}-{CUSTOM_MAX_SIDE:g} m, "
+                         f"got {W} x {H}")
+    if not 1 <= n_objects <= CUSTOM_MAX_OBJECTS or (kind == "after" and n_objects < 2):
+        raise ValueError(f"n_objects must be 1-{CUSTOM_MAX_OBJECTS} (2+ for 'after'), "
+                         f"got {n_objects}")
+    if not n_objects <= n_robots <= CUSTOM_MAX_ROBOTS:
+        raise ValueError(f"n_robots must be {n_objects}-{CUSTOM_MAX_ROBOTS} (one per object "
+                         f"at least), got {n_robots}")
     rng = np.random.default_rng([SUITE_SEED, STREAM, 1_000_000 + seed,
                                  KINDS.index(kind), int(W * 10), int(H * 10), n_objects,
                                  n_robots])
