@@ -276,3 +276,39 @@ def test_a_team_reinforced_while_it_drives_to_its_object_keeps_its_robots_apart(
     team = recorded_teams(res.recording)
     assert (team[-1] == 1).sum() == 3
     assert np.all((team == 1).sum(axis=1) <= 3)
+
+
+def test_a_plan_made_in_the_world_as_it_stands_is_not_declined() -> None:
+    """``Fleet.world_taken``: a loop's segment submitted before any event since its world
+    was taken is admitted even when its bodies, as planned, touch a standing robot (the
+    planner saw that robot and accepted the contact: declining would plan the same again,
+    for ever); once an event has passed, the same segment is declined (the world changed)."""
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from lamp.fleet.coordinator import Fleet
+    from lamp.fleet.segments import Segment
+
+    scene = scene_from_dict(_two_boxes(5.0, (1.2, 2.2), 4.2))
+    r = scene.robot_radius
+    robots = np.array(scene.robot_starts, float)
+    robots[3] = [0.4 + 2 * r - 0.01, 0.6]  # 1 cm into robot 0's disk, in no team
+    executor = SimpleNamespace(object_poses=np.array([o.start for o in scene.objects]),
+                               robot_positions=robots)
+
+    def outcome(events_since: int) -> tuple[bool, bool]:
+        fleet = Fleet(scene, executor, lambda f, k: None, lambda *a: None)
+        o = fleet.objects[0]
+        o.status, o.team = "active", [0]
+        fleet.owner[0] = 0
+        fleet.world_taken(0)
+        fleet.counts["events"] += events_since  # segments that ended since
+        rows = np.linspace(robots[0], robots[0] + [0.0, 0.1], 5)[None]
+        o.request = Segment(0, [0], rows, np.array([scene.objects[0].start]), None,
+                            scene.objects[0].shape, r)
+        fleet._admit(force=False)
+        return o.running is not None, o.reply is not None and o.reply.declined
+
+    assert outcome(events_since=0) == (True, False)  # admitted
+    assert outcome(events_since=1) == (False, True)  # declined

@@ -15,7 +15,9 @@ simulator. Design (``docs/fleet.md``):
   (robots row by row on the shared clock, objects by the space they may take:
   ``spacetime.compatible``), respects higher claims, and its bodies as planned overlap
   no body standing still (else the world changed since the plan: it is declined and the
-  loop plans anew, ``WORLD_CHANGED``). Otherwise it waits for the next event. A planner
+  loop plans anew, ``WORLD_CHANGED``; not before the first event after its loop took its
+  world, ``world_taken``: that plan saw the world as it is, and would be made again).
+  Otherwise it waits for the next event. A planner
   that finds no plan while other objects still move waits for a change too.
 - **Clock.** Admitted segments are re-timed on a common row grid (``segments.on_grid``),
   with rows appended in which their robots hold for the simulator's settle time, and run
@@ -36,7 +38,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -49,6 +50,7 @@ from lamp.fleet.handover import better_team
 from lamp.fleet.objects import given_up
 from lamp.fleet.regions import claim
 from lamp.fleet.segments import Segment, on_grid
+from lamp.fleet.state import ObjectState
 from lamp.fleet.teams import allocate, nearest, reinforce, start_order
 from lamp.fleet.turns import Turns
 from lamp.fleet.utilisation import RobotTime
@@ -64,26 +66,6 @@ FREE, FAILED = -1, -2
 #: A planner that found no plan while others moved plans again after this many events
 #: (segments ending) at the latest, sooner when an object is placed or given up.
 BLOCKED_WAKE_EVENTS = 6
-
-
-@dataclass
-class _Object:
-    index: int
-    status: str = "waiting"  # waiting -> active -> placed | failed
-    team: list[int] = field(default_factory=list)
-    claim: shapely.Geometry | None = None
-    announced: np.ndarray | None = None  # the next segment's planned poses
-    request: Segment | None = None  # submitted, not admitted
-    running: Segment | None = None
-    reply: FleetExecution | None = None
-    ready: bool = False  # its thread has something to resume with
-    #: (objects finished, events) when its planner failed; None: not waiting on a change
-    blocked_at: tuple[int, int] | None = None
-    wake: bool = False  # the answer to ``plan_failed``
-    needs_team: bool = False  # its thread waits for robots (``wait_for_team``)
-    rank: int = 1 << 30  # its priority: the order in which objects started (lower first)
-    outcome: ObjectOutcome | None = None
-    placed_at_s: float | None = None
 
 
 class Fleet:
@@ -111,7 +93,7 @@ class Fleet:
         #: rows a segment's robots hold at its end while others move: the settle time
         self.hold_rows = math.ceil(SETTLE_TIME * float(scene.physics.robot_speed) / self.grid
                                    - 1e-9)
-        self.objects = [_Object(k) for k in range(len(scene.objects))]
+        self.objects = [ObjectState(k) for k in range(len(scene.objects))]
         self.turns = Turns()
         self.started = 0  # objects started so far (their ranks)
         self.finished = 0  # objects placed or given up so far
@@ -224,7 +206,7 @@ class Fleet:
             if team is not None:
                 self._reteam(o, team, "handed_over")
 
-    def _reteam(self, o: _Object, team: Sequence[int], what: str) -> None:
+    def _reteam(self, o: ObjectState, team: Sequence[int], what: str) -> None:
         """``o``'s sub-team becomes ``team`` (robots it loses go free); counted as ``what``."""
         self.log.append((self.clock, what, o.index, f"{o.team} -> {sorted(team)}"))
         self.owner[[i for i in o.team if self.owner[i] == o.index]] = FREE
@@ -244,14 +226,14 @@ class Fleet:
         for obs in self.observers:
             obs.object_finished(k, len(self.objects), o.outcome.result)
 
-    def _give_up(self, o: _Object, why: str) -> None:
+    def _give_up(self, o: ObjectState, why: str) -> None:
         o.status = "failed"
         o.outcome = given_up(self.scene, o.index, self.executor.object_poses[o.index], why)
         for obs in self.observers:
             obs.object_started(o.index, len(self.objects))
             obs.object_finished(o.index, len(self.objects), o.outcome.result)
 
-    def _ranked(self) -> list[_Object]:
+    def _ranked(self) -> list[ObjectState]:
         """The objects by priority: in the order they started (then the scene's)."""
         return sorted(self.objects, key=lambda o: (o.rank, o.index))
 
@@ -273,7 +255,8 @@ class Fleet:
             seg = o.request
             if seg is None:
                 continue
-            hit_standing = self._meets_standing(seg)
+            # a plan made in the world as it stands cannot have been overtaken by it
+            hit_standing = o.world_at < self.counts["events"] and self._meets_standing(seg)
             hit_moving = not force and self._meets_moving(seg)
             self.log.append((self.clock, "check", o.index,
                              f"standing={hit_standing} moving={hit_moving}"))
@@ -442,6 +425,11 @@ class Fleet:
         self.turns.pause(k)
         reply, o.reply = o.reply, None
         return reply  # type: ignore[return-value]
+
+    def world_taken(self, k: int) -> None:
+        """Object ``k``'s new loop plans in the world as it is now: until the next event
+        its segments meet no standing body it did not see (none is declined)."""
+        self.objects[k].world_at = self.counts["events"]
 
     def announce(self, k: int, segment: np.ndarray, rest: np.ndarray) -> None:
         o = self.objects[k]

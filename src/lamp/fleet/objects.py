@@ -112,6 +112,7 @@ def object_main(runner: ClosedLoopRunner, observe: Callable[[SegmentEvent], None
             if view.team_changed:  # a robot failed or joined during transit
                 continue
             scene_k = world()
+            fleet.world_taken(k)
             parts.append(runner.loop(scene_k, k, view, config, observe))
             r = parts[-1].result
             if r.failure_reason not in (WORLD_CHANGED, TEAM_CHANGED):

@@ -1,0 +1,38 @@
+"""What the fleet schedule knows of each object (``Fleet.objects``): its status, sub-team,
+claim, the segment it submitted or runs, and its thread's state."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import shapely
+
+from lamp.contract.runner import ObjectOutcome
+from lamp.fleet.segments import Segment
+from lamp.fleet.view import FleetExecution
+
+__all__ = ["ObjectState"]
+
+
+@dataclass
+class ObjectState:
+    """One object as the fleet schedule tracks it (``Fleet.objects``)."""
+
+    index: int
+    status: str = "waiting"  # waiting -> active -> placed | failed
+    team: list[int] = field(default_factory=list)
+    claim: shapely.Geometry | None = None
+    announced: np.ndarray | None = None  # the next segment's planned poses
+    request: Segment | None = None  # submitted, not admitted
+    running: Segment | None = None
+    reply: FleetExecution | None = None
+    ready: bool = False  # its thread has something to resume with
+    #: (objects finished, events) when its planner failed; None: not waiting on a change
+    blocked_at: tuple[int, int] | None = None
+    wake: bool = False  # the answer to ``plan_failed``
+    needs_team: bool = False  # its thread waits for robots (``wait_for_team``)
+    rank: int = 1 << 30  # its priority: the order in which objects started (lower first)
+    world_at: int = -1  # the event after which its loop took its world (``Fleet.world_taken``)
+    outcome: ObjectOutcome | None = None
+    placed_at_s: float | None = None
