@@ -312,3 +312,43 @@ def test_a_plan_made_in_the_world_as_it_stands_is_not_declined() -> None:
 
     assert outcome(events_since=0) == (True, False)  # admitted
     assert outcome(events_since=1) == (False, True)  # declined
+
+
+def test_a_blocked_objects_claim_binds_only_those_outside_it() -> None:
+    """``Fleet.plan_failed``: the claim of an object whose planner failed stays, but binds
+    only the objects outside it then (``Fleet._inside``): one standing in its way may go
+    on through it (it may be what it waits for), one outside may not come deeper in (to
+    meet it head-on in an aisle)."""
+    from types import SimpleNamespace
+
+    import numpy as np
+    import shapely
+
+    from lamp.fleet.coordinator import Fleet
+    from lamp.fleet.segments import Segment
+
+    d = _two_boxes(6.0, (3.0, 1.3), 5.0)  # object 1's lower edge in the aisle below
+    d["objects"].append({**d["objects"][0], "start": [5.4, 2.2, 0.0], "goal": [5.4, 1.6, 0.0]})
+    scene = scene_from_dict(d)
+    r = scene.robot_radius
+    executor = SimpleNamespace(object_poses=np.array([o.start for o in scene.objects]),
+                               robot_positions=np.array(scene.robot_starts, float))
+    fleet = Fleet(scene, executor, lambda f, k: None, lambda *a: None)
+    for k, o in enumerate(fleet.objects):
+        o.status, o.rank = "active", k
+    aisle = shapely.box(2.0, 0.4, 6.0, 1.2)  # object 0's way: object 1 stands in it
+    fleet.objects[0].claim = aisle
+    fleet.objects[0].exempt = fleet._inside(aisle)
+    assert fleet.objects[0].exempt == {1}
+
+    def deeper(k: int, dy: float) -> Segment:  # object k pushed dy down, into the aisle
+        q = np.asarray(scene.objects[k].start, float)
+        robot = q[:2] + [0.0, 0.15 + r]
+        rows = np.linspace(robot, robot - [0.0, dy], 25)[None]
+        return Segment(k, [0], rows, np.array([q, q - [0.0, dy, 0.0]]), None,
+                       scene.objects[k].shape, r)
+
+    assert fleet._meets_moving(deeper(1, 0.5)) is None  # inside: goes on, deeper
+    assert fleet._meets_moving(deeper(2, 1.0)) == "claim 0"  # outside: may not come in
+    fleet.objects[0].exempt = frozenset()
+    assert fleet._meets_moving(deeper(1, 0.5)) == "claim 0"  # an ordinary claim binds both

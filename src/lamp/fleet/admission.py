@@ -6,11 +6,13 @@
 - :func:`meets_moving`: it cannot run beside a running segment (``spacetime.compatible``),
   or it would leave its object and robots deeper inside a higher-ranked object's claim
   than they were (``CLAIM_AREA_SLACK`` of rounding): it waits for the next event.
+- :func:`standing_in`: the objects standing in a claim, which a blocked object's claim
+  does not bind (``Fleet.plan_failed``).
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 import shapely
@@ -20,7 +22,7 @@ from lamp.fleet.segments import Segment
 from lamp.fleet.spacetime import compatible
 from lamp.scene.model import Scene
 
-__all__ = ["CLAIM_AREA_SLACK", "meets_moving", "meets_standing"]
+__all__ = ["CLAIM_AREA_SLACK", "meets_moving", "meets_standing", "standing_in"]
 
 #: A segment may end with this much more of its bodies' area (m^2) inside a higher claim
 #: than it started with (rounding of the footprints).
@@ -60,3 +62,15 @@ def meets_moving(seg: Segment, running: Sequence[Segment],
         if after > before + CLAIM_AREA_SLACK:
             return f"claim {k}"
     return None
+
+
+def standing_in(region: shapely.Geometry, scene: Scene, object_poses: np.ndarray,
+                robot_positions: np.ndarray, teams: Mapping[int, Sequence[int]]
+                ) -> frozenset[int]:
+    """The objects of ``teams`` (object -> its sub-team's robots) whose body where it
+    stands, or a robot of whose sub-team, meets ``region`` (each shrunk by
+    ``regions.STATIC_SLACK``, as in :func:`meets_standing`)."""
+    r = scene.robot_radius
+    return frozenset(k for k, team in teams.items() if region.intersects(
+        standing(scene.objects[k].shape, object_poses[k], r)) or any(
+        region.intersects(standing(None, robot_positions[i], r)) for i in team))

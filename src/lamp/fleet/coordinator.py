@@ -10,7 +10,9 @@ simulator. Design (``docs/fleet.md``):
   that start together); one with ``after`` starts once those objects are placed. A
   lower-priority segment may not end with its object and robots deeper in a higher
   object's *claim* (the rest of its plan, ``regions.claim``) than they began (crossing
-  one, or leaving it, is allowed): loads never meet head-on in a door.
+  one, or leaving it, is allowed): loads never meet head-on in a door. The claim of an
+  object whose planner found no plan stays (its last plan's), binding only the objects
+  outside it then: those in its way may leave or pass, no other comes to meet it.
 - **Admission.** A segment starts only if it is compatible with every running segment
   (robots row by row on the shared clock, objects by the space they may take:
   ``spacetime.compatible``), respects higher claims, and its bodies as planned overlap
@@ -27,7 +29,8 @@ simulator. Design (``docs/fleet.md``):
   settle as it does after a sequential segment.
 - **Liveness.** When nothing runs and nothing waits on a change, the highest-priority
   waiting segment is admitted against standing bodies only (``forced``), and planners
-  waiting on a change plan in the world as it is (like the sequential schedule).
+  waiting on a change plan in the world as it is (like the sequential schedule), their
+  claims dropped.
 - **Teams.** Allocated by ``lamp.fleet.teams``. A robot that fails (``executor.failed``)
   leaves its sub-team for good (``FAILED``), replaced by the nearest free robot if any;
   far robots hand over to free ones nearer (``lamp.fleet.handover``). The team's loop
@@ -45,7 +48,7 @@ import shapely
 
 from lamp.contract.events import TRACE_EVERY, RunObserver
 from lamp.contract.runner import ObjectOutcome
-from lamp.fleet.admission import meets_moving, meets_standing
+from lamp.fleet.admission import meets_moving, meets_standing, standing_in
 from lamp.fleet.handover import better_team
 from lamp.fleet.objects import given_up
 from lamp.fleet.regions import claim
@@ -279,16 +282,17 @@ class Fleet:
         return meets_standing(seg, self.scene, self.executor.object_poses,
                               self.executor.robot_positions, still, moving)
 
-    def _meets_moving(self, seg: Segment) -> bool:
+    def _meets_moving(self, seg: Segment) -> str | None:
+        """Why ``seg`` must wait (``admission.meets_moving``), None if it need not."""
         rank = self.objects[seg.index].rank
         running = [o.running for o in self.objects if o.running is not None
                    and o.index != seg.index]
         claims = [(o.index, o.claim) for o in self.objects if o.index != seg.index
-                  and o.rank < rank and o.claim is not None]
+                  and o.rank < rank and o.claim is not None and seg.index not in o.exempt]
         why = meets_moving(seg, running, claims)
         if why:
             self.log.append((self.clock, "meets", seg.index, why))
-        return why is not None
+        return why
 
     def _unstick(self) -> bool:
         """Nothing runs and no loop can go on. Planners that wait for a change: the first
@@ -302,7 +306,7 @@ class Fleet:
                           | set(self._free()))
             merge = len(pool) > len(first.team)
             for o in blocked:
-                o.blocked_at, o.wake, o.ready = None, merge, True
+                o.blocked_at, o.wake, o.ready, o.claim = None, merge, True, None
                 if merge and o is not first:
                     o.team = []
             if merge:
@@ -435,7 +439,8 @@ class Fleet:
         o = self.objects[k]
         o.announced = np.asarray(segment, float)
         poses = np.concatenate([o.announced, np.asarray(rest, float).reshape(-1, 3)])
-        o.claim = claim(self.scene.objects[k].shape, poses, self.scene.robot_radius)
+        o.claim, o.exempt = claim(self.scene.objects[k].shape, poses, self.scene.robot_radius), \
+            frozenset()
         if o.claim is not None:
             shapely.prepare(o.claim)
 
@@ -451,11 +456,18 @@ class Fleet:
         if not any(other.index != k and other.status in ("active", "waiting")
                    for other in self.objects):
             return False
-        o.claim = None
+        # its last claim binds only those outside it (module docstring, Priority)
+        o.exempt = self._inside(o.claim) if o.claim is not None else frozenset()
         o.blocked_at = (self.finished, self.counts["events"])
         self.counts["blocked"] += 1
         self.turns.pause(k)
         return o.wake
+
+    def _inside(self, region: shapely.Geometry) -> frozenset[int]:
+        return standing_in(region, self.scene, self.executor.object_poses,
+                           self.executor.robot_positions,
+                           {p.index: p.team for p in self.objects
+                            if p.status in ("active", "waiting")})
 
     def wait_for_team(self, k: int) -> None:
         """Object ``k`` has no robots (they went to another object): wait for some."""
