@@ -21,10 +21,12 @@ from lamp.fleet.regions import OBJECT_MARGIN, ROBOT_MARGIN, claim, footprints, s
 from lamp.fleet.segments import Segment, on_grid
 from lamp.fleet.spacetime import compatible
 from lamp.fleet.teams import (
+    GROW_REACH,
     MIN_TEAM,
     allocate,
     chain_depths,
     least_conflict_order,
+    near_way,
     reinforce,
     start_order,
 )
@@ -329,6 +331,29 @@ def test_loads_into_a_dead_end_aisle_start_deepest_first():
         poses = np.array([o.start for o in objects])
         order = start_order(scene, poses, [0, 1, 2], [])
         assert [goals_x[k] for k in order] == [1.0, 2.0, 3.0]
+
+
+@settings(max_examples=60)
+@given(st.integers(0, 2**31 - 1), st.integers(0, 12))
+def test_near_way_takes_the_robots_within_reach_of_the_objects_way(seed, n):
+    """The robots ``Fleet.plan_failed`` takes into a team whose planner failed: those
+    within ``GROW_REACH`` of the hull of the object's footprints now and at its goal grown
+    by a robot diameter (brute force: distance to each footprint's hull), in pool order;
+    none farther."""
+    rng = np.random.default_rng(seed)
+    box = Rectangle((0.4, 0.3))
+    start, goal = rng.uniform(1, 9, 3), rng.uniform(1, 9, 3)
+    scene = Scene("open", (10.0, 10.0), ((0.5, 0.5),), (SceneObject(box, tuple(start),
+                                                                     tuple(goal)),), (), R)
+    robots = rng.uniform(0, 10, (n, 2))
+    pool = [int(i) for i in rng.permutation(n)]
+    hull = shapely.union_all([to_shapely(box, start), to_shapely(box, goal)]).convex_hull
+    want = [i for i in pool if hull.distance(shapely.Point(robots[i])) <= GROW_REACH + 2 * R]
+    got = near_way(scene, 0, start, pool, robots)
+    assert got == want or all(  # a robot on the reach's edge may fall either way (the
+        # buffer is a polygon)
+        abs(hull.distance(shapely.Point(robots[i])) - GROW_REACH - 2 * R) < 1e-3
+        for i in set(got) ^ set(want))
 
 
 # ------------------------------------------------------------------ space-time

@@ -54,7 +54,7 @@ from lamp.fleet.objects import given_up
 from lamp.fleet.regions import claim
 from lamp.fleet.segments import Segment, on_grid
 from lamp.fleet.state import ObjectState
-from lamp.fleet.teams import allocate, nearest, reinforce, start_order
+from lamp.fleet.teams import allocate, near_way, nearest, reinforce, start_order
 from lamp.fleet.turns import Turns
 from lamp.fleet.utilisation import RobotTime
 from lamp.fleet.view import FleetExecution, FleetView
@@ -445,12 +445,12 @@ class Fleet:
             shapely.prepare(o.claim)
 
     def plan_failed(self, k: int) -> bool:
-        """Object ``k``'s planner found no plan: free robots join its team (True: plan
-        anew), else wait for the world to change (True: it did) unless nothing else can
-        change it (False: go on as alone)."""
+        """Object ``k``'s planner found no plan: free robots near its way join its team
+        (``teams.near_way``; True: plan anew), else wait for the world to change (True:
+        it did) unless nothing else can change it (False: go on as alone)."""
         o = self.objects[k]
-        free = self._free()
-        if free:  # robots nobody needs: they join (and stand in nobody's way)
+        ex = self.executor
+        if free := near_way(self.scene, k, ex.object_poses[k], self._free(), ex.robot_positions):
             self._reteam(o, [*o.team, *free], "grown")
             return True
         if not any(other.index != k and other.status in ("active", "waiting")

@@ -30,11 +30,15 @@ from lamp.contract.model import MAX_ROBOTS
 from lamp.geometry.shapes import to_shapely
 from lamp.scene.model import Scene, Shape
 
-__all__ = ["MIN_TEAM", "allocate", "corridor", "in_the_way", "least_conflict_order", "nearest",
-           "chain_depths", "planar_distance", "reinforce", "start_order"]
+__all__ = ["GROW_REACH", "MIN_TEAM", "allocate", "chain_depths", "corridor", "in_the_way",
+           "least_conflict_order", "near_way", "nearest", "planar_distance", "reinforce",
+           "start_order"]
 
 #: The smallest sub-team an object starts with while other objects are moving.
 MIN_TEAM = 2
+#: Free robots this close (m) to an object's way join its team when its planner finds no
+#: plan (:func:`near_way`): they may stand in its way; robots farther off do not.
+GROW_REACH = 1.0
 
 
 def planar_distance(a: np.ndarray, b: np.ndarray) -> float:
@@ -187,3 +191,13 @@ def start_order(scene: Scene, poses: np.ndarray, candidates: Sequence[int],
                                for k in candidates},
                         {k: poses[k] for k in candidates}, {k: objs[k].goal for k in candidates})
     return least_conflict_order(candidates, ways, busy, blocks)
+
+
+def near_way(scene: Scene, k: int, pose: np.ndarray, pool: Sequence[int],
+             robot_positions: np.ndarray, reach: float = GROW_REACH) -> list[int]:
+    """The robots of ``pool`` (in order) whose centre lies within ``reach`` of object
+    ``k``'s way from ``pose`` to its goal (:func:`corridor`)."""
+    obj = scene.objects[k]
+    way = corridor(obj.shape, pose, obj.goal, scene.robot_radius)
+    pts = shapely.points(np.asarray(robot_positions, float)[list(pool)].reshape(-1, 2))
+    return [i for i, d in zip(pool, shapely.distance(way, pts), strict=True) if d <= reach]
