@@ -51,3 +51,30 @@ def test_pairwise_min_distance_matches_brute_force(b, t, seed) -> None:
     brute = min((np.linalg.norm(paths[i, k] - paths[j, k])
                  for i in range(b) for j in range(i + 1, b) for k in range(t)), default=np.inf)
     assert np.isclose(pairwise_min_distance(paths), brute)
+
+
+def test_a_closed_task_is_freed_by_reference_counting_alone() -> None:
+    """``ManipulationTask.close`` breaks the task <-> Verifier cycle: with the garbage
+    collector off, a closed task that was used (its caches filled) is freed as soon as
+    its last name goes; an unclosed one is not."""
+    import gc
+    import weakref
+
+    def used_task(close: bool) -> weakref.ref:
+        task = ManipulationTask(SCENE, 0, SCENE.object_starts(), GeometricProposer(),
+                                PlannerConfig(), seed=0)
+        q = np.asarray(SCENE.object_starts()[0], float)
+        task.robot_space_at(q, task.window(q))  # fills the robot-space cache
+        ref = weakref.ref(task)
+        if close:
+            task.close()
+        return ref
+
+    gc.collect()
+    gc.disable()
+    try:
+        assert used_task(close=True)() is None
+        assert used_task(close=False)() is not None  # the cycle holds it
+    finally:
+        gc.enable()
+        gc.collect()

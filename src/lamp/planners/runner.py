@@ -85,6 +85,7 @@ class ClosedLoopRunner:
         result = run_object(task, self.factory(task), self.policy, executor, record,
                             observer=observe)
         self.totals.add(task.stats)
+        task.close()
         self.watch_stops += record.watch_stops
         return ObjectOutcome(result, record.planning_time_s, record.makespan,
                              record.unexecuted_planning_s)
