@@ -12,7 +12,7 @@ robot whose route to the object's staging area is at least ``HANDOVER_GAIN`` sho
 (routes as transit drives them, ``transit.routes``). The team's loop ends
 (``team_changed``), the object plans anew with its new team, and the far robot is free
 where it stands. Teams larger than the model's budget (a blocked planner's, which took
-every free robot) are left alone.
+the free robots near its way) are left alone.
 
 :func:`swaps` chooses the pairs: as many as possible, from the free robots nearest by
 route (tested against a brute force).
