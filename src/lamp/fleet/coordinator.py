@@ -283,7 +283,6 @@ class Fleet:
                               self.executor.robot_positions, still, moving)
 
     def _meets_moving(self, seg: Segment) -> str | None:
-        """Why ``seg`` must wait (``admission.meets_moving``), None if it need not."""
         rank = self.objects[seg.index].rank
         running = [o.running for o in self.objects if o.running is not None
                    and o.index != seg.index]
@@ -449,8 +448,9 @@ class Fleet:
         (``teams.near_way``; True: plan anew), else wait for the world to change (True:
         it did) unless nothing else can change it (False: go on as alone)."""
         o = self.objects[k]
-        ex = self.executor
-        if free := near_way(self.scene, k, ex.object_poses[k], self._free(), ex.robot_positions):
+        ex, free = self.executor, self._free()  # its pose read (a sensor draw) only if any
+        if free and (free := near_way(self.scene, k, ex.object_poses[k], free,
+                                      ex.robot_positions)):
             self._reteam(o, [*o.team, *free], "grown")
             return True
         if not any(other.index != k and other.status in ("active", "waiting")
