@@ -438,8 +438,8 @@ class Fleet:
         o = self.objects[k]
         o.announced = np.asarray(segment, float)
         poses = np.concatenate([o.announced, np.asarray(rest, float).reshape(-1, 3)])
-        o.claim, o.exempt = claim(self.scene.objects[k].shape, poses, self.scene.robot_radius), \
-            frozenset()
+        o.claim = claim(self.scene.objects[k].shape, poses, self.scene.robot_radius)
+        o.exempt = frozenset()  # a new plan's claim binds everyone
         if o.claim is not None:
             shapely.prepare(o.claim)
 
@@ -448,7 +448,7 @@ class Fleet:
         (``teams.near_way``; True: plan anew), else wait for the world to change (True:
         it did) unless nothing else can change it (False: go on as alone)."""
         o = self.objects[k]
-        ex, free = self.executor, self._free()  # its pose read (a sensor draw) only if any
+        ex, free = self.executor, self._free()  # the pose (a sensor draw) read only if any
         if free and (free := near_way(self.scene, k, ex.object_poses[k], free,
                                       ex.robot_positions)):
             self._reteam(o, [*o.team, *free], "grown")
