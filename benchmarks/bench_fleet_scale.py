@@ -2,7 +2,9 @@
 
 Scenes come from ``lamp.suites.fleet.generate_custom`` (the family's generator and checks,
 any size): one map kind and size, robots and objects scaled together, three robots per
-object by default. Each point is one ``lamp run --schedule concurrent --record`` in its own
+object by default; or, with ``--map``, from ``generate_on_map`` on a map the family never
+saw (a scene file, or a Moving AI grid map such as ``../shared/data/mapf/den520d.map``
+with ``--cell`` metres per cell). Each point is one ``lamp run --schedule concurrent --record`` in its own
 process (LAMP-Lazy, seed 0); printed per point: objects placed, makespan (simulated s),
 wall time, planning per executed segment, planning in all, peak RSS of the process, and
 the violations the independent safety check finds in the recording
@@ -10,6 +12,7 @@ the violations the independent safety check finds in the recording
 
     python benchmarks/bench_fleet_scale.py [--kind aisles] [--size 40 30]
         [--points 12x4 24x8 48x16 96x32] [--time-cap 1800] [--out DIR]
+    python benchmarks/bench_fleet_scale.py --map MAP [--cell 0.5] --points 18x6 36x12
 
 Finished points are kept in ``DIR`` and not rerun (delete a point's folder to rerun it).
 """
@@ -28,7 +31,8 @@ from pathlib import Path
 
 from lamp.record.safety import check_run_dir
 from lamp.scene.save import save_scene
-from lamp.suites.fleet import KINDS, generate_custom
+from lamp.suites.cli import map_scene
+from lamp.suites.fleet import KINDS, generate_custom, generate_on_map
 
 
 def point(text: str) -> tuple[int, int]:
@@ -65,6 +69,10 @@ def main() -> None:
                     help="fleet map kind (default: aisles)")
     ap.add_argument("--size", type=float, nargs=2, default=[40.0, 30.0], metavar=("W", "H"),
                     help="map size in metres (default: 40 30)")
+    ap.add_argument("--map", type=Path, help="a scene file or Moving AI .map to put the "
+                    "objects on instead of a generated map (--kind and --size unused)")
+    ap.add_argument("--cell", type=float, default=0.5,
+                    help="side of a .map file's cells in metres (default: 0.5)")
     ap.add_argument("--points", nargs="+", type=point,
                     default=[(12, 4), (24, 8), (48, 16), (96, 32)],
                     help="ROBOTSxOBJECTS per point (default: 12x4 24x8 48x16 96x32)")
@@ -73,7 +81,16 @@ def main() -> None:
     ap.add_argument("--out", type=Path, default=Path("fleet-scale"), help="output folder")
     args = ap.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
-    print(f"{args.kind} {args.size[0]:g} x {args.size[1]:g} m, LAMP-Lazy concurrent, seed 0")
+    try:
+        base = None if args.map is None else map_scene(args.map, args.cell)
+    except ValueError as err:  # InputError: names the file and what is wrong
+        ap.error(str(err))
+    if base is None:
+        print(f"{args.kind} {args.size[0]:g} x {args.size[1]:g} m, LAMP-Lazy concurrent, "
+              "seed 0")
+    else:
+        W, H = base.workspace
+        print(f"{args.map.name} ({W:g} x {H:g} m), LAMP-Lazy concurrent, seed 0")
     print("robots | objects | placed | makespan (s) | wall (s) | plan/seg (s) | "
           "plan total (s) | peak RSS (GB) | safety violations")
     first = None
@@ -82,7 +99,8 @@ def main() -> None:
         done = folder / "point.json"
         if not done.exists():
             try:
-                gen = generate_custom(args.kind, tuple(args.size), n_objects, n_robots)
+                gen = (generate_custom(args.kind, tuple(args.size), n_objects, n_robots)
+                       if base is None else generate_on_map(base, n_objects, n_robots))
             except ValueError as err:
                 ap.error(str(err))
             folder.mkdir(exist_ok=True)

@@ -303,6 +303,91 @@ def test_custom_scenes_refuse_bad_arguments_by_name(args, what):
         F.generate_custom(*args)
 
 
+# A small Moving AI grid map (8 x 6 m at 0.5 m a cell): two walls with gaps, a pillar.
+GRID_MAP = """type octile
+height 12
+width 16
+map
+................
+................
+................
+.....@@@@@@.....
+.....@..........
+.....@..........
+..........@@....
+..........@@....
+................
+@@@@@@@@@@@@..@@
+................
+................
+"""
+
+
+def _grid_map(tmp_path, text: str = GRID_MAP):
+    path = tmp_path / "hall.map"
+    path.write_text(text)
+    return path
+
+
+def test_fleet_scenes_on_a_users_map_keep_the_guarantees(tmp_path):
+    """``generate_on_map``: the map's workspace and obstacles exactly, the counts asked
+    for, deterministic in its arguments and in the map, every clearance re-checked with
+    Shapely, every object's route certified."""
+    from lamp.scene.mapf import load_grid_map
+
+    base = load_grid_map(_grid_map(tmp_path), 0.5).scene
+    g = F.generate_on_map(base, 3, 6)
+    assert g.scene_dict == F.generate_on_map(base, 3, 6).scene_dict
+    assert F.generate_on_map(base, 3, 6, seed=1).scene_dict != g.scene_dict
+    other = load_grid_map(_grid_map(tmp_path, GRID_MAP.replace("..@@....", "........")), 0.5)
+    assert F.generate_on_map(other.scene, 3, 6).scene_dict["objects"] != g.scene_dict["objects"]
+    sc = g.scene
+    assert sc.obstacles == base.obstacles and sc.workspace == base.workspace == (8.0, 6.0)
+    assert (sc.n_robots, len(sc.objects), sc.schedule) == (6, 3, "concurrent")
+    _assert_clearances(g)
+    assert len(g.reports) == 3
+    for rep in g.reports:
+        assert rep.route.min_clearance >= C.ROBOT_ROOM and rep.reach.all_reach
+
+
+def test_fleet_scenes_on_a_scene_file_keep_its_physics_and_refuse_bad_input(tmp_path):
+    from dataclasses import replace
+
+    from lamp.scene.physics import Physics
+
+    base = F.generate_custom("yard", (9.0, 7.0), 3, 4).scene
+    base = replace(base, physics=replace(Physics(), robot_speed=0.3), name="mine")
+    g = F.generate_on_map(base, 2, 4)
+    assert g.scene.physics.robot_speed == 0.3 and g.scene.obstacles == base.obstacles
+    assert g.scene_dict["name"].startswith("mine-fleet-")
+    assert load_scene(save_scene(g.scene, tmp_path / "g.yaml")) == g.scene
+    for bad, what in (((replace(base, robot_radius=0.08), 2, 4), "radius"),
+                      ((base, 0, 4), "n_objects"), ((base, 3, 2), "n_robots")):
+        with pytest.raises(ValueError, match=what):
+            F.generate_on_map(*bad)
+
+
+def test_cli_writes_a_fleet_scene_on_a_users_map_and_refuses_bad_input(tmp_path):
+    from lamp.cli import app
+    from lamp.scene.mapf import load_grid_map
+
+    grid, out = _grid_map(tmp_path), tmp_path / "on-map.yaml"
+    res = CliRunner().invoke(app, ["suite", "fleet-scene", str(out), "--map", str(grid),
+                                   "--objects", "3", "--robots", "6"])
+    assert res.exit_code == 0, res.output
+    want = F.generate_on_map(load_grid_map(grid, 0.5).scene, 3, 6).scene
+    assert load_scene(out).to_dict() == want.to_dict()
+    for bad, what in ((["--kind", "yard"], "--kind"), (["--cell", "-1"], "cell"),
+                      (["--robots", "2"], "n_robots"), (["--cell", "0.1"], "--cell")):
+        target = tmp_path / f"bad{len(what)}.yaml"
+        res = CliRunner().invoke(app, ["suite", "fleet-scene", str(target), "--map", str(grid),
+                                       "--objects", "3", *bad])
+        assert res.exit_code == 2 and what in res.output and not target.exists(), res.output
+    res = CliRunner().invoke(app, ["suite", "fleet-scene", str(out), "--map",
+                                   str(tmp_path / "none.map")])
+    assert res.exit_code == 2 and "none.map" in res.output
+
+
 def test_object_reports(generated):
     for g in generated:
         for rep in g.reports:

@@ -4,11 +4,15 @@ scene of any size."""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import typer
 
 from lamp.cli_support import fail_input, lamp_typer
 from lamp.suites.registry import SUITES, export_suite, suite_files
+
+if TYPE_CHECKING:
+    from lamp.scene.model import Scene
 
 suite_app = lamp_typer(help="Built-in benchmark suites.", no_args_is_help=True)
 
@@ -46,28 +50,63 @@ def export_command(
 @suite_app.command("fleet-scene")
 def fleet_scene_command(
     out: Path = typer.Argument(..., help="Scene file to write (.yaml, .yml or .json)."),
-    kind: str = typer.Option("aisles", "--kind", help="Map kind: rooms, aisles, yard, swap "
-                             "or after (the fleet family's)."),
-    size: tuple[float, float] = typer.Option((40.0, 30.0), "--size",
-                                             help="Map width and height (m), 6-150 each."),
+    kind: str | None = typer.Option(None, "--kind", help="Map kind: rooms, aisles (the "
+                                    "default), yard, swap or after (the fleet family's)."),
+    size: tuple[float, float] | None = typer.Option(
+        None, "--size", help="Map width and height (m), 6-150 each [default: 40 30]."),
+    on_map: Path | None = typer.Option(
+        None, "--map", help="Put the objects on this map instead: a scene file (its "
+        "workspace, obstacles and physics) or a Moving AI grid map (.map).",
+        show_default=False),
+    cell: float = typer.Option(0.5, "--cell", help="Side (m) of a .map file's cells."),
     objects: int = typer.Option(16, "--objects", help="Objects to move."),
     robots: int = typer.Option(48, "--robots", help="Robots (at least one per object)."),
     seed: int = typer.Option(0, "--seed", help="Generator seed."),
 ) -> None:
-    """Generate a scene of the ``fleet`` family's kinds at any size (its generator and
-    checks: every object has a certified route and reachable contacts) and write it to
-    OUT, with ``schedule: concurrent``."""
+    """Generate a scene of the ``fleet`` family's kinds at any size, or on your own map
+    (``--map``), with its generator and checks (every object has a certified route and
+    reachable contacts), and write it to OUT, with ``schedule: concurrent``."""
+    from lamp.errors import InputError
     from lamp.scene.save import save_scene
-    from lamp.suites.fleet import generate_custom
+    from lamp.suites.fleet import generate_custom, generate_on_map
 
+    if on_map is not None and (kind is not None or size is not None):
+        fail_input("--map takes the map's own workspace and obstacles: leave out --kind "
+                   "and --size")
+    base = None
+    if on_map is not None:
+        try:
+            base = map_scene(on_map, cell)
+        except InputError as exc:  # names the file (and the field, row or cell)
+            fail_input(str(exc))
     try:
-        gen = generate_custom(kind, size, objects, robots, seed)
+        if base is None:
+            gen = generate_custom(kind or "aisles", size or (40.0, 30.0), objects, robots, seed)
+        else:
+            try:
+                gen = generate_on_map(base, objects, robots, seed)
+            except ValueError as exc:
+                raise ValueError(f"{on_map}: {exc}") from exc
         save_scene(gen.scene, out)
     except ValueError as exc:
         fail_input(str(exc))
     except RuntimeError as exc:  # no draw passed the checks: too many objects for the map
-        fail_input(f"{exc}; try a larger --size or fewer --objects")
+        more = "a larger --size" if base is None else "a larger --cell"
+        fail_input(f"{exc}; try {more} or fewer --objects")
     except OSError as exc:
         fail_input(f"cannot write {out}: {exc.strerror or exc}")
+    W, H = gen.scene.workspace
     typer.echo(f"wrote {out}: {gen.scene.name}, {robots} robots, {objects} objects, "
-               f"{size[0]:g} x {size[1]:g} m")
+               f"{W:g} x {H:g} m")
+
+
+def map_scene(path: Path, cell: float) -> Scene:
+    """The map at ``path``: a Moving AI grid map (``.map``, cells of ``cell`` m) or a
+    scene file; ``InputError`` names what is wrong."""
+    if path.suffix.lower() == ".map":
+        from lamp.scene.mapf import load_grid_map
+
+        return load_grid_map(path, cell).scene
+    from lamp.scene.loader import load_scene
+
+    return load_scene(path)

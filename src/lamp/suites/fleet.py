@@ -35,6 +35,11 @@ blocker is placed). A drawn attempt that fails anything is redrawn from the same
 so a scene is a pure function of its index: ``np.random.default_rng([SUITE_SEED, STREAM,
 index])``.
 
+Beyond the family: :func:`generate_custom` draws a kind at any size, and
+:func:`generate_on_map` puts the yard kind's objects and robots on a map of the user's (a
+scene file's obstacles, or a Moving AI grid map of ``lamp.scene.mapf``), with the same
+checks (``lamp suite fleet-scene``).
+
 Routes are searched on a ``RESOLUTION`` lattice (``COARSE_RESOLUTION`` on maps over
 ``COARSE_ABOVE`` m a side) with ``N_HEADINGS`` headings per period; robot reach on a
 ``REACH_RESOLUTION`` grid. A coarse lattice can only miss routes, never report a false one.
@@ -43,13 +48,16 @@ Routes are searched on a ``RESOLUTION`` lattice (``COARSE_RESOLUTION`` on maps o
 from __future__ import annotations
 
 import hashlib
+import json
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 
-from lamp.scene.model import Scene
+from lamp.scene.loader import scene_from_dict
+from lamp.scene.model import Obstacle, Scene, Shape
+from lamp.suites import checks as C
 from lamp.suites import fleet_checks as FC
 from lamp.suites import fleet_layout as FL
 from lamp.suites import fleet_open as FO
@@ -82,10 +90,12 @@ MAX_ATTEMPTS = 30
 CUSTOM_MAX_SIDE = 150.0
 CUSTOM_MAX_OBJECTS = 200
 CUSTOM_MAX_ROBOTS = 1000
+#: draws of one object on a user's map until its route passes (``generate_on_map``)
+MAP_TRIES = 10
 
 __all__ = ["END_CLEARANCE", "KINDS", "LEVELS", "NAME", "N_SCENES", "OBJECTS", "OBJECT_GAP",
-           "GeneratedFleet", "generate_custom", "generate_scene", "manifest_entry",
-           "scene_name"]
+           "GeneratedFleet", "generate_custom", "generate_on_map", "generate_scene",
+           "manifest_entry", "scene_name"]
 
 
 def scene_name(index: int) -> str:
@@ -240,18 +250,73 @@ def generate_custom(kind: str, workspace: tuple[float, float], n_objects: int,
     return _draw(rng, -1, name, kind, {"custom": True}, (W, H), objects, n_robots)
 
 
+def generate_on_map(base: Scene, n_objects: int, n_robots: int,
+                    seed: int = 0) -> GeneratedFleet:
+    """A fleet scene on ``base``'s map (a user's scene file, or a grid map of
+    ``lamp.scene.mapf``): its workspace, obstacles and physics, with ``n_objects`` new
+    objects of the ``yard`` kind's shapes, each going 1.5-12 m in any direction
+    (``fleet_open.layout_on``), and ``n_robots`` robots near them; ``base``'s own robots
+    and objects are not used. Every guarantee of the module docstring holds;
+    deterministic in its arguments (the stream hashes the map). ValueError names a bad
+    argument; RuntimeError as :func:`generate_scene` when no draw passes the checks."""
+    W, H = (float(v) for v in base.workspace)
+    if max(W, H) > CUSTOM_MAX_SIDE:
+        raise ValueError(f"workspace sides must be at most {CUSTOM_MAX_SIDE:g} m, "
+                         f"got {W:g} x {H:g}")
+    if abs(base.robot_radius - ROBOT_RADIUS) > 1e-9:
+        raise ValueError(f"robots.radius must be {ROBOT_RADIUS:g} m (the robots the checks "
+                         f"place), got {base.robot_radius:g}")
+    if not 1 <= n_objects <= CUSTOM_MAX_OBJECTS:
+        raise ValueError(f"n_objects must be 1-{CUSTOM_MAX_OBJECTS}, got {n_objects}")
+    if not n_objects <= n_robots <= CUSTOM_MAX_ROBOTS:
+        raise ValueError(f"n_robots must be {n_objects}-{CUSTOM_MAX_ROBOTS} (one per object "
+                         f"at least), got {n_robots}")
+    d = base.to_dict()
+    obstacles = d["obstacles"]
+    digest = hashlib.sha256(json.dumps([d["workspace"], obstacles]).encode()).digest()
+    rng = np.random.default_rng([SUITE_SEED, STREAM, 2_000_000 + seed, n_objects, n_robots,
+                                 int.from_bytes(digest[:4], "little")])
+    objects = sample_objects(rng, "yard", n_objects)
+    name = f"{base.name}-fleet-{n_robots}r{n_objects}o-s{seed}"
+
+    def route_ok(obj: FL.FleetObject, start: np.ndarray, goal: np.ndarray,
+                 placed: list[tuple[Shape, np.ndarray]]) -> bool:
+        """A robot-room route with the objects before it at their starts and goals (the
+        checks' world so far): on a cluttered map one object is drawn again, not all."""
+        world = C.build_world((W, H), [*base.obstacles, *(Obstacle(shape, tuple(pose))
+                                                         for shape, pose in placed)])
+        finder = C.RouteFinder(obj.geom, world, resolution_for((W, H)), N_HEADINGS)
+        return finder.find(start, goal, C.ROBOT_ROOM) is not None
+
+    def layout(rng: np.random.Generator, ws: tuple[float, float],
+               objects: list[FL.FleetObject]) -> FL.FleetLayout | None:
+        return FO.layout_on(rng, ws, objects, obstacles, {"map": base.name}, route_ok,
+                            MAP_TRIES)
+
+    gen = _draw(rng, -1, name, "map", {"custom": True}, (W, H), objects, n_robots, layout)
+    extra = {k: v for k, v in d["robots"].items() if k not in ("radius", "starts")}
+    if not extra and "physics" not in d:
+        return gen
+    out = dict(gen.scene_dict)
+    out["robots"] = {**out["robots"], **extra}
+    if "physics" in d:
+        out["physics"] = d["physics"]
+    return replace(gen, scene_dict=out, scene=scene_from_dict(out, source=out["name"]))
+
+
 def _draw(rng: np.random.Generator, index: int, name: str, kind: str, tag: dict[str, Any],
-          ws: tuple[float, float], objects: list[FL.FleetObject],
-          n_robots: int) -> GeneratedFleet:
-    """Lay out ``objects`` and ``n_robots`` robots on a ``kind`` map until a draw passes
-    every check (at most ``MAX_ATTEMPTS``, each from ``rng`` onwards)."""
+          ws: tuple[float, float], objects: list[FL.FleetObject], n_robots: int,
+          layout: Callable[..., FL.FleetLayout | None] | None = None) -> GeneratedFleet:
+    """Lay out ``objects`` and ``n_robots`` robots on a ``kind`` map (or with ``layout``)
+    until a draw passes every check (at most ``MAX_ATTEMPTS``, each from ``rng``
+    onwards)."""
     rejected: dict[str, int] = {}
 
     def reject(why: str) -> None:
         rejected[why] = rejected.get(why, 0) + 1
 
     for attempt in range(1, MAX_ATTEMPTS + 1):
-        lay = LAYOUTS[kind](rng, ws, objects)
+        lay = (layout or LAYOUTS[kind])(rng, ws, objects)
         if lay is None:
             reject("objects do not fit")
             continue

@@ -139,6 +139,10 @@ class Placer:
         self._geoms.append(to_shapely(obj.geom, pose))
         return pose
 
+    def forget(self, n: int) -> None:
+        """Take back the last ``n`` poses added."""
+        del self.footprints[len(self.footprints) - n:], self._geoms[len(self._geoms) - n:]
+
     def place(self, obj: FleetObject, pose: np.ndarray, zones: bool = True) -> np.ndarray | None:
         """``pose`` (rounded) added when it fits, else None."""
         pose = np.array([rnd(pose[0]), rnd(pose[1]), rnd(pose[2], 4)])

@@ -5,12 +5,14 @@ Starts and goals are placed by ``fleet_layout.Placer`` (its guarantees hold)."""
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 import shapely
 
 from lamp.geometry.shapes import to_shapely
+from lamp.scene.model import Shape
 from lamp.suites.fleet_layout import (
     DOOR_APPROACH,
     FleetLayout,
@@ -21,6 +23,9 @@ from lamp.suites.fleet_layout import (
     wall,
 )
 from lamp.suites.layout import circle, obstacles_of, rect, rnd
+
+#: ``layout_on``'s route test: (object, start, goal, footprints placed before it) -> ok
+RouteTest = Callable[[FleetObject, np.ndarray, np.ndarray, list[tuple[Shape, np.ndarray]]], bool]
 
 
 def scatter(rng: np.random.Generator, ws: tuple[float, float], count: int, gap: float,
@@ -65,20 +70,36 @@ def layout_yard(rng: np.random.Generator, ws: tuple[float, float],
     W, H = ws
     count = min(150, int(W * H * rng.uniform(0.02, 0.05)))
     obstacles = scatter(rng, ws, count, 1.2, [])
+    return layout_on(rng, ws, objects, obstacles, {"yard_obstacles": len(obstacles)})
+
+
+def layout_on(rng: np.random.Generator, ws: tuple[float, float], objects: list[FleetObject],
+              obstacles: list[dict[str, Any]], info: dict[str, Any],
+              route_ok: RouteTest | None = None, tries: int = 1) -> FleetLayout | None:
+    """The objects on a map with these ``obstacles`` (a yard's, or a user's map): each
+    starts anywhere and goes 1.5 m to min(12 m, 0.7 x the longer side) in any direction;
+    with ``route_ok(obj, start, goal, placed)`` (``placed``: the footprints of the objects
+    before it) an object is drawn again, up to ``tries`` times in all, until it passes.
+    None when one does not fit."""
+    W, H = ws
     placer = Placer(ws, obstacles)
     starts, goals = [], []
     reach = min(12.0, 0.7 * max(W, H))
     for obj in objects:
-        s = placer.sample(rng, obj, (0.0, 0.0, W, H))
-        if s is None:
-            return None
-        g = placer.sample(rng, obj, (0.0, 0.0, W, H), near=(s[0], s[1], 1.5, reach))
-        if g is None:
+        for _ in range(tries):
+            s = placer.sample(rng, obj, (0.0, 0.0, W, H))
+            if s is None:
+                return None
+            g = placer.sample(rng, obj, (0.0, 0.0, W, H), near=(s[0], s[1], 1.5, reach))
+            if g is not None and (route_ok is None
+                                  or route_ok(obj, s, g, placer.footprints[:-2])):
+                break
+            placer.forget(1 if g is None else 2)
+        else:
             return None
         starts.append(s)
         goals.append(g)
-    return FleetLayout(ws, obstacles, objects, starts, goals, placer,
-                       {"yard_obstacles": len(obstacles)})
+    return FleetLayout(ws, obstacles, objects, starts, goals, placer, info)
 
 
 def layout_swap(rng: np.random.Generator, ws: tuple[float, float],
