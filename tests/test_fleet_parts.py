@@ -17,7 +17,16 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from lamp.contract.model import MAX_ROBOTS
-from lamp.fleet.regions import OBJECT_MARGIN, ROBOT_MARGIN, claim, footprints, swept
+from lamp.fleet.admission import CROSSING, crosses, meets_moving
+from lamp.fleet.regions import (
+    CLAIM_NEAR,
+    OBJECT_MARGIN,
+    ROBOT_MARGIN,
+    claim,
+    claims,
+    footprints,
+    swept,
+)
 from lamp.fleet.segments import Segment, on_grid
 from lamp.fleet.spacetime import compatible
 from lamp.fleet.teams import (
@@ -513,6 +522,51 @@ def test_claim_covers_the_planned_footprints_and_room_for_pushers() -> None:
     for q in poses:
         assert c.contains(to_shapely(BOX, q).buffer(2 * R))
     assert claim(BOX, np.zeros((0, 3)), R) is None
+
+
+def test_claims_near_part_is_the_claim_of_the_first_metres_of_travel() -> None:
+    """``claims``: the claim of the whole plan, the claim of the poses within
+    ``CLAIM_NEAR`` m of travel (the whole claim for a shorter plan), and the way through
+    the poses on to the goal."""
+    poses = np.array([[x, 1.0, 0.0] for x in np.arange(0.0, 8.01, 0.25)])
+    full, near, way = claims(BOX, poses, [9.0, 1.0, 0.0], R)
+    assert full.equals(claim(BOX, poses, R))
+    assert near.equals(claim(BOX, poses[poses[:, 0] <= CLAIM_NEAR + 1e-9], R))
+    assert shapely.area(shapely.difference(near, full)) < 1e-9 < shapely.area(full) - shapely.area(near)
+    assert shapely.get_coordinates(way)[-1].tolist() == [9.0, 1.0]
+    short = claims(BOX, poses[:4], [1.0, 1.0, 0.0], R)
+    assert short[0] is short[1]
+    assert claims(BOX, np.zeros((0, 3)), [0.0, 0.0, 0.0], R) == (None, None, None)
+
+
+def test_a_plan_that_crosses_a_higher_claim_heeds_only_its_near_part() -> None:
+    """``meets_moving``: a segment that ends deeper in a higher-ranked object's claim
+    waits, unless its own way crosses the claim (``crosses``: its goal outside, at most
+    ``CROSSING`` m inside) and it ends beyond the claim's near part; a way that runs
+    along the claim, or ends in it, heeds all of it."""
+    corridor = np.array([[x, 1.0, 0.0] for x in np.arange(0.0, 10.01, 0.25)])
+    full, near, _ = claims(BOX, corridor, [10.0, 1.0, 0.0], R)
+    higher = [(0, full, near)]
+
+    def into(x: float, way: list[list[float]]) -> tuple[Segment, shapely.Geometry]:
+        q0, q1 = np.array([x, 0.0, 0.0]), np.array([x, 0.9, 0.0])  # up into the claim
+        rows = np.linspace(q0[:2] - [0.0, 0.2], q1[:2] - [0.0, 0.2], 20)[None]
+        return (Segment(1, [0], rows, np.array([q0, q1]), None, BOX, R),
+                shapely.LineString(way))
+
+    across = [[0.0, 0.0], [0.0, 2.2]]  # up through the corridor, goal beyond it
+    for x, want in ((7.0, None), (1.0, "claim 0")):  # far ahead / within CLAIM_NEAR
+        seg, way = into(x, [[x + a, b] for a, b in across])
+        assert crosses(way, full)
+        assert meets_moving(seg, [], higher, way) == want
+        assert meets_moving(seg, [], higher) == "claim 0"  # no way known: the whole claim
+    seg, _ = into(7.0, [])
+    along = shapely.LineString([[7.0, 0.0], [7.0, 1.0], [2.0, 1.0], [2.0, 2.2]])
+    stops = shapely.LineString([[7.0, 0.0], [7.0, 1.0]])
+    assert shapely.length(shapely.intersection(along, full)) > CROSSING
+    for way in (along, stops):
+        assert not crosses(way, full)
+        assert meets_moving(seg, [], higher, way) == "claim 0"
 
 
 def test_limit_reached_names_the_limit_that_ends_an_object() -> None:

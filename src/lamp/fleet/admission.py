@@ -5,7 +5,10 @@
   the plan, so the segment is declined and its loop plans anew.
 - :func:`meets_moving`: it cannot run beside a running segment (``spacetime.compatible``),
   or it would leave its object and robots deeper inside a higher-ranked object's claim
-  than they were (``CLAIM_AREA_SLACK`` of rounding): it waits for the next event.
+  than they were (``CLAIM_AREA_SLACK`` of rounding): it waits for the next event. A plan
+  that only crosses the claim (:func:`crosses`) keeps out of its near part only
+  (``regions.CLAIM_NEAR``): it may cross the other's way where that object will come
+  only later, but never run along it towards it, nor stop in it.
 - :func:`standing_in`: the objects standing in a claim, which a blocked object's claim
   does not bind (``Fleet.plan_failed``).
 """
@@ -22,11 +25,23 @@ from lamp.fleet.segments import Segment
 from lamp.fleet.spacetime import compatible
 from lamp.scene.model import Scene
 
-__all__ = ["CLAIM_AREA_SLACK", "meets_moving", "meets_standing", "standing_in"]
+__all__ = ["CLAIM_AREA_SLACK", "CROSSING", "crosses", "meets_moving", "meets_standing",
+           "standing_in"]
 
 #: A segment may end with this much more of its bodies' area (m^2) inside a higher claim
 #: than it started with (rounding of the footprints).
 CLAIM_AREA_SLACK = 1e-4
+#: A way that runs at most this far (m) inside a claim, and ends outside it, crosses it.
+CROSSING = 1.5
+
+
+def crosses(way: shapely.Geometry, region: shapely.Geometry) -> bool:
+    """Whether a plan's ``way`` (its centre's path to its goal, ``regions.claims``)
+    crosses ``region``: its goal lies outside it and at most ``CROSSING`` m of the way
+    inside."""
+    end = shapely.points(shapely.get_coordinates(way)[-1])
+    return (not region.intersects(end)
+            and float(shapely.length(shapely.intersection(way, region))) <= CROSSING)
 
 
 def meets_standing(seg: Segment, scene: Scene, object_poses: np.ndarray,
@@ -48,15 +63,18 @@ def meets_standing(seg: Segment, scene: Scene, object_poses: np.ndarray,
 
 
 def meets_moving(seg: Segment, running: Sequence[Segment],
-                 claims: Sequence[tuple[int, shapely.Geometry]]) -> str | None:
+                 claims: Sequence[tuple[int, shapely.Geometry, shapely.Geometry]],
+                 way: shapely.Geometry | None = None) -> str | None:
     """Why ``seg`` must wait: ``"running k"`` (it cannot run beside object k's running
     segment) or ``"claim k"`` (it would end deeper in object k's claim, ``claims`` being
-    the higher-ranked objects'); None when it need not."""
+    the higher-ranked objects' (index, claim, near part); only the near part when
+    ``seg``'s object's ``way`` crosses the claim); None when it need not."""
     for other in running:
         if not compatible(other, seg):
             return f"running {other.index}"
     ends = None
-    for k, region in claims:
+    for k, full, near in claims:
+        region = near if way is not None and crosses(way, full) else full
         ends = seg.ends() if ends is None else ends
         before, after = (float(shapely.area(shapely.intersection(g, region))) for g in ends)
         if after > before + CLAIM_AREA_SLACK:

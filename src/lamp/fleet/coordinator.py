@@ -9,8 +9,9 @@ simulator. Design (``docs/fleet.md``):
 - **Priority.** Objects rank in the order they started (the scene's order among those
   that start together); one with ``after`` starts once those objects are placed. A
   lower-priority segment may not end with its object and robots deeper in a higher
-  object's *claim* (the rest of its plan, ``regions.claim``) than they began (crossing
-  one, or leaving it, is allowed): loads never meet head-on in a door. The claim of an
+  object's *claim* (the rest of its plan, ``regions.claims``) than they began (crossing
+  one, or leaving it, is allowed; a plan that crosses its way heeds only its next
+  ``CLAIM_NEAR`` m): loads never meet head-on in a door. The claim of an
   object whose planner found no plan stays (its last plan's), binding only the objects
   outside it then: those in its way may leave or pass, no other comes to meet it.
 - **Admission.** A segment starts only if it is compatible with every running segment
@@ -51,7 +52,7 @@ from lamp.contract.runner import ObjectOutcome
 from lamp.fleet.admission import meets_moving, meets_standing, standing_in
 from lamp.fleet.handover import better_team
 from lamp.fleet.objects import given_up
-from lamp.fleet.regions import claim
+from lamp.fleet.regions import claims
 from lamp.fleet.segments import Segment, on_grid
 from lamp.fleet.state import ObjectState
 from lamp.fleet.teams import allocate, near_way, nearest, reinforce, start_order
@@ -286,9 +287,9 @@ class Fleet:
         rank = self.objects[seg.index].rank
         running = [o.running for o in self.objects if o.running is not None
                    and o.index != seg.index]
-        claims = [(o.index, o.claim) for o in self.objects if o.index != seg.index
+        claims = [(o.index, o.claim, o.near) for o in self.objects if o.index != seg.index
                   and o.rank < rank and o.claim is not None and seg.index not in o.exempt]
-        why = meets_moving(seg, running, claims)
+        why = meets_moving(seg, running, claims, self.objects[seg.index].way)
         if why:
             self.log.append((self.clock, "meets", seg.index, why))
         return why
@@ -438,10 +439,9 @@ class Fleet:
         o = self.objects[k]
         o.announced = np.asarray(segment, float)
         poses = np.concatenate([o.announced, np.asarray(rest, float).reshape(-1, 3)])
-        o.claim = claim(self.scene.objects[k].shape, poses, self.scene.robot_radius)
+        obj = self.scene.objects[k]
+        o.claim, o.near, o.way = claims(obj.shape, poses, obj.goal, self.scene.robot_radius)
         o.exempt = frozenset()  # a new plan's claim binds everyone
-        if o.claim is not None:
-            shapely.prepare(o.claim)
 
     def plan_failed(self, k: int) -> bool:
         """Object ``k``'s planner found no plan: free robots near its way join its team

@@ -30,8 +30,8 @@ from lamp.geometry.se2 import interpolate, pose_distance
 from lamp.geometry.shapes import to_shapely
 from lamp.scene.model import Shape
 
-__all__ = ["OBJECT_MARGIN", "ROBOT_MARGIN", "STATIC_SLACK", "claim", "footprints",
-           "robot_disks", "standing", "swept"]
+__all__ = ["CLAIM_NEAR", "OBJECT_MARGIN", "ROBOT_MARGIN", "STATIC_SLACK", "claim", "claims",
+           "footprints", "robot_disks", "standing", "swept"]
 
 #: Clearance (m) each moving robot keeps from another sub-team's space (half the gap).
 ROBOT_MARGIN = 0.01
@@ -40,6 +40,9 @@ ROBOT_MARGIN = 0.01
 OBJECT_MARGIN = 0.05
 #: A standing body is shrunk by this (m) before it is tested against a planned segment.
 STATIC_SLACK = 0.003
+#: The near part of a claim (:func:`claims`): the footprints along this much (m) of the
+#: object's planned travel, which even a plan that only crosses the claim keeps out of.
+CLAIM_NEAR = 2.0
 #: Planned object motion is sampled this finely (m, rad).
 POSE_STEP = 0.05
 TURN_STEP = 0.15
@@ -101,6 +104,25 @@ def claim(shape: Shape, poses: np.ndarray, robot_radius: float) -> shapely.Geome
     if len(poses) == 0:
         return None
     return footprints(shape, poses, 2.0 * robot_radius + OBJECT_MARGIN)
+
+
+def claims(shape: Shape, poses: np.ndarray, goal: np.ndarray, robot_radius: float
+           ) -> tuple[shapely.Geometry | None, shapely.Geometry | None, shapely.Geometry | None]:
+    """What an object's plan ``poses`` (P, 3) claims, prepared: its :func:`claim`, the
+    near part (the claim of the poses within ``CLAIM_NEAR`` m of planned travel from the
+    first; the whole claim when the plan is no longer) and its way (the centre's path
+    through the poses on to ``goal``, a line). (None, None, None) without poses."""
+    poses = np.asarray(poses, float).reshape(-1, 3)
+    if len(poses) == 0:
+        return None, None, None
+    travel = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(poses[:, :2], axis=0).T))])
+    n_near = max(1, int(np.searchsorted(travel, CLAIM_NEAR, side="right")))
+    full = claim(shape, poses, robot_radius)
+    near = full if n_near >= len(poses) else claim(shape, poses[:n_near], robot_radius)
+    way = shapely.LineString(np.vstack([poses[:, :2], np.asarray(goal, float)[None, :2]]))
+    for g in {id(g): g for g in (full, near, way)}.values():
+        shapely.prepare(g)
+    return full, near, way
 
 
 def standing(shape: Shape | None, pose: np.ndarray, robot_radius: float) -> shapely.Geometry:

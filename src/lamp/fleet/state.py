@@ -23,6 +23,9 @@ class ObjectState:
     status: str = "waiting"  # waiting -> active -> placed | failed
     team: list[int] = field(default_factory=list)
     claim: shapely.Geometry | None = None
+    #: its claim's near part and its way (``regions.claims``), with the claim
+    near: shapely.Geometry | None = None
+    way: shapely.Geometry | None = None
     #: objects its claim does not bind: those inside it when its planner failed
     exempt: frozenset[int] = frozenset()
     announced: np.ndarray | None = None  # the next segment's planned poses
