@@ -352,3 +352,43 @@ def test_a_blocked_objects_claim_binds_only_those_outside_it() -> None:
     assert fleet._meets_moving(deeper(2, 1.0)) == "claim 0"  # outside: may not come in
     fleet.objects[0].exempt = frozenset()
     assert fleet._meets_moving(deeper(1, 0.5)) == "claim 0"  # an ordinary claim binds both
+
+
+def test_an_announced_plan_claims_its_way_and_a_crossing_heeds_only_the_near_part() -> None:
+    """``Fleet.announce`` sets an object's claim, its near part and its way (on to its
+    goal, ``regions.claims``); ``Fleet._meets_moving`` hands the lower-ranked object's own
+    way to admission, so a segment that crosses a higher-ranked object's way far ahead
+    is admitted, and one that would stop in it is not."""
+    from types import SimpleNamespace
+
+    import numpy as np
+    import shapely
+
+    from lamp.fleet.coordinator import Fleet
+    from lamp.fleet.regions import CLAIM_NEAR
+    from lamp.fleet.segments import Segment
+
+    d = _two_boxes(9.0, (6.0, 0.5), 6.0)
+    d["objects"][1]["goal"] = [6.0, 2.5, 0.0]  # box 1 goes up, across the row of box 0
+    d["objects"][0]["goal"] = [8.0, 0.8, 0.0]  # box 0 runs along the row at y = 0.8
+    scene = scene_from_dict(d)
+    r = scene.robot_radius
+    executor = SimpleNamespace(object_poses=np.array([o.start for o in scene.objects]),
+                               robot_positions=np.array(scene.robot_starts, float))
+    fleet = Fleet(scene, executor, lambda f, k: None, lambda *a: None)
+    for k, o in enumerate(fleet.objects):
+        o.status, o.rank = "active", k
+    row = np.array([[x, 0.8, 0.0] for x in np.arange(1.2, 8.01, 0.2)])
+    fleet.announce(0, row[:2], row[2:])
+    o = fleet.objects[0]
+    assert o.way is not None and np.allclose(shapely.get_coordinates(o.way)[-1], [8.0, 0.8])
+    assert o.near.area < o.claim.area and o.near.bounds[2] < 1.2 + CLAIM_NEAR + 0.5
+    q0, q1 = np.array([6.0, 0.5, 0.0]), np.array([6.0, 1.0, 0.0])  # box 1 into the row
+    rows = np.linspace(q0[:2] - [0.0, 0.15 + r], q1[:2] - [0.0, 0.15 + r], 25)[None]
+    seg = Segment(1, [0], rows, np.array([q0, q1]), None, scene.objects[1].shape, r)
+    up = np.array([[6.0, y, 0.0] for y in np.arange(0.5, 2.51, 0.1)])
+    fleet.announce(1, up[:2], up[2:])
+    assert fleet._meets_moving(seg) is None  # crosses 4.8 m ahead of box 0
+    fleet.announce(1, up[:6], np.zeros((0, 3)))
+    fleet.objects[1].way = shapely.LineString([[6.0, 0.5], [6.0, 0.9]])  # stops in the row
+    assert fleet._meets_moving(seg) == "claim 0"
