@@ -314,28 +314,39 @@ def test_a_plan_made_in_the_world_as_it_stands_is_not_declined() -> None:
     assert outcome(events_since=1) == (False, True)  # declined
 
 
+def _moving_fleet(scene):
+    """A ``Fleet`` on ``scene`` whose objects all move, ranked in file order, over an
+    executor that only reports the scene's start poses (no simulator)."""
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from lamp.fleet.coordinator import Fleet
+
+    executor = SimpleNamespace(object_poses=np.array([o.start for o in scene.objects]),
+                               robot_positions=np.array(scene.robot_starts, float))
+    fleet = Fleet(scene, executor, lambda f, k: None, lambda *a: None)
+    for k, o in enumerate(fleet.objects):
+        o.status, o.rank = "active", k
+    return fleet
+
+
 def test_a_blocked_objects_claim_binds_only_those_outside_it() -> None:
     """``Fleet.plan_failed``: the claim of an object whose planner failed stays, but binds
     only the objects outside it then (``Fleet._inside``): one standing in its way may go
     on through it (it may be what it waits for), one outside may not come deeper in (to
     meet it head-on in an aisle)."""
-    from types import SimpleNamespace
 
     import numpy as np
     import shapely
 
-    from lamp.fleet.coordinator import Fleet
     from lamp.fleet.segments import Segment
 
     d = _two_boxes(6.0, (3.0, 1.3), 5.0)  # object 1's lower edge in the aisle below
     d["objects"].append({**d["objects"][0], "start": [5.4, 2.2, 0.0], "goal": [5.4, 1.6, 0.0]})
     scene = scene_from_dict(d)
     r = scene.robot_radius
-    executor = SimpleNamespace(object_poses=np.array([o.start for o in scene.objects]),
-                               robot_positions=np.array(scene.robot_starts, float))
-    fleet = Fleet(scene, executor, lambda f, k: None, lambda *a: None)
-    for k, o in enumerate(fleet.objects):
-        o.status, o.rank = "active", k
+    fleet = _moving_fleet(scene)
     aisle = shapely.box(2.0, 0.4, 6.0, 1.2)  # object 0's way: object 1 stands in it
     fleet.objects[0].claim = aisle
     fleet.objects[0].exempt = fleet._inside(aisle)
@@ -359,12 +370,10 @@ def test_an_announced_plan_claims_its_way_and_a_crossing_heeds_only_the_near_par
     goal, ``regions.claims``); ``Fleet._meets_moving`` hands the lower-ranked object's own
     way to admission, so a segment that crosses a higher-ranked object's way far ahead
     is admitted, and one that would stop in it is not."""
-    from types import SimpleNamespace
 
     import numpy as np
     import shapely
 
-    from lamp.fleet.coordinator import Fleet
     from lamp.fleet.regions import CLAIM_NEAR
     from lamp.fleet.segments import Segment
 
@@ -373,11 +382,7 @@ def test_an_announced_plan_claims_its_way_and_a_crossing_heeds_only_the_near_par
     d["objects"][0]["goal"] = [8.0, 0.8, 0.0]  # box 0 runs along the row at y = 0.8
     scene = scene_from_dict(d)
     r = scene.robot_radius
-    executor = SimpleNamespace(object_poses=np.array([o.start for o in scene.objects]),
-                               robot_positions=np.array(scene.robot_starts, float))
-    fleet = Fleet(scene, executor, lambda f, k: None, lambda *a: None)
-    for k, o in enumerate(fleet.objects):
-        o.status, o.rank = "active", k
+    fleet = _moving_fleet(scene)
     row = np.array([[x, 0.8, 0.0] for x in np.arange(1.2, 8.01, 0.2)])
     fleet.announce(0, row[:2], row[2:])
     o = fleet.objects[0]
