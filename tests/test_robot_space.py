@@ -274,3 +274,63 @@ def test_components_agree_with_a_flood_fill(seed):
             if ids[a] and ids[b]:
                 same = seen[nodes[a]] == seen[nodes[b]]
                 assert (ids[a] == ids[b]) == same
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), k=st.integers(0, 25),
+       reach=st.floats(0.01, 0.4))
+def test_obstacles_near_a_box_decide_every_segment_in_it(seed: int, k: int,
+                                                          reach: float) -> None:
+    """``GeometrySet.near``: for segments inside the box and thresholds up to ``reach``,
+    the kept obstacles give the same ``segment_clearance >= t`` answers as all of them,
+    and they are the obstacles whose bounding box comes within ``reach`` of the box."""
+    from lamp.geometry.clearance_kernels import segment_clearance
+    from lamp.geometry.geometry_set import GeometrySet
+    from lamp.geometry.shapes import obstacle_geometry
+
+    rng = np.random.default_rng(seed)
+    obs = _random_obstacles(rng, k)
+    full = GeometrySet(obs)
+    x0, y0 = rng.uniform(0, [W - 0.2, H - 0.2])
+    box = (x0, y0, x0 + rng.uniform(0.05, W - x0), y0 + rng.uniform(0.05, H - y0))
+    sub = full.near(box, reach)
+    grown = shapely.box(*box).buffer(reach, join_style="mitre")
+    assert len(sub.circles) + sub.n_polygons == sum(
+        shapely.box(*obstacle_geometry(o).bounds).intersects(grown) for o in obs)
+    a = rng.uniform(box[:2], box[2:], (200, 2))
+    b = rng.uniform(box[:2], box[2:], (200, 2))
+    t = rng.uniform(1e-6, reach, 200)
+    for p, q, tk in zip(a, b, t, strict=True):
+        args = (W, H)
+        want = segment_clearance(*p, *q, full.circles, full.verts, full.ptr, *args) >= tk
+        assert (segment_clearance(*p, *q, sub.circles, sub.verts, sub.ptr, *args) >= tk) == want
+
+
+def test_a_windowed_lattice_has_the_edges_it_had_with_every_obstacle() -> None:
+    """``Lattice`` decides its grazing edges with the obstacles near its window only
+    (``GeometrySet.near``): on a grid map (a Moving AI-like 20% of 0.25 m cells blocked,
+    whose sides lattice edges graze by the hundred), window by window, the same edges as
+    with every obstacle; and with none, not the same (the check is sensitive)."""
+    from lamp.geometry.geometry_set import GeometrySet
+    from lamp.mrmp import distance_field as DF
+    from lamp.scene.mapf import _rectangles
+
+    blocked = np.random.default_rng(3).random((24, 24)) < 0.2
+    obs = [Obstacle(Rectangle((cols * 0.25, rows * 0.25)),
+                    ((c0 + cols / 2) * 0.25, (24 - r0 - rows / 2) * 0.25, 0.0))
+           for r0, c0, rows, cols in _rectangles(blocked)]
+    near = GeometrySet.near
+    for window in ((0.5, 0.5, 2.0, 2.5), (3.0, 1.0, 5.5, 4.0), None):
+        space = RobotSpace((6.0, 6.0), obs, radius=R, window=window)
+        lat = DF.Lattice(space, 0.05)
+        refs = []
+        for pick in (lambda self, box, reach: self, lambda self, box, reach: GeometrySet(())):
+            try:
+                GeometrySet.near = pick  # every obstacle / none
+                refs.append(DF.Lattice(space, 0.05))
+            finally:
+                GeometrySet.near = near
+        assert lat.V == refs[0].V and np.array_equal(lat.nbr, refs[0].nbr)
+        assert not np.array_equal(lat.nbr, refs[1].nbr)
+        if window is not None:
+            assert space.geometry.near(lat.window, space.threshold).n_polygons < len(obs)

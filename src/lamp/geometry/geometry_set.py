@@ -89,3 +89,45 @@ class GeometrySet:
     @property
     def n_polygons(self) -> int:
         return len(self.ptr) - 1
+
+    def bounds(self) -> np.ndarray:
+        """(C + n_polygons, 4) bounding boxes (x0, y0, x1, y1): the circles', then the
+        polygons' (computed once)."""
+        out = getattr(self, "_bounds", None)
+        if out is None:
+            c = self.circles
+            circ = np.stack([c[:, 0] - c[:, 2], c[:, 1] - c[:, 2],
+                             c[:, 0] + c[:, 2], c[:, 1] + c[:, 2]], axis=1)
+            if self.n_polygons:
+                lo = np.minimum.reduceat(self.verts, self.ptr[:-1], axis=0)
+                hi = np.maximum.reduceat(self.verts, self.ptr[:-1], axis=0)
+                poly = np.concatenate([lo, hi], axis=1)
+            else:
+                poly = np.zeros((0, 4))
+            out = self._bounds = np.concatenate([circ, poly])
+        return out
+
+    def near(self, box: tuple[float, float, float, float], reach: float) -> GeometrySet:
+        """The obstacles whose bounding box comes within ``reach`` of ``box`` (x0, y0,
+        x1, y1), or ``self`` when that is all of them.
+
+        Guarantee (``tests/test_robot_space.py``): for a segment inside ``box`` and a
+        threshold ``0 < t <= reach``, ``segment_clearance`` over the result is ``>= t``
+        exactly when it is over ``self``: an obstacle nearer the segment than ``t`` has
+        its bounding box within ``reach`` of ``box``, so it is kept."""
+        b = self.bounds()
+        x0, y0, x1, y1 = (float(v) for v in box)
+        keep = ((b[:, 0] <= x1 + reach) & (b[:, 2] >= x0 - reach)
+                & (b[:, 1] <= y1 + reach) & (b[:, 3] >= y0 - reach))
+        if keep.all():
+            return self
+        nc = len(self.circles)
+        out = GeometrySet(())
+        out.circles = np.ascontiguousarray(self.circles[keep[:nc]])
+        polys = np.flatnonzero(keep[nc:])
+        if len(polys):
+            starts, ends = self.ptr[polys], self.ptr[polys + 1]
+            out.verts = np.ascontiguousarray(np.concatenate(
+                [self.verts[a:e] for a, e in zip(starts, ends, strict=True)]))
+            out.ptr = np.concatenate([[0], np.cumsum(ends - starts)]).astype(np.int64)
+        return out

@@ -174,7 +174,8 @@ class Lattice:
 
         self.dlen = np.array([step * math.hypot(*d) for d in DIRS.tolist()], dtype=float)
         W, H = space.workspace
-        g = space.geometry
+        # every edge lies in the window: obstacles farther than thr from it cannot decide one
+        g = space.geometry.near(self.window, thr + h)
         nbr = _build_edges(F, ids, s, h, thr, g.circles, g.verts, g.ptr, W, H, V, a0, b0)
         self.nbr = nbr
         self.V = V
