@@ -33,7 +33,8 @@ from scipy import ndimage
 from lamp.geometry.primitives import Obstacle
 from lamp.geometry.shapes import obstacle_geometry
 
-__all__ = ["DistanceTiles", "TILE", "FULL_GRID_CELLS", "DEFAULT_GRID_CAP"]
+__all__ = ["DistanceTiles", "TILE", "FULL_GRID_CELLS", "DEFAULT_GRID_CAP", "obstacle_box",
+           "obstacle_cells"]
 
 #: Cells per tile side.
 TILE = 128
@@ -56,14 +57,12 @@ def grid_shape(workspace: tuple[float, float], resolution: float) -> tuple[int, 
 
 
 @lru_cache(maxsize=4096)
-def obstacle_cells(
+def obstacle_box(
     obstacle: Obstacle, workspace: tuple[float, float], resolution: float
-) -> tuple[int, int, np.ndarray] | None:
-    """Occupied cells of one obstacle: (row0, col0, bool mask) or None when none.
-
-    A cell is occupied when its centre is within half a cell diagonal of the obstacle.
-    Cached per obstacle: scenes share static obstacles across many ObjectSpaces.
-    """
+) -> tuple[shapely.Geometry, int, int, int, int] | None:
+    """The cells one obstacle may occupy: (its outline grown by half a cell diagonal,
+    row0, col0, row1, col1), or None when that box misses the grid. Cheap: no cell is
+    tested (:func:`obstacle_cells` does that, for the tiles that need it)."""
     ny, nx = grid_shape(workspace, resolution)
     h = resolution / math.sqrt(2.0)
     geom = obstacle_geometry(obstacle).buffer(h, quad_segs=8)
@@ -74,6 +73,22 @@ def obstacle_cells(
     r1 = min(ny - 1, math.ceil(y1 / resolution - 0.5))
     if c1 < c0 or r1 < r0:
         return None
+    return geom, r0, c0, r1, c1
+
+
+@lru_cache(maxsize=4096)
+def obstacle_cells(
+    obstacle: Obstacle, workspace: tuple[float, float], resolution: float
+) -> tuple[int, int, np.ndarray] | None:
+    """Occupied cells of one obstacle: (row0, col0, bool mask) or None when none.
+
+    A cell is occupied when its centre is within half a cell diagonal of the obstacle.
+    Cached per obstacle: scenes share static obstacles across many ObjectSpaces.
+    """
+    box = obstacle_box(obstacle, workspace, resolution)
+    if box is None:
+        return None
+    geom, r0, c0, r1, c1 = box
     xs = (np.arange(c0, c1 + 1) + 0.5) * resolution
     ys = (np.arange(r0, r1 + 1) + 0.5) * resolution
     gx, gy = np.meshgrid(xs, ys)
@@ -116,11 +131,11 @@ class DistanceTiles:
         self._n = 0
         #: tile boxes (tx0, ty0, tx1, ty1) known to be filled
         self._ready: set[tuple[int, int, int, int]] = set()
-        cells = [obstacle_cells(ob, self.workspace, self.resolution) for ob in obstacles]
-        self._cells = [c for c in cells if c is not None]
-        self._boxes = np.array(
-            [(r0, c0, r0 + m.shape[0] - 1, c0 + m.shape[1] - 1) for r0, c0, m in self._cells],
-            dtype=np.int64).reshape(-1, 4)
+        # each obstacle's cells are tested when a tile within its box is first filled
+        boxes = [(ob, obstacle_box(ob, self.workspace, self.resolution)) for ob in obstacles]
+        self._obstacles = [ob for ob, b in boxes if b is not None]
+        self._boxes = np.array([b[1:] for _, b in boxes if b is not None],
+                               dtype=np.int64).reshape(-1, 4)
         if not self.capped:
             self._fill_whole()
         self.args: tuple = (self._store[: self._n], self.table, ny, nx)
@@ -132,7 +147,10 @@ class DistanceTiles:
         b = self._boxes
         hit = np.nonzero((b[:, 0] <= r1) & (b[:, 2] >= r0) & (b[:, 1] <= c1) & (b[:, 3] >= c0))[0]
         for k in hit.tolist():
-            rr, cc, mask = self._cells[k]
+            cells = obstacle_cells(self._obstacles[k], self.workspace, self.resolution)
+            if cells is None:
+                continue
+            rr, cc, mask = cells
             a0, a1 = max(rr, r0), min(rr + mask.shape[0] - 1, r1)
             b0, b1 = max(cc, c0), min(cc + mask.shape[1] - 1, c1)
             occ[a0 - r0 : a1 - r0 + 1, b0 - c0 : b1 - c0 + 1] |= mask[
