@@ -77,6 +77,7 @@ class GeometrySet:
         else:
             self.verts = np.zeros((0, 2), dtype=np.float64)
             self.ptr = np.zeros(1, dtype=np.int64)
+        self._bounds: np.ndarray | None = None  # filled by bounds()
 
     @staticmethod
     def concat(a: GeometrySet, b: GeometrySet) -> GeometrySet:
@@ -93,7 +94,7 @@ class GeometrySet:
     def bounds(self) -> np.ndarray:
         """(C + n_polygons, 4) bounding boxes (x0, y0, x1, y1): the circles', then the
         polygons' (computed once)."""
-        out = getattr(self, "_bounds", None)
+        out = self._bounds
         if out is None:
             c = self.circles
             circ = np.stack([c[:, 0] - c[:, 2], c[:, 1] - c[:, 2],
