@@ -53,7 +53,7 @@ def fleet_scene_command(
     kind: str | None = typer.Option(None, "--kind", help="Map kind: rooms, aisles (the "
                                     "default), yard, swap or after (the fleet family's)."),
     size: tuple[float, float] | None = typer.Option(
-        None, "--size", help="Map width and height (m), 6-150 each [default: 40 30]."),
+        None, "--size", help="Map width and height (m), 6-150 each; 40 30 when not given."),
     on_map: Path | None = typer.Option(
         None, "--map", help="Put the objects on this map instead: a scene file (its "
         "workspace, obstacles and physics) or a Moving AI grid map (.map).",
