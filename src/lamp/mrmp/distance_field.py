@@ -35,6 +35,8 @@ DIRS = np.array(
     [[1, 0], [1, 1], [0, 1], [-1, 1], [1, -1], [0, -1], [-1, -1], [-1, 0]], dtype=np.int64
 )
 _FIELD_CACHE_SIZE = 16
+#: Lattice rows whose edges are decided together, against the obstacles near them.
+EDGE_BAND = 32
 
 
 @nb.njit(cache=True)
@@ -71,18 +73,19 @@ def _dijkstra(
 @nb.njit(cache=True)
 def _build_edges(
     F: np.ndarray, ids: np.ndarray, s: int, h: float, thr: float,
-    circles: np.ndarray, verts: np.ndarray, ptr: np.ndarray, W: float, H: float, V: int,
-    a_off: int, b_off: int,
-) -> np.ndarray:
-    """(V, 8) neighbour table: an edge exists when both nodes are free and the motion
+    circles: np.ndarray, verts: np.ndarray, ptr: np.ndarray, W: float, H: float,
+    a_off: int, b_off: int, b_lo: int, b_hi: int, nbr: np.ndarray,
+) -> None:
+    """Fill the (V, 8) neighbour table ``nbr`` with the edges from the nodes of lattice
+    rows ``b_lo`` .. ``b_hi - 1``: an edge exists when both nodes are free and the motion
     keeps clearance >= thr, by the cone bound over the grid nodes it passes through
     (exact field values), or, when that bound misses by less than 0.75 h, by the exact
-    segment clearance. ``F[s * b, s * a]`` is lattice node ``(a + a_off, b + b_off)``."""
+    segment clearance against the obstacles given (those near the rows suffice).
+    ``F[s * b, s * a]`` is lattice node ``(a + a_off, b + b_off)``."""
     nb_, na = ids.shape
-    nbr = np.full((V, 8), -1, dtype=np.int64)
     diag = h * math.sqrt(2.0)
     L = s * h
-    for b in range(nb_):
+    for b in range(b_lo, b_hi):
         for a in range(na):
             u = ids[b, a]
             if u < 0:
@@ -122,7 +125,6 @@ def _build_edges(
                 if ok:
                     nbr[u, d] = v
                     nbr[v, 7 - d] = u
-    return nbr
 
 
 class Lattice:
@@ -174,9 +176,15 @@ class Lattice:
 
         self.dlen = np.array([step * math.hypot(*d) for d in DIRS.tolist()], dtype=float)
         W, H = space.workspace
-        # every edge lies in the window: obstacles farther than thr from it cannot decide one
-        g = space.geometry.near(self.window, thr + h)
-        nbr = _build_edges(F, ids, s, h, thr, g.circles, g.verts, g.ptr, W, H, V, a0, b0)
+        # the edges from a band of rows lie in the band and the row above it: obstacles
+        # farther than thr from that strip cannot decide one (``GeometrySet.near``)
+        nbr = np.full((V, 8), -1, dtype=np.int64)
+        x0, x1 = a0 * step, (a0 + na - 1) * step
+        for lo in range(0, nb_, EDGE_BAND):
+            hi = min(nb_, lo + EDGE_BAND)
+            g = space.geometry.near((x0, (b0 + lo) * step, x1, (b0 + hi) * step), thr + h)
+            _build_edges(F, ids, s, h, thr, g.circles, g.verts, g.ptr, W, H, a0, b0, lo, hi,
+                         nbr)
         self.nbr = nbr
         self.V = V
         self._fields: OrderedDict[Any, np.ndarray] = OrderedDict()
