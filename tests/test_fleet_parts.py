@@ -536,6 +536,8 @@ def test_claims_near_part_is_the_claim_of_the_first_metres_of_travel() -> None:
     assert shapely.get_coordinates(way)[-1].tolist() == [9.0, 1.0]
     short = claims(BOX, poses[:4], [1.0, 1.0, 0.0], R)
     assert short[0] is short[1]
+    off = claims(BOX, poses, [9.0, 1.0, 0.0], R, near_reach=0.0)  # the fleet's default
+    assert off[0] is off[1] and off[0].equals(full)
     assert claims(BOX, np.zeros((0, 3)), [0.0, 0.0, 0.0], R) == (None, None, None)
 
 

@@ -15,6 +15,7 @@ from typer.testing import CliRunner
 import lamp
 from lamp.cli import app
 from lamp.errors import InputError
+from lamp.fleet.regions import CLAIM_NEAR
 from lamp.pipeline import RunRequest
 from lamp.record.safety import check_recording, recorded_teams
 from lamp.scene import scene_from_dict
@@ -314,7 +315,7 @@ def test_a_plan_made_in_the_world_as_it_stands_is_not_declined() -> None:
     assert outcome(events_since=1) == (False, True)  # declined
 
 
-def _moving_fleet(scene):
+def _moving_fleet(scene, cross_near: float = 0.0):
     """A ``Fleet`` on ``scene`` whose objects all move, ranked in file order, over an
     executor that only reports the scene's start poses (no simulator)."""
     from types import SimpleNamespace
@@ -325,7 +326,7 @@ def _moving_fleet(scene):
 
     executor = SimpleNamespace(object_poses=np.array([o.start for o in scene.objects]),
                                robot_positions=np.array(scene.robot_starts, float))
-    fleet = Fleet(scene, executor, lambda f, k: None, lambda *a: None)
+    fleet = Fleet(scene, executor, lambda f, k: None, lambda *a: None, cross_near=cross_near)
     for k, o in enumerate(fleet.objects):
         o.status, o.rank = "active", k
     return fleet
@@ -365,16 +366,18 @@ def test_a_blocked_objects_claim_binds_only_those_outside_it() -> None:
     assert fleet._meets_moving(deeper(1, 0.5)) == "claim 0"  # an ordinary claim binds both
 
 
-def test_an_announced_plan_claims_its_way_and_a_crossing_heeds_only_the_near_part() -> None:
+@pytest.mark.parametrize("cross_near", [CLAIM_NEAR, 0.0])
+def test_an_announced_plan_claims_its_way_and_a_crossing_heeds_only_the_near_part(
+        cross_near: float) -> None:
     """``Fleet.announce`` sets an object's claim, its near part and its way (on to its
-    goal, ``regions.claims``); ``Fleet._meets_moving`` hands the lower-ranked object's own
-    way to admission, so a segment that crosses a higher-ranked object's way far ahead
-    is admitted, and one that would stop in it is not."""
+    goal, ``regions.claims``); with ``cross_near`` (``fleet_cross_near``) set,
+    ``Fleet._meets_moving`` hands the lower-ranked object's own way to admission, so a
+    segment that crosses a higher-ranked object's way far ahead is admitted, and one that
+    would stop in it is not; off (the default), the whole claim binds it."""
 
     import numpy as np
     import shapely
 
-    from lamp.fleet.regions import CLAIM_NEAR
     from lamp.fleet.segments import Segment
 
     d = _two_boxes(9.0, (6.0, 0.5), 6.0)
@@ -382,18 +385,22 @@ def test_an_announced_plan_claims_its_way_and_a_crossing_heeds_only_the_near_par
     d["objects"][0]["goal"] = [8.0, 0.8, 0.0]  # box 0 runs along the row at y = 0.8
     scene = scene_from_dict(d)
     r = scene.robot_radius
-    fleet = _moving_fleet(scene)
+    fleet = _moving_fleet(scene, cross_near)
     row = np.array([[x, 0.8, 0.0] for x in np.arange(1.2, 8.01, 0.2)])
     fleet.announce(0, row[:2], row[2:])
     o = fleet.objects[0]
     assert o.way is not None and np.allclose(shapely.get_coordinates(o.way)[-1], [8.0, 0.8])
-    assert o.near.area < o.claim.area and o.near.bounds[2] < 1.2 + CLAIM_NEAR + 0.5
+    if cross_near:
+        assert o.near.area < o.claim.area and o.near.bounds[2] < 1.2 + cross_near + 0.5
+    else:
+        assert o.near is o.claim
     q0, q1 = np.array([6.0, 0.5, 0.0]), np.array([6.0, 1.0, 0.0])  # box 1 into the row
     rows = np.linspace(q0[:2] - [0.0, 0.15 + r], q1[:2] - [0.0, 0.15 + r], 25)[None]
     seg = Segment(1, [0], rows, np.array([q0, q1]), None, scene.objects[1].shape, r)
     up = np.array([[6.0, y, 0.0] for y in np.arange(0.5, 2.51, 0.1)])
     fleet.announce(1, up[:2], up[2:])
-    assert fleet._meets_moving(seg) is None  # crosses 4.8 m ahead of box 0
+    want = None if cross_near else "claim 0"
+    assert fleet._meets_moving(seg) == want  # crosses 4.8 m ahead of box 0
     fleet.announce(1, up[:6], np.zeros((0, 3)))
     fleet.objects[1].way = shapely.LineString([[6.0, 0.5], [6.0, 0.9]])  # stops in the row
     assert fleet._meets_moving(seg) == "claim 0"

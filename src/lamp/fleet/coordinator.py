@@ -10,18 +10,17 @@ simulator. Design (``docs/fleet.md``):
   that start together); one with ``after`` starts once those objects are placed. A
   lower-priority segment may not end with its object and robots deeper in a higher
   object's *claim* (the rest of its plan, ``regions.claims``) than they began (crossing
-  one, or leaving it, is allowed; a plan that crosses its way heeds only its next
-  ``CLAIM_NEAR`` m): loads never meet head-on in a door. The claim of an
-  object whose planner found no plan stays (its last plan's), binding only the objects
-  outside it then: those in its way may leave or pass, no other comes to meet it.
+  one, or leaving it, is allowed; with ``cross_near``, a plan that only crosses it heeds
+  its near part): loads never meet head-on in a door. The claim of an object whose
+  planner found no plan stays, binding only the objects outside it then.
 - **Admission.** A segment starts only if it is compatible with every running segment
   (robots row by row on the shared clock, objects by the space they may take:
   ``spacetime.compatible``), respects higher claims, and its bodies as planned overlap
   no body standing still (else the world changed since the plan: it is declined and the
   loop plans anew, ``WORLD_CHANGED``; not before the first event after its loop took its
   world, ``world_taken``: that plan saw the world as it is, and would be made again).
-  Otherwise it waits for the next event. A planner
-  that finds no plan while other objects still move waits for a change too.
+  Otherwise it waits for the next event. A planner that finds no plan while other
+  objects still move waits for a change too.
 - **Clock.** Admitted segments are re-timed on a common row grid (``segments.on_grid``),
   with rows appended in which their robots hold for the simulator's settle time, and run
   together until the first ends (or a push watch stops one); that loop plans its next
@@ -30,8 +29,7 @@ simulator. Design (``docs/fleet.md``):
   settle as it does after a sequential segment.
 - **Liveness.** When nothing runs and nothing waits on a change, the highest-priority
   waiting segment is admitted against standing bodies only (``forced``), and planners
-  waiting on a change plan in the world as it is (like the sequential schedule), their
-  claims dropped.
+  waiting on a change plan in the world as it is (as sequentially), claims dropped.
 - **Teams.** Allocated by ``lamp.fleet.teams``. A robot that fails (``executor.failed``)
   leaves its sub-team for good (``FAILED``), replaced by the nearest free robot if any;
   far robots hand over to free ones nearer (``lamp.fleet.handover``). The team's loop
@@ -86,7 +84,7 @@ class Fleet:
     def __init__(self, scene: Scene, executor: Any, object_main: Callable[[Fleet, int],
                  ObjectOutcome], timeline: Callable[[Any, float, np.ndarray], None],
                  observers: Sequence[RunObserver] = (), row_step: float = 0.02,
-                 reinforce_reach: float = 0.0) -> None:
+                 reinforce_reach: float = 0.0, cross_near: float = 0.0) -> None:
         self.scene = scene
         self.executor = executor
         self.object_main = object_main
@@ -94,13 +92,13 @@ class Fleet:
         self.observers = list(observers)
         self.grid = float(row_step)
         self.reinforce_reach = float(reinforce_reach)  # 0: off (``_reinforce``)
+        self.cross_near = float(cross_near)  # 0: off (a crossing heeds the whole claim)
         #: rows a segment's robots hold at its end while others move: the settle time
         self.hold_rows = math.ceil(SETTLE_TIME * float(scene.physics.robot_speed) / self.grid
                                    - 1e-9)
         self.objects = [ObjectState(k) for k in range(len(scene.objects))]
         self.turns = Turns()
-        self.started = 0  # objects started so far (their ranks)
-        self.finished = 0  # objects placed or given up so far
+        self.started = self.finished = 0  # objects started (their ranks), placed or given up
         self.clock = 0.0
         #: (simulated time, what, object, detail) of every decision: for the curious
         self.log: list[tuple[float, str, int, str]] = []
@@ -289,7 +287,8 @@ class Fleet:
                    and o.index != seg.index]
         claims = [(o.index, o.claim, o.near) for o in self.objects if o.index != seg.index
                   and o.rank < rank and o.claim is not None and seg.index not in o.exempt]
-        why = meets_moving(seg, running, claims, self.objects[seg.index].way)
+        why = meets_moving(seg, running, claims, self.objects[seg.index].way
+                           if self.cross_near > 0 else None)
         if why:
             self.log.append((self.clock, "meets", seg.index, why))
         return why
@@ -440,7 +439,8 @@ class Fleet:
         o.announced = np.asarray(segment, float)
         poses = np.concatenate([o.announced, np.asarray(rest, float).reshape(-1, 3)])
         obj = self.scene.objects[k]
-        o.claim, o.near, o.way = claims(obj.shape, poses, obj.goal, self.scene.robot_radius)
+        o.claim, o.near, o.way = claims(obj.shape, poses, obj.goal, self.scene.robot_radius,
+                                        self.cross_near)
         o.exempt = frozenset()  # a new plan's claim binds everyone
 
     def plan_failed(self, k: int) -> bool:

@@ -41,7 +41,8 @@ OBJECT_MARGIN = 0.05
 #: A standing body is shrunk by this (m) before it is tested against a planned segment.
 STATIC_SLACK = 0.003
 #: The near part of a claim (:func:`claims`): the footprints along this much (m) of the
-#: object's planned travel, which even a plan that only crosses the claim keeps out of.
+#: object's planned travel, which even a plan that only crosses the claim keeps out of
+#: (the fleet's ``fleet_cross_near``, off by default, sets it; 2 m is what was measured).
 CLAIM_NEAR = 2.0
 #: Planned object motion is sampled this finely (m, rad).
 POSE_STEP = 0.05
@@ -106,17 +107,20 @@ def claim(shape: Shape, poses: np.ndarray, robot_radius: float) -> shapely.Geome
     return footprints(shape, poses, 2.0 * robot_radius + OBJECT_MARGIN)
 
 
-def claims(shape: Shape, poses: np.ndarray, goal: np.ndarray, robot_radius: float
+def claims(shape: Shape, poses: np.ndarray, goal: np.ndarray, robot_radius: float,
+           near_reach: float = CLAIM_NEAR
            ) -> tuple[shapely.Geometry | None, shapely.Geometry | None, shapely.Geometry | None]:
     """What an object's plan ``poses`` (P, 3) claims, prepared: its :func:`claim`, the
-    near part (the claim of the poses within ``CLAIM_NEAR`` m of planned travel from the
-    first; the whole claim when the plan is no longer) and its way (the centre's path
-    through the poses on to ``goal``, a line). (None, None, None) without poses."""
+    near part (the claim of the poses within ``near_reach`` m of planned travel from the
+    first; the whole claim when the plan is no longer, or ``near_reach`` is 0) and its way
+    (the centre's path through the poses on to ``goal``, a line). (None, None, None)
+    without poses."""
     poses = np.asarray(poses, float).reshape(-1, 3)
     if len(poses) == 0:
         return None, None, None
     travel = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(poses[:, :2], axis=0).T))])
-    n_near = max(1, int(np.searchsorted(travel, CLAIM_NEAR, side="right")))
+    n_near = (max(1, int(np.searchsorted(travel, near_reach, side="right")))
+              if near_reach > 0 else len(poses))
     full = claim(shape, poses, robot_radius)
     near = full if n_near >= len(poses) else claim(shape, poses[:n_near], robot_radius)
     way = shapely.LineString(np.vstack([poses[:, :2], np.asarray(goal, float)[None, :2]]))

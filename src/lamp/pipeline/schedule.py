@@ -59,6 +59,7 @@ def run_concurrently(scene: Any, executor: Executor, runner: ObjectRunner, recor
     watchers = [recorder, *observers]
     fleet = Fleet(scene, executor, object_main(runner, _segments_to(watchers)),
                   recorder.follow, watchers, row_step=MAX_STEP,
-                  reinforce_reach=runner.config.fleet_reinforce_reach)
+                  reinforce_reach=runner.config.fleet_reinforce_reach,
+                  cross_near=runner.config.fleet_cross_near)
     outcomes = fleet.run()
     return outcomes, fleet.stats()

@@ -171,6 +171,10 @@ class PlannerConfig:
                                          "to start, free robots within this distance (m) "
                                          "of a moving object whose team has room join it; "
                                          "0: they stay free.", low=0.0)
+    fleet_cross_near: float = param(0.0, "Concurrent schedule: a plan that only crosses a "
+                                    "higher-ranked object's way heeds just the part of its "
+                                    "claim within this much (m) of its planned travel; 0: "
+                                    "the whole claim.", low=0.0)
 
     def __post_init__(self) -> None:
         check_fields(self)
@@ -201,7 +205,7 @@ LOOP_PARAMS = ("planning_time_limit", "max_segments", "drift_position", "drift_o
                "stop_position", "stop_orientation", "long_push_length", "long_push_turn",
                "continuous_push_gap",
                "sensing_sigma", "sensing_readings", "space_cache_mb", "fleet_park_clear",
-               "fleet_reinforce_reach")
+               "fleet_reinforce_reach", "fleet_cross_near")
 VERIFY_PARAMS = ("k", "max_budget", "gspi_attempts_per_budget", "gspi_time_limit",
                  "contact_tolerance")
 LATTICE_PARAMS = ("lattice_step", "n_headings", "robot_match_tolerance")
