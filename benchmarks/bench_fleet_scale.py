@@ -30,8 +30,8 @@ import time
 from pathlib import Path
 
 from lamp.record.safety import check_run_dir
+from lamp.scene.mapf import load_map
 from lamp.scene.save import save_scene
-from lamp.suites.cli import map_scene
 from lamp.suites.fleet import KINDS, generate_custom, generate_on_map
 
 
@@ -82,7 +82,7 @@ def main() -> None:
     args = ap.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
     try:
-        base = None if args.map is None else map_scene(args.map, args.cell)
+        base = None if args.map is None else load_map(args.map, args.cell)
     except ValueError as err:  # InputError: names the file and what is wrong
         ap.error(str(err))
     if base is None:

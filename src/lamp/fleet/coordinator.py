@@ -282,13 +282,13 @@ class Fleet:
                               self.executor.robot_positions, still, moving)
 
     def _meets_moving(self, seg: Segment) -> str | None:
-        rank = self.objects[seg.index].rank
+        """Why ``seg`` must wait (``admission.meets_moving``), None if it need not."""
+        me = self.objects[seg.index]
         running = [o.running for o in self.objects if o.running is not None
                    and o.index != seg.index]
         claims = [(o.index, o.claim, o.near) for o in self.objects if o.index != seg.index
-                  and o.rank < rank and o.claim is not None and seg.index not in o.exempt]
-        why = meets_moving(seg, running, claims, self.objects[seg.index].way
-                           if self.cross_near > 0 else None)
+                  and o.rank < me.rank and o.claim is not None and seg.index not in o.exempt]
+        why = meets_moving(seg, running, claims, me.way if self.cross_near > 0 else None)
         if why:
             self.log.append((self.clock, "meets", seg.index, why))
         return why

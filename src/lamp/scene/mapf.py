@@ -23,9 +23,10 @@ from pathlib import Path
 import numpy as np
 
 from lamp.errors import InputError
+from lamp.scene.loader import load_scene
 from lamp.scene.model import Obstacle, Rectangle, Scene
 
-__all__ = ["GridMap", "load_grid_map", "random_instance"]
+__all__ = ["GridMap", "load_grid_map", "load_map", "random_instance"]
 
 _FREE = frozenset(".GS")
 _BLOCKED = frozenset("@OTW")
@@ -123,6 +124,15 @@ def load_grid_map(path: str | Path, cell: float = 0.15, robot_radius: float = 0.
     scene = Scene(p.stem, (w * cell, h * cell), (first,), (),
                   obstacles, robot_radius, source=str(p))
     return GridMap(p.stem, blocked, float(cell), scene)
+
+
+def load_map(path: str | Path, cell: float) -> Scene:
+    """The map at ``path`` as a scene: a Moving AI grid map (``.map``, cells of ``cell``
+    m, :func:`load_grid_map`) or a scene file (:func:`~lamp.scene.loader.load_scene`); ``InputError``
+    names what is wrong."""
+    if Path(path).suffix.lower() == ".map":
+        return load_grid_map(path, cell).scene
+    return load_scene(path)
 
 
 def random_instance(gm: GridMap, n: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:

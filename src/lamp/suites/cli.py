@@ -4,15 +4,11 @@ scene of any size."""
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import typer
 
 from lamp.cli_support import fail_input, lamp_typer
 from lamp.suites.registry import SUITES, export_suite, suite_files
-
-if TYPE_CHECKING:
-    from lamp.scene.model import Scene
 
 suite_app = lamp_typer(help="Built-in benchmark suites.", no_args_is_help=True)
 
@@ -67,31 +63,27 @@ def fleet_scene_command(
     (``--map``), with its generator and checks (every object has a certified route and
     reachable contacts), and write it to OUT, with ``schedule: concurrent``."""
     from lamp.errors import InputError
+    from lamp.scene.mapf import load_map
     from lamp.scene.save import save_scene
     from lamp.suites.fleet import generate_custom, generate_on_map
 
     if on_map is not None and (kind is not None or size is not None):
         fail_input("--map takes the map's own workspace and obstacles: leave out --kind "
                    "and --size")
-    base = None
-    if on_map is not None:
-        try:
-            base = map_scene(on_map, cell)
-        except InputError as exc:  # names the file (and the field, row or cell)
-            fail_input(str(exc))
     try:
-        if base is None:
+        if on_map is None:
             gen = generate_custom(kind or "aisles", size or (40.0, 30.0), objects, robots, seed)
         else:
+            base = load_map(on_map, cell)  # an InputError names the file (and field, cell)
             try:
                 gen = generate_on_map(base, objects, robots, seed)
             except ValueError as exc:
-                raise ValueError(f"{on_map}: {exc}") from exc
+                raise InputError(f"{on_map}: {exc}") from exc
         save_scene(gen.scene, out)
-    except ValueError as exc:
+    except ValueError as exc:  # InputError included
         fail_input(str(exc))
     except RuntimeError as exc:  # no draw passed the checks: too many objects for the map
-        more = "a larger --size" if base is None else "a larger --cell"
+        more = "a larger --size" if on_map is None else "a larger --cell"
         fail_input(f"{exc}; try {more} or fewer --objects")
     except OSError as exc:
         fail_input(f"cannot write {out}: {exc.strerror or exc}")
@@ -99,14 +91,3 @@ def fleet_scene_command(
     typer.echo(f"wrote {out}: {gen.scene.name}, {robots} robots, {objects} objects, "
                f"{W:g} x {H:g} m")
 
-
-def map_scene(path: Path, cell: float) -> Scene:
-    """The map at ``path``: a Moving AI grid map (``.map``, cells of ``cell`` m) or a
-    scene file; ``InputError`` names what is wrong."""
-    if path.suffix.lower() == ".map":
-        from lamp.scene.mapf import load_grid_map
-
-        return load_grid_map(path, cell).scene
-    from lamp.scene.loader import load_scene
-
-    return load_scene(path)

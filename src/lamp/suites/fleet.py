@@ -236,18 +236,23 @@ def generate_custom(kind: str, workspace: tuple[float, float], n_objects: int,
     if not (low <= min(W, H) and max(W, H) <= CUSTOM_MAX_SIDE):
         raise ValueError(f"workspace sides must be {low:g}-{CUSTOM_MAX_SIDE:g} m, "
                          f"got {W} x {H}")
-    if not 1 <= n_objects <= CUSTOM_MAX_OBJECTS or (kind == "after" and n_objects < 2):
-        raise ValueError(f"n_objects must be 1-{CUSTOM_MAX_OBJECTS} (2+ for 'after'), "
-                         f"got {n_objects}")
-    if not n_objects <= n_robots <= CUSTOM_MAX_ROBOTS:
-        raise ValueError(f"n_robots must be {n_objects}-{CUSTOM_MAX_ROBOTS} (one per object "
-                         f"at least), got {n_robots}")
+    _check_counts(n_objects, n_robots, 2 if kind == "after" else 1, " (2+ for 'after')")
     rng = np.random.default_rng([SUITE_SEED, STREAM, 1_000_000 + seed,
                                  KINDS.index(kind), int(W * 10), int(H * 10), n_objects,
                                  n_robots])
     objects = sample_objects(rng, kind, n_objects)
     name = f"{NAME}-{kind}-{W:g}x{H:g}-{n_robots}r{n_objects}o-s{seed}"
     return _draw(rng, -1, name, kind, {"custom": True}, (W, H), objects, n_robots)
+
+
+def _check_counts(n_objects: int, n_robots: int, least: int = 1, note: str = "") -> None:
+    """ValueError naming ``n_objects`` (at least ``least``; ``note`` says why) or
+    ``n_robots`` when a custom scene cannot have that many."""
+    if not least <= n_objects <= CUSTOM_MAX_OBJECTS:
+        raise ValueError(f"n_objects must be 1-{CUSTOM_MAX_OBJECTS}{note}, got {n_objects}")
+    if not n_objects <= n_robots <= CUSTOM_MAX_ROBOTS:
+        raise ValueError(f"n_robots must be {n_objects}-{CUSTOM_MAX_ROBOTS} (one per object "
+                         f"at least), got {n_robots}")
 
 
 def generate_on_map(base: Scene, n_objects: int, n_robots: int,
@@ -266,11 +271,7 @@ def generate_on_map(base: Scene, n_objects: int, n_robots: int,
     if abs(base.robot_radius - ROBOT_RADIUS) > 1e-9:
         raise ValueError(f"robots.radius must be {ROBOT_RADIUS:g} m (the robots the checks "
                          f"place), got {base.robot_radius:g}")
-    if not 1 <= n_objects <= CUSTOM_MAX_OBJECTS:
-        raise ValueError(f"n_objects must be 1-{CUSTOM_MAX_OBJECTS}, got {n_objects}")
-    if not n_objects <= n_robots <= CUSTOM_MAX_ROBOTS:
-        raise ValueError(f"n_robots must be {n_objects}-{CUSTOM_MAX_ROBOTS} (one per object "
-                         f"at least), got {n_robots}")
+    _check_counts(n_objects, n_robots)
     d = base.to_dict()
     obstacles = d["obstacles"]
     digest = hashlib.sha256(json.dumps([d["workspace"], obstacles]).encode()).digest()
