@@ -118,7 +118,7 @@ def stalled(seg: int, d: np.ndarray) -> np.ndarray:
 
 
 def run(executor, policy=LAZY, config=CONFIG, planner=None, reroute=None, goal=GOAL,
-        clearance=None, reach=0.0):
+        clearance=None, reach=0.0, route=None):
     planner = planner or StraightPlanner(goal)
     events: list[SegmentEvent] = []
     record = LoopRecord()
@@ -130,7 +130,7 @@ def run(executor, policy=LAZY, config=CONFIG, planner=None, reroute=None, goal=G
 
     loop = ClosedLoop(planner, policy, executor, index=0, goal=goal, config=config,
                       reroute=reroute or default_reroute, record=record, observer=events.append,
-                      clearance=clearance, reach=reach)
+                      clearance=clearance, reach=reach, route=route)
     result = loop.run()
     return SimpleNamespace(result=result, events=events, record=record, planner=planner,
                            reroutes=reroutes)
@@ -199,6 +199,24 @@ def test_stall_is_reported_to_the_planner_until_the_segment_limit() -> None:
     assert res.segments == 4 and res.replans == 3 and not res.success
     assert res.failure_reason == "segment limit reached (4)"
     assert np.allclose(res.final_pose, START)
+
+
+@pytest.mark.parametrize("route", [None, 5.0])
+def test_a_scaled_segment_limit_is_measured_on_the_route(route) -> None:
+    """Without ``max_segments`` the limit scales with the route the loop is given (here
+    5 m: 150 segments), else with the straight line (1 m: the paper's 100)."""
+    asked: list[np.ndarray] = []
+
+    def distance(q):
+        asked.append(np.array(q))
+        return route
+
+    out = run(FakeExecutor(stalled), config=dataclasses.replace(CONFIG, max_segments=None),
+              route=None if route is None else distance)
+    limit = 100 if route is None else 150
+    assert out.result.segments == limit
+    assert out.result.failure_reason == f"segment limit reached ({limit})"
+    assert len(asked) == (0 if route is None else 1) and all(np.allclose(q, START) for q in asked)
 
 
 def test_stall_without_its_policy_reads_as_drift() -> None:

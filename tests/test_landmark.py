@@ -16,7 +16,7 @@ from scipy.sparse.csgraph import dijkstra
 from lamp.geometry.object_space import ObjectSpace
 from lamp.scene.model import Circle, Obstacle, Polygon, Rectangle
 from lamp.search.dstar_lite import DStarLite
-from lamp.search.landmark import inscribed_radius
+from lamp.search.landmark import inscribed_radius, route_length
 from lamp.search.lattice import ObjectLattice
 
 SHAPES = (
@@ -175,3 +175,43 @@ def test_bad_landmark():
     space = ObjectSpace(Circle(0.1), (1.0, 1.0))
     with pytest.raises(ValueError, match="landmark"):
         ObjectLattice(space, (0.5, 0.5, 0.0), landmark=(math.nan, 0.2))
+
+
+def _octile(a, b) -> float:
+    dx, dy = abs(b[0] - a[0]), abs(b[1] - a[1])
+    return max(dx, dy) + (math.sqrt(2.0) - 1.0) * min(dx, dy)
+
+
+@settings(max_examples=25, deadline=None)
+@given(sx=st.floats(0.2, 3.8), sy=st.floats(0.2, 1.8), gx=st.floats(0.2, 3.8),
+       gy=st.floats(0.2, 1.8))
+def test_route_length_on_an_open_map_is_the_octile_distance(sx, sy, gx, gy):
+    space = ObjectSpace(Circle(0.1), (4.0, 2.0))
+    got = route_length(space, (sx, sy), (gx, gy), 0.1)
+    assert got is not None
+    assert abs(got - _octile((sx, sy), (gx, gy))) <= 0.1 + 1e-9
+    assert got >= math.hypot(gx - sx, gy - sy) - 0.1
+
+
+WALL = Obstacle(Rectangle((0.1, 1.6)), (2.0, 0.8, 0.0))  # x 1.95-2.05, y 0-1.6
+
+
+def test_route_length_goes_round_a_wall():
+    space = ObjectSpace(Circle(0.1), (4.0, 2.0), [WALL])
+    got = route_length(space, (1.0, 0.5), (3.0, 0.5), 0.1)
+    # the centre crosses x = 2 above the wall: at least the two straight legs to (2, 1.6)
+    detour = 2 * math.hypot(1.0, 1.1)
+    assert got is not None and detour - 0.1 <= got <= detour * 1.09 + 0.3
+    # the same wall, from start to a goal on its own side: the open-map distance
+    assert route_length(space, (1.0, 0.5), (1.0, 1.5), 0.1) == pytest.approx(1.0, abs=0.1)
+
+
+def test_route_length_is_none_when_a_wall_cuts_the_map():
+    cut = Obstacle(Rectangle((0.1, 2.0)), (2.0, 1.0, 0.0))
+    space = ObjectSpace(Circle(0.1), (4.0, 2.0), [cut])
+    assert route_length(space, (1.0, 0.5), (3.0, 0.5), 0.1) is None
+    # a gap narrower than the object's inscribed disk does not let it through either
+    gap = [Obstacle(Rectangle((0.1, 0.95)), (2.0, 0.475, 0.0)),
+           Obstacle(Rectangle((0.1, 0.95)), (2.0, 1.525, 0.0))]  # a 0.1 m slit at y = 1
+    assert route_length(ObjectSpace(Circle(0.1), (4.0, 2.0), gap), (1.0, 0.5), (3.0, 0.5),
+                        0.1) is None

@@ -6,6 +6,7 @@ import json
 import math
 from pathlib import Path
 
+import numpy as np
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
@@ -19,6 +20,8 @@ from lamp.planners.config import (
     PlannerConfig,
     segment_limit,
 )
+from lamp.planners.task import route_distance
+from lamp.scene.model import Circle, Obstacle, Rectangle, Scene, SceneObject
 
 DATA = Path(__file__).parent / "data"
 
@@ -31,6 +34,33 @@ def test_segment_limit_is_fixed_or_grows_with_the_distance(distance, fixed):
     else:
         assert got >= PAPER_MAX_SEGMENTS and got >= SEGMENTS_PER_METRE * distance - 1e-6
         assert got == max(PAPER_MAX_SEGMENTS, math.ceil(SEGMENTS_PER_METRE * distance - 1e-9))
+
+
+def test_a_distance_function_is_asked_only_when_the_limit_scales():
+    def distance() -> float:
+        asked.append(1)
+        return 7.0
+
+    asked: list[int] = []
+    assert segment_limit(42, distance) == 42 and asked == []
+    assert segment_limit(None, distance) == 210 and asked == [1]
+
+
+def test_the_route_around_a_wall_sets_the_limit():
+    """``route_distance``: the straight line on an open map, the way round a wall when
+    one stands between (at least its two legs), the straight line again when the wall
+    cuts the map (no route: the limit does not guess)."""
+    def scene(wall_height: float) -> Scene:
+        wall = Obstacle(Rectangle((0.1, wall_height)), (2.0, wall_height / 2, 0.0))
+        return Scene(name="wall", workspace=(4.0, 2.0), robot_radius=0.05, robot_starts=((0.3, 0.3),),
+                     objects=(SceneObject(Circle(0.1), (1.0, 0.5, 0.0), (3.0, 0.5, 0.0)),),
+                     obstacles=(wall,) if wall_height else ())
+
+    start = np.array([1.0, 0.5, 0.0])
+    assert route_distance(scene(0.0), 0, start, 0.1) == pytest.approx(2.0, abs=1e-9)
+    round_wall = route_distance(scene(1.6), 0, start, 0.1)
+    assert 2 * math.hypot(1.0, 1.1) - 0.1 <= round_wall <= 3.6
+    assert route_distance(scene(2.0), 0, start, 0.1) == pytest.approx(2.0, abs=1e-9)
 
 
 def test_a_50_m_route_gets_room():

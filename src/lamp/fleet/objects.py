@@ -32,6 +32,7 @@ from lamp.fleet.transit import transit
 from lamp.planners.closed_loop import TEAM_CHANGED, WORLD_CHANGED
 from lamp.planners.config import segment_limit
 from lamp.planners.runner import ClosedLoopRunner, judged, merged
+from lamp.planners.task import route_distance
 from lamp.planners.team import team_scene
 from lamp.scene.model import Scene
 
@@ -90,7 +91,8 @@ def object_main(runner: ClosedLoopRunner, observe: Callable[[SegmentEvent], None
         goal = np.asarray(scene.objects[k].goal, float)
         start = np.asarray(fleet.executor.object_poses[k], float)
         seed = runner.seed * 1000 + k  # the object's tasks' seed (``ClosedLoopRunner.loop``)
-        limit = segment_limit(cfg.max_segments, float(np.hypot(*(goal[:2] - start[:2]))))
+        limit = segment_limit(cfg.max_segments, lambda: route_distance(
+            scene, k, start, cfg.lattice_step))
         parts: list[ObjectOutcome] = []
         while True:
             used = sum(p.result.segments for p in parts)

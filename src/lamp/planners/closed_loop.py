@@ -37,7 +37,7 @@ from lamp.contract.transition import Transition
 from lamp.geometry.se2 import pose_distance
 from lamp.planners.config import PlannerConfig, segment_limit
 from lamp.planners.long_push import merge, take_long_push
-from lamp.planners.task import ManipulationTask
+from lamp.planners.task import ManipulationTask, route_distance
 from lamp.planners.watch import WATCH_FACTOR, WATCH_ROTATION, PushWatch, watched
 
 
@@ -149,8 +149,12 @@ class ClosedLoop:
                  record: LoopRecord | None = None,
                  observer: Callable[[SegmentEvent], None] | None = None,
                  clearance: Callable[[np.ndarray], float] | None = None,
-                 reach: float = 0.0) -> None:
+                 reach: float = 0.0,
+                 route: Callable[[np.ndarray], float] | None = None) -> None:
         self.planner = planner
+        #: how far the object has to go from a pose (``task.route_distance``), which a
+        #: scaled segment limit is measured on; None: the straight line
+        self.route = route
         #: the object's clearance at a pose and its reach (farthest point from its origin),
         #: for the drift limits in tight places (``drift_limits``); None: the config's
         self.clearance = clearance
@@ -170,7 +174,8 @@ class ClosedLoop:
         cfg, goal = self.config, self.goal
         st = _Progress(np.asarray(self.executor.object_poses[self.index], float),
                        np.asarray(self.executor.robot_positions, float))
-        max_segments = segment_limit(cfg.max_segments, float(np.hypot(*(goal[:2] - st.q_O[:2]))))
+        max_segments = segment_limit(cfg.max_segments, lambda: float(np.hypot(
+            *(goal[:2] - st.q_O[:2]))) if self.route is None else self.route(st.q_O))
         while st.iterations < max_segments:
             if within_goal(st.q_O, goal, cfg.stop_position, cfg.stop_orientation):
                 if not cfg.sensing_sigma or st.confirmed == st.segments:
@@ -424,5 +429,7 @@ def run_object(task: ManipulationTask, planner: ObjectPlanner, policy: LoopPolic
     exact = task.exact_space
     loop = ClosedLoop(planner, policy, sim, index=task.index, goal=task.goal, config=task.config,
                       reroute=task.verifier.reroute, record=record, observer=observer,
-                      clearance=exact.clearance, reach=exact.reach)
+                      clearance=exact.clearance, reach=exact.reach,
+                      route=lambda q: route_distance(task.scene, task.index, q,
+                                                     task.config.lattice_step))
     return loop.run()

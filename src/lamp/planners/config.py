@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 import sys
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Literal
 
@@ -40,17 +41,24 @@ LAZY_EXPANSION_RATE = 1000.0
 #: ``lamp bench`` keeps it on the built-in paper suites.
 PAPER_MAX_SEGMENTS = 100
 #: When the limit scales with the task (``max_segments=None``, the default for user scenes):
-#: segments allowed per metre of straight-line start-goal distance, ten per metre (one per
-#: 0.1 m lattice step, though a long push covers many) times a detour factor of three.
+#: segments allowed per metre of the object's route from start to goal (the longer of the
+#: straight line and the shortest route around the map's obstacles,
+#: ``lamp.planners.task.route_distance``), ten per metre (one per 0.1 m lattice step,
+#: though a long push covers many) times a factor of three for detours and pushes that
+#: drift. (Per metre of straight line alone, a maze ran out: ``maze-31-4``'s object 4, a
+#: 6.1 m straight line and a 25 m route, stopped 4.7 m short at its 182nd segment.)
 SEGMENTS_PER_METRE = 30.0
 
 
-def segment_limit(max_segments: int | None, distance: float) -> int:
-    """The executed-segment limit for an object whose goal is ``distance`` m from its start:
-    ``max_segments`` when set, else ``max(PAPER_MAX_SEGMENTS, ceil(SEGMENTS_PER_METRE *
-    distance))``, so a large map never runs out of segments before the route does."""
+def segment_limit(max_segments: int | None, distance: float | Callable[[], float]) -> int:
+    """The executed-segment limit for an object whose route to its goal is ``distance`` m
+    long (a number, or a function asked only when the limit scales): ``max_segments``
+    when set, else ``max(PAPER_MAX_SEGMENTS, ceil(SEGMENTS_PER_METRE * distance))``, so
+    a large map or a winding route never runs out of segments before the route does."""
     if max_segments is not None:
         return int(max_segments)
+    if callable(distance):
+        distance = distance()
     return max(PAPER_MAX_SEGMENTS, math.ceil(SEGMENTS_PER_METRE * float(distance) - 1e-9))
 
 

@@ -27,7 +27,7 @@ from lamp.contract.plan import LoopPolicy, ObjectPlanner
 from lamp.contract.runner import Executor, ObjectOutcome
 from lamp.planners.closed_loop import TEAM_CHANGED, LoopRecord, run_object
 from lamp.planners.config import PlannerConfig, segment_limit
-from lamp.planners.task import ManipulationTask
+from lamp.planners.task import ManipulationTask, route_distance
 from lamp.planners.team import TeamView, team_scene
 from lamp.planners.verifier import TaskStats
 from lamp.scene.model import Scene
@@ -59,7 +59,8 @@ class ClosedLoopRunner:
             return self.loop(self.scene, index, executor, self.config, observe)
         goal = np.asarray(self.scene.objects[index].goal, float)
         start = np.asarray(executor.object_poses[index], float)
-        limit = segment_limit(self.config.max_segments, float(np.hypot(*(goal[:2] - start[:2]))))
+        limit = segment_limit(self.config.max_segments, lambda: route_distance(
+            self.scene, index, start, self.config.lattice_step))
         parts: list[ObjectOutcome] = []
         while True:  # one closed loop per team: a robot that fails ends it
             now = np.asarray(executor.robot_positions, float)

@@ -36,6 +36,7 @@ from lamp.planners.verifier import (  # noqa: F401  (re-exported: their old home
     pairwise_min_distance,
 )
 from lamp.scene.model import Scene, Shape
+from lamp.search.landmark import route_length
 
 #: Margin (m) of a robot-space window around the object and the robots; more than the
 #: waiting-spot search radius of ``Reassign`` plus a robot.
@@ -48,6 +49,20 @@ WINDOW_MIN_SIDE = 4.0
 WINDOW_MAX_SIDE = 16.0
 #: Robot spaces kept per task: at most this many (and ``PlannerConfig.space_cache_mb``).
 _SPACES_KEPT = 64
+
+
+def route_distance(scene: Scene, index: int, pose: np.ndarray, step: float) -> float:
+    """How far object ``index`` has to go from ``pose`` to its goal around the map's
+    obstacles (the other objects move, so they do not count): the longer of the straight
+    line and ``landmark.route_length`` on a grid of side ``step`` (the straight line when
+    no route joins them). What a scaled segment limit is measured on
+    (``config.segment_limit``)."""
+    obj = scene.objects[index]
+    start, goal = np.asarray(pose, float), np.asarray(obj.goal, float)
+    straight = float(np.hypot(*(goal[:2] - start[:2])))
+    space = ObjectSpace(obj.shape, scene.workspace, tuple(scene.obstacles))
+    route = route_length(space, (start[0], start[1]), (goal[0], goal[1]), step)
+    return straight if route is None else max(straight, route)
 
 
 @dataclass
