@@ -213,8 +213,9 @@ def _quiet_verbose(quiet: bool, verbose: bool) -> RunProgress:
     return RunProgress(quiet=quiet, verbose=verbose)
 
 
-SEGMENT_LIMIT_HELP = (f"{PAPER_MAX_SEGMENTS}, or {SEGMENTS_PER_METRE:g} per metre from start to "
-                      f"goal when that is more; the paper benchmark keeps {PAPER_MAX_SEGMENTS}")
+SEGMENT_LIMIT_HELP = (f"{PAPER_MAX_SEGMENTS}, or {SEGMENTS_PER_METRE:g} per metre of the object's "
+                      f"route around the obstacles when that is more; the paper benchmark "
+                      f"keeps {PAPER_MAX_SEGMENTS}")
 QUIET_HELP = "Print nothing but errors (result.json is still written)."
 VERBOSE_HELP = "Print a line per object and segment, even when the output is not a terminal."
 
