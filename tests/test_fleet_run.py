@@ -315,7 +315,7 @@ def test_a_plan_made_in_the_world_as_it_stands_is_not_declined() -> None:
     assert outcome(events_since=1) == (False, True)  # declined
 
 
-def _moving_fleet(scene, cross_near: float = 0.0):
+def _moving_fleet(scene, cross_near: float = 0.0, cross_waiting: float = 0.0):
     """A ``Fleet`` on ``scene`` whose objects all move, ranked in file order, over an
     executor that only reports the scene's start poses (no simulator)."""
     from types import SimpleNamespace
@@ -326,7 +326,8 @@ def _moving_fleet(scene, cross_near: float = 0.0):
 
     executor = SimpleNamespace(object_poses=np.array([o.start for o in scene.objects]),
                                robot_positions=np.array(scene.robot_starts, float))
-    fleet = Fleet(scene, executor, lambda f, k: None, lambda *a: None, cross_near=cross_near)
+    fleet = Fleet(scene, executor, lambda f, k: None, lambda *a: None, cross_near=cross_near,
+                  cross_waiting=cross_waiting)
     for k, o in enumerate(fleet.objects):
         o.status, o.rank = "active", k
     return fleet
@@ -404,3 +405,47 @@ def test_an_announced_plan_claims_its_way_and_a_crossing_heeds_only_the_near_par
     fleet.announce(1, up[:6], np.zeros((0, 3)))
     fleet.objects[1].way = shapely.LineString([[6.0, 0.5], [6.0, 0.9]])  # stops in the row
     assert fleet._meets_moving(seg) == "claim 0"
+
+
+@pytest.mark.parametrize("cross_waiting", [CLAIM_NEAR, 0.0])
+def test_a_crossing_heeds_only_the_near_part_of_a_waiting_objects_claim(
+        cross_waiting: float) -> None:
+    """``fleet_cross_waiting`` (``admission.heeded_claims``): a segment that crosses a
+    higher-ranked object's way far ahead of it is admitted while that object stands
+    waiting (its segment not admitted, or its planner waiting for a change), and waits
+    while it runs; one that would stop in the way waits either way. Off, the whole claim
+    binds it always."""
+    import numpy as np
+    import shapely
+
+    from lamp.fleet.segments import Segment
+
+    d = _two_boxes(9.0, (6.0, 0.5), 6.0)
+    d["objects"][1]["goal"] = [6.0, 2.5, 0.0]  # box 1 goes up, across the row of box 0
+    d["objects"][0]["goal"] = [8.0, 0.8, 0.0]  # box 0 runs along the row at y = 0.8
+    scene = scene_from_dict(d)
+    r = scene.robot_radius
+    fleet = _moving_fleet(scene, cross_waiting=cross_waiting)
+    row = np.array([[x, 0.8, 0.0] for x in np.arange(1.2, 8.01, 0.2)])
+    fleet.announce(0, row[:2], row[2:])
+    higher = fleet.objects[0]
+    assert higher.near.area < higher.claim.area if cross_waiting else higher.near is higher.claim
+    robot = row[0, :2] - [0.15 + r, 0.0]  # box 0's own segment: a short push at x = 1.2
+    own = Segment(0, [0], np.linspace(robot, robot + [0.2, 0.0], 10)[None], row[:2], None,
+                  scene.objects[0].shape, r)
+    q0, q1 = np.array([6.0, 0.5, 0.0]), np.array([6.0, 1.0, 0.0])  # box 1 into the row
+    rows = np.linspace(q0[:2] - [0.0, 0.15 + r], q1[:2] - [0.0, 0.15 + r], 25)[None]
+    seg = Segment(1, [0], rows, np.array([q0, q1]), None, scene.objects[1].shape, r)
+    up = np.array([[6.0, y, 0.0] for y in np.arange(0.5, 2.51, 0.1)])
+    fleet.announce(1, up[:2], up[2:])
+    crossing = None if cross_waiting else "claim 0"
+    higher.running = own  # it moves: the whole claim binds
+    assert not higher.waiting and fleet._meets_moving(seg) == "claim 0"
+    higher.running, higher.request = None, own  # its segment waits to be admitted
+    assert higher.waiting and fleet._meets_moving(seg) == crossing
+    higher.request, higher.blocked_at = None, (0, 0)  # its planner waits for a change
+    assert higher.waiting and fleet._meets_moving(seg) == crossing
+    fleet.objects[1].way = shapely.LineString([[6.0, 0.5], [6.0, 0.9]])  # stops in the row
+    assert fleet._meets_moving(seg) == "claim 0"
+    higher.blocked_at = None  # neither running nor waiting (placed, say): not waiting
+    assert not higher.waiting

@@ -7,10 +7,13 @@
   or it would leave its object and robots deeper inside a higher-ranked object's claim
   than they were (``CLAIM_AREA_SLACK`` of rounding): it waits for the next event. A plan
   that only crosses the claim (:func:`crosses`) keeps out of its near part only
-  (``regions.CLAIM_NEAR``): it may cross the other's way where that object will come
+  (``regions.claims``'s near reach): it may cross the other's way where that object will come
   only later, but never run along it towards it, nor stop in it.
 - :func:`standing_in`: the objects standing in a claim, which a blocked object's claim
   does not bind (``Fleet.plan_failed``).
+- :func:`heeded_claims`: the claims a segment must heed, each whole or, where a plan that
+  only crosses it may, its near part: any claim's with ``cross_near``; with
+  ``cross_waiting``, the claim of an object standing waiting (``ObjectState.waiting``).
 """
 
 from __future__ import annotations
@@ -23,10 +26,11 @@ import shapely
 from lamp.fleet.regions import standing
 from lamp.fleet.segments import Segment
 from lamp.fleet.spacetime import compatible
+from lamp.fleet.state import ObjectState
 from lamp.scene.model import Scene
 
-__all__ = ["CLAIM_AREA_SLACK", "CROSSING", "crosses", "meets_moving", "meets_standing",
-           "standing_in"]
+__all__ = ["CLAIM_AREA_SLACK", "CROSSING", "crosses", "heeded_claims", "meets_moving",
+           "meets_standing", "standing_in"]
 
 #: A segment may end with this much more of its bodies' area (m^2) inside a higher claim
 #: than it started with (rounding of the footprints).
@@ -92,3 +96,18 @@ def standing_in(region: shapely.Geometry, scene: Scene, object_poses: np.ndarray
     return frozenset(k for k, team in teams.items() if region.intersects(
         standing(scene.objects[k].shape, object_poses[k], r)) or any(
         region.intersects(standing(None, robot_positions[i], r)) for i in team))
+
+
+def heeded_claims(objects: Sequence[ObjectState], me: ObjectState, cross_near: float,
+                  cross_waiting: float
+                  ) -> list[tuple[int, shapely.Geometry, shapely.Geometry]]:
+    """The claims of the ``objects`` ranked above ``me`` that bind it (not those that
+    exempt it), as :func:`meets_moving` takes them: (index, claim, the part a plan that
+    only crosses it heeds). That part is the claim's near part (``ObjectState.near``)
+    with ``cross_near`` > 0, or with ``cross_waiting`` > 0 while its object stands
+    waiting: it comes no nearer while it waits, so a crossing far ahead of it is clear
+    of it; otherwise the whole claim."""
+    return [(o.index, o.claim, o.near if cross_near > 0 or (cross_waiting > 0 and o.waiting)
+             else o.claim)
+            for o in objects if o.index != me.index and o.rank < me.rank
+            and o.claim is not None and me.index not in o.exempt]

@@ -10,9 +10,10 @@ simulator. Design (``docs/fleet.md``):
   that start together); one with ``after`` starts once those objects are placed. A
   lower-priority segment may not end with its object and robots deeper in a higher
   object's *claim* (the rest of its plan, ``regions.claims``) than they began (crossing
-  one, or leaving it, is allowed; with ``cross_near``, a plan that only crosses it heeds
-  its near part): loads never meet head-on in a door. The claim of an object whose
-  planner found no plan stays, binding only the objects outside it then.
+  one, or leaving it, is allowed; a plan that only crosses the claim of an object standing
+  waiting heeds its near part, ``cross_waiting``, and with ``cross_near`` any claim's):
+  loads never meet head-on in a door. The claim of an object whose planner found no plan
+  stays, binding only the objects outside it then.
 - **Admission.** A segment starts only if it is compatible with every running segment
   (robots row by row on the shared clock, objects by the space they may take:
   ``spacetime.compatible``), respects higher claims, and its bodies as planned overlap
@@ -47,7 +48,7 @@ import shapely
 
 from lamp.contract.events import TRACE_EVERY, RunObserver
 from lamp.contract.runner import ObjectOutcome
-from lamp.fleet.admission import meets_moving, meets_standing, standing_in
+from lamp.fleet.admission import heeded_claims, meets_moving, meets_standing, standing_in
 from lamp.fleet.handover import better_team
 from lamp.fleet.objects import given_up
 from lamp.fleet.regions import claims
@@ -84,7 +85,8 @@ class Fleet:
     def __init__(self, scene: Scene, executor: Any, object_main: Callable[[Fleet, int],
                  ObjectOutcome], timeline: Callable[[Any, float, np.ndarray], None],
                  observers: Sequence[RunObserver] = (), row_step: float = 0.02,
-                 reinforce_reach: float = 0.0, cross_near: float = 0.0) -> None:
+                 reinforce_reach: float = 0.0, cross_near: float = 0.0,
+                 cross_waiting: float = 0.0) -> None:
         self.scene = scene
         self.executor = executor
         self.object_main = object_main
@@ -92,7 +94,8 @@ class Fleet:
         self.observers = list(observers)
         self.grid = float(row_step)
         self.reinforce_reach = float(reinforce_reach)  # 0: off (``_reinforce``)
-        self.cross_near = float(cross_near)  # 0: off (a crossing heeds the whole claim)
+        #: near reach (m) crossing any claim / a waiting object's claim; 0: the whole claim
+        self.cross_near, self.cross_waiting = float(cross_near), float(cross_waiting)
         #: rows a segment's robots hold at its end while others move: the settle time
         self.hold_rows = math.ceil(SETTLE_TIME * float(scene.physics.robot_speed) / self.grid
                                    - 1e-9)
@@ -284,11 +287,9 @@ class Fleet:
     def _meets_moving(self, seg: Segment) -> str | None:
         """Why ``seg`` must wait (``admission.meets_moving``), None if it need not."""
         me = self.objects[seg.index]
-        running = [o.running for o in self.objects if o.running is not None
-                   and o.index != seg.index]
-        claims = [(o.index, o.claim, o.near) for o in self.objects if o.index != seg.index
-                  and o.rank < me.rank and o.claim is not None and seg.index not in o.exempt]
-        why = meets_moving(seg, running, claims, me.way if self.cross_near > 0 else None)
+        running = [o.running for o in self.objects if o.running is not None and o is not me]
+        why = meets_moving(seg, running, heeded_claims(self.objects, me, self.cross_near,
+                                                       self.cross_waiting), me.way)
         if why:
             self.log.append((self.clock, "meets", seg.index, why))
         return why
@@ -440,7 +441,7 @@ class Fleet:
         poses = np.concatenate([o.announced, np.asarray(rest, float).reshape(-1, 3)])
         obj = self.scene.objects[k]
         o.claim, o.near, o.way = claims(obj.shape, poses, obj.goal, self.scene.robot_radius,
-                                        self.cross_near)
+                                        self.cross_near or self.cross_waiting)
         o.exempt = frozenset()  # a new plan's claim binds everyone
 
     def plan_failed(self, k: int) -> bool:
@@ -471,9 +472,7 @@ class Fleet:
 
     def wait_for_team(self, k: int) -> None:
         """Object ``k`` has no robots (they went to another object): wait for some."""
-        o = self.objects[k]
-        o.claim = None
-        o.needs_team = True
+        self.objects[k].claim, self.objects[k].needs_team = None, True
         self.turns.pause(k)
 
     def mark_placed(self, k: int) -> bool:

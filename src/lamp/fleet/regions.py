@@ -28,6 +28,7 @@ import shapely
 
 from lamp.geometry.se2 import interpolate, pose_distance
 from lamp.geometry.shapes import to_shapely
+from lamp.planners.config import CLAIM_NEAR  # its owner: the fleet's settings' default
 from lamp.scene.model import Shape
 
 __all__ = ["CLAIM_NEAR", "OBJECT_MARGIN", "ROBOT_MARGIN", "STATIC_SLACK", "claim", "claims",
@@ -40,10 +41,6 @@ ROBOT_MARGIN = 0.01
 OBJECT_MARGIN = 0.05
 #: A standing body is shrunk by this (m) before it is tested against a planned segment.
 STATIC_SLACK = 0.003
-#: The near part of a claim (:func:`claims`): the footprints along this much (m) of the
-#: object's planned travel, which even a plan that only crosses the claim keeps out of
-#: (the fleet's ``fleet_cross_near``, off by default, sets it; 2 m is what was measured).
-CLAIM_NEAR = 2.0
 #: Planned object motion is sampled this finely (m, rad).
 POSE_STEP = 0.05
 TURN_STEP = 0.15

@@ -41,3 +41,10 @@ class ObjectState:
     world_at: int = -1  # the event after which its loop took its world (``Fleet.world_taken``)
     outcome: ObjectOutcome | None = None
     placed_at_s: float | None = None
+
+    @property
+    def waiting(self) -> bool:
+        """Whether it stands waiting: its segment submitted and not admitted, or its
+        planner waiting for the world to change (it comes no nearer meanwhile)."""
+        return self.running is None and (self.request is not None
+                                         or self.blocked_at is not None)

@@ -60,6 +60,7 @@ def run_concurrently(scene: Any, executor: Executor, runner: ObjectRunner, recor
     fleet = Fleet(scene, executor, object_main(runner, _segments_to(watchers)),
                   recorder.follow, watchers, row_step=MAX_STEP,
                   reinforce_reach=runner.config.fleet_reinforce_reach,
-                  cross_near=runner.config.fleet_cross_near)
+                  cross_near=runner.config.fleet_cross_near,
+                  cross_waiting=runner.config.fleet_cross_waiting)
     outcomes = fleet.run()
     return outcomes, fleet.stats()

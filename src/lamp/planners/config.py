@@ -49,6 +49,13 @@ PAPER_MAX_SEGMENTS = 100
 #: 6.1 m straight line and a 25 m route, stopped 4.7 m short at its 182nd segment.)
 SEGMENTS_PER_METRE = 30.0
 
+#: The near part of a claim in the concurrent schedule (``fleet.regions.claims``): the
+#: footprints along this much (m) of an object's planned travel, which even a plan that
+#: only crosses its claim keeps out of (``fleet_cross_waiting``'s default; 4 m for
+#: ``fleet_cross_near`` undid most of its gains on the ``fleet`` family, 2 m is what was
+#: measured).
+CLAIM_NEAR = 2.0
+
 
 def segment_limit(max_segments: int | None, distance: float | Callable[[], float]) -> int:
     """The executed-segment limit for an object whose route to its goal is ``distance`` m
@@ -183,6 +190,14 @@ class PlannerConfig:
                                     "higher-ranked object's way heeds just the part of its "
                                     "claim within this much (m) of its planned travel; 0: "
                                     "the whole claim.", low=0.0)
+    #: The concurrent schedule only (``admission.heeded_claims``): on the ``maze-31-4`` grid
+    #: map a 2 m move waited 265 s on the claim of an object that itself waited on a third
+    #: one's; measured in ``docs/fleet.md`` (Coordination).
+    fleet_cross_waiting: float = param(CLAIM_NEAR, "Concurrent schedule: a plan that only crosses "
+                                       "the way of a higher-ranked object standing waiting "
+                                       "heeds just the part of its claim within this much "
+                                       "(m) of its planned travel; 0: the whole claim.",
+                                       low=0.0)
 
     def __post_init__(self) -> None:
         check_fields(self)
@@ -213,7 +228,7 @@ LOOP_PARAMS = ("planning_time_limit", "max_segments", "drift_position", "drift_o
                "stop_position", "stop_orientation", "long_push_length", "long_push_turn",
                "continuous_push_gap",
                "sensing_sigma", "sensing_readings", "space_cache_mb", "fleet_park_clear",
-               "fleet_reinforce_reach", "fleet_cross_near")
+               "fleet_reinforce_reach", "fleet_cross_near", "fleet_cross_waiting")
 VERIFY_PARAMS = ("k", "max_budget", "gspi_attempts_per_budget", "gspi_time_limit",
                  "contact_tolerance")
 LATTICE_PARAMS = ("lattice_step", "n_headings", "robot_match_tolerance")
