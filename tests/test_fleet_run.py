@@ -367,6 +367,30 @@ def test_a_blocked_objects_claim_binds_only_those_outside_it() -> None:
     assert fleet._meets_moving(deeper(1, 0.5)) == "claim 0"  # an ordinary claim binds both
 
 
+def _crossing(cross_near: float = 0.0, cross_waiting: float = 0.0):
+    """Box 0 runs along the row at y = 0.8 to x = 8 (its plan announced); box 1 goes up
+    from (6, 0.5) to (6, 2.5), across that row 4.8 m ahead of box 0 (its plan announced):
+    (fleet, box 1's first segment, into the row, box 0's and box 1's planned poses)."""
+    import numpy as np
+
+    from lamp.fleet.segments import Segment
+
+    d = _two_boxes(9.0, (6.0, 0.5), 6.0)
+    d["objects"][1]["goal"] = [6.0, 2.5, 0.0]
+    d["objects"][0]["goal"] = [8.0, 0.8, 0.0]
+    scene = scene_from_dict(d)
+    r = scene.robot_radius
+    fleet = _moving_fleet(scene, cross_near, cross_waiting)
+    row = np.array([[x, 0.8, 0.0] for x in np.arange(1.2, 8.01, 0.2)])
+    fleet.announce(0, row[:2], row[2:])
+    q0, q1 = np.array([6.0, 0.5, 0.0]), np.array([6.0, 1.0, 0.0])  # box 1 into the row
+    rows = np.linspace(q0[:2] - [0.0, 0.15 + r], q1[:2] - [0.0, 0.15 + r], 25)[None]
+    seg = Segment(1, [0], rows, np.array([q0, q1]), None, scene.objects[1].shape, r)
+    up = np.array([[6.0, y, 0.0] for y in np.arange(0.5, 2.51, 0.1)])
+    fleet.announce(1, up[:2], up[2:])
+    return fleet, seg, row, up
+
+
 @pytest.mark.parametrize("cross_near", [CLAIM_NEAR, 0.0])
 def test_an_announced_plan_claims_its_way_and_a_crossing_heeds_only_the_near_part(
         cross_near: float) -> None:
@@ -379,27 +403,13 @@ def test_an_announced_plan_claims_its_way_and_a_crossing_heeds_only_the_near_par
     import numpy as np
     import shapely
 
-    from lamp.fleet.segments import Segment
-
-    d = _two_boxes(9.0, (6.0, 0.5), 6.0)
-    d["objects"][1]["goal"] = [6.0, 2.5, 0.0]  # box 1 goes up, across the row of box 0
-    d["objects"][0]["goal"] = [8.0, 0.8, 0.0]  # box 0 runs along the row at y = 0.8
-    scene = scene_from_dict(d)
-    r = scene.robot_radius
-    fleet = _moving_fleet(scene, cross_near)
-    row = np.array([[x, 0.8, 0.0] for x in np.arange(1.2, 8.01, 0.2)])
-    fleet.announce(0, row[:2], row[2:])
+    fleet, seg, _, up = _crossing(cross_near=cross_near)
     o = fleet.objects[0]
     assert o.way is not None and np.allclose(shapely.get_coordinates(o.way)[-1], [8.0, 0.8])
     if cross_near:
         assert o.near.area < o.claim.area and o.near.bounds[2] < 1.2 + cross_near + 0.5
     else:
         assert o.near is o.claim
-    q0, q1 = np.array([6.0, 0.5, 0.0]), np.array([6.0, 1.0, 0.0])  # box 1 into the row
-    rows = np.linspace(q0[:2] - [0.0, 0.15 + r], q1[:2] - [0.0, 0.15 + r], 25)[None]
-    seg = Segment(1, [0], rows, np.array([q0, q1]), None, scene.objects[1].shape, r)
-    up = np.array([[6.0, y, 0.0] for y in np.arange(0.5, 2.51, 0.1)])
-    fleet.announce(1, up[:2], up[2:])
     want = None if cross_near else "claim 0"
     assert fleet._meets_moving(seg) == want  # crosses 4.8 m ahead of box 0
     fleet.announce(1, up[:6], np.zeros((0, 3)))
@@ -420,24 +430,13 @@ def test_a_crossing_heeds_only_the_near_part_of_a_waiting_objects_claim(
 
     from lamp.fleet.segments import Segment
 
-    d = _two_boxes(9.0, (6.0, 0.5), 6.0)
-    d["objects"][1]["goal"] = [6.0, 2.5, 0.0]  # box 1 goes up, across the row of box 0
-    d["objects"][0]["goal"] = [8.0, 0.8, 0.0]  # box 0 runs along the row at y = 0.8
-    scene = scene_from_dict(d)
-    r = scene.robot_radius
-    fleet = _moving_fleet(scene, cross_waiting=cross_waiting)
-    row = np.array([[x, 0.8, 0.0] for x in np.arange(1.2, 8.01, 0.2)])
-    fleet.announce(0, row[:2], row[2:])
+    fleet, seg, row, _ = _crossing(cross_waiting=cross_waiting)
     higher = fleet.objects[0]
     assert higher.near.area < higher.claim.area if cross_waiting else higher.near is higher.claim
+    r = fleet.scene.robot_radius
     robot = row[0, :2] - [0.15 + r, 0.0]  # box 0's own segment: a short push at x = 1.2
     own = Segment(0, [0], np.linspace(robot, robot + [0.2, 0.0], 10)[None], row[:2], None,
-                  scene.objects[0].shape, r)
-    q0, q1 = np.array([6.0, 0.5, 0.0]), np.array([6.0, 1.0, 0.0])  # box 1 into the row
-    rows = np.linspace(q0[:2] - [0.0, 0.15 + r], q1[:2] - [0.0, 0.15 + r], 25)[None]
-    seg = Segment(1, [0], rows, np.array([q0, q1]), None, scene.objects[1].shape, r)
-    up = np.array([[6.0, y, 0.0] for y in np.arange(0.5, 2.51, 0.1)])
-    fleet.announce(1, up[:2], up[2:])
+                  fleet.scene.objects[0].shape, r)
     crossing = None if cross_waiting else "claim 0"
     higher.running = own  # it moves: the whole claim binds
     assert not higher.waiting and fleet._meets_moving(seg) == "claim 0"

@@ -51,7 +51,7 @@ from lamp.contract.runner import ObjectOutcome
 from lamp.fleet.admission import heeded_claims, meets_moving, meets_standing, standing_in
 from lamp.fleet.handover import better_team
 from lamp.fleet.objects import given_up
-from lamp.fleet.regions import claims
+from lamp.fleet.regions import CLAIM_NEAR, claims
 from lamp.fleet.segments import Segment, on_grid
 from lamp.fleet.state import ObjectState
 from lamp.fleet.teams import allocate, near_way, nearest, reinforce, start_order
@@ -86,7 +86,7 @@ class Fleet:
                  ObjectOutcome], timeline: Callable[[Any, float, np.ndarray], None],
                  observers: Sequence[RunObserver] = (), row_step: float = 0.02,
                  reinforce_reach: float = 0.0, cross_near: float = 0.0,
-                 cross_waiting: float = 0.0) -> None:
+                 cross_waiting: float = CLAIM_NEAR) -> None:
         self.scene = scene
         self.executor = executor
         self.object_main = object_main
