@@ -439,12 +439,12 @@ def test_a_crossing_heeds_only_the_near_part_of_a_waiting_objects_claim(
                   fleet.scene.objects[0].shape, r)
     crossing = None if cross_waiting else "claim 0"
     higher.running = own  # it moves: the whole claim binds
-    assert not higher.waiting and fleet._meets_moving(seg) == "claim 0"
+    assert not higher.held_up and fleet._meets_moving(seg) == "claim 0"
     higher.running, higher.request = None, own  # its segment waits to be admitted
-    assert higher.waiting and fleet._meets_moving(seg) == crossing
+    assert higher.held_up and fleet._meets_moving(seg) == crossing
     higher.request, higher.blocked_at = None, (0, 0)  # its planner waits for a change
-    assert higher.waiting and fleet._meets_moving(seg) == crossing
+    assert higher.held_up and fleet._meets_moving(seg) == crossing
     fleet.objects[1].way = shapely.LineString([[6.0, 0.5], [6.0, 0.9]])  # stops in the row
     assert fleet._meets_moving(seg) == "claim 0"
     higher.blocked_at = None  # neither running nor waiting (placed, say): not waiting
-    assert not higher.waiting
+    assert not higher.held_up

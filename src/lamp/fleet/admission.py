@@ -13,7 +13,7 @@
   does not bind (``Fleet.plan_failed``).
 - :func:`heeded_claims`: the claims a segment must heed, each whole or, where a plan that
   only crosses it may, its near part: any claim's with ``cross_near``; with
-  ``cross_waiting``, the claim of an object standing waiting (``ObjectState.waiting``).
+  ``cross_waiting``, the claim of an object standing waiting (``ObjectState.held_up``).
 """
 
 from __future__ import annotations
@@ -107,7 +107,7 @@ def heeded_claims(objects: Sequence[ObjectState], me: ObjectState, cross_near: f
     with ``cross_near`` > 0, or with ``cross_waiting`` > 0 while its object stands
     waiting: it comes no nearer while it waits, so a crossing far ahead of it is clear
     of it; otherwise the whole claim."""
-    return [(o.index, o.claim, o.near if cross_near > 0 or (cross_waiting > 0 and o.waiting)
+    return [(o.index, o.claim, o.near if cross_near > 0 or (cross_waiting > 0 and o.held_up)
              else o.claim)
             for o in objects if o.index != me.index and o.rank < me.rank
             and o.claim is not None and me.index not in o.exempt]

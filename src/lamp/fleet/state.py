@@ -43,7 +43,7 @@ class ObjectState:
     placed_at_s: float | None = None
 
     @property
-    def waiting(self) -> bool:
+    def held_up(self) -> bool:
         """Whether it stands waiting: its segment submitted and not admitted, or its
         planner waiting for the world to change (it comes no nearer meanwhile)."""
         return self.running is None and (self.request is not None
