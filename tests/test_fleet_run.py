@@ -448,3 +448,25 @@ def test_a_crossing_heeds_only_the_near_part_of_a_waiting_objects_claim(
     assert fleet._meets_moving(seg) == "claim 0"
     higher.blocked_at = None  # neither running nor waiting (placed, say): not waiting
     assert not higher.held_up
+
+
+@pytest.mark.parametrize("params, want", [({}, CLAIM_NEAR), ({"fleet_cross_waiting": 0.0}, 0.0),
+                                          ({"fleet_cross_waiting": 0.5}, 0.5)])
+def test_the_crossing_settings_reach_the_fleet(monkeypatch, params, want) -> None:
+    """``lamp.solve(params=...)`` hands ``fleet_cross_waiting`` (default ``CLAIM_NEAR``)
+    and ``fleet_cross_near`` to the concurrent schedule's ``Fleet``."""
+    from lamp.fleet.coordinator import Fleet
+
+    seen: list[tuple[float, float]] = []
+
+    class Seen(Exception):
+        pass
+
+    def run(self):
+        seen.append((self.cross_near, self.cross_waiting))
+        raise Seen
+
+    monkeypatch.setattr(Fleet, "run", run)
+    with pytest.raises(Seen):
+        lamp.solve(scene_from_dict(_two_boxes(5.0, (1.2, 2.2), 4.2)), "lazy", 0, params=params)
+    assert seen == [(0.0, want)]
