@@ -28,9 +28,10 @@ simulator. Design (``docs/fleet.md``):
   segment while the others hold their place in their rows (simulated time stands still
   while loops plan). Only when every running segment ends together does the simulator
   settle as it does after a sequential segment.
-- **Liveness.** When nothing runs and nothing waits on a change, the highest-priority
-  waiting segment is admitted against standing bodies only (``forced``), and planners
-  waiting on a change plan in the world as it is (as sequentially), claims dropped.
+- **Liveness.** When nothing runs and nothing waits on a change, an object standing on
+  a blocked one's goal moves aside (``fleet.makeway``); else planners waiting on a change
+  plan in the world as it is (as sequentially), claims dropped, or the highest-priority
+  waiting segment is admitted against standing bodies only (``forced``).
 - **Teams.** Allocated by ``lamp.fleet.teams``. A robot that fails (``executor.failed``)
   leaves its sub-team for good (``FAILED``), replaced by the nearest free robot if any;
   far robots hand over to free ones nearer (``lamp.fleet.handover``). The team's loop
@@ -50,6 +51,7 @@ from lamp.contract.events import TRACE_EVERY, RunObserver
 from lamp.contract.runner import ObjectOutcome
 from lamp.fleet.admission import heeded_claims, meets_moving, meets_standing, standing_in
 from lamp.fleet.handover import better_team
+from lamp.fleet.makeway import make_way
 from lamp.fleet.objects import given_up
 from lamp.fleet.regions import CLAIM_NEAR, claims
 from lamp.fleet.segments import Segment, on_grid
@@ -87,11 +89,8 @@ class Fleet:
                  observers: Sequence[RunObserver] = (), row_step: float = 0.02,
                  reinforce_reach: float = 0.0, cross_near: float = 0.0,
                  cross_waiting: float = CLAIM_NEAR) -> None:
-        self.scene = scene
-        self.executor = executor
-        self.object_main = object_main
-        self.timeline = timeline
-        self.observers = list(observers)
+        self.scene, self.executor, self.observers = scene, executor, list(observers)
+        self.object_main, self.timeline = object_main, timeline
         self.grid = float(row_step)
         self.reinforce_reach = float(reinforce_reach)  # 0: off (``_reinforce``)
         #: near reach (m) crossing any claim / a waiting object's claim; 0: the whole claim
@@ -105,12 +104,13 @@ class Fleet:
         self.clock = 0.0
         #: (simulated time, what, object, detail) of every decision: for the curious
         self.log: list[tuple[float, str, int, str]] = []
-        self.counts = dict.fromkeys(("admitted", "declined", "waited", "forced", "blocked",
-                                     "merged", "grown", "reinforced", "replaced", "handed_over",
-                                     "events", "transit_hops", "parking_moves"), 0)
+        self.counts = dict.fromkeys((
+            "admitted", "declined", "waited", "forced", "blocked", "merged", "grown",
+            "reinforced", "replaced", "handed_over", "events", "transit_hops",
+            "parking_moves", "made_way"), 0)
+        self.made_way: set[tuple[int, int]] = set()  # (j, k): j moved aside for k's goal
         self._handover_checked: set[tuple[int, tuple[int, ...], tuple[int, ...]]] = set()
-        #: wall-clock seconds spent planning transit hops and parking moves
-        self.transit_planning_s = 0.0
+        self.transit_planning_s = 0.0  # wall-clock s planning transit hops and parking moves
         self.robot_time = RobotTime(scene.n_robots)  # utilisation
         self.owner = np.full(scene.n_robots, FREE)  # robot -> object of its team (FREE, FAILED)
         #: robots that failed (``executor.failed``: a ``DisturbedExecutor``'s), and when
@@ -160,8 +160,7 @@ class Fleet:
 
     def _any_waits(self, but: int | None = None) -> bool:
         """Whether an object (other than ``but``) waits to start or waits for robots."""
-        return any(o.status == "waiting" or o.needs_team for o in self.objects
-                   if o.index != but)
+        return any(o.status == "waiting" or o.needs_team for o in self.objects if o.index != but)
 
     def _start(self, ready: list[int]) -> None:
         """Sub-teams for the ``ready`` objects: those waiting for robots first, then the
@@ -295,11 +294,14 @@ class Fleet:
         return why
 
     def _unstick(self) -> bool:
-        """Nothing runs and no loop can go on. Planners that wait for a change: the first
-        gets the robots of all of them (like the sequential schedule, where the whole
-        team plans), the others wait for robots; when it has them all already, it plans
-        in the world as it is. Else the first waiting segment is forced."""
+        """Nothing runs and no loop can go on. Planners that wait for a change: one
+        standing on another's goal moves aside (``makeway.make_way``); else the first gets
+        the robots of all of them (as sequentially), the others wait for robots; when it
+        has them all already, it plans in the world as it is. Else the first waiting
+        segment is forced."""
         blocked = [o for o in self._ranked() if o.blocked_at is not None]
+        if blocked and make_way(self, blocked):
+            return True
         if blocked:
             first = blocked[0]
             pool = sorted({i for o in blocked for i in o.team}
@@ -378,11 +380,9 @@ class Fleet:
         return [int(i) for i in np.flatnonzero(self.owner == FREE)]
 
     def _note_failures(self) -> None:
-        """Robots that failed during the last stretch (``executor.failed``) leave their
-        sub-teams for good, each replaced by the free robot nearest to its object when
-        there is one: the team's loop sees ``team_changed`` after its segment and plans
-        anew with its robots (``lamp.fleet.objects``); every later plan has the failed
-        robot as an obstacle where it stopped."""
+        """Robots that failed in the last stretch (``executor.failed``) leave their teams
+        for good, each replaced by the free robot nearest its object if any (the loop
+        plans anew after its segment); every later plan has them as obstacles."""
         for i in sorted(getattr(self.executor, "failed", {})):
             if i in self.failed_at:
                 continue
@@ -411,8 +411,7 @@ class Fleet:
 
     # ------------------------------------------------------------------ a loop's executor
     def view(self, k: int) -> FleetView:
-        """Object ``k``'s sub-team's executor, for its closed loop."""
-        return FleetView(self, k)
+        return FleetView(self, k)  # object k's sub-team's executor, for its closed loop
 
     def submit(self, k: int, paths: np.ndarray, stop: Callable[[np.ndarray], bool] | None,
                team: Sequence[int]) -> FleetExecution:
@@ -440,7 +439,8 @@ class Fleet:
         o.announced = np.asarray(segment, float)
         poses = np.concatenate([o.announced, np.asarray(rest, float).reshape(-1, 3)])
         obj = self.scene.objects[k]
-        o.claim, o.near, o.way = claims(obj.shape, poses, obj.goal, self.scene.robot_radius,
+        goal = obj.goal if o.detour is None else o.detour
+        o.claim, o.near, o.way = claims(obj.shape, poses, goal, self.scene.robot_radius,
                                         self.cross_near or self.cross_waiting)
         o.exempt = frozenset()  # a new plan's claim binds everyone
 

@@ -8,7 +8,8 @@ robot a disk obstacle where it stands). A team that stands far from its object f
 drives to it (``lamp.fleet.transit``); a team whose object is placed moves out of the
 others' way before its robots go free (``lamp.fleet.parking``). A loop that ends with ``WORLD_CHANGED`` (its
 segment was declined, or it found no plan while others moved) or ``TEAM_CHANGED`` (a robot
-of its sub-team failed: ``Fleet`` took it out of the team) is followed by a new one,
+of its sub-team failed: ``Fleet`` took it out of the team) is followed by a new one, and so
+is a loop that took the object aside to a detour's end (``lamp.fleet.makeway``),
 within the object's segment limit and cumulative planning limit (when one of them ends it,
 the object's failure names that limit, :func:`limit_reached`); the object's outcome
 merges every loop's (``runner.merged``: each new loop counts as a replan). The objects
@@ -27,6 +28,7 @@ from lamp.contract.events import SegmentEvent
 from lamp.contract.goals import goal_errors
 from lamp.contract.result import ObjectResult
 from lamp.contract.runner import ObjectOutcome
+from lamp.fleet.makeway import detour_done, with_goal
 from lamp.fleet.parking import needed_by_others, park
 from lamp.fleet.transit import transit
 from lamp.planners.closed_loop import TEAM_CHANGED, WORLD_CHANGED
@@ -114,11 +116,15 @@ def object_main(runner: ClosedLoopRunner, observe: Callable[[SegmentEvent], None
             fleet.transit_planning_s += planning
             if view.team_changed:  # a robot failed or joined during transit
                 continue
-            scene_k = world()
+            detour = fleet.objects[k].detour
+            scene_k = world() if detour is None else with_goal(world(), k, detour)
             fleet.world_taken(k)
             parts.append(runner.loop(scene_k, k, view, config, observe))
             r = parts[-1].result
-            if r.failure_reason not in (WORLD_CHANGED, TEAM_CHANGED):
+            ended = r.failure_reason not in (WORLD_CHANGED, TEAM_CHANGED)
+            if ended and detour is not None:  # aside (or no way there): on to its goal
+                detour_done(fleet, k)
+            elif ended:
                 break
             ran_out = limit_reached(limit, used + r.segments, len(parts),
                                     spent + r.planning_time_s, cfg.planning_time_limit)

@@ -37,6 +37,9 @@ class ObjectState:
     blocked_at: tuple[int, int] | None = None
     wake: bool = False  # the answer to ``plan_failed``
     needs_team: bool = False  # its thread waits for robots (``wait_for_team``)
+    #: a pose to move to before its goal: it stands on a blocked object's goal
+    #: (``fleet.makeway``); None: none
+    detour: np.ndarray | None = None
     rank: int = 1 << 30  # its priority: the order in which objects started (lower first)
     world_at: int = -1  # the event after which its loop took its world (``Fleet.world_taken``)
     outcome: ObjectOutcome | None = None

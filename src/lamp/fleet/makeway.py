@@ -1,0 +1,155 @@
+"""Making way: an object standing on the goal of a blocked object moves aside first.
+
+Objects whose goals are each other's places (two loads swapping places, three rotating
+round) block one another for good: each planner finds no plan while the other stands on
+its goal, and waiting changes nothing. When the fleet schedule is stuck (nothing runs and
+the planners wait for a change, ``Fleet._unstick``), :func:`make_way` looks, in priority
+order, for a blocked object ``k`` whose goal another object ``j`` stands on (its
+footprint within a robot diameter of ``k``'s footprint at its goal, :func:`occupant`), ``j``
+itself blocked too. ``j`` then gets a *detour*: a pose to move to first
+(:func:`buffer_pose`), which its loop plans to and runs like a goal (LAMP's own loop and
+Verify; ``lamp.fleet.objects``); when it stands there, or finds no way there, the detour
+ends (:func:`detour_done`), the blocked planners plan again and ``j`` goes on to its own
+goal. Each (``j``, ``k``) pair makes way at most once, so the schedule still ends.
+
+The buffer is the free position nearest ``j`` (at its heading, on a grid of
+``BUFFER_STEP``) whose distance to anything ``j`` must keep clear of is at least ``j``'s
+bounding radius and a robot diameter (room for robots all round): the obstacles and the
+workspace border, the other objects and robots where they stand, the other unplaced
+objects at their goals, and ``k``'s way (``teams.corridor``); and which ``j`` can reach
+(``landmark.route_length`` round the obstacles and the objects). The search widens from
+``BUFFER_REACH`` metres around ``j`` to the whole map.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from typing import TYPE_CHECKING
+
+import numpy as np
+import shapely
+
+from lamp.fleet.teams import corridor
+from lamp.geometry.object_space import ObjectSpace
+from lamp.geometry.shapes import obstacle_geometry, to_shapely
+from lamp.scene.model import Scene
+from lamp.search.landmark import route_length
+
+if TYPE_CHECKING:
+    from lamp.fleet.coordinator import Fleet
+    from lamp.fleet.state import ObjectState
+
+__all__ = ["BUFFER_REACH", "BUFFER_STEP", "buffer_pose", "detour_done", "make_way",
+           "occupant", "with_goal"]
+
+#: Grid (m) on which buffer positions are sought.
+BUFFER_STEP = 0.1
+#: First search radius (m) around the object; doubled until the map is covered.
+BUFFER_REACH = 3.0
+#: Buffer candidates checked for reachability (nearest first) per search radius.
+_REACH_CHECKS = 8
+
+
+def occupant(scene: Scene, k: int, poses: np.ndarray, candidates: list[int]) -> int | None:
+    """The first of ``candidates`` (objects, at ``poses``) whose footprint comes within a
+    robot diameter of object ``k``'s footprint at its goal; None if none does."""
+    obj = scene.objects[k]
+    goal = to_shapely(obj.shape, np.asarray(obj.goal, float))
+    gap = 2.0 * float(scene.robot_radius)
+    for j in candidates:
+        if j != k and shapely.dwithin(goal, to_shapely(scene.objects[j].shape, poses[j]), gap):
+            return j
+    return None
+
+
+def buffer_pose(scene: Scene, j: int, poses: np.ndarray, robot_positions: np.ndarray,
+                team: list[int], keep: list[shapely.Geometry], step: float = BUFFER_STEP
+                ) -> np.ndarray | None:
+    """The pose (``j``'s heading) ``j`` moves aside to (module docstring): clear by ``j``'s
+    bounding radius and a robot diameter of the obstacles, the border, the other objects
+    at ``poses``, the robots not in ``team`` and ``keep``; reachable; nearest ``j`` (ties
+    by grid order). None when no position qualifies."""
+    obj = scene.objects[j]
+    pose = np.asarray(poses[j], float)
+    r = float(scene.robot_radius)
+    clear = float(obj.shape.bounding_radius) + 2.0 * r
+    W, H = scene.workspace
+    parts = [obstacle_geometry(o) for o in scene.obstacles] + list(keep)
+    parts += [to_shapely(o.shape, poses[i]) for i, o in enumerate(scene.objects) if i != j]
+    parts += [shapely.Point(*p).buffer(r) for i, p in enumerate(np.asarray(robot_positions))
+              if i not in team]
+    blocked = shapely.union_all(parts) if parts else shapely.GeometryCollection()
+    shapely.prepare(blocked)
+    xs = np.arange(clear, W - clear + 1e-9, step)
+    ys = np.arange(clear, H - clear + 1e-9, step)
+    if len(xs) == 0 or len(ys) == 0:
+        return None
+    space = ObjectSpace.from_scene(scene, j, poses)
+    tried: set[tuple[int, int]] = set()
+    reach = BUFFER_REACH
+    while True:
+        ix = np.flatnonzero(np.abs(xs - pose[0]) <= reach)
+        iy = np.flatnonzero(np.abs(ys - pose[1]) <= reach)
+        gi, gj = (a.ravel() for a in np.meshgrid(ix, iy, indexing="ij"))
+        d = np.hypot(xs[gi] - pose[0], ys[gj] - pose[1])
+        fresh = np.array([(a, b) not in tried for a, b in zip(gi.tolist(), gj.tolist(),
+                                                                 strict=True)], bool)
+        gi, gj, d = gi[fresh], gj[fresh], d[fresh]
+        tried.update(zip(gi.tolist(), gj.tolist(), strict=True))
+        pts = shapely.points(xs[gi], ys[gj])
+        ok = ~np.asarray(shapely.dwithin(blocked, pts, clear), bool)
+        order = np.flatnonzero(ok)[np.lexsort((gj[ok], gi[ok], d[ok]))]
+        for c in order[:_REACH_CHECKS]:
+            x, y = float(xs[gi[c]]), float(ys[gj[c]])
+            if route_length(space, (pose[0], pose[1]), (x, y), step) is not None:
+                return np.array([x, y, pose[2]])
+        if reach >= math.hypot(W, H):
+            return None
+        reach *= 2.0
+
+
+def with_goal(scene: Scene, k: int, goal: np.ndarray) -> Scene:
+    """``scene`` with object ``k``'s goal moved to ``goal``."""
+    objs = list(scene.objects)
+    objs[k] = replace(objs[k], goal=tuple(float(v) for v in goal))
+    return replace(scene, objects=tuple(objs))
+
+
+def make_way(fleet: Fleet, blocked: list[ObjectState]) -> bool:
+    """Give a detour to a blocked object standing on the goal of another blocked one
+    (``blocked``: in priority order; module docstring); True if one was given."""
+    scene = fleet.scene
+    poses = np.asarray(fleet.executor.object_poses, float)
+    standing = [o.index for o in blocked if o.detour is None and o.team]
+    for o in blocked:
+        j = occupant(scene, o.index, poses, [i for i in standing if i != o.index
+                                              and (i, o.index) not in fleet.made_way])
+        if j is None:
+            continue
+        fleet.made_way.add((j, o.index))
+        keep = [corridor(scene.objects[o.index].shape, poses[o.index],
+                         scene.objects[o.index].goal, scene.robot_radius)]
+        keep += [to_shapely(p.shape, np.asarray(p.goal, float)).buffer(2 * scene.robot_radius)
+                 for i, p in enumerate(scene.objects)
+                 if i != j and fleet.objects[i].status in ("active", "waiting")]
+        target = buffer_pose(scene, j, poses, fleet.executor.robot_positions,
+                             fleet.objects[j].team, keep)
+        fleet.log.append((fleet.clock, "make_way", j, f"for {o.index}: "
+                          f"{None if target is None else np.round(target, 2).tolist()}"))
+        if target is None:
+            continue
+        J = fleet.objects[j]
+        J.detour, J.blocked_at, J.wake, J.ready = target, None, True, True
+        fleet.counts["made_way"] += 1
+        return True
+    return False
+
+
+def detour_done(fleet: Fleet, k: int) -> None:
+    """Object ``k`` stands at its detour's end (or found no way there): it goes on to its
+    own goal, and the planners waiting for a change plan again."""
+    fleet.objects[k].detour = None
+    for o in fleet.objects:
+        if o.blocked_at is not None:
+            o.blocked_at, o.wake, o.ready = None, True, True
