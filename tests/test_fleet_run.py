@@ -10,6 +10,7 @@ from pathlib import Path
 
 import pytest
 import yaml
+from run_safety import assert_safe
 from typer.testing import CliRunner
 
 import lamp
@@ -17,7 +18,7 @@ from lamp.cli import app
 from lamp.errors import InputError
 from lamp.fleet.regions import CLAIM_NEAR
 from lamp.pipeline import RunRequest
-from lamp.record.safety import check_recording, recorded_teams
+from lamp.record.safety import recorded_teams
 from lamp.scene import scene_from_dict
 
 #: Two rooms side by side, a box in each to push along its room, six robots: two
@@ -37,13 +38,6 @@ ROOMS = {
 }
 
 
-def _safe(result) -> None:
-    rec = result.recording
-    report = check_recording(rec.scene_model(), rec.arrays["times"], rec.arrays["robots"],
-                             rec.arrays["objects"], robot_team=recorded_teams(rec))
-    assert report.ok, report.summary()
-
-
 @pytest.fixture(scope="module")
 def rooms_runs():
     scene = scene_from_dict(copy.deepcopy(ROOMS))
@@ -56,8 +50,8 @@ def rooms_runs():
 def test_concurrent_run_places_every_object_safely_and_sooner(rooms_runs) -> None:
     concurrent, _, sequential = rooms_runs
     assert concurrent.success and sequential.success
-    _safe(concurrent)
-    _safe(sequential)
+    assert_safe(concurrent)
+    assert_safe(sequential)
     fleet = concurrent.to_dict()["stats"]["fleet"]
     placed = fleet["placed_at_s"]
     assert all(t is not None for t in placed)
@@ -89,7 +83,7 @@ def test_fleet_family_scenes_run_concurrently_and_safely(name: str) -> None:
     result = lamp.solve(name, "lazy", 0)
     assert result.to_dict()["stats"]["fleet"]["admitted"] > 0
     assert result.success, [o.failure_reason for o in result.objects]
-    _safe(result)
+    assert_safe(result)
 
 
 def test_schedule_is_refused_by_name_where_it_cannot_run(tmp_path: Path) -> None:
@@ -211,7 +205,7 @@ def test_a_failed_robot_leaves_its_sub_team_and_a_free_one_takes_its_place() -> 
     res = lamp.solve(scene, "lazy", 0, disturbances=Disturbances(robot_failures=((1, 2.0),)))
     out = res.to_dict()
     assert res.success, [o.failure_reason for o in res.objects]
-    _safe(res)
+    assert_safe(res)
     fleet = out["stats"]["fleet"]
     assert set(fleet["robots_failed_at_s"]) == {"1"}
     assert set(out["stats"]["failed_robots"]) == {"1"}
@@ -249,7 +243,7 @@ def test_robots_freed_by_a_placed_object_reinforce_a_moving_team() -> None:
     assert off.success and off.to_dict()["stats"]["fleet"]["reinforced"] == 0
     res = lamp.solve(scene_from_dict(d), "lazy", 0, params={"fleet_reinforce_reach": 4.0})
     assert res.success, [o.failure_reason for o in res.objects]
-    _safe(res)
+    assert_safe(res)
     fleet = res.to_dict()["stats"]["fleet"]
     first, last = fleet["placed_at_s"]
     assert first < last and fleet["reinforced"] >= 1
@@ -271,7 +265,7 @@ def test_a_team_reinforced_while_it_drives_to_its_object_keeps_its_robots_apart(
     d = _two_boxes(12.0, (9.0, 2.2), 10.5)
     res = lamp.solve(scene_from_dict(d), "lazy", 0, params={"fleet_reinforce_reach": 20.0})
     assert res.success, [o.failure_reason for o in res.objects]
-    _safe(res)
+    assert_safe(res)
     fleet = res.to_dict()["stats"]["fleet"]
     assert fleet["reinforced"] >= 1 and fleet["transit_hops"] >= 1
     team = recorded_teams(res.recording)

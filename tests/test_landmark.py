@@ -8,15 +8,17 @@ import math
 
 import numpy as np
 import pytest
+import shapely
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
 from lamp.geometry.object_space import ObjectSpace
+from lamp.geometry.shapes import obstacle_geometry
 from lamp.scene.model import Circle, Obstacle, Polygon, Rectangle
 from lamp.search.dstar_lite import DStarLite
-from lamp.search.landmark import inscribed_radius, route_length
+from lamp.search.landmark import inscribed_radius, route_length, route_path
 from lamp.search.lattice import ObjectLattice
 
 SHAPES = (
@@ -215,3 +217,37 @@ def test_route_length_is_none_when_a_wall_cuts_the_map():
            Obstacle(Rectangle((0.1, 0.95)), (2.0, 1.525, 0.0))]  # a 0.1 m slit at y = 1
     assert route_length(ObjectSpace(Circle(0.1), (4.0, 2.0), gap), (1.0, 0.5), (3.0, 0.5),
                         0.1) is None
+
+
+@settings(max_examples=25, deadline=None)
+@given(sx=st.floats(0.2, 3.8), sy=st.floats(0.2, 1.8), gx=st.floats(0.2, 3.8),
+       gy=st.floats(0.2, 1.8), wall=st.booleans())
+def test_route_path_joins_start_to_goal_by_passable_neighbours_at_the_route_length(
+        sx, sy, gx, gy, wall):
+    space = ObjectSpace(Circle(0.1), (4.0, 2.0), [WALL] if wall else [])
+    if not (space.pose_free((sx, sy, 0.0)) and space.pose_free((gx, gy, 0.0))):
+        return
+    path = route_path(space, (sx, sy), (gx, gy), 0.1)
+    length = route_length(space, (sx, sy), (gx, gy), 0.1)
+    assert (path is None) == (length is None)
+    assert path is not None  # the wall leaves a way round it
+    assert np.allclose(path[0], (sx, sy)) and np.allclose(path[-1], (gx, gy))
+    inner = path[1:-1]
+    steps = np.abs(np.diff(inner, axis=0))
+    assert np.all(steps <= 0.1 + 1e-9) and np.all(steps.max(axis=1) >= 0.1 - 1e-9)
+    walls = [obstacle_geometry(WALL)] if wall else []
+    for x, y in inner:  # the disk passes there (touching at most)
+        assert 0.1 - 1e-6 <= x <= 3.9 + 1e-6 and 0.1 - 1e-6 <= y <= 1.9 + 1e-6
+        assert all(w.distance(shapely.Point(x, y)) >= 0.1 - 1e-6 for w in walls)
+    total = float(np.sum(np.hypot(*np.diff(path, axis=0).T)))
+    assert abs(total - length) <= 0.2 + 1e-9 + 0.1 * (math.sqrt(2) - 1) * 2
+
+
+def test_route_path_goes_round_a_wall_and_is_none_across_a_cut():
+    space = ObjectSpace(Circle(0.1), (4.0, 2.0), [WALL])
+    path = route_path(space, (1.0, 0.5), (3.0, 0.5), 0.1)
+    crossing = path[np.argmin(np.abs(path[:, 0] - 2.0))]
+    assert crossing[1] >= 1.6 + 0.1 - 1e-9  # above the wall's end by the disk's radius
+    cut = Obstacle(Rectangle((0.1, 2.0)), (2.0, 1.0, 0.0))
+    assert route_path(ObjectSpace(Circle(0.1), (4.0, 2.0), [cut]), (1.0, 0.5), (3.0, 0.5),
+                      0.1) is None

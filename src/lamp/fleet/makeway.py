@@ -1,24 +1,30 @@
-"""Making way: an object standing on the goal of a blocked object moves aside first.
+"""Making way: an object standing in a blocked object's way moves aside first.
 
 Objects whose goals are each other's places (two loads swapping places, three rotating
-round) block one another for good: each planner finds no plan while the other stands on
-its goal, and waiting changes nothing. When the fleet schedule is stuck (nothing runs and
-the planners wait for a change, ``Fleet._unstick``), :func:`make_way` looks, in priority
-order, for a blocked object ``k`` whose goal another object ``j`` stands on (its
-footprint within a robot diameter of ``k``'s footprint at its goal, :func:`occupant`), ``j``
-itself blocked too. ``j`` then gets a *detour*: a pose to move to first
-(:func:`buffer_pose`), which its loop plans to and runs like a goal (LAMP's own loop and
-Verify; ``lamp.fleet.objects``); when it stands there, or finds no way there, the detour
-ends (:func:`detour_done`), the blocked planners plan again and ``j`` goes on to its own
-goal. Each (``j``, ``k``) pair makes way at most once, so the schedule still ends.
+round), or that stand in each other's way in a dead end, block one another for good: each
+planner finds no plan while the other stands where it must pass, and waiting changes
+nothing. When the fleet schedule is stuck (nothing runs and the planners wait for a
+change, ``Fleet._unstick``), :func:`make_way` looks, in priority order, for a blocked
+object ``k`` in whose way another blocked object ``j`` stands: its footprint within
+``k``'s bounding radius and a robot diameter of ``k``'s route round the map's obstacles
+to its goal (:func:`way_of`, :func:`standing_in_way`; the first such along the route).
+``j`` then gets a *detour*: a pose to move to first (:func:`buffer_pose`), which its loop
+plans to and runs like a goal (LAMP's own loop and Verify; ``lamp.fleet.objects``); when
+it stands there, or finds no way there, the detour ends (:func:`detour_done`), the
+blocked planners plan again and ``j`` goes on to its own goal. Each (``j``, ``k``) pair
+makes way at most once, so the schedule still ends. Runs that never get stuck are
+unchanged (the ``fleet`` family: all 25 the same).
 
 The buffer is the free position nearest ``j`` (at its heading, on a grid of
 ``BUFFER_STEP``) whose distance to anything ``j`` must keep clear of is at least ``j``'s
 bounding radius and a robot diameter (room for robots all round): the obstacles and the
 workspace border, the other objects and robots where they stand, the other unplaced
-objects at their goals, and ``k``'s way (``teams.corridor``); and which ``j`` can reach
-(``landmark.route_length`` round the obstacles and the objects). The search widens from
-``BUFFER_REACH`` metres around ``j`` to the whole map.
+objects at their goals, and the band ``k`` sweeps along its route; and which ``j`` can
+reach (``landmark.route_length`` round the obstacles and the objects). The search widens
+from ``BUFFER_REACH`` metres around ``j`` to the whole map, doubling; at each width the
+routes of the ``_REACH_CHECKS`` nearest clear positions not yet tried are sought, so the
+buffer is the nearest clear reachable position unless more clear positions nearer than it
+are walled off.
 """
 
 from __future__ import annotations
@@ -30,18 +36,17 @@ from typing import TYPE_CHECKING
 import numpy as np
 import shapely
 
-from lamp.fleet.teams import corridor
 from lamp.geometry.object_space import ObjectSpace
 from lamp.geometry.shapes import obstacle_geometry, to_shapely
 from lamp.scene.model import Scene
-from lamp.search.landmark import route_length
+from lamp.search.landmark import route_length, route_path
 
 if TYPE_CHECKING:
     from lamp.fleet.coordinator import Fleet
     from lamp.fleet.state import ObjectState
 
 __all__ = ["BUFFER_REACH", "BUFFER_STEP", "buffer_pose", "detour_done", "make_way",
-           "occupant", "with_goal"]
+           "standing_in_way", "way_of", "with_goal"]
 
 #: Grid (m) on which buffer positions are sought.
 BUFFER_STEP = 0.1
@@ -51,16 +56,27 @@ BUFFER_REACH = 3.0
 _REACH_CHECKS = 8
 
 
-def occupant(scene: Scene, k: int, poses: np.ndarray, candidates: list[int]) -> int | None:
-    """The first of ``candidates`` (objects, at ``poses``) whose footprint comes within a
-    robot diameter of object ``k``'s footprint at its goal; None if none does."""
+def way_of(scene: Scene, k: int, pose: np.ndarray, step: float = BUFFER_STEP
+           ) -> shapely.LineString:
+    """Object ``k``'s way from ``pose`` to its goal round the map's obstacles
+    (``landmark.route_path``; the other objects move, so they do not count), or the
+    straight line when no route joins them."""
     obj = scene.objects[k]
-    goal = to_shapely(obj.shape, np.asarray(obj.goal, float))
-    gap = 2.0 * float(scene.robot_radius)
-    for j in candidates:
-        if j != k and shapely.dwithin(goal, to_shapely(scene.objects[j].shape, poses[j]), gap):
-            return j
-    return None
+    start, goal = np.asarray(pose, float)[:2], np.asarray(obj.goal, float)[:2]
+    space = ObjectSpace(obj.shape, scene.workspace, tuple(scene.obstacles))
+    path = route_path(space, (start[0], start[1]), (goal[0], goal[1]), step)
+    return shapely.LineString(np.array([start, goal]) if path is None else path)
+
+
+def standing_in_way(scene: Scene, k: int, way: shapely.LineString, poses: np.ndarray,
+                    candidates: list[int]) -> int | None:
+    """The first along ``way`` (object ``k``'s, :func:`way_of`) of ``candidates`` (objects,
+    at ``poses``) whose footprint comes within ``k``'s bounding radius and a robot
+    diameter of it (where ``k`` and its robots pass); None if none does."""
+    reach = float(scene.objects[k].shape.bounding_radius) + 2.0 * float(scene.robot_radius)
+    hits = [(way.project(shapely.Point(poses[j][:2])), j) for j in candidates if j != k
+            and shapely.dwithin(way, to_shapely(scene.objects[j].shape, poses[j]), reach)]
+    return min(hits)[1] if hits else None
 
 
 def buffer_pose(scene: Scene, j: int, poses: np.ndarray, robot_positions: np.ndarray,
@@ -86,21 +102,19 @@ def buffer_pose(scene: Scene, j: int, poses: np.ndarray, robot_positions: np.nda
     if len(xs) == 0 or len(ys) == 0:
         return None
     space = ObjectSpace.from_scene(scene, j, poses)
-    tried: set[tuple[int, int]] = set()
+    checked: set[tuple[int, int]] = set()  # positions whose route was sought
     reach = BUFFER_REACH
     while True:
         ix = np.flatnonzero(np.abs(xs - pose[0]) <= reach)
         iy = np.flatnonzero(np.abs(ys - pose[1]) <= reach)
         gi, gj = (a.ravel() for a in np.meshgrid(ix, iy, indexing="ij"))
+        ok = ~np.asarray(shapely.dwithin(blocked, shapely.points(xs[gi], ys[gj]), clear), bool)
+        gi, gj = gi[ok], gj[ok]
         d = np.hypot(xs[gi] - pose[0], ys[gj] - pose[1])
-        fresh = np.array([(a, b) not in tried for a, b in zip(gi.tolist(), gj.tolist(),
-                                                                 strict=True)], bool)
-        gi, gj, d = gi[fresh], gj[fresh], d[fresh]
-        tried.update(zip(gi.tolist(), gj.tolist(), strict=True))
-        pts = shapely.points(xs[gi], ys[gj])
-        ok = ~np.asarray(shapely.dwithin(blocked, pts, clear), bool)
-        order = np.flatnonzero(ok)[np.lexsort((gj[ok], gi[ok], d[ok]))]
-        for c in order[:_REACH_CHECKS]:
+        fresh = [c for c in np.lexsort((gj, gi, d)).tolist()
+                 if (gi[c], gj[c]) not in checked][:_REACH_CHECKS]
+        for c in fresh:
+            checked.add((gi[c], gj[c]))
             x, y = float(xs[gi[c]]), float(ys[gj[c]])
             if route_length(space, (pose[0], pose[1]), (x, y), step) is not None:
                 return np.array([x, y, pose[2]])
@@ -117,25 +131,26 @@ def with_goal(scene: Scene, k: int, goal: np.ndarray) -> Scene:
 
 
 def make_way(fleet: Fleet, blocked: list[ObjectState]) -> bool:
-    """Give a detour to a blocked object standing on the goal of another blocked one
+    """Give a detour to a blocked object standing in the way of another blocked one
     (``blocked``: in priority order; module docstring); True if one was given."""
     scene = fleet.scene
     poses = np.asarray(fleet.executor.object_poses, float)
     standing = [o.index for o in blocked if o.detour is None and o.team]
     for o in blocked:
-        j = occupant(scene, o.index, poses, [i for i in standing if i != o.index
-                                              and (i, o.index) not in fleet.made_way])
+        k = o.index
+        way = way_of(scene, k, poses[k])
+        j = standing_in_way(scene, k, way, poses, [i for i in standing
+                                                   if (i, k) not in fleet.made_way])
         if j is None:
             continue
-        fleet.made_way.add((j, o.index))
-        keep = [corridor(scene.objects[o.index].shape, poses[o.index],
-                         scene.objects[o.index].goal, scene.robot_radius)]
+        fleet.made_way.add((j, k))
+        keep = [way.buffer(float(scene.objects[k].shape.bounding_radius))]
         keep += [to_shapely(p.shape, np.asarray(p.goal, float)).buffer(2 * scene.robot_radius)
                  for i, p in enumerate(scene.objects)
                  if i != j and fleet.objects[i].status in ("active", "waiting")]
         target = buffer_pose(scene, j, poses, fleet.executor.robot_positions,
                              fleet.objects[j].team, keep)
-        fleet.log.append((fleet.clock, "make_way", j, f"for {o.index}: "
+        fleet.log.append((fleet.clock, "make_way", j, f"for {k}: "
                           f"{None if target is None else np.round(target, 2).tolist()}"))
         if target is None:
             continue

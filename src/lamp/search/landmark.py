@@ -204,6 +204,17 @@ class LandmarkPotential:
         return int(self.values.nbytes + self.passable.nbytes)
 
 
+def _potential_from(space: ObjectSpace, start: tuple[float, float], step: float
+                    ) -> LandmarkPotential:
+    """The potential over the workspace grid of side ``step`` through ``start``, from it."""
+    sx, sy = float(start[0]), float(start[1])
+    w, h = space.workspace
+    origin = (sx - step * math.floor(sx / step), sy - step * math.floor(sy / step))
+    shape = (int(math.floor((w - origin[0]) / step)) + 1,
+             int(math.floor((h - origin[1]) / step)) + 1)
+    return LandmarkPotential(space, origin, step, shape, (sx, sy), 2.0 * step)
+
+
 def route_length(space: ObjectSpace, start: tuple[float, float], goal: tuple[float, float],
                  step: float) -> float | None:
     """The length of the object's shortest route from ``start`` to ``goal`` as the potential
@@ -218,11 +229,45 @@ def route_length(space: ObjectSpace, start: tuple[float, float], goal: tuple[flo
     detour around it; a goal walled off from the start gives None. Cost: one Dijkstra over
     the workspace's grid (a 50 m map at 0.1 m: 250 k positions).
     """
-    sx, sy = float(start[0]), float(start[1])
-    w, h = space.workspace
-    origin = (sx - step * math.floor(sx / step), sy - step * math.floor(sy / step))
-    shape = (int(math.floor((w - origin[0]) / step)) + 1,
-             int(math.floor((h - origin[1]) / step)) + 1)
-    potential = LandmarkPotential(space, origin, step, shape, (sx, sy), 2.0 * step)
+    potential = _potential_from(space, start, step)
     value = potential.at(float(goal[0]), float(goal[1]))
     return None if value >= potential.unreachable else float(value)
+
+
+def route_path(space: ObjectSpace, start: tuple[float, float], goal: tuple[float, float],
+               step: float) -> np.ndarray | None:
+    """(N, 2) the route :func:`route_length` measures: ``start``, the passable grid
+    positions of a steepest descent of the potential from the goal's cheapest neighbour
+    (within two steps) down to a cell beside the start, then ``goal``; None when the goal
+    is not connected to the start.
+
+    Guarantees (``tests/test_landmark.py``): it begins at ``start`` and ends at ``goal``;
+    its grid positions are passable and 8-neighbours in turn; its length is the route
+    length within two grid steps. Every step of the descent lowers the potential (the
+    cell's Dijkstra predecessor is one such neighbour), so it ends, at a cell the search
+    was seeded with: within two steps of the start."""
+    p = _potential_from(space, start, step)
+    cells = p._near(float(goal[0]), float(goal[1]), p.radius)
+    if not cells:
+        return None
+    u = min(cells, key=lambda c: (p.values[c[0]] + c[1], c[0]))[0]
+    if p.values[u] >= p.unreachable:
+        return None
+    n_i, n_j = p.shape
+    path = [(float(goal[0]), float(goal[1]))]
+    while True:
+        i, j = divmod(u, n_j)
+        path.append((p.origin[0] + i * p.step, p.origin[1] + j * p.step))
+        best = u
+        for di in (-1, 0, 1):
+            for dj in (-1, 0, 1):
+                vi, vj = i + di, j + dj
+                if 0 <= vi < n_i and 0 <= vj < n_j and p.passable[vi, vj]:
+                    v = vi * n_j + vj
+                    if p.values[v] < p.values[best]:
+                        best = v
+        if best == u:
+            break
+        u = best
+    path.append((float(start[0]), float(start[1])))
+    return np.array(path[::-1])

@@ -1,0 +1,235 @@
+"""Making way (``lamp.fleet.makeway``): an object standing on a blocked object's goal moves
+aside, so loads that swap places finish; the buffer it moves to is clear, reachable and
+the nearest such position."""
+
+from __future__ import annotations
+
+import copy
+import math
+from types import SimpleNamespace
+
+import numpy as np
+import shapely
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
+from run_safety import assert_safe
+
+import lamp
+from lamp.fleet.coordinator import Fleet
+from lamp.fleet.makeway import (
+    BUFFER_STEP,
+    buffer_pose,
+    make_way,
+    standing_in_way,
+    way_of,
+    with_goal,
+)
+from lamp.geometry.object_space import ObjectSpace
+from lamp.geometry.shapes import obstacle_geometry, to_shapely
+from lamp.scene import scene_from_dict
+from lamp.search.landmark import route_length
+
+#: Two boxes in an open yard, each to go where the other stands; three robots each.
+SWAP = {
+    "format": "lamp-scene/1", "name": "swap", "workspace": [6.0, 4.0],
+    "schedule": "concurrent",
+    "robots": {"radius": 0.05, "starts": [[1.0, 1.0], [1.2, 1.0], [1.4, 1.0], [4.6, 1.0],
+                                          [4.8, 1.0], [5.0, 1.0]]},
+    "obstacles": [],
+    "objects": [
+        {"type": "rectangle", "size": [0.4, 0.4], "start": [2.0, 2.0, 0.0],
+         "goal": [4.0, 2.0, 0.0]},
+        {"type": "rectangle", "size": [0.4, 0.4], "start": [4.0, 2.0, 0.0],
+         "goal": [2.0, 2.0, 0.0]},
+    ],
+}
+
+
+def _scene(d: dict):
+    return scene_from_dict(copy.deepcopy(d))
+
+
+def test_two_loads_swapping_places_both_finish_safely() -> None:
+    result = lamp.solve(_scene(SWAP), "lazy", 0)
+    assert result.success, [o.failure_reason for o in result.objects]
+    fleet = result.stats["fleet"]
+    assert fleet["made_way"] == 1
+    assert all(t is not None for t in fleet["placed_at_s"])
+    assert_safe(result)
+
+
+#: A dead end 1.2 m wide: object 0 deep inside is to come out, object 1 at its mouth to
+#: go in past it.
+DEAD_END = {
+    "format": "lamp-scene/1", "name": "dead-end", "workspace": [8.0, 4.0],
+    "schedule": "concurrent",
+    "robots": {"radius": 0.05, "starts": [[6.5, 2.0], [6.5, 1.8], [6.5, 2.2], [7.0, 2.0],
+                                          [7.0, 1.8], [7.0, 2.2]]},
+    "obstacles": [{"type": "rectangle", "center": [2.5, 0.7], "size": [5.0, 1.4]},
+                  {"type": "rectangle", "center": [2.5, 3.3], "size": [5.0, 1.4]}],
+    "objects": [
+        {"type": "rectangle", "size": [0.4, 0.4], "start": [2.0, 2.0, 0.0],
+         "goal": [6.0, 3.3, 0.0]},
+        {"type": "rectangle", "size": [0.4, 0.4], "start": [4.0, 2.0, 0.0],
+         "goal": [1.0, 2.0, 0.0]},
+    ],
+}
+
+
+def test_two_loads_passing_in_a_dead_end_both_finish_safely() -> None:
+    result = lamp.solve(_scene(DEAD_END), "lazy", 0)
+    assert result.success, [o.failure_reason for o in result.objects]
+    assert result.stats["fleet"]["made_way"] == 1
+    placed = result.stats["fleet"]["placed_at_s"]
+    assert placed[0] < placed[1]  # the one inside came out first
+    assert_safe(result)
+
+
+def test_the_sequential_schedule_keeps_its_semantics_on_a_swap() -> None:
+    """One after another in the file's order, nobody moves aside: the first object finds
+    its goal taken (the paper's schedule is unchanged)."""
+    result = lamp.solve(_scene(SWAP), "lazy", 0, schedule="sequential")
+    assert not result.objects[0].success
+
+
+@given(dx=st.floats(-1.5, 1.5), dy=st.floats(-1.0, 1.0), r=st.floats(0.1, 0.4))
+@settings(max_examples=60, deadline=None)
+def test_standing_in_way_is_the_object_near_the_route(dx, dy, r) -> None:
+    """On an open map a route along an axis is the straight segment; a disk's gap to it
+    is the distance of its centre to the segment less its radius."""
+    assume(math.hypot(1.5 + dx, 0.5 - dy) > 0.3 + r + 0.01)  # apart at their starts
+    d = copy.deepcopy(SWAP)
+    d["objects"][0] = {"type": "circle", "radius": 0.3, "start": [1.0, 3.0, 0.0],
+                       "goal": [3.0, 3.0, 0.0]}
+    d["objects"][1] = {"type": "circle", "radius": r, "start": [2.5 + dx, 2.5 + dy, 0.0],
+                       "goal": [5.0, 1.0, 0.0]}
+    scene = _scene(d)
+    poses = np.array([o.start for o in scene.objects])
+    way = way_of(scene, 0, poses[0])
+    assert np.allclose(np.asarray(way.coords)[:, 1], 3.0)
+    cx = min(max(2.5 + dx, 1.0), 3.0)
+    gap = math.hypot(2.5 + dx - cx, 2.5 + dy - 3.0) - r
+    reach = 0.3 + 2 * scene.robot_radius
+    if abs(gap - reach) < 1e-3:  # the polygonal circles' tolerance
+        return
+    assert standing_in_way(scene, 0, way, poses, [0, 1]) == (1 if gap <= reach else None)
+
+
+def test_the_first_object_along_the_route_is_the_one_in_the_way() -> None:
+    d = copy.deepcopy(SWAP)
+    d["objects"].append({"type": "rectangle", "size": [0.3, 0.3], "start": [3.0, 2.0, 0.0],
+                         "goal": [3.0, 3.5, 0.0]})
+    scene = _scene(d)
+    poses = np.array([o.start for o in scene.objects])
+    way = way_of(scene, 0, poses[0])
+    assert standing_in_way(scene, 0, way, poses, [1, 2]) == 2
+    assert standing_in_way(scene, 0, way, poses, [1]) == 1
+
+
+def _clear_map(draw_obstacles: list[tuple[float, float, float]]) -> dict:
+    """SWAP with the drawn circle obstacles that keep clear of its robots and objects."""
+    d = copy.deepcopy(SWAP)
+    taken = [shapely.Point(*p).buffer(0.1) for p in d["robots"]["starts"]]
+    taken += [shapely.box(x - 0.25, y - 0.25, x + 0.25, y + 0.25)
+              for o in d["objects"] for x, y, _ in (o["start"], o["goal"])]
+    d["obstacles"] = [{"type": "circle", "center": [x, y], "radius": rr}
+                      for x, y, rr in draw_obstacles
+                      if rr <= x <= 6.0 - rr and rr <= y <= 4.0 - rr and not any(t.intersects(shapely.Point(x, y).buffer(rr)) for t in taken)]
+    return d
+
+
+obstacles = st.lists(st.tuples(st.floats(0.3, 5.7), st.floats(0.3, 3.7), st.floats(0.1, 0.5)),
+                     max_size=6)
+
+
+@given(obs=obstacles)
+@settings(max_examples=25, deadline=None)
+def test_a_buffer_is_clear_reachable_and_the_nearest_clear_position(obs) -> None:
+    d = _clear_map(obs)
+    scene = _scene(d)
+    j, poses = 1, np.array([o.start for o in scene.objects])
+    keep = [shapely.box(1.5, 1.5, 2.5, 2.5)]
+    robots = np.array(scene.robot_starts, float)
+    got = buffer_pose(scene, j, poses, robots, [3, 4, 5], keep)
+    r = scene.robot_radius
+    clear = scene.objects[j].shape.bounding_radius + 2 * r
+    things = [obstacle_geometry(o) for o in scene.obstacles] + keep
+    things += [to_shapely(scene.objects[0].shape, poses[0])]
+    things += [shapely.Point(*p).buffer(r) for p in robots[:3]]
+    W, H = scene.workspace
+    # the brute-force reference: every grid position, nearest first
+    xs = np.arange(clear, W - clear + 1e-9, BUFFER_STEP)
+    ys = np.arange(clear, H - clear + 1e-9, BUFFER_STEP)
+    ok = [(math.hypot(x - poses[j][0], y - poses[j][1]), x, y) for x in xs for y in ys
+          if all(g.distance(shapely.Point(x, y)) >= clear for g in things)]
+    if got is None:
+        space = ObjectSpace.from_scene(scene, j, poses)
+        assert all(route_length(space, tuple(poses[j][:2]), (x, y), BUFFER_STEP) is None
+                   for _, x, y in sorted(ok)[:8])
+        return
+    x, y, th = got
+    assert th == poses[j][2]
+    assert clear - 1e-9 <= x <= W - clear + 1e-9 and clear - 1e-9 <= y <= H - clear + 1e-9
+    assert all(g.distance(shapely.Point(x, y)) >= clear - 1e-9 for g in things)
+    space = ObjectSpace.from_scene(scene, j, poses)
+    assert route_length(space, tuple(poses[j][:2]), (x, y), BUFFER_STEP) is not None
+    nearest = min(ok)
+    if route_length(space, tuple(poses[j][:2]), nearest[1:], BUFFER_STEP) is not None:
+        assert math.hypot(x - poses[j][0], y - poses[j][1]) <= nearest[0] + 1e-9
+
+
+def test_no_buffer_where_the_map_has_no_room() -> None:
+    d = copy.deepcopy(SWAP)
+    d["workspace"] = [1.2, 0.8]
+    d["robots"]["starts"] = [[0.1, 0.1], [1.1, 0.1]]
+    d["objects"] = [
+        {"type": "rectangle", "size": [0.3, 0.3], "start": [0.3, 0.4, 0.0],
+         "goal": [0.9, 0.4, 0.0]},
+        {"type": "rectangle", "size": [0.3, 0.3], "start": [0.9, 0.4, 0.0],
+         "goal": [0.3, 0.4, 0.0]},
+    ]
+    scene = _scene(d)
+    poses = np.array([o.start for o in scene.objects])
+    keep = [to_shapely(scene.objects[0].shape, scene.objects[0].goal)]
+    assert buffer_pose(scene, 1, poses, np.array(scene.robot_starts), [1], keep) is None
+
+
+def _stuck_fleet(scene) -> Fleet:
+    """A ``Fleet`` on ``scene`` whose objects are all started and all blocked, over an
+    executor that only reports the start poses (no simulator)."""
+    executor = SimpleNamespace(object_poses=np.array([o.start for o in scene.objects]),
+                               robot_positions=np.array(scene.robot_starts, float))
+    fleet = Fleet(scene, executor, lambda f, k: None, lambda *a: None)
+    for k, o in enumerate(fleet.objects):
+        o.status, o.rank, o.team, o.blocked_at = "active", k, [3 * k, 3 * k + 1, 3 * k + 2], (0, 0)
+    return fleet
+
+
+def test_the_object_on_the_first_blocked_goal_moves_aside_once_per_pair() -> None:
+    scene = _scene(SWAP)
+    fleet = _stuck_fleet(scene)
+    assert make_way(fleet, fleet._ranked())
+    mover = fleet.objects[1]  # it stands on the goal of object 0, the first
+    assert mover.detour is not None and mover.blocked_at is None and mover.ready
+    assert fleet.objects[0].detour is None and fleet.objects[0].blocked_at is not None
+    assert not shapely.dwithin(to_shapely(scene.objects[1].shape, mover.detour),
+                               to_shapely(scene.objects[0].shape, scene.objects[0].goal),
+                               2 * scene.robot_radius)
+    # blocked again at the same places: object 0 makes way for object 1, then nobody
+    mover.detour, mover.blocked_at = None, (0, 0)
+    assert make_way(fleet, fleet._ranked())
+    assert fleet.objects[0].detour is not None
+    fleet.objects[0].detour, fleet.objects[0].blocked_at = None, (0, 0)
+    assert not make_way(fleet, fleet._ranked())
+    assert fleet.counts["made_way"] == 2
+
+
+def test_a_detour_claims_its_way_to_the_buffer_not_to_the_goal() -> None:
+    scene = _scene(SWAP)
+    fleet = _stuck_fleet(scene)
+    make_way(fleet, fleet._ranked())
+    target = fleet.objects[1].detour
+    fleet.announce(1, np.array([[4.0, 2.0, 0.0]]), np.array([target]))
+    goal = to_shapely(scene.objects[1].shape, scene.objects[1].goal)
+    assert not fleet.objects[1].way.intersects(goal)
+    assert with_goal(scene, 1, target).objects[1].goal == tuple(float(v) for v in target)
