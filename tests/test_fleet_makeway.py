@@ -87,9 +87,12 @@ def test_two_loads_passing_in_a_dead_end_both_finish_safely() -> None:
 
 def test_the_sequential_schedule_keeps_its_semantics_on_a_swap() -> None:
     """One after another in the file's order, nobody moves aside: the first object finds
-    its goal taken (the paper's schedule is unchanged)."""
+    its goal taken (the paper's schedule is unchanged), and its failure says by whom."""
     result = lamp.solve(_scene(SWAP), "lazy", 0, schedule="sequential")
     assert not result.objects[0].success
+    reason = result.objects[0].failure_reason
+    assert reason.startswith("no plan found") and "object 1 stands in its way" in reason
+    assert "object" not in lamp.solve(_scene(SWAP), "lazy", 0).objects[0].failure_reason
 
 
 @given(dx=st.floats(-1.5, 1.5), dy=st.floats(-1.0, 1.0), r=st.floats(0.1, 0.4))

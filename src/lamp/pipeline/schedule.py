@@ -11,9 +11,13 @@ closed loops.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from dataclasses import replace
 from typing import Any
 
+import numpy as np
+
 from lamp.contract.events import RunObserver, SegmentEvent
+from lamp.contract.plan import PlanStatus
 from lamp.contract.runner import Executor, ObjectOutcome, ObjectRunner
 
 __all__ = ["run_concurrently", "run_in_order"]
@@ -39,11 +43,32 @@ def run_in_order(n_objects: int, executor: Executor, runner: ObjectRunner,
     for index in range(n_objects):
         for o in observers:
             o.object_started(index, n_objects)
-        outcome = runner.run_object(index, executor, observe)
+        outcome = _blocker_named(getattr(runner, "scene", None), index, executor,
+                                 runner.run_object(index, executor, observe))
         for o in observers:
             o.object_finished(index, n_objects, outcome.result)
         outcomes.append(outcome)
     return outcomes
+
+
+def _blocker_named(scene: Any, index: int, executor: Executor, outcome: ObjectOutcome
+                   ) -> ObjectOutcome:
+    """``outcome`` of object ``index``; when it failed for want of a plan and another
+    object stands in its way (``fleet.makeway.standing_in_way``: nobody moves aside in
+    this schedule), its failure reason says which, and what would move it."""
+    r = outcome.result
+    if scene is None or r.success or not r.failure_reason.startswith(PlanStatus.NO_PATH.reason):
+        return outcome
+    from lamp.fleet.makeway import standing_in_way, way_of
+
+    poses = np.asarray(executor.object_poses, float)
+    j = standing_in_way(scene, index, way_of(scene, index, poses[index]), poses,
+                        list(range(len(scene.objects))))
+    if j is None:
+        return outcome
+    why = (f"{r.failure_reason} (object {j} stands in its way: this schedule moves the "
+           f"objects one after another in the file's order; the concurrent one moves it aside)")
+    return replace(outcome, result=replace(r, failure_reason=why))
 
 
 def run_concurrently(scene: Any, executor: Executor, runner: ObjectRunner, recorder: Any,
