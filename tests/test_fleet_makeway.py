@@ -236,3 +236,51 @@ def test_a_detour_claims_its_way_to_the_buffer_not_to_the_goal() -> None:
     goal = to_shapely(scene.objects[1].shape, scene.objects[1].goal)
     assert not fleet.objects[1].way.intersects(goal)
     assert with_goal(scene, 1, target).objects[1].goal == tuple(float(v) for v in target)
+
+
+def _waiting_in_way(goal_of_1: list[float]) -> Fleet:
+    """SWAP (object 1's goal moved to ``goal_of_1``) with object 0 blocked, all six robots
+    its team, and object 1, standing on its goal, not started."""
+    d = copy.deepcopy(SWAP)
+    d["objects"][1]["goal"] = goal_of_1
+    scene = _scene(d)
+    executor = SimpleNamespace(object_poses=np.array([o.start for o in scene.objects]),
+                               robot_positions=np.array(scene.robot_starts, float))
+    fleet = Fleet(scene, executor, lambda f, k: None, lambda *a: None)
+    first = fleet.objects[0]
+    first.status, first.rank, first.team, first.blocked_at = "active", 0, list(range(6)), (0, 0)
+    fleet.owner[:] = 0
+    fleet.started = 1
+    return fleet
+
+
+def test_robots_go_to_the_object_in_the_way_and_it_moves_aside_when_its_own_way_is_shut():
+    fleet = _waiting_in_way([2.0, 2.0, 0.0])  # its goal is where object 0 stands
+    try:
+        assert make_way(fleet, fleet._ranked())
+        first, mover = fleet.objects
+        assert mover.status == "active" and mover.team == list(range(6)) and mover.ready
+        assert list(fleet.owner) == [1] * 6
+        assert first.team == [] and first.blocked_at is None and first.ready
+        assert mover.detour is not None and fleet.counts["made_way"] == 1
+    finally:
+        fleet.turns.close()
+
+
+def test_robots_go_to_the_object_in_the_way_which_goes_straight_on_when_its_way_is_clear():
+    fleet = _waiting_in_way([4.0, 3.3, 0.0])
+    try:
+        assert make_way(fleet, fleet._ranked())
+        mover = fleet.objects[1]
+        assert mover.team == list(range(6)) and mover.detour is None
+        assert fleet.counts["made_way"] == 0
+    finally:
+        fleet.turns.close()
+
+
+def test_one_robot_swaps_two_loads() -> None:
+    d = copy.deepcopy(SWAP)
+    d["robots"]["starts"] = [[1.0, 1.0]]
+    result = lamp.solve(_scene(d), "lazy", 0)
+    assert result.success, [o.failure_reason for o in result.objects]
+    assert_safe(result)

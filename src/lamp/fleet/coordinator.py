@@ -91,8 +91,7 @@ class Fleet:
                  cross_waiting: float = CLAIM_NEAR) -> None:
         self.scene, self.executor, self.observers = scene, executor, list(observers)
         self.object_main, self.timeline = object_main, timeline
-        self.grid = float(row_step)
-        self.reinforce_reach = float(reinforce_reach)  # 0: off (``_reinforce``)
+        self.grid, self.reinforce_reach = float(row_step), float(reinforce_reach)  # 0: off
         #: near reach (m) crossing any claim / a waiting object's claim; 0: the whole claim
         self.cross_near, self.cross_waiting = float(cross_near), float(cross_waiting)
         #: rows a segment's robots hold at its end while others move: the settle time
@@ -173,17 +172,21 @@ class Fleet:
         teams = allocate(first + order, self._free(), self.executor.robot_positions,
                          self.executor.object_poses, bool(moving))
         for k, team in teams.items():
-            o = self.objects[k]
-            o.team, o.ready = team, True
-            self.owner[team] = k
-            if o.needs_team:
-                o.needs_team = False
-                continue
-            o.status, o.rank = "active", self.started
-            self.started += 1
-            for obs in self.observers:
-                obs.object_started(k, len(self.objects))
-            self.turns.start(k, lambda k=k: self._main(k))
+            self.give_team(k, team)
+
+    def give_team(self, k: int, team: list[int]) -> None:
+        """Object ``k`` (waiting to start, or for robots) gets ``team`` and goes on."""
+        o = self.objects[k]
+        o.team, o.ready = team, True
+        self.owner[team] = k
+        if o.needs_team:
+            o.needs_team = False
+            return
+        o.status, o.rank = "active", self.started
+        self.started += 1
+        for obs in self.observers:
+            obs.object_started(k, len(self.objects))
+        self.turns.start(k, lambda: self._main(k))
 
     def _reinforce(self) -> None:
         """Free robots join the moving teams with room within ``reinforce_reach``
@@ -262,8 +265,6 @@ class Fleet:
             # a plan made in the world as it stands cannot have been overtaken by it
             hit_standing = o.world_at < self.counts["events"] and self._meets_standing(seg)
             hit_moving = not force and self._meets_moving(seg)
-            self.log.append((self.clock, "check", o.index,
-                             f"standing={hit_standing} moving={hit_moving}"))
             if hit_standing and not force:
                 if not hit_moving:
                     o.request, o.reply, o.ready = None, self._reply(seg.team, declined=True), True

@@ -8,10 +8,13 @@ change, ``Fleet._unstick``), :func:`make_way` looks, in priority order, for a bl
 object ``k`` in whose way another blocked object ``j`` stands: its footprint within
 ``k``'s bounding radius and a robot diameter of ``k``'s route round the map's obstacles
 to its goal (:func:`way_of`, :func:`standing_in_way`; the first such along the route).
-``j`` then gets a *detour*: a pose to move to first (:func:`buffer_pose`), which its loop
-plans to and runs like a goal (LAMP's own loop and Verify; ``lamp.fleet.objects``); when
-it stands there, or finds no way there, the detour ends (:func:`detour_done`), the
-blocked planners plan again and ``j`` goes on to its own goal. Each (``j``, ``k``) pair
+``j`` is blocked too, or stands without robots (waiting for robots, or to start: with few
+robots, one team at a time). ``j`` then gets a *detour*: a pose to move to first
+(:func:`buffer_pose`), which its loop plans to and runs like a goal (LAMP's own loop and
+Verify; ``lamp.fleet.objects``); when it stands there, or finds no way there, the detour
+ends (:func:`detour_done`), the blocked planners plan again and ``j`` goes on to its own
+goal. A ``j`` without robots gets ``k``'s (``k`` waits for robots), and a detour only if
+its own way is shut too; else it goes straight to its goal. Each (``j``, ``k``) pair
 makes way at most once, so the schedule still ends. Runs that never get stuck are
 unchanged (the ``fleet`` family: all 25 the same).
 
@@ -130,33 +133,55 @@ def with_goal(scene: Scene, k: int, goal: np.ndarray) -> Scene:
     return replace(scene, objects=tuple(objs))
 
 
+def _stands_still(fleet: Fleet, o: ObjectState) -> bool:
+    """Whether ``o`` stays where it stands until something is done for it: its planner
+    waits for a change (with robots), or it waits for robots, or to start (its ``after``
+    objects placed); and it is on no detour."""
+    if o.detour is not None:
+        return False
+    if o.status == "active":
+        return (o.blocked_at is not None and bool(o.team)) or o.needs_team
+    return o.status == "waiting" and all(fleet.objects[a].status == "placed"
+                                         for a in fleet.scene.objects[o.index].after)
+
+
 def make_way(fleet: Fleet, blocked: list[ObjectState]) -> bool:
-    """Give a detour to a blocked object standing in the way of another blocked one
-    (``blocked``: in priority order; module docstring); True if one was given."""
+    """For the first of ``blocked`` (priority order) in whose way an object stands still
+    (module docstring): that object moves aside, or, without robots and with its own way
+    clear, gets the blocked one's robots and goes to its goal. True if one did."""
     scene = fleet.scene
     poses = np.asarray(fleet.executor.object_poses, float)
-    standing = [o.index for o in blocked if o.detour is None and o.team]
+    still = [p.index for p in fleet.objects if _stands_still(fleet, p)]
+    unplaced = [p.index for p in fleet.objects if p.status in ("active", "waiting")]
     for o in blocked:
         k = o.index
         way = way_of(scene, k, poses[k])
-        j = standing_in_way(scene, k, way, poses, [i for i in standing
-                                                   if (i, k) not in fleet.made_way])
-        if j is None:
+        j = standing_in_way(scene, k, way, poses, [i for i in still
+                                                   if i != k and (i, k) not in fleet.made_way])
+        if j is None or not o.team:
             continue
         fleet.made_way.add((j, k))
-        keep = [way.buffer(float(scene.objects[k].shape.bounding_radius))]
-        keep += [to_shapely(p.shape, np.asarray(p.goal, float)).buffer(2 * scene.robot_radius)
-                 for i, p in enumerate(scene.objects)
-                 if i != j and fleet.objects[i].status in ("active", "waiting")]
-        target = buffer_pose(scene, j, poses, fleet.executor.robot_positions,
-                             fleet.objects[j].team, keep)
-        fleet.log.append((fleet.clock, "make_way", j, f"for {k}: "
-                          f"{None if target is None else np.round(target, 2).tolist()}"))
-        if target is None:
-            continue
         J = fleet.objects[j]
-        J.detour, J.blocked_at, J.wake, J.ready = target, None, True, True
-        fleet.counts["made_way"] += 1
+        team = J.team or list(o.team)
+        target = None
+        if J.team or standing_in_way(scene, j, way_of(scene, j, poses[j]), poses,
+                                     [i for i in unplaced if i != j]) is not None:
+            keep = [way.buffer(float(scene.objects[k].shape.bounding_radius))]
+            keep += [to_shapely(scene.objects[i].shape, np.asarray(scene.objects[i].goal, float))
+                     .buffer(2 * scene.robot_radius) for i in unplaced if i != j]
+            target = buffer_pose(scene, j, poses, fleet.executor.robot_positions, team, keep)
+            fleet.log.append((fleet.clock, "make_way", j, f"for {k}: "
+                              f"{None if target is None else np.round(target, 2).tolist()}"))
+            if target is None:
+                continue
+            fleet.counts["made_way"] += 1
+        J.detour = target
+        if J.team:
+            J.blocked_at, J.wake, J.ready = None, True, True
+        else:  # the blocked object's robots go to the one in its way; it waits for robots
+            o.team, o.blocked_at, o.wake, o.ready = [], None, True, True
+            fleet.log.append((fleet.clock, "handed", j, f"robots {team} of {k}"))
+            fleet.give_team(j, team)
         return True
     return False
 
