@@ -9,6 +9,7 @@ import math
 from types import SimpleNamespace
 
 import numpy as np
+import pytest
 import shapely
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
@@ -25,6 +26,7 @@ from lamp.fleet.makeway import (
     with_goal,
 )
 from lamp.geometry.object_space import ObjectSpace
+from lamp.geometry.primitives import Obstacle, Rectangle
 from lamp.geometry.shapes import obstacle_geometry, to_shapely
 from lamp.scene import scene_from_dict
 from lamp.search.landmark import route_length
@@ -145,40 +147,49 @@ obstacles = st.lists(st.tuples(st.floats(0.3, 5.7), st.floats(0.3, 3.7), st.floa
                      max_size=6)
 
 
-@given(obs=obstacles)
+@given(obs=obstacles, split=st.booleans())
 @settings(max_examples=25, deadline=None)
-def test_a_buffer_is_clear_reachable_and_the_nearest_clear_position(obs) -> None:
+def test_a_buffer_is_clear_reachable_and_the_nearest_such_position(obs, split) -> None:
+    """Against a brute force over the grid; ``split``: what will stand when the object goes
+    on is a wall across the map at x = 3, so only the half of its goal (2, 2) will do."""
     d = _clear_map(obs)
     scene = _scene(d)
     j, poses = 1, np.array([o.start for o in scene.objects])
     keep = [shapely.box(1.5, 1.5, 2.5, 2.5)]
     robots = np.array(scene.robot_starts, float)
-    got = buffer_pose(scene, j, poses, robots, [3, 4, 5], keep)
+    then = (Obstacle(Rectangle((0.1, 4.0)), (3.0, 2.0, 0.0)),) if split else ()
+    got = buffer_pose(scene, j, poses, robots, [3, 4, 5], keep, then)
     r = scene.robot_radius
     clear = scene.objects[j].shape.bounding_radius + 2 * r
     things = [obstacle_geometry(o) for o in scene.obstacles] + keep
     things += [to_shapely(scene.objects[0].shape, poses[0])]
     things += [shapely.Point(*p).buffer(r) for p in robots[:3]]
     W, H = scene.workspace
+    now = ObjectSpace.from_scene(scene, j, poses)
+    onward = ObjectSpace(scene.objects[j].shape, scene.workspace, (*scene.obstacles, *then))
+
+    def reachable(x: float, y: float) -> bool:
+        return (route_length(now, tuple(poses[j][:2]), (x, y), BUFFER_STEP) is not None
+                and route_length(onward, (x, y), (2.0, 2.0), BUFFER_STEP) is not None)
+
     # the brute-force reference: every grid position, nearest first
     xs = np.arange(clear, W - clear + 1e-9, BUFFER_STEP)
     ys = np.arange(clear, H - clear + 1e-9, BUFFER_STEP)
-    ok = [(math.hypot(x - poses[j][0], y - poses[j][1]), x, y) for x in xs for y in ys
-          if all(g.distance(shapely.Point(x, y)) >= clear for g in things)]
+    ok = sorted((math.hypot(x - poses[j][0], y - poses[j][1]), x, y) for x in xs for y in ys
+                if all(g.distance(shapely.Point(x, y)) >= clear for g in things))
     if got is None:
-        space = ObjectSpace.from_scene(scene, j, poses)
-        assert all(route_length(space, tuple(poses[j][:2]), (x, y), BUFFER_STEP) is None
-                   for _, x, y in sorted(ok)[:8])
+        assert not any(reachable(x, y) for _, x, y in ok[:8])
         return
     x, y, th = got
     assert th == poses[j][2]
     assert clear - 1e-9 <= x <= W - clear + 1e-9 and clear - 1e-9 <= y <= H - clear + 1e-9
     assert all(g.distance(shapely.Point(x, y)) >= clear - 1e-9 for g in things)
-    space = ObjectSpace.from_scene(scene, j, poses)
-    assert route_length(space, tuple(poses[j][:2]), (x, y), BUFFER_STEP) is not None
-    nearest = min(ok)
-    if route_length(space, tuple(poses[j][:2]), nearest[1:], BUFFER_STEP) is not None:
-        assert math.hypot(x - poses[j][0], y - poses[j][1]) <= nearest[0] + 1e-9
+    assert reachable(x, y)
+    if split:
+        assert x < 3.0
+    first = next((c for c in ok[:8] if reachable(*c[1:])), None)
+    if first is not None:  # among the eight nearest: the search finds exactly it
+        assert (x, y) == pytest.approx(first[1:])
 
 
 def test_no_buffer_where_the_map_has_no_room() -> None:

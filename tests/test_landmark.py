@@ -251,3 +251,16 @@ def test_route_path_goes_round_a_wall_and_is_none_across_a_cut():
     cut = Obstacle(Rectangle((0.1, 2.0)), (2.0, 1.0, 0.0))
     assert route_path(ObjectSpace(Circle(0.1), (4.0, 2.0), [cut]), (1.0, 0.5), (3.0, 0.5),
                       0.1) is None
+
+
+@settings(max_examples=25, deadline=None)
+@given(sx=st.floats(0.25, 1.7), sy=st.floats(0.25, 1.75), gx=st.floats(2.3, 3.75),
+       gy=st.floats(0.25, 1.75))
+def test_route_length_is_none_for_any_goal_beyond_a_wall_off_the_grid_too(sx, sy, gx, gy):
+    """A goal off the grid beside a wall is valued by the positions on its own side only."""
+    cut = Obstacle(Rectangle((0.1, 2.0)), (2.0, 1.0, 0.0))
+    space = ObjectSpace(Circle(0.2), (4.0, 2.0), [cut])
+    assert route_length(space, (sx, sy), (gx, gy), 0.1) is None
+    assert route_path(space, (sx, sy), (gx, gy), 0.1) is None
+    back = route_length(space, (gx, gy), (3.8 - (gx - 2.3), sy), 0.1)
+    assert back is not None  # the same side: a route

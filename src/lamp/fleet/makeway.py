@@ -22,8 +22,10 @@ The buffer is the free position nearest ``j`` (at its heading, on a grid of
 ``BUFFER_STEP``) whose distance to anything ``j`` must keep clear of is at least ``j``'s
 bounding radius and a robot diameter (room for robots all round): the obstacles and the
 workspace border, the other objects and robots where they stand, the other unplaced
-objects at their goals, and the band ``k`` sweeps along its route; and which ``j`` can
-reach (``landmark.route_length`` round the obstacles and the objects). The search widens
+objects at their goals, and the band ``k`` sweeps along its route; which ``j`` can reach
+(``landmark.route_length`` round the obstacles and the objects); and from which ``j``
+can reach its own goal round the obstacles and ``k`` placed (not a pocket ``k`` will
+close: a corridor swap once put the buffer beyond ``k``'s goal in the corridor). The search widens
 from ``BUFFER_REACH`` metres around ``j`` to the whole map, doubling; at each width the
 routes of the ``_REACH_CHECKS`` nearest clear positions not yet tried are sought, so the
 buffer is the nearest clear reachable position unless more clear positions nearer than it
@@ -33,6 +35,7 @@ are walled off.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
@@ -40,6 +43,7 @@ import numpy as np
 import shapely
 
 from lamp.geometry.object_space import ObjectSpace
+from lamp.geometry.primitives import Obstacle
 from lamp.geometry.shapes import obstacle_geometry, to_shapely
 from lamp.scene.model import Scene
 from lamp.search.landmark import route_length, route_path
@@ -83,12 +87,15 @@ def standing_in_way(scene: Scene, k: int, way: shapely.LineString, poses: np.nda
 
 
 def buffer_pose(scene: Scene, j: int, poses: np.ndarray, robot_positions: np.ndarray,
-                team: list[int], keep: list[shapely.Geometry], step: float = BUFFER_STEP
+                team: list[int], keep: list[shapely.Geometry],
+                then: Sequence[Obstacle] = (), step: float = BUFFER_STEP
                 ) -> np.ndarray | None:
     """The pose (``j``'s heading) ``j`` moves aside to (module docstring): clear by ``j``'s
     bounding radius and a robot diameter of the obstacles, the border, the other objects
-    at ``poses``, the robots not in ``team`` and ``keep``; reachable; nearest ``j`` (ties
-    by grid order). None when no position qualifies."""
+    at ``poses``, the robots not in ``team`` and ``keep``; reachable now (round the
+    obstacles and the other objects); ``j``'s goal reachable from it round the obstacles
+    and ``then`` (what will stand when ``j`` goes on: the object it made way for, placed);
+    nearest ``j`` (ties by grid order). None when no position qualifies."""
     obj = scene.objects[j]
     pose = np.asarray(poses[j], float)
     r = float(scene.robot_radius)
@@ -105,6 +112,8 @@ def buffer_pose(scene: Scene, j: int, poses: np.ndarray, robot_positions: np.nda
     if len(xs) == 0 or len(ys) == 0:
         return None
     space = ObjectSpace.from_scene(scene, j, poses)
+    onward = ObjectSpace(obj.shape, scene.workspace, (*scene.obstacles, *then))
+    goal = (float(obj.goal[0]), float(obj.goal[1]))
     checked: set[tuple[int, int]] = set()  # positions whose route was sought
     reach = BUFFER_REACH
     while True:
@@ -119,7 +128,8 @@ def buffer_pose(scene: Scene, j: int, poses: np.ndarray, robot_positions: np.nda
         for c in fresh:
             checked.add((gi[c], gj[c]))
             x, y = float(xs[gi[c]]), float(ys[gj[c]])
-            if route_length(space, (pose[0], pose[1]), (x, y), step) is not None:
+            if (route_length(space, (pose[0], pose[1]), (x, y), step) is not None
+                    and route_length(onward, (x, y), goal, step) is not None):
                 return np.array([x, y, pose[2]])
         if reach >= math.hypot(W, H):
             return None
@@ -169,7 +179,9 @@ def make_way(fleet: Fleet, blocked: list[ObjectState]) -> bool:
             keep = [way.buffer(float(scene.objects[k].shape.bounding_radius))]
             keep += [to_shapely(scene.objects[i].shape, np.asarray(scene.objects[i].goal, float))
                      .buffer(2 * scene.robot_radius) for i in unplaced if i != j]
-            target = buffer_pose(scene, j, poses, fleet.executor.robot_positions, team, keep)
+            placed = Obstacle(scene.objects[k].shape, scene.objects[k].goal)
+            target = buffer_pose(scene, j, poses, fleet.executor.robot_positions, team, keep,
+                                 (placed,))
             fleet.log.append((fleet.clock, "make_way", j, f"for {k}: "
                               f"{None if target is None else np.round(target, 2).tolist()}"))
             if target is None:

@@ -219,9 +219,11 @@ def route_length(space: ObjectSpace, start: tuple[float, float], goal: tuple[flo
                  step: float) -> float | None:
     """The length of the object's shortest route from ``start`` to ``goal`` as the potential
     sees it: the shortest 8-connected path over the passable positions (module docstring)
-    of the grid of side ``step`` through ``start``, to ``goal`` (valued as
-    :meth:`LandmarkPotential.at` values an off-grid position). None when the goal is not
-    connected to the start.
+    of the grid of side ``step`` through ``start`` to a position within two steps of
+    ``goal``, plus the octile distance from there (the least such sum). None when no
+    position near the goal is connected to the start. (Until 2026-12-05 an off-grid goal
+    was valued as :meth:`LandmarkPotential.at` values it, which near a wall mixes in the
+    positions beyond it: a goal walled off from the start got a length, not None.)
 
     Guarantees (``tests/test_landmark.py``): on a map without obstacles it is the octile
     distance from start to goal (within a grid step); it is never below the straight-line
@@ -229,9 +231,10 @@ def route_length(space: ObjectSpace, start: tuple[float, float], goal: tuple[flo
     detour around it; a goal walled off from the start gives None. Cost: one Dijkstra over
     the workspace's grid (a 50 m map at 0.1 m: 250 k positions).
     """
-    potential = _potential_from(space, start, step)
-    value = potential.at(float(goal[0]), float(goal[1]))
-    return None if value >= potential.unreachable else float(value)
+    p = _potential_from(space, start, step)
+    ends = [p.values[c] + o for c, o in p._near(float(goal[0]), float(goal[1]), p.radius)
+            if p.values[c] < p.unreachable]
+    return float(min(ends)) if ends else None
 
 
 def route_path(space: ObjectSpace, start: tuple[float, float], goal: tuple[float, float],
