@@ -59,12 +59,14 @@ SCENES = {
          [0.4, 4.6], [0.6, 4.6], [0.8, 4.6], [5.2, 4.6], [5.4, 4.6], [5.6, 4.6]],
         [], [_box(0.4, (2.5, 2.0), (3.5, 2.0)), _box(0.4, (3.5, 2.0), (3.5, 3.0)),
              _box(0.4, (3.5, 3.0), (2.5, 3.0)), _box(0.4, (2.5, 3.0), (2.5, 2.0))]),
-    # a 1.2 m corridor open at both ends; the boxes swap places inside it
+    # a 1.2 m corridor open at both ends; the boxes swap places inside it, one to its
+    # lower side, one to its upper side (placed on the centre line, a box would leave
+    # 0.4 m beside it: no room to pass it with robots)
     "corridor-swap": _scene(
         "corridor-swap", [8.0, 4.0],
         [[0.4, 2.0], [0.4, 1.8], [0.4, 2.2], [7.6, 2.0], [7.6, 1.8], [7.6, 2.2]],
         [_wall(4.0, 0.7, 4.0, 1.4), _wall(4.0, 3.3, 4.0, 1.4)],
-        [_box(0.4, (3.0, 2.0), (5.0, 2.0)), _box(0.4, (5.0, 2.0), (3.0, 2.0))]),
+        [_box(0.4, (3.0, 2.0), (5.0, 1.7)), _box(0.4, (5.0, 2.0), (3.0, 2.3))]),
     # a dead end 1.2 m wide: the box inside to come out, the one at its mouth to go in
     "dead-end": _scene(
         "dead-end", [8.0, 4.0],
