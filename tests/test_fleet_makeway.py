@@ -20,6 +20,7 @@ from lamp.fleet.coordinator import Fleet
 from lamp.fleet.makeway import (
     BUFFER_STEP,
     buffer_pose,
+    detour_done,
     make_way,
     standing_in_way,
     way_of,
@@ -274,6 +275,10 @@ def test_robots_go_to_the_object_in_the_way_and_it_moves_aside_when_its_own_way_
         assert list(fleet.owner) == [1] * 6
         assert first.team == [] and first.blocked_at is None and first.ready
         assert mover.detour is not None and fleet.counts["made_way"] == 1
+        first.needs_team = True  # its loop ended and waits for robots
+        detour_done(fleet, 1)  # aside: the robots go back to the object it made way for
+        assert mover.detour is None and mover.team == [] and first.team == list(range(6))
+        assert list(fleet.owner) == [0] * 6 and not first.needs_team and first.ready
     finally:
         fleet.turns.close()
 

@@ -187,21 +187,28 @@ def make_way(fleet: Fleet, blocked: list[ObjectState]) -> bool:
             if target is None:
                 continue
             fleet.counts["made_way"] += 1
-        J.detour = target
+        J.detour, J.lent_by = target, None
         if J.team:
             J.blocked_at, J.wake, J.ready = None, True, True
         else:  # the blocked object's robots go to the one in its way; it waits for robots
             o.team, o.blocked_at, o.wake, o.ready = [], None, True, True
             fleet.log.append((fleet.clock, "handed", j, f"robots {team} of {k}"))
             fleet.give_team(j, team)
+            J.lent_by = k if target is not None else None  # back to k after the detour
         return True
     return False
 
 
-def detour_done(fleet: Fleet, k: int) -> None:
-    """Object ``k`` stands at its detour's end (or found no way there): it goes on to its
-    own goal, and the planners waiting for a change plan again."""
-    fleet.objects[k].detour = None
+def detour_done(fleet: Fleet, j: int) -> None:
+    """Object ``j`` stands at its detour's end (or found no way there): the planners
+    waiting for a change plan again, and ``j`` goes on to its own goal; with robots lent
+    by the object it made way for, once that one has them back (if it still waits)."""
+    J = fleet.objects[j]
+    J.detour, lender, J.lent_by = None, J.lent_by, None
     for o in fleet.objects:
         if o.blocked_at is not None:
             o.blocked_at, o.wake, o.ready = None, True, True
+    if lender is not None and fleet.objects[lender].needs_team and J.team:
+        team, J.team = J.team, []
+        fleet.log.append((fleet.clock, "handed", lender, f"robots {team} back from {j}"))
+        fleet.give_team(lender, team)

@@ -40,6 +40,7 @@ class ObjectState:
     #: a pose to move to before its goal: it stands on a blocked object's goal
     #: (``fleet.makeway``); None: none
     detour: np.ndarray | None = None
+    lent_by: int | None = None  # the object whose robots it has for its detour
     rank: int = 1 << 30  # its priority: the order in which objects started (lower first)
     world_at: int = -1  # the event after which its loop took its world (``Fleet.world_taken``)
     outcome: ObjectOutcome | None = None
