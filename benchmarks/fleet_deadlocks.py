@@ -6,6 +6,7 @@ comparison, one after another. Prints per scene and run: objects placed, makespa
 finds in the recording (``lamp.record.safety``).
 
     python benchmarks/fleet_deadlocks.py [--write DIR] [--scenes swap dead-end]
+    python benchmarks/fleet_deadlocks.py --random 12   # random rotations of 2-4 loads
 """
 
 from __future__ import annotations
@@ -14,6 +15,8 @@ import argparse
 import copy
 import time
 from pathlib import Path
+
+import numpy as np
 
 import lamp
 from lamp.record.safety import check_recording, recorded_teams
@@ -76,11 +79,45 @@ SCENES = {
 }
 
 
+def random_rotation(seed: int) -> dict:
+    """A yard of 6-10 x 4-8 m with up to four pillars and 2-4 objects (boxes, disks and
+    oblong boxes, at places at least 1.2 m apart) each to go to the next one's place, three
+    robots per object along the bottom edge; deterministic in ``seed``."""
+    rng = np.random.default_rng(seed)
+    W, H = float(rng.uniform(6, 10)), float(rng.uniform(4, 8))
+    n = int(rng.integers(2, 5))
+    places: list[tuple[float, float]] = []
+    while len(places) < n:
+        p = (float(rng.uniform(1.0, W - 1.0)), float(rng.uniform(1.5, H - 1.0)))
+        if all(np.hypot(p[0] - q[0], p[1] - q[1]) >= 1.2 for q in places):
+            places.append(p)
+    pillars = []
+    for _ in range(int(rng.integers(0, 5))):
+        c, rad = (float(rng.uniform(0.5, W - 0.5)), float(rng.uniform(1.0, H - 0.5))), 0.2
+        if all(np.hypot(c[0] - q[0], c[1] - q[1]) >= 0.8 for q in places):
+            pillars.append({"type": "circle", "center": list(c), "radius": rad})
+    shapes = [{"type": "rectangle", "size": [0.4, 0.4]}, {"type": "circle", "radius": 0.2},
+              {"type": "rectangle", "size": [0.5, 0.3]}]
+    objects = []
+    for i, p in enumerate(places):
+        q = places[(i + 1) % n]
+        objects.append({**shapes[int(rng.integers(0, 3))], "start": [*p, 0.0],
+                        "goal": [*q, 0.0]})
+    robots = [[0.4 + 0.2 * i, 0.3] for i in range(3 * n)]
+    return _scene(f"rotation-{seed}", [round(W, 2), round(H, 2)], robots, pillars, objects)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--scenes", nargs="+", choices=sorted(SCENES), default=list(SCENES))
+    ap.add_argument("--random", type=int, default=0, metavar="N",
+                    help="instead: N random rotations (``random_rotation``, seeds 0..N-1)")
     ap.add_argument("--write", type=Path, help="also save the scenes to this folder")
     args = ap.parse_args()
+    if args.random:
+        SCENES.clear()
+        SCENES.update({f"rotation-{i}": random_rotation(i) for i in range(args.random)})
+        args.scenes = list(SCENES)
     print("scene | run | placed | makespan (s) | moves aside | wall (s) | violations")
     for name in args.scenes:
         scene = scene_from_dict(copy.deepcopy(SCENES[name]))
