@@ -53,12 +53,13 @@ from lamp.fleet.admission import heeded_claims, meets_moving, meets_standing, st
 from lamp.fleet.handover import better_team
 from lamp.fleet.makeway import make_way
 from lamp.fleet.objects import given_up
+from lamp.fleet.precedence import goal_cuts
 from lamp.fleet.regions import CLAIM_NEAR, claims
 from lamp.fleet.segments import Segment, on_grid
 from lamp.fleet.state import ObjectState
 from lamp.fleet.teams import allocate, near_way, nearest, reinforce, start_order
 from lamp.fleet.turns import Turns
-from lamp.fleet.utilisation import RobotTime
+from lamp.fleet.utilisation import RobotTime, schedule_stats
 from lamp.fleet.view import FleetExecution, FleetView
 from lamp.scene.model import Scene
 from lamp.sim.simulator import SETTLE_TIME
@@ -108,6 +109,7 @@ class Fleet:
             "reinforced", "replaced", "handed_over", "events", "transit_hops",
             "parking_moves", "made_way"), 0)
         self.made_way: set[tuple[int, int]] = set()  # (j, k): j moved aside for k's goal
+        self.cuts = goal_cuts(scene, scene.object_starts())  # k starts after cuts[k] are done
         self._handover_checked: set[tuple[int, tuple[int, ...], tuple[int, ...]]] = set()
         self.transit_planning_s = 0.0  # wall-clock s planning transit hops and parking moves
         self.robot_time = RobotTime(scene.n_robots)  # utilisation
@@ -137,9 +139,10 @@ class Fleet:
         return [o.outcome for o in self.objects]  # type: ignore[misc]
 
     def _release(self) -> None:
-        """Start objects whose ``after`` objects are placed, give robots to those waiting
-        for a team (``teams.allocate``), fail those waiting on a failed object; free robots
-        reinforce moving teams (when no object waits) and take far team robots' places."""
+        """Start objects whose ``after`` objects are placed (and those their goals would cut
+        done, ``fleet.precedence``), give robots to those waiting for a team
+        (``teams.allocate``), fail those waiting on a failed object; free robots reinforce
+        moving teams (when no object waits) and take far team robots' places."""
         ready = []
         for o in self.objects:
             if o.status == "active" and o.needs_team:
@@ -149,7 +152,8 @@ class Fleet:
                 if any(self.objects[k].status == "failed" for k in after):
                     self._give_up(o, "not started: an object it waits for (after) was not "
                                   "placed")
-                elif all(self.objects[k].status == "placed" for k in after):
+                elif all(self.objects[k].status == "placed" for k in after) and all(
+                        self.objects[j].status in ("placed", "failed") for j in self.cuts[o.index]):
                     ready.append(o.index)
         if ready:
             self._start(ready)
@@ -486,15 +490,5 @@ class Fleet:
                 and not self._any_waits(but=k))
 
     def stats(self) -> dict[str, Any]:
-        """The schedule's figures for ``result.json``: counts, per-object placement times
-        and the robots' utilisation: shares of robot-time working (their sub-team's
-        segment runs), moving (working and driven), waiting (in a sub-team, its segment
-        not running) and idle (in no sub-team); working + waiting + idle = 1."""
-        return {
-            **self.counts,
-            "placed_at_s": [None if o.placed_at_s is None else round(o.placed_at_s, 4)
-                            for o in self.objects],
-            "robots_failed_at_s": {str(i): round(t, 4) for i, t in sorted(self.failed_at.items())},
-            "transit_planning_s": round(self.transit_planning_s, 4),
-            "utilisation": self.robot_time.shares(self.clock),
-        }
+        """The schedule's figures for ``result.json`` (``utilisation.schedule_stats``)."""
+        return schedule_stats(self)

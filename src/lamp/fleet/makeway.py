@@ -14,7 +14,8 @@ robots, one team at a time). ``j`` then gets a *detour*: a pose to move to first
 Verify; ``lamp.fleet.objects``); when it stands there, or finds no way there, the detour
 ends (:func:`detour_done`), the blocked planners plan again and ``j`` goes on to its own
 goal. A ``j`` without robots gets ``k``'s (``k`` waits for robots), and a detour only if
-its own way is shut too; else it goes straight to its goal. Each (``j``, ``k``) pair
+its own way is shut too or its goal would cut ``k``'s way (``fleet.precedence``); else it
+goes straight to its goal. Each (``j``, ``k``) pair
 makes way at most once, so the schedule still ends. Runs that never get stuck are
 unchanged (the ``fleet`` family: all 25 the same).
 
@@ -174,8 +175,8 @@ def make_way(fleet: Fleet, blocked: list[ObjectState]) -> bool:
         J = fleet.objects[j]
         team = J.team or list(o.team)
         target = None
-        if J.team or standing_in_way(scene, j, way_of(scene, j, poses[j]), poses,
-                                     [i for i in unplaced if i != j]) is not None:
+        if J.team or k in fleet.cuts[j] or standing_in_way(
+                scene, j, way_of(scene, j, poses[j]), poses, [i for i in unplaced if i != j]):
             keep = [way.buffer(float(scene.objects[k].shape.bounding_radius))]
             keep += [to_shapely(scene.objects[i].shape, np.asarray(scene.objects[i].goal, float))
                      .buffer(2 * scene.robot_radius) for i in unplaced if i != j]

@@ -9,10 +9,14 @@ through ``Fleet.stats``): working + waiting + idle = the clock, for every robot.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-__all__ = ["STATES", "RobotTime"]
+if TYPE_CHECKING:
+    from lamp.fleet.coordinator import Fleet
+
+__all__ = ["STATES", "RobotTime", "schedule_stats"]
 
 #: the states robot-time is charged to (``moving`` is a part of ``working``)
 STATES = ("working", "moving", "waiting", "idle")
@@ -43,3 +47,18 @@ class RobotTime:
         n = len(self.seconds["working"])
         total = max(clock, 1e-9) * max(1, n)
         return {k: round(float(v.sum()) / total, 4) for k, v in self.seconds.items()}
+
+
+def schedule_stats(fleet: Fleet) -> dict[str, Any]:
+    """The schedule's figures for ``result.json``: counts, per-object placement times and
+    the robots' utilisation: shares of robot-time working (their sub-team's segment runs),
+    moving (working and driven), waiting (in a sub-team, its segment not running) and idle
+    (in no sub-team); working + waiting + idle = 1."""
+    return {
+        **fleet.counts,
+        "placed_at_s": [None if o.placed_at_s is None else round(o.placed_at_s, 4)
+                        for o in fleet.objects],
+        "robots_failed_at_s": {str(i): round(t, 4) for i, t in sorted(fleet.failed_at.items())},
+        "transit_planning_s": round(fleet.transit_planning_s, 4),
+        "utilisation": fleet.robot_time.shares(fleet.clock),
+    }
