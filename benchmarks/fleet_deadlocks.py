@@ -1,5 +1,6 @@
 """Loads that block each other for good unless one moves aside (``lamp.fleet.makeway``):
-places swapped, rotated round, a corridor swap and a dead end; run concurrently (LAMP-Lazy,
+places swapped, rotated round, a corridor swap, a dead end, and a goal in the gap another
+load must pass through; run concurrently (LAMP-Lazy,
 seed 0) with every robot and with one team (the first three robots only), and, for
 comparison, one after another. Prints per scene and run: objects placed, makespan
 (simulated s), moves aside, wall time and the violations the independent safety check
@@ -76,6 +77,13 @@ SCENES = {
         [[6.5, 2.0], [6.5, 1.8], [6.5, 2.2], [7.0, 2.0], [7.0, 1.8], [7.0, 2.2]],
         [_wall(2.5, 0.7, 5.0, 1.4), _wall(2.5, 3.3, 5.0, 1.4)],
         [_box(0.4, (2.0, 2.0), (6.0, 3.3)), _box(0.4, (4.0, 2.0), (1.0, 2.0))]),
+    # a wall with a 1 m gap at its top: box 0's goal is in the gap, box 1 must pass
+    # through it first (``fleet.precedence``; no move aside needed)
+    "gap-goal": _scene(
+        "gap-goal", [8.0, 6.0],
+        [[0.4, 0.4], [0.6, 0.4], [0.8, 0.4], [0.4, 5.6], [0.6, 5.6], [0.8, 5.6]],
+        [_wall(4.0, 2.5, 0.2, 5.0)],
+        [_box(0.4, (2.5, 5.5), (4.0, 5.5)), _box(0.4, (2.0, 1.0), (6.0, 1.0))]),
 }
 
 

@@ -175,8 +175,9 @@ def make_way(fleet: Fleet, blocked: list[ObjectState]) -> bool:
         J = fleet.objects[j]
         team = J.team or list(o.team)
         target = None
-        if J.team or k in fleet.cuts[j] or standing_in_way(
-                scene, j, way_of(scene, j, poses[j]), poses, [i for i in unplaced if i != j]):
+        shut = standing_in_way(scene, j, way_of(scene, j, poses[j]), poses,
+                               [i for i in unplaced if i != j]) is not None
+        if J.team or k in fleet.cuts[j] or shut:
             keep = [way.buffer(float(scene.objects[k].shape.bounding_radius))]
             keep += [to_shapely(scene.objects[i].shape, np.asarray(scene.objects[i].goal, float))
                      .buffer(2 * scene.robot_radius) for i in unplaced if i != j]

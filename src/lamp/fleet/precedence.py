@@ -30,14 +30,21 @@ from lamp.geometry.shapes import to_shapely
 from lamp.scene.model import Scene
 from lamp.search.landmark import route_length, route_path
 
-__all__ = ["goal_cuts"]
+__all__ = ["COARSE_CELLS", "goal_cuts"]
+
+#: Grid cells across the map's longer side above which the routes' grid grows coarser
+#: than 0.1 m (a 150 m map: 0.375 m): one route per object costs a Dijkstra over the map.
+COARSE_CELLS = 400
 
 
-def goal_cuts(scene: Scene, poses: np.ndarray, step: float = 0.1,
+def goal_cuts(scene: Scene, poses: np.ndarray, step: float | None = None,
               objects: Sequence[int] | None = None) -> dict[int, frozenset[int]]:
     """For each of ``objects`` (default: all) ``k``: the objects ``j`` whose way from
     ``poses[j]`` to their goal ``k`` placed at its goal would cut (module docstring),
-    pairs on a cycle of that relation left out. Deterministic."""
+    pairs on a cycle of that relation left out; routes on a grid of side ``step``
+    (default: 0.1 m, coarser on maps over ``COARSE_CELLS`` of it across). Deterministic."""
+    if step is None:
+        step = max(0.1, max(scene.workspace) / COARSE_CELLS)
     objs = list(range(len(scene.objects))) if objects is None else list(objects)
     poses = np.asarray(poses, float)
     r = float(scene.robot_radius)

@@ -67,7 +67,8 @@ def _blocker_named(scene: Any, index: int, executor: Executor, outcome: ObjectOu
     if j is None:
         return outcome
     why = (f"{r.failure_reason} (object {j} stands in its way: this schedule moves the "
-           f"objects one after another in the file's order; the concurrent one moves it aside)")
+           f"objects one after another in the file's order; the concurrent one finds an "
+           f"order or moves it aside)")
     return replace(outcome, result=replace(r, failure_reason=why))
 
 
