@@ -9,7 +9,9 @@ pairs for certain, once, when the schedule begins: object ``k`` *cuts* object ``
 it stands) but cannot once ``k`` stands at its goal (``landmark.route_length`` with
 ``k``'s goal footprint as one more obstacle). Only pairs whose goal footprint comes near
 the way (``j``'s bounding radius and a robot diameter) are checked, so the cost is one
-route per object and one more per such pair. ``Fleet`` starts ``k`` only once every
+route per object and one more per such pair; not those where ``k``'s goal is where ``j``
+stands (within a robot diameter): ``k`` waits for ``j`` to leave anyway, and where that is
+a cycle (places rotated round) one makes way (``fleet.makeway``). ``Fleet`` starts ``k`` only once every
 object it cuts is placed or given up. Pairs that cut each other (directly or round a
 cycle: strongly connected components, SciPy) get no precedence: no order of placements
 helps them, and waiting would only stall them.
@@ -63,6 +65,8 @@ def goal_cuts(scene: Scene, poses: np.ndarray, step: float | None = None,
             obj = scene.objects[j]
             if j == k or not shapely.dwithin(way, at_goal, obj.shape.bounding_radius + 2 * r):
                 continue
+            if shapely.dwithin(at_goal, to_shapely(obj.shape, poses[j]), 2 * r):
+                continue  # k's goal is where j stands: j leaves first anyway (or makes way)
             space = ObjectSpace(obj.shape, scene.workspace, (*scene.obstacles, placed))
             if route_length(space, (poses[j][0], poses[j][1]), (obj.goal[0], obj.goal[1]),
                             step) is None:
