@@ -7,7 +7,8 @@ simulator. Design (``docs/fleet.md``):
   other object a body where it stands. Loops run as coroutines (``lamp.fleet.turns``):
   one at a time, in priority order, so a run is deterministic.
 - **Priority.** Objects rank in the order they started (the scene's order among those
-  that start together); one with ``after`` starts once those objects are placed. A
+  that start together); one with ``after`` starts once those objects are placed, and one
+  whose goal would cut others' ways once those are done (``fleet.precedence``). A
   lower-priority segment may not end with its object and robots deeper in a higher
   object's *claim* (the rest of its plan, ``regions.claims``) than they began (crossing
   one, or leaving it, is allowed; a plan that only crosses the claim of an object standing
@@ -28,10 +29,10 @@ simulator. Design (``docs/fleet.md``):
   segment while the others hold their place in their rows (simulated time stands still
   while loops plan). Only when every running segment ends together does the simulator
   settle as it does after a sequential segment.
-- **Liveness.** When nothing runs and nothing waits on a change, an object standing on
-  a blocked one's goal moves aside (``fleet.makeway``); else planners waiting on a change
-  plan in the world as it is (as sequentially), claims dropped, or the highest-priority
-  waiting segment is admitted against standing bodies only (``forced``).
+- **Liveness.** When nothing runs and nothing waits on a change, an object standing in
+  a blocked one's way moves aside or takes its robots (``fleet.makeway``); else planners
+  waiting on a change plan in the world as it is (as sequentially), claims dropped, or the
+  highest-priority waiting segment is admitted against standing bodies only (``forced``).
 - **Teams.** Allocated by ``lamp.fleet.teams``. A robot that fails (``executor.failed``)
   leaves its sub-team for good (``FAILED``), replaced by the nearest free robot if any;
   far robots hand over to free ones nearer (``lamp.fleet.handover``). The team's loop
