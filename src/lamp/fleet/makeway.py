@@ -11,7 +11,8 @@ to its goal (:func:`way_of`, :func:`standing_in_way`; the first such along the r
 ``j`` is blocked too, or stands without robots (waiting for robots, or to start: with few
 robots, one team at a time). ``j`` then gets a *detour*: a pose to move to first
 (:func:`buffer_pose`), which its loop plans to and runs like a goal (LAMP's own loop and
-Verify; ``lamp.fleet.objects``); when it stands there, or finds no way there, the detour
+Verify; ``lamp.fleet.objects``; it stops there at any heading, the clearance being
+measured by the bounding radius); when it stands there, or finds no way there, the detour
 ends (:func:`detour_done`), the blocked planners plan again and ``j`` goes on to its own
 goal. A ``j`` without robots gets ``k``'s (``k`` waits for robots), and a detour only if
 its own way is shut too or its goal would cut ``k``'s way (``fleet.precedence``); else it

@@ -18,6 +18,7 @@ moving at once share ``FLEET_SPACE_CACHE_MB`` of robot-space cache.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import replace
 from typing import TYPE_CHECKING
@@ -119,6 +120,8 @@ def object_main(runner: ClosedLoopRunner, observe: Callable[[SegmentEvent], None
             detour = fleet.objects[k].detour
             scene_k = world() if detour is None else with_goal(world(), k, detour)
             fleet.world_taken(k)
+            if detour is not None:  # a place to stand aside: any heading will do
+                config = replace(config, stop_orientation=math.pi)
             parts.append(runner.loop(scene_k, k, view, config, observe))
             r = parts[-1].result
             ended = r.failure_reason not in (WORLD_CHANGED, TEAM_CHANGED)
