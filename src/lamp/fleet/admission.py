@@ -109,5 +109,5 @@ def heeded_claims(objects: Sequence[ObjectState], me: ObjectState, cross_near: f
     of it; otherwise the whole claim."""
     return [(o.index, o.claim, o.near if cross_near > 0 or (cross_waiting > 0 and o.held_up)
              else o.claim)
-            for o in objects if o.index != me.index and o.rank < me.rank
-            and o.claim is not None and me.index not in o.exempt]
+            for o in objects if o.rank < me.rank and o.claim is not None
+            and me.index not in o.exempt]

@@ -109,7 +109,7 @@ class Fleet:
             "admitted", "declined", "waited", "forced", "blocked", "merged", "grown",
             "reinforced", "replaced", "handed_over", "events", "transit_hops",
             "parking_moves", "made_way"), 0)
-        self.made_way: set[tuple[int, int]] = set()  # (j, k): j moved aside for k's goal
+        self.made_way: set[tuple[int, int]] = set()  # (j, k): j made way for k (makeway)
         self.cuts = goal_cuts(scene, scene.object_starts())  # k starts after cuts[k] are done
         self._handover_checked: set[tuple[int, tuple[int, ...], tuple[int, ...]]] = set()
         self.transit_planning_s = 0.0  # wall-clock s planning transit hops and parking moves
@@ -301,7 +301,7 @@ class Fleet:
 
     def _unstick(self) -> bool:
         """Nothing runs and no loop can go on. Planners that wait for a change: one
-        standing on another's goal moves aside (``makeway.make_way``); else the first gets
+        standing in another's way moves aside (``makeway.make_way``); else the first gets
         the robots of all of them (as sequentially), the others wait for robots; when it
         has them all already, it plans in the world as it is. Else the first waiting
         segment is forced."""

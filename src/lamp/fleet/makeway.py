@@ -55,7 +55,7 @@ if TYPE_CHECKING:
     from lamp.fleet.state import ObjectState
 
 __all__ = ["BUFFER_REACH", "BUFFER_STEP", "buffer_pose", "detour_done", "make_way",
-           "standing_in_way", "way_of", "with_goal"]
+           "route_of", "standing_in_way", "way_of", "with_goal"]
 
 #: Grid (m) on which buffer positions are sought.
 BUFFER_STEP = 0.1
@@ -65,16 +65,25 @@ BUFFER_REACH = 3.0
 _REACH_CHECKS = 8
 
 
+def route_of(scene: Scene, k: int, pose: np.ndarray, step: float = BUFFER_STEP
+             ) -> np.ndarray | None:
+    """Object ``k``'s route from ``pose`` to its goal round the map's obstacles
+    (``landmark.route_path``; the other objects move, so they do not count); None when
+    none joins them."""
+    obj = scene.objects[k]
+    space = ObjectSpace(obj.shape, scene.workspace, tuple(scene.obstacles))
+    return route_path(space, (float(pose[0]), float(pose[1])),
+                      (float(obj.goal[0]), float(obj.goal[1])), step)
+
+
 def way_of(scene: Scene, k: int, pose: np.ndarray, step: float = BUFFER_STEP
            ) -> shapely.LineString:
-    """Object ``k``'s way from ``pose`` to its goal round the map's obstacles
-    (``landmark.route_path``; the other objects move, so they do not count), or the
+    """Object ``k``'s way from ``pose`` to its goal: its route (:func:`route_of`), or the
     straight line when no route joins them."""
-    obj = scene.objects[k]
-    start, goal = np.asarray(pose, float)[:2], np.asarray(obj.goal, float)[:2]
-    space = ObjectSpace(obj.shape, scene.workspace, tuple(scene.obstacles))
-    path = route_path(space, (start[0], start[1]), (goal[0], goal[1]), step)
-    return shapely.LineString(np.array([start, goal]) if path is None else path)
+    path = route_of(scene, k, pose, step)
+    if path is None:
+        path = np.array([np.asarray(pose, float)[:2], np.asarray(scene.objects[k].goal, float)[:2]])
+    return shapely.LineString(path)
 
 
 def standing_in_way(scene: Scene, k: int, way: shapely.LineString, poses: np.ndarray,

@@ -5,7 +5,7 @@ shuts that load's way for good: placed objects never move again. The start order
 to start such a load later (``teams.in_the_way``), but it judges by the straight hull of
 the ways, and with robots enough both start at once anyway. :func:`goal_cuts` finds the
 pairs for certain, once, when the schedule begins: object ``k`` *cuts* object ``j`` when
-``j`` can reach its goal round the map's obstacles (``landmark.route_path``, from where
+``j`` can reach its goal round the map's obstacles (``makeway.route_of``, from where
 it stands) but cannot once ``k`` stands at its goal (``landmark.route_length`` with
 ``k``'s goal footprint as one more obstacle). Only pairs whose goal footprint comes near
 the way (``j``'s bounding radius and a robot diameter) are checked, so the cost is one
@@ -26,11 +26,12 @@ import shapely
 from scipy.sparse import csr_array
 from scipy.sparse.csgraph import connected_components
 
+from lamp.fleet.makeway import route_of
 from lamp.geometry.object_space import ObjectSpace
 from lamp.geometry.primitives import Obstacle
 from lamp.geometry.shapes import to_shapely
 from lamp.scene.model import Scene
-from lamp.search.landmark import route_length, route_path
+from lamp.search.landmark import route_length
 
 __all__ = ["COARSE_CELLS", "goal_cuts"]
 
@@ -52,9 +53,7 @@ def goal_cuts(scene: Scene, poses: np.ndarray, step: float | None = None,
     r = float(scene.robot_radius)
     ways: dict[int, shapely.LineString] = {}
     for j in objs:
-        obj = scene.objects[j]
-        space = ObjectSpace(obj.shape, scene.workspace, tuple(scene.obstacles))
-        path = route_path(space, (poses[j][0], poses[j][1]), (obj.goal[0], obj.goal[1]), step)
+        path = route_of(scene, j, poses[j], step)
         if path is not None:
             ways[j] = shapely.LineString(path)
     edges = []

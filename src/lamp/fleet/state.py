@@ -37,7 +37,7 @@ class ObjectState:
     blocked_at: tuple[int, int] | None = None
     wake: bool = False  # the answer to ``plan_failed``
     needs_team: bool = False  # its thread waits for robots (``wait_for_team``)
-    #: a pose to move to before its goal: it stands on a blocked object's goal
+    #: a pose to move to before its goal: it stands in a blocked object's way
     #: (``fleet.makeway``); None: none
     detour: np.ndarray | None = None
     lent_by: int | None = None  # the object whose robots it has for its detour

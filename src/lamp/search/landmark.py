@@ -215,6 +215,18 @@ def _potential_from(space: ObjectSpace, start: tuple[float, float], step: float
     return LandmarkPotential(space, origin, step, shape, (sx, sy), 2.0 * step)
 
 
+def _goal_end(p: LandmarkPotential, goal: tuple[float, float]) -> tuple[int, float] | None:
+    """The cell within two steps of ``goal`` connected to the start that is cheapest to end
+    at, with its route length plus the octile rest to ``goal`` (ties by cell index); None
+    when no such cell is connected to the start."""
+    ends = [(p.values[c] + o, c) for c, o in p._near(float(goal[0]), float(goal[1]), p.radius)
+            if p.values[c] < p.unreachable]
+    if not ends:
+        return None
+    length, cell = min(ends)
+    return cell, float(length)
+
+
 def route_length(space: ObjectSpace, start: tuple[float, float], goal: tuple[float, float],
                  step: float) -> float | None:
     """The length of the object's shortest route from ``start`` to ``goal`` as the potential
@@ -231,10 +243,8 @@ def route_length(space: ObjectSpace, start: tuple[float, float], goal: tuple[flo
     detour around it; a goal walled off from the start gives None. Cost: one Dijkstra over
     the workspace's grid (a 50 m map at 0.1 m: 250 k positions).
     """
-    p = _potential_from(space, start, step)
-    ends = [p.values[c] + o for c, o in p._near(float(goal[0]), float(goal[1]), p.radius)
-            if p.values[c] < p.unreachable]
-    return float(min(ends)) if ends else None
+    end = _goal_end(_potential_from(space, start, step), goal)
+    return None if end is None else end[1]
 
 
 def route_path(space: ObjectSpace, start: tuple[float, float], goal: tuple[float, float],
@@ -250,12 +260,10 @@ def route_path(space: ObjectSpace, start: tuple[float, float], goal: tuple[float
     cell's Dijkstra predecessor is one such neighbour), so it ends, at a cell the search
     was seeded with: within two steps of the start."""
     p = _potential_from(space, start, step)
-    cells = p._near(float(goal[0]), float(goal[1]), p.radius)
-    if not cells:
+    end = _goal_end(p, goal)
+    if end is None:
         return None
-    u = min(cells, key=lambda c: (p.values[c[0]] + c[1], c[0]))[0]
-    if p.values[u] >= p.unreachable:
-        return None
+    u = end[0]
     n_i, n_j = p.shape
     path = [(float(goal[0]), float(goal[1]))]
     while True:
