@@ -6,11 +6,11 @@ from __future__ import annotations
 
 import copy
 import math
-from types import SimpleNamespace
 
 import numpy as np
 import pytest
 import shapely
+from fleet_fakes import fleet_at_starts
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 from run_safety import assert_safe
@@ -212,9 +212,7 @@ def test_no_buffer_where_the_map_has_no_room() -> None:
 def _stuck_fleet(scene) -> Fleet:
     """A ``Fleet`` on ``scene`` whose objects are all started and all blocked, over an
     executor that only reports the start poses (no simulator)."""
-    executor = SimpleNamespace(object_poses=np.array([o.start for o in scene.objects]),
-                               robot_positions=np.array(scene.robot_starts, float))
-    fleet = Fleet(scene, executor, lambda f, k: None, lambda *a: None)
+    fleet = fleet_at_starts(scene)
     for k, o in enumerate(fleet.objects):
         o.status, o.rank, o.team, o.blocked_at = "active", k, [3 * k, 3 * k + 1, 3 * k + 2], (0, 0)
     return fleet
@@ -256,9 +254,7 @@ def _waiting_in_way(goal_of_1: list[float]) -> Fleet:
     d = copy.deepcopy(SWAP)
     d["objects"][1]["goal"] = goal_of_1
     scene = _scene(d)
-    executor = SimpleNamespace(object_poses=np.array([o.start for o in scene.objects]),
-                               robot_positions=np.array(scene.robot_starts, float))
-    fleet = Fleet(scene, executor, lambda f, k: None, lambda *a: None)
+    fleet = fleet_at_starts(scene)
     first = fleet.objects[0]
     first.status, first.rank, first.team, first.blocked_at = "active", 0, list(range(6)), (0, 0)
     fleet.owner[:] = 0

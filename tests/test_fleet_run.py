@@ -10,6 +10,7 @@ from pathlib import Path
 
 import pytest
 import yaml
+from fleet_fakes import fleet_at_starts
 from run_safety import assert_safe
 from typer.testing import CliRunner
 
@@ -278,22 +279,17 @@ def test_a_plan_made_in_the_world_as_it_stands_is_not_declined() -> None:
     was taken is admitted even when its bodies, as planned, touch a standing robot (the
     planner saw that robot and accepted the contact: declining would plan the same again,
     for ever); once an event has passed, the same segment is declined (the world changed)."""
-    from types import SimpleNamespace
-
     import numpy as np
 
-    from lamp.fleet.coordinator import Fleet
     from lamp.fleet.segments import Segment
 
     scene = scene_from_dict(_two_boxes(5.0, (1.2, 2.2), 4.2))
     r = scene.robot_radius
     robots = np.array(scene.robot_starts, float)
     robots[3] = [0.4 + 2 * r - 0.01, 0.6]  # 1 cm into robot 0's disk, in no team
-    executor = SimpleNamespace(object_poses=np.array([o.start for o in scene.objects]),
-                               robot_positions=robots)
 
     def outcome(events_since: int) -> tuple[bool, bool]:
-        fleet = Fleet(scene, executor, lambda f, k: None, lambda *a: None)
+        fleet = fleet_at_starts(scene, robots)
         o = fleet.objects[0]
         o.status, o.team = "active", [0]
         fleet.owner[0] = 0
@@ -312,16 +308,7 @@ def test_a_plan_made_in_the_world_as_it_stands_is_not_declined() -> None:
 def _moving_fleet(scene, cross_near: float = 0.0, cross_waiting: float = 0.0):
     """A ``Fleet`` on ``scene`` whose objects all move, ranked in file order, over an
     executor that only reports the scene's start poses (no simulator)."""
-    from types import SimpleNamespace
-
-    import numpy as np
-
-    from lamp.fleet.coordinator import Fleet
-
-    executor = SimpleNamespace(object_poses=np.array([o.start for o in scene.objects]),
-                               robot_positions=np.array(scene.robot_starts, float))
-    fleet = Fleet(scene, executor, lambda f, k: None, lambda *a: None, cross_near=cross_near,
-                  cross_waiting=cross_waiting)
+    fleet = fleet_at_starts(scene, cross_near=cross_near, cross_waiting=cross_waiting)
     for k, o in enumerate(fleet.objects):
         o.status, o.rank = "active", k
     return fleet
