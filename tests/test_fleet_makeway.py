@@ -248,11 +248,15 @@ def test_a_detour_claims_its_way_to_the_buffer_not_to_the_goal() -> None:
     assert with_goal(scene, 1, target).objects[1].goal == tuple(float(v) for v in target)
 
 
-def _waiting_in_way(goal_of_1: list[float]) -> Fleet:
+def _waiting_in_way(goal_of_1: list[float], third: bool = False) -> Fleet:
     """SWAP (object 1's goal moved to ``goal_of_1``) with object 0 blocked, all six robots
-    its team, and object 1, standing on its goal, not started."""
+    its team, and object 1, standing on its goal, not started (``third``: and a small box
+    in a corner, not started)."""
     d = copy.deepcopy(SWAP)
     d["objects"][1]["goal"] = goal_of_1
+    if third:
+        d["objects"].append({"type": "rectangle", "size": [0.2, 0.2], "start": [5.5, 3.5, 0.0],
+                             "goal": [5.5, 0.5, 0.0]})
     scene = _scene(d)
     fleet = fleet_at_starts(scene)
     first = fleet.objects[0]
@@ -286,6 +290,22 @@ def test_robots_go_to_the_object_in_the_way_which_goes_straight_on_when_its_way_
         mover = fleet.objects[1]
         assert mover.team == list(range(6)) and mover.detour is None
         assert fleet.counts["made_way"] == 0
+    finally:
+        fleet.turns.close()
+
+
+def test_an_object_precedence_holds_back_moves_aside_but_not_to_its_goal() -> None:
+    """A teamless object that may not start yet (its goal would cut a way, precedence)
+    gets a detour with the robots it is handed, even with its own way clear; with nothing
+    holding it back it goes straight on (the test above)."""
+    fleet = _waiting_in_way([4.0, 3.3, 0.0], third=True)
+    fleet.cuts[1] = {2}  # (as if) object 1's goal would cut the third's way
+    try:
+        assert not fleet.may_start(1)
+        assert make_way(fleet, fleet._ranked())
+        mover = fleet.objects[1]
+        assert mover.team == list(range(6)) and mover.detour is not None
+        assert fleet.counts["made_way"] == 1
     finally:
         fleet.turns.close()
 

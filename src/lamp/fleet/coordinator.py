@@ -153,14 +153,19 @@ class Fleet:
                 if any(self.objects[k].status == "failed" for k in after):
                     self._give_up(o, "not started: an object it waits for (after) was not "
                                   "placed")
-                elif all(self.objects[k].status == "placed" for k in after) and all(
-                        self.objects[j].status in ("placed", "failed") for j in self.cuts[o.index]):
+                elif self.may_start(o.index):
                     ready.append(o.index)
         if ready:
             self._start(ready)
         if self.reinforce_reach > 0 and not self._any_waits():
             self._reinforce()
         self._hand_over()
+
+    def may_start(self, k: int) -> bool:
+        """Whether object ``k`` may start: its ``after`` objects are placed and those its
+        goal would cut are done (``fleet.precedence``)."""
+        return all(self.objects[a].status == "placed" for a in self.scene.objects[k].after) \
+            and all(self.objects[j].status in ("placed", "failed") for j in self.cuts[k])
 
     def _any_waits(self, but: int | None = None) -> bool:
         """Whether an object (other than ``but``) waits to start or waits for robots."""

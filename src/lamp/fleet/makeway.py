@@ -15,8 +15,9 @@ Verify; ``lamp.fleet.objects``; it stops there at any heading, the clearance bei
 measured by the bounding radius); when it stands there, or finds no way there, the detour
 ends (:func:`detour_done`), the blocked planners plan again and ``j`` goes on to its own
 goal. A ``j`` without robots gets ``k``'s (``k`` waits for robots), and a detour only if
-its own way is shut too or its goal would cut ``k``'s way (``fleet.precedence``); else it
-goes straight to its goal. Each (``j``, ``k``) pair
+its own way is shut too or it may not start yet (``Fleet.may_start``: its goal would cut
+the way of ``k`` or of another object not yet done, ``fleet.precedence``); else it goes
+straight to its goal. Each (``j``, ``k``) pair
 makes way at most once, so the schedule still ends. Runs that never get stuck are
 unchanged (the ``fleet`` family: all 25 the same).
 
@@ -187,7 +188,7 @@ def make_way(fleet: Fleet, blocked: list[ObjectState]) -> bool:
         target = None
         shut = standing_in_way(scene, j, way_of(scene, j, poses[j]), poses,
                                [i for i in unplaced if i != j]) is not None
-        if J.team or k in fleet.cuts[j] or shut:
+        if J.team or shut or (J.status == "waiting" and not fleet.may_start(j)):
             keep = [way.buffer(float(scene.objects[k].shape.bounding_radius))]
             keep += [to_shapely(scene.objects[i].shape, np.asarray(scene.objects[i].goal, float))
                      .buffer(2 * scene.robot_radius) for i in unplaced if i != j]
