@@ -1,5 +1,13 @@
 """The IROS case study with a fleet: its map and 9 objects, 9 robots (its 3 and six more),
-moved one after another and concurrently; prints both makespans and their ratio.
+moved one after another and concurrently; prints both makespans and their ratio, and the
+critical chain's bound on the ratio.
+
+The bound: ``teams.start_order`` starts an object after those whose way its goal lies in
+(``teams.in_the_way``). Along the longest chain of that relation, weighted by each
+object's running time in the sequential run (the team's approach and pushes, alone in the
+room), no schedule that keeps the chain's order can place the last object sooner than the
+chain's sum; divided by the sequential makespan it bounds the ratio from below. (A chain
+broken costs more than it saves on this scene: ``docs/fleet.md``, Limits.)
 
 The six robots are placed deterministically at the free spots of a 0.2 m grid nearest the
 three robots' centre (clear of obstacles and of every object's start and goal by 0.1 m,
@@ -18,6 +26,7 @@ import numpy as np
 import shapely
 
 import lamp
+from lamp.fleet.teams import corridor, in_the_way
 from lamp.geometry.shapes import obstacle_geometry, to_shapely
 from lamp.scene.model import Scene
 from lamp.scene.save import save_scene
@@ -46,6 +55,37 @@ def with_robots(scene: Scene, extra: int) -> Scene:
     return replace(scene, robot_starts=tuple(starts), name=f"{scene.name}-{len(starts)}r")
 
 
+def running_times(recording) -> dict[int, float]:
+    """Each object's running time (s) in a sequential run: the sum of its segments' spans."""
+    a = recording.arrays
+    t, rows, obj = a["times"], a["segment_rows"], a["segment_object"]
+    out: dict[int, float] = {}
+    for g, k in enumerate(obj):
+        out[int(k)] = out.get(int(k), 0.0) + float(t[rows[g + 1]] - t[rows[g]])
+    return out
+
+
+def critical_chain(scene: Scene, weight: dict[int, float]) -> tuple[list[int], float]:
+    """The chain ``k -> j`` (``j``'s goal lies in ``k``'s way, so ``j`` starts after ``k``)
+    of the objects at their starts with the largest sum of ``weight``, and that sum. An
+    edge back into the chain being built is skipped (a cycle is no chain)."""
+    objs, r = scene.objects, scene.robot_radius
+    ks = range(len(objs))
+    ways = {k: corridor(objs[k].shape, objs[k].start, objs[k].goal, r) for k in ks}
+    blocks = in_the_way(ways, {k: to_shapely(objs[k].shape, objs[k].goal) for k in ks},
+                        {k: np.asarray(objs[k].start) for k in ks},
+                        {k: np.asarray(objs[k].goal) for k in ks})
+    after = {k: [j for j in ks if k in blocks[j]] for k in ks}
+
+    def longest(k: int, on: frozenset[int]) -> tuple[float, list[int]]:
+        tails = [longest(j, on | {j}) for j in after[k] if j not in on]
+        best = max(tails, default=(0.0, []))
+        return weight.get(k, 0.0) + best[0], [k, *best[1]]
+
+    span, chain = max(longest(k, frozenset({k})) for k in ks)
+    return chain, span
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--write", help="also save the scene to this file")
@@ -62,12 +102,16 @@ def main() -> None:
             t0 = time.perf_counter()
             result = lamp.solve(scene, "lazy", seed, schedule=schedule)
             spans[schedule] = result.makespan_s
+            if schedule == "sequential":
+                chain, bound = critical_chain(scene, running_times(result.recording))
             placed = sum(o.success for o in result.objects)
             print(f"seed {seed} {schedule:10s} success {result.success} ({placed}/9 placed)  "
                   f"makespan {result.makespan_s:.1f} s  planning "
                   f"{result.total_planning_time_s:.1f} s  wall {time.perf_counter() - t0:.0f} s")
         ratios.append(spans["concurrent"] / spans["sequential"])
-        print(f"seed {seed} makespan concurrent / sequential: {ratios[-1]:.2f}")
+        print(f"seed {seed} makespan concurrent / sequential: {ratios[-1]:.2f}  (critical chain "
+              f"{' -> '.join(map(str, chain))}: {bound:.1f} s alone, bound "
+              f"{bound / spans['sequential']:.3f})")
     if len(ratios) > 1:
         print(f"median over seeds {args.seeds}: {float(np.median(ratios)):.2f} "
               f"({min(ratios):.2f}-{max(ratios):.2f})")
