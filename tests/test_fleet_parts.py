@@ -422,6 +422,15 @@ def test_compatible_segments_stay_clear_row_by_row(seed, apart) -> None:
         assert _brute_force_clear(a, b)
     if not _brute_force_clear(a, b):
         assert not compatible(a, b)
+    # later on the clock, with each segment's object spaces kept from the first test
+    for seg in (a, b):
+        seg.cursor = int(rng.integers(seg.cursor, seg.rows.shape[1]))
+    warm = compatible(a, b)
+    if warm:
+        assert _brute_force_clear(a, b)
+    a.spaces.clear()
+    b.spaces.clear()
+    assert compatible(a, b) == warm  # the kept spaces are the ones it would compute now
 
 
 def test_far_apart_segments_are_compatible_and_crossing_robots_are_not() -> None:

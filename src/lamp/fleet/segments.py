@@ -71,6 +71,10 @@ class Segment:
     #: the first row at which a robot may touch the object (:meth:`first_touch`); before
     #: it the object stands at its first planned pose
     touch: int = field(init=False)
+    #: where its object may be, filled on first use by ``spacetime`` (the planned poses
+    #: never change, so neither do these spaces)
+    spaces: dict[str, shapely.Geometry] = field(default_factory=dict, init=False, repr=False,
+                                                compare=False)
 
     def __post_init__(self) -> None:
         self.touch = self.first_touch()

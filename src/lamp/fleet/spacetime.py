@@ -31,8 +31,20 @@ __all__ = ["compatible", "object_phases", "object_space"]
 
 def object_space(seg: Segment, final: bool = False) -> shapely.Geometry:
     """Where ``seg``'s object may be while it runs (``final``: once it has ended)."""
-    poses = seg.poses[-1:] if final else seg.poses
-    return footprints(seg.shape, poses, OBJECT_MARGIN)
+    return _space(seg, "final" if final else "motion")
+
+
+def _space(seg: Segment, which: str) -> shapely.Geometry:
+    """``seg``'s object at its first planned pose (``which`` = "first"), along its planned
+    motion ("motion") or at its last pose ("final"), grown by ``OBJECT_MARGIN``; computed
+    once per segment (``Segment.spaces``) and prepared for the many tests against it."""
+    space = seg.spaces.get(which)
+    if space is None:
+        poses = {"first": seg.poses[:1], "motion": seg.poses, "final": seg.poses[-1:]}[which]
+        space = footprints(seg.shape, poses, OBJECT_MARGIN)
+        shapely.prepare(space)
+        seg.spaces[which] = space
+    return space
 
 
 def object_phases(seg: Segment) -> list[tuple[float, shapely.Geometry]]:
@@ -43,8 +55,7 @@ def object_phases(seg: Segment) -> list[tuple[float, shapely.Geometry]]:
     touch = max(0, seg.touch - seg.cursor)
     out = []
     if touch > 0:
-        out.append((float(min(touch, seg.remaining)), footprints(seg.shape, seg.poses[:1],
-                                                                 OBJECT_MARGIN)))
+        out.append((float(min(touch, seg.remaining)), _space(seg, "first")))
     if touch < seg.remaining:
         out.append((float(seg.remaining), object_space(seg)))
     out.append((math.inf, object_space(seg, final=True)))
@@ -70,7 +81,8 @@ def _robots_clear(rows: np.ndarray, phases: list[tuple[float, shapely.Geometry]]
         if part.size == 0:
             continue
         pts = shapely.points(part.reshape(-1, 2))
-        if np.min(shapely.distance(region, pts)) < clearance:
+        near = shapely.dwithin(region, pts, clearance)  # a prepared test, then the few exactly
+        if near.any() and np.min(shapely.distance(region, pts[near])) < clearance:
             return False
     return True
 
