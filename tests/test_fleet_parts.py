@@ -17,11 +17,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from lamp.contract.model import MAX_ROBOTS
-from lamp.fleet.admission import CROSSING, crosses, meets_moving
+from lamp.fleet.admission import CROSSING, crosses, meets_moving, meets_standing
 from lamp.fleet.regions import (
     CLAIM_NEAR,
     OBJECT_MARGIN,
     ROBOT_MARGIN,
+    STATIC_SLACK,
     claim,
     claims,
     footprints,
@@ -41,6 +42,7 @@ from lamp.fleet.teams import (
 )
 from lamp.fleet.turns import Turns
 from lamp.geometry.shapes import to_shapely
+from lamp.scene import scene_from_dict
 from lamp.scene.model import Obstacle, Rectangle, Scene, SceneObject
 
 R = 0.05
@@ -589,3 +591,31 @@ def test_limit_reached_names_the_limit_that_ends_an_object() -> None:
     assert limit_reached(50, 50, 3, 12.0, 300.0) == "segment limit reached (50)"
     assert limit_reached(50, 10, 51, 12.0, 300.0) == "plan-anew limit reached (50 loops)"
     assert limit_reached(50, 60, 60, 300.0, 300.0) == "planning time limit"
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(0, 2**31 - 1), st.integers(1, 12))
+def test_meets_standing_finds_the_standing_robots_the_planned_bodies_overlap(seed, n) -> None:
+    """Against exact disks: a robot not in the team nor moving, whose disk (shrunk by
+    ``STATIC_SLACK``) the segment's planned bodies overlap, is found; one they keep clear
+    of is not (up to the 16-gon the disk is drawn as: within 0.5% of its radius)."""
+    rng = np.random.default_rng(seed)
+    seg = _random_segment(rng, 0, (0.0, 0.0))
+    robots = rng.uniform(-1.2, 1.2, (n, 2))
+    moving = {int(i) for i in rng.choice(n, size=int(rng.integers(0, n + 1)), replace=False)}
+    scene = scene_from_dict({
+        "format": "lamp-scene/1", "name": "standing", "workspace": [20.0, 20.0],
+        "robots": {"radius": R, "starts": [[1.0 + 0.2 * i, 15.0] for i in range(n)]},
+        "obstacles": [],
+        "objects": [{"type": "circle", "radius": 0.1, "start": [15.0, 1.0, 0.0],
+                     "goal": [15.0, 3.0, 0.0]}]})
+    core = seg.core()
+    outer = R - STATIC_SLACK
+    inner = outer * math.cos(math.pi / 32)
+    d = [float(core.distance(shapely.Point(p))) if i not in seg.team and i not in moving
+         else math.inf for i, p in enumerate(robots)]
+    found = meets_standing(seg, scene, np.zeros((1, 3)), robots, [], moving)
+    if min(d, default=math.inf) < inner:
+        assert found
+    if found:
+        assert min(d) < outer

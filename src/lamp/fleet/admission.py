@@ -54,16 +54,13 @@ def meets_standing(seg: Segment, scene: Scene, object_poses: np.ndarray,
     """Whether ``seg``'s planned bodies overlap an object of ``still_objects`` where it is
     or a robot (not in ``seg``'s team nor in ``moving_robots``) where it stands."""
     core = seg.core()
-    shapely.prepare(core)
     r = scene.robot_radius
     for k in still_objects:
         if core.intersects(standing(scene.objects[k].shape, object_poses[k], r)):
             return True
-    for i in range(scene.n_robots):
-        if i not in seg.team and i not in moving_robots and core.intersects(
-                standing(None, robot_positions[i], r)):
-            return True
-    return False
+    still = [i for i in range(scene.n_robots) if i not in seg.team and i not in moving_robots]
+    return bool(still) and bool(shapely.intersects(
+        core, standing(None, np.asarray(robot_positions, float)[still], r)).any())
 
 
 def meets_moving(seg: Segment, running: Sequence[Segment],

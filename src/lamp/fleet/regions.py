@@ -126,10 +126,16 @@ def claims(shape: Shape, poses: np.ndarray, goal: np.ndarray, robot_radius: floa
     return full, near, way
 
 
-def standing(shape: Shape | None, pose: np.ndarray, robot_radius: float) -> shapely.Geometry:
+def standing(shape: Shape | None, pose: np.ndarray, robot_radius: float
+             ) -> shapely.Geometry | np.ndarray:
     """A body where it stands: an object (``shape`` at ``pose``) or, with ``shape`` None, a
-    robot at ``pose[:2]``; shrunk by ``STATIC_SLACK``."""
+    robot at ``pose[:2]`` (robots at ``pose`` (N, 2): an array of N disks); shrunk by
+    ``STATIC_SLACK``."""
     if shape is None:
+        pose = np.asarray(pose, float)
+        if pose.ndim == 2:
+            return shapely.buffer(shapely.points(pose[:, :2]), robot_radius - STATIC_SLACK,
+                                  quad_segs=8)
         return shapely.Point(float(pose[0]), float(pose[1])).buffer(
             robot_radius - STATIC_SLACK, quad_segs=8)
     return to_shapely(shape, pose).buffer(-STATIC_SLACK)

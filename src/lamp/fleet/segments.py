@@ -71,8 +71,9 @@ class Segment:
     #: the first row at which a robot may touch the object (:meth:`first_touch`); before
     #: it the object stands at its first planned pose
     touch: int = field(init=False)
-    #: where its object may be, filled on first use by ``spacetime`` (the planned poses
-    #: never change, so neither do these spaces)
+    #: the spaces it takes, filled on first use: where its object may be (``spacetime``;
+    #: the planned poses never change, so neither do these) and its :meth:`core` (renewed
+    #: when a rejoin changes the rows)
     spaces: dict[str, shapely.Geometry] = field(default_factory=dict, init=False, repr=False,
                                                 compare=False)
 
@@ -114,6 +115,7 @@ class Segment:
             return
         back = straight_moves(np.asarray(positions, float), self.rows[:, self.cursor], row_step)
         self.rows = np.concatenate([back, self.rows[:, self.cursor:]], axis=1)
+        self.spaces.pop("core", None)
         # a push under way goes on moving the object; one not begun begins as late as the
         # inserted rows delay it, or as early as they come near the object
         self.touch = 0 if self.touch <= self.cursor else min(
@@ -128,5 +130,11 @@ class Segment:
         return before, after
 
     def core(self) -> shapely.Geometry:
-        """Its bodies exactly as planned (``regions.swept(..., margins=False)``)."""
-        return swept(self.shape, self.poses, self.rows, self.robot_radius, margins=False)
+        """Its bodies exactly as planned (``regions.swept(..., margins=False)``), prepared;
+        computed once for its rows."""
+        core = self.spaces.get("core")
+        if core is None:
+            core = swept(self.shape, self.poses, self.rows, self.robot_radius, margins=False)
+            shapely.prepare(core)
+            self.spaces["core"] = core
+        return core
