@@ -427,3 +427,38 @@ def test_helpers():
     area = sum((b - a) * (d - c) for a, c, b, d in pieces)
     assert area == pytest.approx(8.0 * 2.0 - 1.0 * 0.8 - 0.8 * 0.6 - 1.0 * 0.5)
     assert all(b - a > 0 and d - c >= 0.1 for a, c, b, d in pieces)
+
+
+def test_each_draw_is_announced_with_why_the_ones_before_failed() -> None:
+    """``on_attempt`` hears of draws 1, 2, ... of ``MAX_ATTEMPTS`` in turn, each with the
+    reasons of the draws before it (as many as came before); on success the last is the
+    scene's own draw, on failure all ``MAX_ATTEMPTS`` were announced."""
+    calls: list[tuple[int, int, dict[str, int]]] = []
+    g = F.generate_custom("yard", (6.0, 6.0), 12, 12,
+                          on_attempt=lambda a, of, why: calls.append((a, of, why)))
+    assert g.attempts > 1  # (this one needs several draws)
+    assert [c[0] for c in calls] == list(range(1, g.attempts + 1))
+    assert all(of == F.MAX_ATTEMPTS and sum(why.values()) == a - 1 for a, of, why in calls)
+    calls.clear()
+    with pytest.raises(RuntimeError, match="no valid scene"):
+        F.generate_custom("aisles", (8.0, 6.0), 6, 12,
+                          on_attempt=lambda a, of, why: calls.append((a, of, why)))
+    assert [c[0] for c in calls] == list(range(1, F.MAX_ATTEMPTS + 1))
+    assert calls[-1][2] == {"objects do not fit": F.MAX_ATTEMPTS - 1}
+
+
+def test_drawing_a_scene_shows_a_status_line_on_a_terminal_only() -> None:
+    import io
+
+    from lamp.suites.cli import DrawProgress
+
+    stream = io.StringIO()
+    with DrawProgress(stream=stream, terminal=True) as shown:
+        shown(1, 30, {})
+        shown(3, 30, {"objects do not fit": 2})
+    assert "drawing the scene: attempt 3/30 (rejected so far: objects do not fit x2)" \
+        in stream.getvalue()
+    piped = io.StringIO()
+    with DrawProgress(stream=piped, terminal=False) as shown:
+        shown(3, 30, {"objects do not fit": 2})
+    assert piped.getvalue() == ""

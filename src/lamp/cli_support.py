@@ -130,6 +130,33 @@ def version_callback(value: bool) -> None:
         raise typer.Exit()
 
 
+class StatusLine:
+    """One live status line on a console (stderr by default), drawn only on a terminal."""
+
+    def __init__(self, stream: Any = None, terminal: bool | None = None) -> None:
+        from rich.console import Console
+
+        self.console = Console(file=stream or sys.stderr, highlight=False,
+                               force_terminal=terminal)
+        self._status: Any = None
+
+    @property
+    def live(self) -> bool:
+        return self.console.is_terminal
+
+    def show(self, text: str) -> None:
+        if self._status is None:
+            self._status = self.console.status(text)
+            self._status.start()
+        else:
+            self._status.update(text)
+
+    def close(self) -> None:
+        if self._status is not None:
+            self._status.stop()
+            self._status = None
+
+
 class RunProgress:
     """Shows a run's progress on stderr: a live status line on a terminal, nothing when
     piped (unless ``verbose``: one line per event), nothing at all when ``quiet``.
@@ -140,14 +167,11 @@ class RunProgress:
 
     def __init__(self, *, quiet: bool = False, verbose: bool = False,
                  stream: Any = None, terminal: bool | None = None) -> None:
-        from rich.console import Console
-
         self.quiet = quiet
         self.verbose = verbose and not quiet
-        self.console = Console(file=stream or sys.stderr, highlight=False,
-                               force_terminal=terminal)
-        self.live = not quiet and not self.verbose and self.console.is_terminal
-        self._status: Any = None
+        self.line = StatusLine(stream, terminal)
+        self.console = self.line.console
+        self.live = not quiet and not self.verbose and self.line.live
 
     def __call__(self, event: ProgressEvent) -> None:
         if self.quiet:
@@ -159,19 +183,13 @@ class RunProgress:
             self.close()
             self._print(text)
         elif self.live:
-            if self._status is None:
-                self._status = self.console.status(text)
-                self._status.start()
-            else:
-                self._status.update(text)
+            self.line.show(text)
 
     def _print(self, text: str) -> None:
         self.console.print(text, markup=False)
 
     def close(self) -> None:
-        if self._status is not None:
-            self._status.stop()
-            self._status = None
+        self.line.close()
 
     def __enter__(self) -> RunProgress:
         return self

@@ -4,10 +4,11 @@ scene of any size."""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import typer
 
-from lamp.cli_support import fail_input, lamp_typer
+from lamp.cli_support import StatusLine, fail_input, lamp_typer
 from lamp.suites.registry import SUITES, export_suite, suite_files
 
 suite_app = lamp_typer(help="Built-in benchmark suites.", no_args_is_help=True)
@@ -43,6 +44,30 @@ def export_command(
     typer.echo(f"wrote {len(written) - 1} scene file(s) and manifest.json to {directory}")
 
 
+class DrawProgress:
+    """While a scene is drawn, a status line (on a terminal): which draw of how many, and
+    why the ones before it were rejected."""
+
+    def __init__(self, stream: Any = None, terminal: bool | None = None) -> None:
+        self.line = StatusLine(stream, terminal)
+
+    @staticmethod
+    def describe(attempt: int, of: int, rejected: dict[str, int]) -> str:
+        why = ", ".join(f"{reason} x{n}" for reason, n in rejected.items())
+        return f"drawing the scene: attempt {attempt}/{of}" + (
+            f" (rejected so far: {why})" if why else "")
+
+    def __call__(self, attempt: int, of: int, rejected: dict[str, int]) -> None:
+        if self.line.live:
+            self.line.show(self.describe(attempt, of, rejected))
+
+    def __enter__(self) -> DrawProgress:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.line.close()
+
+
 @suite_app.command("fleet-scene")
 def fleet_scene_command(
     out: Path = typer.Argument(..., help="Scene file to write (.yaml, .yml or .json)."),
@@ -71,14 +96,16 @@ def fleet_scene_command(
         fail_input("--map takes the map's own workspace and obstacles: leave out --kind "
                    "and --size")
     try:
-        if on_map is None:
-            gen = generate_custom(kind or "aisles", size or (40.0, 30.0), objects, robots, seed)
-        else:
-            base = load_map(on_map, cell)  # an InputError names the file (and field, cell)
-            try:
-                gen = generate_on_map(base, objects, robots, seed)
-            except ValueError as exc:
-                raise InputError(f"{on_map}: {exc}") from exc
+        with DrawProgress() as shown:
+            if on_map is None:
+                gen = generate_custom(kind or "aisles", size or (40.0, 30.0), objects, robots,
+                                      seed, on_attempt=shown)
+            else:
+                base = load_map(on_map, cell)  # an InputError names the file (field, cell)
+                try:
+                    gen = generate_on_map(base, objects, robots, seed, on_attempt=shown)
+                except ValueError as exc:
+                    raise InputError(f"{on_map}: {exc}") from exc
         save_scene(gen.scene, out)
     except ValueError as exc:  # InputError included
         fail_input(str(exc))

@@ -150,6 +150,10 @@ def n_pairs(n_objects: int) -> int:
     return 1 + (n_objects >= 5) + (n_objects >= 9)
 
 
+#: ``on_attempt(attempt, of, rejected)``: a draw is about to be made (1-based, of ``of``
+#: at most; ``rejected``: why earlier draws failed, reason -> count).
+OnAttempt = Callable[[int, int, dict[str, int]], None]
+
 LAYOUTS: dict[str, Callable[..., FL.FleetLayout | None]] = {
     "rooms": FL.layout_rooms,
     "aisles": FW.layout_aisles,
@@ -222,13 +226,15 @@ def generate_scene(index: int, held_out: bool = False) -> GeneratedFleet:
 
 
 def generate_custom(kind: str, workspace: tuple[float, float], n_objects: int,
-                    n_robots: int, seed: int = 0) -> GeneratedFleet:
+                    n_robots: int, seed: int = 0,
+                    on_attempt: OnAttempt | None = None) -> GeneratedFleet:
     """A scene of the family's ``kind`` at any size: ``n_objects`` objects and
     ``n_robots`` robots on a ``workspace`` map (m), with every guarantee of the module
     docstring; deterministic in its arguments (its own random stream, apart from the
     family's). For fleets beyond the family's 24 robots and 12 objects
     (``benchmarks/bench_fleet_scale.py``). ValueError names a bad argument; RuntimeError
-    as :func:`generate_scene` when no draw passes the checks."""
+    as :func:`generate_scene` when no draw passes the checks. ``on_attempt(attempt,
+    MAX_ATTEMPTS, rejected so far)`` is called before each draw (for a progress line)."""
     if kind not in KINDS:
         raise ValueError(f"kind must be one of {', '.join(KINDS)}, got {kind!r}")
     W, H = (float(v) for v in workspace)
@@ -242,7 +248,8 @@ def generate_custom(kind: str, workspace: tuple[float, float], n_objects: int,
                                  n_robots])
     objects = sample_objects(rng, kind, n_objects)
     name = f"{NAME}-{kind}-{W:g}x{H:g}-{n_robots}r{n_objects}o-s{seed}"
-    return _draw(rng, -1, name, kind, {"custom": True}, (W, H), objects, n_robots)
+    return _draw(rng, -1, name, kind, {"custom": True}, (W, H), objects, n_robots,
+                 on_attempt=on_attempt)
 
 
 def _check_counts(n_objects: int, n_robots: int, least: int = 1, note: str = "") -> None:
@@ -256,14 +263,15 @@ def _check_counts(n_objects: int, n_robots: int, least: int = 1, note: str = "")
 
 
 def generate_on_map(base: Scene, n_objects: int, n_robots: int,
-                    seed: int = 0) -> GeneratedFleet:
+                    seed: int = 0, on_attempt: OnAttempt | None = None) -> GeneratedFleet:
     """A fleet scene on ``base``'s map (a user's scene file, or a grid map of
     ``lamp.scene.mapf``): its workspace, obstacles and physics, with ``n_objects`` new
     objects of the ``yard`` kind's shapes, each going 1.5-12 m in any direction
     (``fleet_open.layout_on``), and ``n_robots`` robots near them; ``base``'s own robots
     and objects are not used. Every guarantee of the module docstring holds;
     deterministic in its arguments (the stream hashes the map). ValueError names a bad
-    argument; RuntimeError as :func:`generate_scene` when no draw passes the checks."""
+    argument; RuntimeError as :func:`generate_scene` when no draw passes the checks;
+    ``on_attempt`` as in :func:`generate_custom`."""
     W, H = (float(v) for v in base.workspace)
     if max(W, H) > CUSTOM_MAX_SIDE:
         raise ValueError(f"workspace sides must be at most {CUSTOM_MAX_SIDE:g} m, "
@@ -294,7 +302,8 @@ def generate_on_map(base: Scene, n_objects: int, n_robots: int,
         return FO.layout_on(rng, ws, objects, obstacles, {"map": base.name}, route_ok,
                             MAP_TRIES)
 
-    gen = _draw(rng, -1, name, "map", {"custom": True}, (W, H), objects, n_robots, layout)
+    gen = _draw(rng, -1, name, "map", {"custom": True}, (W, H), objects, n_robots, layout,
+                on_attempt)
     extra = {k: v for k, v in d["robots"].items() if k not in ("radius", "starts")}
     if not extra and "physics" not in d:
         return gen
@@ -307,16 +316,19 @@ def generate_on_map(base: Scene, n_objects: int, n_robots: int,
 
 def _draw(rng: np.random.Generator, index: int, name: str, kind: str, tag: dict[str, Any],
           ws: tuple[float, float], objects: list[FL.FleetObject], n_robots: int,
-          layout: Callable[..., FL.FleetLayout | None] | None = None) -> GeneratedFleet:
+          layout: Callable[..., FL.FleetLayout | None] | None = None,
+          on_attempt: OnAttempt | None = None) -> GeneratedFleet:
     """Lay out ``objects`` and ``n_robots`` robots on a ``kind`` map (or with ``layout``)
     until a draw passes every check (at most ``MAX_ATTEMPTS``, each from ``rng``
-    onwards)."""
+    onwards); ``on_attempt`` hears of each draw before it is made."""
     rejected: dict[str, int] = {}
 
     def reject(why: str) -> None:
         rejected[why] = rejected.get(why, 0) + 1
 
     for attempt in range(1, MAX_ATTEMPTS + 1):
+        if on_attempt is not None:
+            on_attempt(attempt, MAX_ATTEMPTS, dict(rejected))
         lay = (layout or LAYOUTS[kind])(rng, ws, objects)
         if lay is None:
             reject("objects do not fit")
