@@ -175,3 +175,39 @@ def test_errors_raised_on_purpose_are_lamp_errors() -> None:
 def test_top_level_namespace_is_the_public_api() -> None:
     assert dir(lamp) == sorted(lamp.__all__)
     assert all(hasattr(lamp, name) for name in lamp.__all__)
+
+
+def test_progress_counts_the_objects_done_and_moving_in_a_concurrent_run() -> None:
+    """Each event counts the objects finished and moving so far (as its own events
+    replayed in order say); with two moving at once a description names both counts,
+    and a run of one object after another reads as before."""
+    scene = lamp.scene_from_dict({
+        "format": "lamp-scene/1", "name": "two", "workspace": [6.0, 4.0],
+        "schedule": "concurrent",
+        "robots": {"radius": 0.05, "starts": [[1.0, 0.4], [1.2, 0.4], [1.4, 0.4],
+                                              [4.6, 0.4], [4.8, 0.4], [5.0, 0.4]]},
+        "obstacles": [],
+        "objects": [{"type": "rectangle", "size": [0.4, 0.4], "start": [1.5, 1.2, 0.0],
+                     "goal": [1.5, 2.6, 0.0]},
+                    {"type": "rectangle", "size": [0.4, 0.4], "start": [4.5, 1.2, 0.0],
+                     "goal": [4.5, 2.6, 0.0]}]})
+    for schedule in ("concurrent", "sequential"):
+        events = []
+        result = lamp.solve(scene, "lazy", 0, schedule=schedule, progress=events.append)
+        assert result.success
+        events = [e for e in events if e.kind not in ("compiling", "compiled")]
+        moving, done = set(), 0
+        for e in events:  # the reference: the events themselves, replayed
+            if e.kind == "object":
+                moving.add(e.object_index)
+            elif e.kind == "object-done":
+                moving.discard(e.object_index)
+                done += 1
+            assert (e.done, e.moving) == (done, len(moving))
+        assert done == 2
+        both = [e for e in events if e.moving == 2]
+        if schedule == "concurrent":
+            assert any(e.kind == "segment" for e in both)
+            assert all(f"({e.done}/2 done, 2 moving)" in e.describe() for e in both)
+        else:
+            assert not both and not any("moving" in e.describe() for e in events)
