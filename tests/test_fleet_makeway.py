@@ -296,16 +296,28 @@ def test_robots_go_to_the_object_in_the_way_which_goes_straight_on_when_its_way_
 
 def test_an_object_precedence_holds_back_moves_aside_but_not_to_its_goal() -> None:
     """A teamless object that may not start yet (its goal would cut a way, precedence)
-    gets a detour with the robots it is handed, even with its own way clear; with nothing
-    holding it back it goes straight on (the test above)."""
+    gets a detour with the robots it is handed, even with its own way clear (with nothing
+    holding it back it goes straight on: the test above); at the detour's end it gives
+    the robots up and gets robots again only once it may start."""
     fleet = _waiting_in_way([4.0, 3.3, 0.0], third=True)
     fleet.cuts[1] = {2}  # (as if) object 1's goal would cut the third's way
     try:
         assert not fleet.may_start(1)
         assert make_way(fleet, fleet._ranked())
-        mover = fleet.objects[1]
+        first, mover, third = fleet.objects
         assert mover.team == list(range(6)) and mover.detour is not None
         assert fleet.counts["made_way"] == 1
+        # aside, with the object it made way for not waiting for robots (it got others):
+        # its robots go free and it waits for robots until it may start
+        third.status = "active"
+        detour_done(fleet, 1)
+        assert mover.detour is None and mover.team == [] and list(fleet.owner) == [-1] * 6
+        mover.needs_team = True  # its loop waits for robots
+        fleet._release()
+        assert mover.team == [] and mover.needs_team
+        third.status = "placed"  # now nothing holds it back
+        fleet._release()
+        assert mover.team and not mover.needs_team
     finally:
         fleet.turns.close()
 

@@ -57,7 +57,7 @@ from lamp.fleet.objects import given_up
 from lamp.fleet.precedence import goal_cuts
 from lamp.fleet.regions import CLAIM_NEAR, claims
 from lamp.fleet.segments import Segment, on_grid
-from lamp.fleet.state import ObjectState
+from lamp.fleet.state import FAILED, FREE, ObjectState
 from lamp.fleet.teams import allocate, near_way, nearest, reinforce, start_order
 from lamp.fleet.turns import Turns
 from lamp.fleet.utilisation import RobotTime, schedule_stats
@@ -67,9 +67,6 @@ from lamp.sim.simulator import SETTLE_TIME
 
 __all__ = ["BLOCKED_WAKE_EVENTS", "Fleet"]
 
-#: ``Fleet.owner`` of a robot in no sub-team, and of one that failed (it stays where it
-#: stopped, an obstacle to every plan, and is never given to a team again).
-FREE, FAILED = -1, -2
 #: A planner that found no plan while others moved plans again after this many events
 #: (segments ending) at the latest, sooner when an object is placed or given up.
 BLOCKED_WAKE_EVENTS = 6
@@ -146,7 +143,7 @@ class Fleet:
         moving teams (when no object waits) and take far team robots' places."""
         ready = []
         for o in self.objects:
-            if o.status == "active" and o.needs_team:
+            if o.status == "active" and o.needs_team and self.may_start(o.index):
                 ready.append(o.index)
             elif o.status == "waiting":
                 after = self.scene.objects[o.index].after

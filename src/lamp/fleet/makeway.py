@@ -45,6 +45,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import shapely
 
+from lamp.fleet.state import FREE
 from lamp.geometry.object_space import ObjectSpace
 from lamp.geometry.primitives import Obstacle
 from lamp.geometry.shapes import obstacle_geometry, to_shapely
@@ -188,7 +189,7 @@ def make_way(fleet: Fleet, blocked: list[ObjectState]) -> bool:
         target = None
         shut = standing_in_way(scene, j, way_of(scene, j, poses[j]), poses,
                                [i for i in unplaced if i != j]) is not None
-        if J.team or shut or (J.status == "waiting" and not fleet.may_start(j)):
+        if J.team or shut or not fleet.may_start(j):
             keep = [way.buffer(float(scene.objects[k].shape.bounding_radius))]
             keep += [to_shapely(scene.objects[i].shape, np.asarray(scene.objects[i].goal, float))
                      .buffer(2 * scene.robot_radius) for i in unplaced if i != j]
@@ -215,7 +216,9 @@ def make_way(fleet: Fleet, blocked: list[ObjectState]) -> bool:
 def detour_done(fleet: Fleet, j: int) -> None:
     """Object ``j`` stands at its detour's end (or found no way there): the planners
     waiting for a change plan again, and ``j`` goes on to its own goal; with robots lent
-    by the object it made way for, once that one has them back (if it still waits)."""
+    by the object it made way for, once that one has them back (if it still waits); and
+    only once it may start (``Fleet.may_start``): until then its robots go free and it
+    waits for robots where it stands, which ``Fleet`` gives it only then."""
     J = fleet.objects[j]
     J.detour, lender, J.lent_by = None, J.lent_by, None
     for o in fleet.objects:
@@ -225,3 +228,7 @@ def detour_done(fleet: Fleet, j: int) -> None:
         team, J.team = J.team, []
         fleet.log.append((fleet.clock, "handed", lender, f"robots {team} back from {j}"))
         fleet.give_team(lender, team)
+    elif J.team and not fleet.may_start(j):  # held back still (precedence): it waits aside
+        fleet.log.append((fleet.clock, "freed", j, f"robots {J.team}: it may not start yet"))
+        fleet.owner[J.team] = FREE
+        J.team = []

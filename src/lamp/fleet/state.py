@@ -12,7 +12,11 @@ from lamp.contract.runner import ObjectOutcome
 from lamp.fleet.segments import Segment
 from lamp.fleet.view import FleetExecution
 
-__all__ = ["ObjectState"]
+__all__ = ["FAILED", "FREE", "ObjectState"]
+
+#: ``Fleet.owner`` of a robot in no sub-team, and of one that failed (it stays where it
+#: stopped, an obstacle to every plan, and is never given to a team again).
+FREE, FAILED = -1, -2
 
 
 @dataclass
