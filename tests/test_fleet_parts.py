@@ -41,7 +41,8 @@ from lamp.fleet.teams import (
     start_order,
 )
 from lamp.fleet.turns import Turns
-from lamp.geometry.shapes import to_shapely
+from lamp.geometry.primitives import Circle, Polygon
+from lamp.geometry.shapes import to_shapely, to_shapely_many
 from lamp.scene import scene_from_dict
 from lamp.scene.model import Obstacle, Rectangle, Scene, SceneObject
 
@@ -619,3 +620,35 @@ def test_meets_standing_finds_the_standing_robots_the_planned_bodies_overlap(see
         assert found
     if found:
         assert min(d) < outer
+
+
+_SHAPES = st.one_of(
+    st.builds(lambda w, h: Rectangle((w, h)), st.floats(0.05, 1.0), st.floats(0.05, 1.0)),
+    st.builds(Circle, st.floats(0.05, 0.5)),
+    st.just(Polygon(((-0.2, -0.15), (0.2, -0.15), (0.0, 0.25)))),
+    st.just(Polygon(((0.0, 0.3), (0.2, -0.1), (-0.25, -0.2), (-0.1, 0.1)))))
+
+
+def _footprints_pair_by_pair(shape, poses, grow):
+    """The reference: each densified pose's body, each step's hull, all unioned."""
+    from lamp.fleet.regions import _densified
+
+    parts = [to_shapely(shape, q) for q in _densified(poses)]
+    hulls = [shapely.convex_hull(shapely.union(a, b))
+             for a, b in zip(parts[:-1], parts[1:], strict=True)]
+    geom = shapely.union_all(parts + hulls) if hulls else parts[0]
+    return geom.buffer(grow) if grow > 0 else geom
+
+
+@settings(max_examples=60, deadline=None)
+@given(_SHAPES, st.integers(0, 2**31 - 1), st.integers(1, 6), st.sampled_from([0.0, 0.05]))
+def test_footprints_are_the_very_geometries_built_pose_by_pose(shape, seed, n, grow) -> None:
+    """``to_shapely_many`` builds each pose's ``to_shapely`` to the last bit, so the
+    footprints built in one call are those built pose by pose and pair by pair."""
+    rng = np.random.default_rng(seed)
+    poses = np.cumsum(rng.uniform([-0.5, -0.5, -1.0], [0.5, 0.5, 1.0], (n, 3)), axis=0)
+    for g, q in zip(to_shapely_many(shape, poses), poses, strict=True):
+        assert np.array_equal(shapely.get_coordinates(g),
+                              shapely.get_coordinates(to_shapely(shape, q)))
+    new, old = footprints(shape, poses, grow), _footprints_pair_by_pair(shape, poses, grow)
+    assert np.array_equal(shapely.get_coordinates(new), shapely.get_coordinates(old))

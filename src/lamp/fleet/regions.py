@@ -27,7 +27,7 @@ import numpy as np
 import shapely
 
 from lamp.geometry.se2 import interpolate, pose_distance
-from lamp.geometry.shapes import to_shapely
+from lamp.geometry.shapes import to_shapely, to_shapely_many
 from lamp.planners.config import CLAIM_NEAR  # its owner: the fleet's settings' default
 from lamp.scene.model import Shape
 
@@ -62,11 +62,12 @@ def _densified(poses: np.ndarray) -> np.ndarray:
 
 def footprints(shape: Shape, poses: np.ndarray, grow: float = 0.0) -> shapely.Geometry:
     """Union of ``shape``'s footprints at ``poses`` (densified), grown by ``grow`` (m)."""
-    poses = _densified(poses)
-    parts = [to_shapely(shape, q) for q in poses]
-    hulls = [shapely.convex_hull(shapely.union(a, b)) for a, b in zip(parts[:-1], parts[1:],
-                                                                       strict=True)]
-    geom = shapely.union_all(parts + hulls) if hulls else parts[0]
+    parts = to_shapely_many(shape, _densified(poses))
+    if len(parts) == 1:
+        geom = parts[0]
+    else:  # each step's hull, then all at once (the same geometry as pair by pair)
+        geom = shapely.union_all(np.concatenate([
+            parts, shapely.convex_hull(shapely.union(parts[:-1], parts[1:]))]))
     return geom.buffer(grow) if grow > 0 else geom
 
 

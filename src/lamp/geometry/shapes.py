@@ -43,6 +43,23 @@ def to_shapely(shape: Shape, pose: ArrayLike = (0.0, 0.0, 0.0)) -> shapely.Geome
     return shapely.Polygon(world_outline(shape, pose))
 
 
+def to_shapely_many(shape: Shape, poses: ArrayLike) -> np.ndarray:
+    """``to_shapely(shape, q)`` for each pose ``q`` of ``poses`` (P, 3), as an array of P
+    geometries built in one call; each is the very geometry ``to_shapely`` builds (the
+    same vertices to the last bit: each pose's cosine and sine are taken as there, and
+    the vertices by the same operations in the same order)."""
+    poses = np.asarray(poses, dtype=float).reshape(-1, 3)
+    if isinstance(shape, Circle):
+        return shapely.buffer(shapely.points(poses[:, :2]), shape.radius, quad_segs=32)
+    local = local_outline(shape)
+    c = np.array([np.cos(a) for a in poses[:, 2]])[:, None]
+    s = np.array([np.sin(a) for a in poses[:, 2]])[:, None]
+    out = np.empty((len(poses), *local.shape), dtype=float)
+    out[..., 0] = poses[:, 0, None] + c * local[None, :, 0] - s * local[None, :, 1]
+    out[..., 1] = poses[:, 1, None] + s * local[None, :, 0] + c * local[None, :, 1]
+    return shapely.polygons(out)
+
+
 def obstacle_geometry(obstacle: Obstacle) -> shapely.Geometry:
     return to_shapely(obstacle.shape, obstacle.pose)
 
