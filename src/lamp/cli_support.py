@@ -131,7 +131,8 @@ def version_callback(value: bool) -> None:
 
 
 class StatusLine:
-    """One live status line on a console (stderr by default), drawn only on a terminal."""
+    """One live status line on a console (stderr by default); ``live``: the console is a
+    terminal, the only place callers should ``show`` it."""
 
     def __init__(self, stream: Any = None, terminal: bool | None = None) -> None:
         from rich.console import Console
