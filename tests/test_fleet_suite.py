@@ -439,6 +439,7 @@ def test_each_draw_is_announced_with_why_the_ones_before_failed() -> None:
     assert g.attempts > 1  # (this one needs several draws)
     assert [c[0] for c in calls] == list(range(1, g.attempts + 1))
     assert all(of == F.MAX_ATTEMPTS and sum(why.values()) == a - 1 for a, of, why in calls)
+    assert set(calls[-1][2]) == {"no robot-room route for an object"}  # counted by kind
     calls.clear()
     with pytest.raises(RuntimeError, match="no valid scene"):
         F.generate_custom("aisles", (8.0, 6.0), 6, 12,

@@ -49,6 +49,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import re
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import Any
@@ -345,8 +346,8 @@ def _draw(rng: np.random.Generator, index: int, name: str, kind: str, tag: dict[
             continue
         reports = FC.check_objects(scene, resolution_for(ws), N_HEADINGS, REACH_RESOLUTION,
                                    REACH_RING_WIDTH)
-        if isinstance(reports, str):
-            reject(reports.split(" object ")[0] if " object " in reports else reports)
+        if isinstance(reports, str):  # counted by kind: "object 3" reads "an object"
+            reject(re.sub(r"\bobject \d+", "an object", reports))
             continue
         info = {"kind": kind, **tag, "workspace": list(ws), **lay.info}
         return GeneratedFleet(index, kind, d, scene, reports, attempt, info,
