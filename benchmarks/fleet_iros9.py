@@ -26,7 +26,7 @@ import numpy as np
 import shapely
 
 import lamp
-from lamp.fleet.teams import corridor, in_the_way
+from lamp.fleet.teams import goal_blocks
 from lamp.geometry.shapes import obstacle_geometry, to_shapely
 from lamp.scene.model import Scene
 from lamp.scene.save import save_scene
@@ -69,12 +69,8 @@ def critical_chain(scene: Scene, weight: dict[int, float]) -> tuple[list[int], f
     """The chain ``k -> j`` (``j``'s goal lies in ``k``'s way, so ``j`` starts after ``k``)
     of the objects at their starts with the largest sum of ``weight``, and that sum. An
     edge back into the chain being built is skipped (a cycle is no chain)."""
-    objs, r = scene.objects, scene.robot_radius
-    ks = range(len(objs))
-    ways = {k: corridor(objs[k].shape, objs[k].start, objs[k].goal, r) for k in ks}
-    blocks = in_the_way(ways, {k: to_shapely(objs[k].shape, objs[k].goal) for k in ks},
-                        {k: np.asarray(objs[k].start) for k in ks},
-                        {k: np.asarray(objs[k].goal) for k in ks})
+    ks = range(len(scene.objects))
+    _, blocks = goal_blocks(scene, scene.object_starts(), list(ks))
     after = {k: [j for j in ks if k in blocks[j]] for k in ks}
 
     def longest(k: int, on: frozenset[int]) -> tuple[float, list[int]]:

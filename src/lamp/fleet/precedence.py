@@ -29,7 +29,7 @@ from scipy.sparse.csgraph import connected_components
 from lamp.fleet.makeway import route_of
 from lamp.geometry.object_space import ObjectSpace
 from lamp.geometry.primitives import Obstacle
-from lamp.geometry.shapes import to_shapely
+from lamp.geometry.shapes import obstacle_geometry, to_shapely
 from lamp.scene.model import Scene
 from lamp.search.landmark import route_length
 
@@ -59,7 +59,7 @@ def goal_cuts(scene: Scene, poses: np.ndarray, step: float | None = None,
     edges = []
     for k in objs:
         placed = Obstacle(scene.objects[k].shape, scene.objects[k].goal)
-        at_goal = to_shapely(placed.shape, np.asarray(placed.pose, float))
+        at_goal = obstacle_geometry(placed)
         for j, way in ways.items():
             obj = scene.objects[j]
             if j == k or not shapely.dwithin(way, at_goal, obj.shape.bounding_radius + 2 * r):

@@ -30,7 +30,8 @@ from lamp.contract.model import MAX_ROBOTS
 from lamp.geometry.shapes import to_shapely
 from lamp.scene.model import Scene, Shape
 
-__all__ = ["GROW_REACH", "MIN_TEAM", "allocate", "chain_depths", "corridor", "in_the_way",
+__all__ = ["GROW_REACH", "MIN_TEAM", "allocate", "chain_depths", "corridor", "goal_blocks",
+           "in_the_way",
            "least_conflict_order", "near_way", "nearest", "planar_distance", "reinforce",
            "start_order"]
 
@@ -179,17 +180,26 @@ def corridor(shape: Shape, pose: np.ndarray, goal: np.ndarray, robot_radius: flo
     return ends.convex_hull.buffer(2 * float(robot_radius))
 
 
+def goal_blocks(scene: Scene, poses: np.ndarray, candidates: Sequence[int]
+                ) -> tuple[dict[int, shapely.Geometry], dict[int, set[int]]]:
+    """The :func:`corridor` of each of ``candidates`` (objects of ``scene`` at ``poses``)
+    and :func:`in_the_way` taken among them."""
+    objs, r = scene.objects, scene.robot_radius
+    ways = {k: corridor(objs[k].shape, poses[k], objs[k].goal, r) for k in candidates}
+    blocks = in_the_way(ways, {k: to_shapely(objs[k].shape, np.asarray(objs[k].goal, float))
+                               for k in candidates},
+                        {k: poses[k] for k in candidates}, {k: objs[k].goal for k in candidates})
+    return ways, blocks
+
+
 def start_order(scene: Scene, poses: np.ndarray, candidates: Sequence[int],
                 moving: Sequence[int]) -> list[int]:
     """``candidates`` (objects of ``scene`` at ``poses``) in :func:`least_conflict_order`,
     the corridors of the ``moving`` objects busy and :func:`in_the_way` taken among the
-    candidates."""
+    candidates (:func:`goal_blocks`)."""
     objs, r = scene.objects, scene.robot_radius
-    ways = {k: corridor(objs[k].shape, poses[k], objs[k].goal, r) for k in candidates}
+    ways, blocks = goal_blocks(scene, poses, candidates)
     busy = [corridor(objs[k].shape, poses[k], objs[k].goal, r) for k in moving]
-    blocks = in_the_way(ways, {k: to_shapely(objs[k].shape, np.asarray(objs[k].goal, float))
-                               for k in candidates},
-                        {k: poses[k] for k in candidates}, {k: objs[k].goal for k in candidates})
     return least_conflict_order(candidates, ways, busy, blocks)
 
 
