@@ -23,7 +23,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 import shapely
 
-from lamp.fleet.regions import standing
+from lamp.fleet.regions import standing, standing_robots
 from lamp.fleet.segments import Segment
 from lamp.fleet.spacetime import compatible
 from lamp.fleet.state import ObjectState
@@ -56,11 +56,11 @@ def meets_standing(seg: Segment, scene: Scene, object_poses: np.ndarray,
     core = seg.core()
     r = scene.robot_radius
     for k in still_objects:
-        if core.intersects(standing(scene.objects[k].shape, object_poses[k], r)):
+        if core.intersects(standing(scene.objects[k].shape, object_poses[k])):
             return True
     still = [i for i in range(scene.n_robots) if i not in seg.team and i not in moving_robots]
     return bool(still) and bool(shapely.intersects(
-        core, standing(None, np.asarray(robot_positions, float)[still], r)).any())
+        core, standing_robots(np.asarray(robot_positions, float)[still], r)).any())
 
 
 def meets_moving(seg: Segment, running: Sequence[Segment],
@@ -91,8 +91,8 @@ def standing_in(region: shapely.Geometry, scene: Scene, object_poses: np.ndarray
     ``regions.STATIC_SLACK``, as in :func:`meets_standing`)."""
     r = scene.robot_radius
     return frozenset(k for k, team in teams.items() if region.intersects(
-        standing(scene.objects[k].shape, object_poses[k], r)) or any(
-        region.intersects(standing(None, robot_positions[i], r)) for i in team))
+        standing(scene.objects[k].shape, object_poses[k])) or bool(shapely.intersects(
+        region, standing_robots(np.asarray(robot_positions, float)[list(team)], r)).any()))
 
 
 def heeded_claims(objects: Sequence[ObjectState], me: ObjectState, cross_near: float,

@@ -205,7 +205,7 @@ class Fleet:
                                  self.executor.object_poses, teams,
                                  self.reinforce_reach).items():
             if team != self.objects[k].team:
-                self._reteam(self.objects[k], team, "reinforced")
+                self.reteam(self.objects[k], team, "reinforced")
 
     def _hand_over(self) -> None:
         """Between its segments (a reply waits), a team's far robots give their places to
@@ -218,15 +218,17 @@ class Fleet:
             team = better_team(self.scene, o.index, o.team, key[2], self.executor.robot_positions,
                                o.reply.object_poses[o.index], lambda: self.executor.object_poses)
             if team is not None:
-                self._reteam(o, team, "handed_over")
+                self.reteam(o, team, "handed_over")
 
-    def _reteam(self, o: ObjectState, team: Sequence[int], what: str) -> None:
-        """``o``'s sub-team becomes ``team`` (robots it loses go free); counted as ``what``."""
+    def reteam(self, o: ObjectState, team: Sequence[int], what: str) -> None:
+        """``o``'s sub-team becomes ``team`` (robots it loses go free); logged as ``what``,
+        and counted when ``what`` is one of the schedule's counts."""
         self.log.append((self.clock, what, o.index, f"{o.team} -> {sorted(team)}"))
         self.owner[[i for i in o.team if self.owner[i] == o.index]] = FREE
         o.team = sorted(team)
         self.owner[o.team] = o.index
-        self.counts[what] += 1
+        if what in self.counts:
+            self.counts[what] += 1
 
     def _main(self, k: int) -> None:
         o = self.objects[k]
@@ -320,7 +322,7 @@ class Fleet:
                 if merge and o is not first:
                     o.team = []
             if merge:
-                self._reteam(first, pool, "merged")
+                self.reteam(first, pool, "merged")
             return True
         if any(o.request is not None for o in self.objects):
             self._admit(force=True)
@@ -402,7 +404,7 @@ class Fleet:
                 o = self.objects[k]
                 o.team = [j for j in o.team if j != i]
                 if free := self._free():  # the nearest robot nobody needs takes its place
-                    self._reteam(o, [*o.team, *nearest(free, self.executor.robot_positions,
+                    self.reteam(o, [*o.team, *nearest(free, self.executor.robot_positions,
                                                        self.executor.object_poses[k], 1)],
                                  "replaced")
 
@@ -460,7 +462,7 @@ class Fleet:
         ex, free = self.executor, self._free()  # the pose (a sensor draw) read only if any
         if free and (free := near_way(self.scene, k, ex.object_poses[k], free,
                                       ex.robot_positions)):
-            self._reteam(o, [*o.team, *free], "grown")
+            self.reteam(o, [*o.team, *free], "grown")
             return True
         if not any(other.index != k and other.status in ("active", "waiting")
                    for other in self.objects):

@@ -45,7 +45,6 @@ from typing import TYPE_CHECKING
 import numpy as np
 import shapely
 
-from lamp.fleet.state import FREE
 from lamp.geometry.object_space import ObjectSpace
 from lamp.geometry.primitives import Obstacle
 from lamp.geometry.shapes import obstacle_geometry, to_shapely
@@ -229,6 +228,4 @@ def detour_done(fleet: Fleet, j: int) -> None:
         fleet.log.append((fleet.clock, "handed", lender, f"robots {team} back from {j}"))
         fleet.give_team(lender, team)
     elif J.team and not fleet.may_start(j):  # held back still (precedence): it waits aside
-        fleet.log.append((fleet.clock, "freed", j, f"robots {J.team}: it may not start yet"))
-        fleet.owner[J.team] = FREE
-        J.team = []
+        fleet.reteam(J, [], "freed: it may not start yet")

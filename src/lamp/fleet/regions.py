@@ -32,7 +32,7 @@ from lamp.planners.config import CLAIM_NEAR  # its owner: the fleet's settings' 
 from lamp.scene.model import Shape
 
 __all__ = ["CLAIM_NEAR", "OBJECT_MARGIN", "ROBOT_MARGIN", "STATIC_SLACK", "claim", "claims",
-           "footprints", "robot_disks", "standing", "swept"]
+           "footprints", "robot_disks", "standing", "standing_robots", "swept"]
 
 #: Clearance (m) each moving robot keeps from another sub-team's space (half the gap).
 ROBOT_MARGIN = 0.01
@@ -127,16 +127,14 @@ def claims(shape: Shape, poses: np.ndarray, goal: np.ndarray, robot_radius: floa
     return full, near, way
 
 
-def standing(shape: Shape | None, pose: np.ndarray, robot_radius: float
-             ) -> shapely.Geometry | np.ndarray:
-    """A body where it stands: an object (``shape`` at ``pose``) or, with ``shape`` None, a
-    robot at ``pose[:2]`` (robots at ``pose`` (N, 2): an array of N disks); shrunk by
+def standing(shape: Shape, pose: np.ndarray) -> shapely.Geometry:
+    """An object's body where it stands (``shape`` at ``pose``), shrunk by
     ``STATIC_SLACK``."""
-    if shape is None:
-        pose = np.asarray(pose, float)
-        if pose.ndim == 2:
-            return shapely.buffer(shapely.points(pose[:, :2]), robot_radius - STATIC_SLACK,
-                                  quad_segs=8)
-        return shapely.Point(float(pose[0]), float(pose[1])).buffer(
-            robot_radius - STATIC_SLACK, quad_segs=8)
     return to_shapely(shape, pose).buffer(-STATIC_SLACK)
+
+
+def standing_robots(positions: np.ndarray, robot_radius: float) -> np.ndarray:
+    """The bodies of robots standing at ``positions`` ((N, 2) or (N, 3); the x, y used):
+    N disks, shrunk by ``STATIC_SLACK``."""
+    centres = np.asarray(positions, float).reshape(-1, np.shape(positions)[-1])[:, :2]
+    return shapely.buffer(shapely.points(centres), robot_radius - STATIC_SLACK, quad_segs=8)
