@@ -13,11 +13,13 @@
   does not bind (``Fleet.plan_failed``).
 - :func:`heeded_claims`: the claims a segment must heed, each whole or, where a plan that
   only crosses it may, its near part: any claim's with ``cross_near``; with
-  ``cross_waiting``, the claim of an object standing waiting (``ObjectState.held_up``).
+  ``cross_waiting``, the claim of an object standing waiting (``ObjectState.held_up``);
+  and the claim of an object its own object passes ahead of (:func:`passes_ahead`).
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 
 import numpy as np
@@ -29,14 +31,20 @@ from lamp.fleet.spacetime import compatible
 from lamp.fleet.state import ObjectState
 from lamp.scene.model import Scene
 
-__all__ = ["CLAIM_AREA_SLACK", "CROSSING", "crosses", "heeded_claims", "meets_moving",
-           "meets_standing", "standing_in"]
+__all__ = ["CLAIM_AREA_SLACK", "CROSSING", "PASS_MARGIN", "PASS_STEP", "crosses",
+           "heeded_claims", "passes_ahead", "meets_moving", "meets_standing", "standing_in"]
 
 #: A segment may end with this much more of its bodies' area (m^2) inside a higher claim
 #: than it started with (rounding of the footprints).
 CLAIM_AREA_SLACK = 1e-4
 #: A way that runs at most this far (m) inside a claim, and ends outside it, crosses it.
 CROSSING = 1.5
+#: A plan may go through a higher-ranked object's claim when it passes each point of it
+#: at least this much (m) of travel before that object comes near it
+#: (:func:`passes_ahead`; ``fleet_pass_margin``'s default).
+PASS_MARGIN = 1.0
+#: The spacing (m) of the points at which :func:`passes_ahead` compares two ways.
+PASS_STEP = 0.1
 
 
 def crosses(way: shapely.Geometry, region: shapely.Geometry) -> bool:
@@ -46,6 +54,39 @@ def crosses(way: shapely.Geometry, region: shapely.Geometry) -> bool:
     end = shapely.points(shapely.get_coordinates(way)[-1])
     return (not region.intersects(end)
             and float(shapely.length(shapely.intersection(way, region))) <= CROSSING)
+
+
+def passes_ahead(way: shapely.LineString, region: shapely.Geometry,
+                 claimer_way: shapely.LineString, reach: float, margin: float,
+                 step: float = PASS_STEP) -> bool:
+    """Whether a plan whose ``way`` (its centre's path on to its goal) goes through a
+    higher-ranked object's claim ``region`` passes it ahead of that object: its goal lies
+    outside the claim, and it passes every point of its way inside the claim, going at
+    the claiming object's pace, ``margin`` m of travel before that object's centre comes
+    within ``reach`` of the point along its own way (``claimer_way``). Both ways are
+    taken at points ``step`` m apart. An object ahead on the other's way going the same
+    direction passes ahead when it is more than ``reach`` and ``margin`` ahead; one
+    crossing or going towards it, when its way through is short against the gap. (An
+    object standing in another's claim is in its way already: waiting there only makes
+    that one come to it.) False when the way ends inside the claim or ``margin`` is
+    infinite."""
+    if not math.isfinite(margin):
+        return False
+    if region.intersects(shapely.points(shapely.get_coordinates(way)[-1])):
+        return False
+    s, points = _along(way, step)
+    inside = shapely.intersects(region, shapely.points(points))
+    a, theirs = _along(claimer_way, step)
+    near = np.hypot(*np.moveaxis(points[inside, None] - theirs[None], -1, 0)) <= reach
+    comes = np.where(near.any(axis=1), a[np.argmax(near, axis=1)], np.inf)
+    return bool(np.all(s[inside] + margin <= comes))
+
+
+def _along(line: shapely.LineString, step: float) -> tuple[np.ndarray, np.ndarray]:
+    """Points of ``line`` every ``step`` m from its start, and its end: (distances along
+    it, (n, 2) points)."""
+    s = np.append(np.arange(0.0, float(line.length), step), float(line.length))
+    return s, shapely.get_coordinates(shapely.line_interpolate_point(line, s))
 
 
 def meets_standing(seg: Segment, scene: Scene, object_poses: np.ndarray,
@@ -96,15 +137,28 @@ def standing_in(region: shapely.Geometry, scene: Scene, object_poses: np.ndarray
 
 
 def heeded_claims(objects: Sequence[ObjectState], me: ObjectState, cross_near: float,
-                  cross_waiting: float
+                  cross_waiting: float, reach: Sequence[float] = (),
+                  pass_margin: float = math.inf
                   ) -> list[tuple[int, shapely.Geometry, shapely.Geometry]]:
     """The claims of the ``objects`` ranked above ``me`` that bind it (not those that
     exempt it), as :func:`meets_moving` takes them: (index, claim, the part a plan that
     only crosses it heeds). That part is the claim's near part (``ObjectState.near``)
     with ``cross_near`` > 0, or with ``cross_waiting`` > 0 while its object stands
     waiting: it comes no nearer while it waits, so a crossing far ahead of it is clear
-    of it; otherwise the whole claim."""
-    return [(o.index, o.claim, o.near if cross_near > 0 or (cross_waiting > 0 and o.held_up)
-             else o.claim)
-            for o in objects if o.rank < me.rank and o.claim is not None
-            and me.index not in o.exempt]
+    of it; otherwise the whole claim. Where ``me``'s way passes through the claim ahead
+    of its object (:func:`passes_ahead`, ``reach[k]`` each object's share of the reach,
+    ``pass_margin``) only the near part binds, for both: it may go through, never into
+    the near part."""
+    out = []
+    for o in objects:
+        if o.rank >= me.rank or o.claim is None or me.index in o.exempt:
+            continue
+        near = o.near if o.near is not None else o.claim
+        if (me.way is not None and o.way is not None and math.isfinite(pass_margin)
+                and passes_ahead(me.way, o.claim, o.way, reach[me.index] + reach[o.index],
+                                 pass_margin)):
+            out.append((o.index, near, near))
+        else:
+            out.append((o.index, o.claim, near if cross_near > 0
+                        or (cross_waiting > 0 and o.held_up) else o.claim))
+    return out

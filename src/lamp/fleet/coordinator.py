@@ -48,15 +48,21 @@ from typing import Any
 import numpy as np
 import shapely
 
-from lamp.contract.events import TRACE_EVERY, RunObserver
+from lamp.contract.events import RunObserver
 from lamp.contract.runner import ObjectOutcome
-from lamp.fleet.admission import heeded_claims, meets_moving, meets_standing, standing_in
+from lamp.fleet.admission import (
+    PASS_MARGIN,
+    heeded_claims,
+    meets_moving,
+    meets_standing,
+    standing_in,
+)
 from lamp.fleet.handover import better_team
 from lamp.fleet.makeway import make_way
 from lamp.fleet.objects import given_up
 from lamp.fleet.precedence import goal_cuts
 from lamp.fleet.regions import CLAIM_NEAR, claims
-from lamp.fleet.segments import Segment, on_grid
+from lamp.fleet.segments import Segment, on_grid, run_together
 from lamp.fleet.state import FAILED, FREE, ObjectState
 from lamp.fleet.teams import allocate, near_way, nearest, reinforce, start_order
 from lamp.fleet.turns import Turns
@@ -87,12 +93,15 @@ class Fleet:
                  ObjectOutcome], timeline: Callable[[Any, float, np.ndarray], None],
                  observers: Sequence[RunObserver] = (), row_step: float = 0.02,
                  reinforce_reach: float = 0.0, cross_near: float = 0.0,
-                 cross_waiting: float = CLAIM_NEAR) -> None:
+                 cross_waiting: float = CLAIM_NEAR, pass_margin: float = PASS_MARGIN
+                 ) -> None:
         self.scene, self.executor, self.observers = scene, executor, list(observers)
         self.object_main, self.timeline = object_main, timeline
         self.grid, self.reinforce_reach = float(row_step), float(reinforce_reach)  # 0: off
         #: near reach (m) crossing any claim / a waiting object's claim; 0: the whole claim
         self.cross_near, self.cross_waiting = float(cross_near), float(cross_waiting)
+        self.pass_margin = float(pass_margin)  # admission.passes_ahead; inf: off
+        self.reach = [o.shape.bounding_radius + scene.robot_radius for o in scene.objects]
         #: rows a segment's robots hold at its end while others move: the settle time
         self.hold_rows = math.ceil(SETTLE_TIME * float(scene.physics.robot_speed) / self.grid
                                    - 1e-9)
@@ -297,8 +306,9 @@ class Fleet:
         """Why ``seg`` must wait (``admission.meets_moving``), None if it need not."""
         me = self.objects[seg.index]
         running = [o.running for o in self.objects if o.running is not None and o is not me]
-        why = meets_moving(seg, running, heeded_claims(self.objects, me, self.cross_near,
-                                                       self.cross_waiting), me.way)
+        why = meets_moving(seg, running, heeded_claims(
+            self.objects, me, self.cross_near, self.cross_waiting, self.reach,
+            self.pass_margin), me.way)
         if why:
             self.log.append((self.clock, "meets", seg.index, why))
         return why
@@ -334,31 +344,11 @@ class Fleet:
         """Run every admitted segment until the first ends (or a watch stops one)."""
         running = [o.running for o in self.objects if o.running is not None]
         now = np.asarray(self.executor.robot_positions, float)
-        for s in running:  # robots nudged off their rows (by a push nearby) rejoin them
+        for s in running:  # robots nudged off their rows (``Segment.rejoin``) rejoin them
             s.rejoin(now[s.team], self.grid)
-        n_rows = min(s.remaining for s in running)
-        paths = np.repeat(now[:, None], n_rows, axis=1)
-        for s in running:
-            paths[s.team] = s.rows[:, s.cursor:s.cursor + n_rows]
-        fired: list[Segment] = []
-
-        def stop(poses: np.ndarray) -> bool:
-            for s in running:
-                if s.stop is not None and s.stop(poses):
-                    fired.append(s)
-            return bool(fired)
-
-        watched = any(s.stop is not None for s in running)
-        tau = np.cumsum(self.executor.row_durations(paths))  # when each row is reached
-        # the simulator's own settle only when nobody moves on (else the held rows settle)
-        every = all(s.remaining == n_rows for s in running)
-        out = self.executor.execute(paths, record_every=TRACE_EVERY,
-                                    stop=stop if watched else None,
-                                    settle_time=SETTLE_TIME if every else 0.0)
-        done = n_rows
-        if out.stopped_at is not None:  # the rows whose time had come
-            stopped_s = out.stopped_at * float(out.sim_time) / max(1, int(out.steps))
-            done = int(np.clip(np.searchsorted(tau, stopped_s + 1e-9, side="right"), 0, n_rows))
+        if any(s.done for s in running):  # one rejoined too often: it ends, nothing runs
+            return self._ended(running)
+        out, paths, done, fired = run_together(self.executor, running)
         self.robot_time.charge([s.team for s in running], self.owner, paths,
                                float(out.sim_time))
         self.timeline(out.trace, float(out.sim_time), np.maximum(self.owner, FREE))
@@ -372,6 +362,11 @@ class Fleet:
             s.left |= bool(left[s.index])
             if s in fired:
                 s.stopped_at = int(out.stopped_at)
+        self._ended(running)
+
+    def _ended(self, running: list[Segment]) -> None:
+        """The loops of the ``running`` segments that are done go on, with their replies."""
+        for s in running:
             if s.done:
                 o = self.objects[s.index]
                 o.running = None

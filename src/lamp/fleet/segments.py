@@ -12,18 +12,21 @@ paths in which every sub-team moves as it would alone, and no row steps further 
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import shapely
 
+from lamp.contract.events import TRACE_EVERY
 from lamp.contract.trajectory import straight_moves
 from lamp.fleet.regions import OBJECT_MARGIN, swept
 from lamp.geometry.shapes import to_shapely
 from lamp.scene.model import Shape
+from lamp.sim.simulator import SETTLE_TIME
 
-__all__ = ["REJOIN_GAP", "Segment", "TOUCH_TOLERANCE", "on_grid"]
+__all__ = ["REJOIN_GAP", "REJOIN_LIMIT", "Segment", "TOUCH_TOLERANCE", "on_grid", "run_together"]
 
 #: A robot that starts a segment near its object (left in contact by the last push) counts
 #: as pushing once it comes this much (m) nearer than it stood.
@@ -31,6 +34,10 @@ TOUCH_TOLERANCE = 0.002
 #: A robot farther than this (m) from its next row moves back to it first (the simulator
 #: takes paths that start within ``MAX_START_GAP`` = 0.05 m of the robots).
 REJOIN_GAP = 0.03
+#: A segment whose robots had to move back to their rows this many times ends at the
+#: next (:meth:`Segment.rejoin`): they push what does not give, and every event set them
+#: back. (At 96 robots and 32 loads a push ran 305 events so, 80 s and more.)
+REJOIN_LIMIT = 10
 
 
 def on_grid(start: np.ndarray, paths: np.ndarray, row_step: float) -> np.ndarray:
@@ -68,6 +75,7 @@ class Segment:
     sim_time: float = 0.0
     left: bool = False
     stopped_at: int | None = None
+    rejoined: int = 0  # times its robots moved back to their rows (:meth:`rejoin`)
     #: the first row at which a robot may touch the object (:meth:`first_touch`); before
     #: it the object stands at its first planned pose
     touch: int = field(init=False)
@@ -109,9 +117,16 @@ class Segment:
 
     def rejoin(self, positions: np.ndarray, row_step: float) -> None:
         """Robots that stand more than ``REJOIN_GAP`` from the next row (nudged while they
-        held) first move straight back to it: rows are inserted before it."""
+        held, or held back by what they push) first move straight back to it: rows are
+        inserted before it. The ``REJOIN_LIMIT``-th time the segment ends instead, stopped
+        where it stands (``stopped_at``, as a push watch stops one): its loop sees what
+        the push achieved, a stall or drift, and plans anew."""
         gap = np.hypot(*(np.asarray(positions, float) - self.rows[:, self.cursor]).T)
         if gap.max() <= REJOIN_GAP:
+            return
+        self.rejoined += 1
+        if self.rejoined >= REJOIN_LIMIT:
+            self.stopped_at = 0
             return
         back = straight_moves(np.asarray(positions, float), self.rows[:, self.cursor], row_step)
         self.rows = np.concatenate([back, self.rows[:, self.cursor:]], axis=1)
@@ -138,3 +153,36 @@ class Segment:
             shapely.prepare(core)
             self.spaces["core"] = core
         return core
+
+
+def run_together(executor: Any, running: Sequence[Segment]
+                 ) -> tuple[Any, np.ndarray, int, list[Segment]]:
+    """Run the ``running`` segments' next rows stacked into one set of paths on
+    ``executor`` (robots in none of them stand where they are) until the first segment
+    ends, or a push watch stops one; its settle time only when every segment ends there
+    (else their held rows settle). Returns the execution, the paths, how many rows every
+    segment ran (those whose time had come when a watch stopped them), and the segments
+    whose watch fired. Moves no cursor."""
+    now = np.asarray(executor.robot_positions, float)
+    n_rows = min(s.remaining for s in running)
+    paths = np.repeat(now[:, None], n_rows, axis=1)
+    for s in running:
+        paths[s.team] = s.rows[:, s.cursor:s.cursor + n_rows]
+    fired: list[Segment] = []
+
+    def stop(poses: np.ndarray) -> bool:
+        for s in running:
+            if s.stop is not None and s.stop(poses):
+                fired.append(s)
+        return bool(fired)
+
+    watched = any(s.stop is not None for s in running)
+    tau = np.cumsum(executor.row_durations(paths))  # when each row is reached
+    every = all(s.remaining == n_rows for s in running)
+    out = executor.execute(paths, record_every=TRACE_EVERY, stop=stop if watched else None,
+                           settle_time=SETTLE_TIME if every else 0.0)
+    done = n_rows
+    if out.stopped_at is not None:
+        stopped_s = out.stopped_at * float(out.sim_time) / max(1, int(out.steps))
+        done = int(np.clip(np.searchsorted(tau, stopped_s + 1e-9, side="right"), 0, n_rows))
+    return out, paths, done, fired

@@ -87,6 +87,7 @@ def run_concurrently(scene: Any, executor: Executor, runner: ObjectRunner, recor
                   recorder.follow, watchers, row_step=MAX_STEP,
                   reinforce_reach=runner.config.fleet_reinforce_reach,
                   cross_near=runner.config.fleet_cross_near,
-                  cross_waiting=runner.config.fleet_cross_waiting)
+                  cross_waiting=runner.config.fleet_cross_waiting,
+                  pass_margin=runner.config.fleet_pass_margin)
     outcomes = fleet.run()
     return outcomes, fleet.stats()

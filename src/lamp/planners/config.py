@@ -199,6 +199,14 @@ class PlannerConfig:
                                        "(m) of its planned travel; 0: the whole claim.",
                                        low=0.0)
 
+    #: The concurrent schedule only (``admission.passes_ahead``); measured in
+    #: ``docs/fleet.md`` (Coordination).
+    fleet_pass_margin: float = param(1.0, "Concurrent schedule: a plan may go through a "
+                                     "higher-ranked object's claim when it passes each "
+                                     "point of it this much (m) of travel before that "
+                                     "object comes near; inf: it waits for that object "
+                                     "to pass.", low=0.0, unbounded=True)
+
     def __post_init__(self) -> None:
         check_fields(self)
 
@@ -228,7 +236,8 @@ LOOP_PARAMS = ("planning_time_limit", "max_segments", "drift_position", "drift_o
                "stop_position", "stop_orientation", "long_push_length", "long_push_turn",
                "continuous_push_gap",
                "sensing_sigma", "sensing_readings", "space_cache_mb", "fleet_park_clear",
-               "fleet_reinforce_reach", "fleet_cross_near", "fleet_cross_waiting")
+               "fleet_reinforce_reach", "fleet_cross_near", "fleet_cross_waiting",
+               "fleet_pass_margin")
 VERIFY_PARAMS = ("k", "max_budget", "gspi_attempts_per_budget", "gspi_time_limit",
                  "contact_tolerance")
 LATTICE_PARAMS = ("lattice_step", "n_headings", "robot_match_tolerance")

@@ -1,0 +1,73 @@
+"""``Segment.rejoin`` and its limit: robots off their rows move straight back to them, and a
+segment whose robots had to ``REJOIN_LIMIT`` times (they push what does not give, and
+every event set them back) ends there, stopped, so its loop sees the stall and plans anew
+(``Fleet._advance``)."""
+
+from __future__ import annotations
+
+import numpy as np
+from fleet_fakes import fleet_at_starts
+
+from lamp.fleet.segments import REJOIN_GAP, REJOIN_LIMIT, Segment
+from lamp.scene import scene_from_dict
+from lamp.scene.model import Rectangle
+
+BOX = Rectangle((0.4, 0.3))
+R = 0.1
+
+
+def _segment(start=(0.0, 0.0), n: int = 20) -> Segment:
+    """One robot's segment: 0.02 m rows along x from ``start``."""
+    rows = np.array(start, float) + np.outer(0.02 * np.arange(1, n + 1), [1.0, 0.0])
+    return Segment(0, [0], rows[None], np.array([[1.0, 1.0, 0.0]] * 2), None, BOX, R)
+
+
+def test_a_robot_within_the_gap_keeps_its_rows() -> None:
+    seg = _segment()
+    rows = seg.rows.copy()
+    seg.rejoin(np.array([[0.02, REJOIN_GAP * 0.9]]), 0.02)
+    np.testing.assert_array_equal(seg.rows, rows)
+    assert seg.rejoined == 0 and not seg.done
+
+
+def test_a_nudged_robot_moves_straight_back_to_its_next_row() -> None:
+    seg = _segment()
+    seg.cursor = 5
+    nxt = seg.rows[0, 5].copy()
+    seg.rejoin(np.array([nxt + [0.0, 0.1]]), 0.02)
+    steps = np.hypot(*np.diff(np.vstack([nxt + [0.0, 0.1], seg.rows[0]]), axis=0).T)
+    assert seg.cursor == 0 and seg.rejoined == 1 and not seg.done
+    assert steps.max() <= 0.02 + 1e-9  # paced at the row step, back onto the old rows
+    np.testing.assert_allclose(seg.rows[0, -15:], _segment().rows[0, 5:])
+
+
+def test_the_limit_th_rejoin_ends_the_segment_where_it_stands() -> None:
+    seg = _segment(n=200)
+    for i in range(1, REJOIN_LIMIT):
+        seg.rejoin(seg.rows[:, seg.cursor] + [0.0, 0.1], 0.02)
+        assert seg.rejoined == i and not seg.done
+        seg.cursor += 2  # a little progress, then held back again
+    rows = seg.rows.copy()
+    seg.rejoin(seg.rows[:, seg.cursor] + [0.0, 0.1], 0.02)
+    assert seg.done and seg.stopped_at is not None
+    np.testing.assert_array_equal(seg.rows, rows)
+
+
+def test_the_fleet_hands_a_segment_ended_so_back_to_its_loop_stopped() -> None:
+    """Nothing runs in that event: the loop gets its reply (stopped, like a push the
+    watch stopped) and goes on."""
+    scene = scene_from_dict({
+        "format": "lamp-scene/1", "name": "rejoin", "workspace": [4.0, 3.0],
+        "robots": {"starts": [[0.5, 0.5], [0.5, 1.0]]},
+        "objects": [{"type": "rectangle", "size": [0.4, 0.3], "start": [2.0, 1.5, 0.0],
+                     "goal": [3.0, 1.5, 0.0]}]})
+    fleet = fleet_at_starts(scene)
+    o = fleet.objects[0]
+    o.status, o.team, o.rank = "active", [0], 0
+    seg = _segment(start=(0.5, 0.7))  # its next row 0.22 m from the robot at (0.5, 0.5)
+    seg.rejoined = REJOIN_LIMIT - 1
+    o.running = seg
+    fleet._advance()
+    assert o.running is None and o.ready
+    assert o.reply is not None and o.reply.stopped_at is not None
+    assert fleet.clock == 0.0 and fleet.counts["events"] == 0
