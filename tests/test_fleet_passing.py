@@ -1,5 +1,6 @@
 """``admission.passes_ahead``: a plan may go through a higher-ranked object's claim when it
-passes every point of it, at the same pace, the margin ahead of the claiming object; and
+passes every point of it, at the same pace, the margin ahead of the claiming object, or
+leave a claim it stands in by its way; never towards the claiming object (head-on); and
 ``heeded_claims`` then gives it the near part only."""
 
 from __future__ import annotations
@@ -19,97 +20,100 @@ CLAIM = CLAIMER.buffer(0.5)
 REACH = 0.5
 
 
-def exit_north(x: float) -> shapely.LineString:
-    """A way from (x, 0) straight out of the claim to (x, 3)."""
-    return shapely.LineString([(x, 0.0), (x, 3.0)])
+def across(x: float) -> shapely.LineString:
+    """A way from (x, -3) straight across the claim to (x, 3): inside from 2.5 to 3.5 m."""
+    return shapely.LineString([(x, -3.0), (x, 3.0)])
 
 
-def test_a_way_out_far_ahead_of_the_claimer_passes_ahead() -> None:
-    # inside 0.5 m; the claimer comes within 0.5 m of it at x = 7.5: 0.5 + 1 <= 7.5
-    assert passes_ahead(exit_north(8.0), CLAIM, CLAIMER, REACH, 1.0)
+def line(*points: tuple[float, float]) -> shapely.LineString:
+    return shapely.LineString(points)
 
 
-def test_a_way_next_to_the_claimer_does_not() -> None:
-    # the claimer is within reach of the part at once
-    assert not passes_ahead(exit_north(0.8), CLAIM, CLAIMER, REACH, 1.0)
+def test_crossing_far_ahead_of_the_claimer_passes_ahead() -> None:
+    # inside until 3.5 m of travel; the claimer comes within 0.5 m at about x - 0.5
+    assert passes_ahead(across(8.0), CLAIM, CLAIMER, REACH, 1.0)
+
+
+def test_crossing_just_ahead_of_the_claimer_does_not() -> None:
+    assert not passes_ahead(across(2.0), CLAIM, CLAIMER, REACH, 1.0)
 
 
 def test_the_margin_decides_at_the_edge() -> None:
-    # inside 0.5 m, the claimer comes within reach at x = 2.5: 0.5 + 2 <= 2.5, not + 2.5
-    assert passes_ahead(exit_north(3.0), CLAIM, CLAIMER, REACH, 2.0)
-    assert not passes_ahead(exit_north(3.0), CLAIM, CLAIMER, REACH, 2.5)
+    # at x = 6 the way is 2.5 m of travel ahead at every point inside (rounded to 0.1 m)
+    assert passes_ahead(across(6.0), CLAIM, CLAIMER, REACH, 2.0)
+    assert not passes_ahead(across(6.0), CLAIM, CLAIMER, REACH, 3.0)
 
 
-def test_a_long_way_along_the_claim_towards_the_claimer_does_not() -> None:
-    # from x = 8 back along the claim to x = 3, then out: 5.5 m inside, met at x = 2.5
-    way = shapely.LineString([(8.0, 0.0), (3.0, 0.0), (3.0, 3.0)])
-    assert not passes_ahead(way, CLAIM, CLAIMER, REACH, 1.0)
+def test_standing_in_the_claim_it_leaves_by_its_way_whatever_the_gap() -> None:
+    out = line((0.8, 0.0), (0.8, 3.0))  # beside the claimer, out sideways
+    assert passes_ahead(out, CLAIM, CLAIMER, REACH, 1.0)
+    assert not passes_ahead(out, CLAIM, CLAIMER, REACH, math.inf)  # off
 
 
-def test_crossing_ahead_but_not_into_the_claim_nor_without_a_margin() -> None:
-    across = shapely.LineString([(8.0, 3.0), (8.0, -3.0)])
-    assert passes_ahead(across, CLAIM, CLAIMER, REACH, 1.0)  # inside at 2.5-3.5 m, met at 7.5
-    assert not passes_ahead(across, CLAIM, CLAIMER, REACH, 5.0)
-    assert not passes_ahead(shapely.LineString([(8.0, 0.0), (9.0, 0.0)]), CLAIM, CLAIMER,
-                            REACH, 1.0)  # ends inside
-    assert not passes_ahead(exit_north(8.0), CLAIM, CLAIMER, REACH, math.inf)
-
-
-def test_a_claimer_whose_way_never_comes_near_the_part() -> None:
-    claimer = shapely.LineString([(0.0, 0.0), (4.0, 0.0)])
-    claim = claimer.buffer(0.5)
-    assert passes_ahead(exit_north(4.3), claim, shapely.LineString([(0.0, 0.0), (2.0, 0.0)]),
-                        0.1, 1.0)
-
-
-def reference(x: float, margin: float) -> bool | None:
-    """``passes_ahead`` of ``exit_north(x)`` worked out by hand: the way's points at y =
-    0, 0.1, ... (those with y <= 0.5 inside the claim, passed after y m) against the
-    claimer's points at a = 0, 0.1, ..., 10 (the first within ``REACH`` of (x, y) is when
-    it comes); None where a comparison is a tie (rounding decides it)."""
-    ys = [i / 10 for i in range(6)]
-    grid = [i / 10 for i in range(101)]
-    out = True
-    for y in ys:
-        comes = next((a for a in grid if math.hypot(a - x, y) <= REACH), math.inf)
-        if abs(y + margin - comes) < 1e-9:
-            return None
-        out &= y + margin <= comes
-    return out
-
-
-@given(x=st.floats(0.0, 9.9), ahead=st.floats(0.0, 5.0), margin=st.floats(0.0, 5.0),
-       less=st.floats(0.0, 5.0))
-def test_passing_ahead_against_a_hand_reference(x, ahead, margin, less) -> None:
-    """As the reference says; and monotone, as the rule means: the way's exit farther
-    along the claimer's way, or a smaller margin, keeps a way that passes ahead passing
-    ahead."""
-    got = passes_ahead(exit_north(x), CLAIM, CLAIMER, REACH, margin)
-    if (want := reference(x, margin)) is not None:
-        assert got == want
-    if got:
-        assert passes_ahead(exit_north(min(9.9, x + ahead)), CLAIM, CLAIMER, REACH, margin)
-        assert passes_ahead(exit_north(x), CLAIM, CLAIMER, REACH, max(0.0, margin - less))
+def test_never_towards_the_claimer() -> None:
+    """Head-on: standing in the claim, or coming in far ahead, running along it towards
+    the claimer before leaving: no."""
+    assert not passes_ahead(line((8.0, 0.0), (3.0, 0.0), (3.0, 3.0)), CLAIM, CLAIMER,
+                            REACH, 1.0)
+    assert not passes_ahead(line((9.5, 3.0), (9.5, 0.0), (8.0, 0.0), (8.0, 3.0)), CLAIM,
+                            CLAIMER, REACH, 0.0)
 
 
 def test_going_the_same_way_ahead_of_the_claimer() -> None:
-    """Ahead on the claimer's way and going its way, out at the far end: it passes ahead
-    when the gap exceeds the reach and the margin, whatever the length it runs inside."""
-    way = shapely.LineString([(4.0, 0.0), (9.5, 0.0), (9.5, 3.0)])
-    assert passes_ahead(way, CLAIM, CLAIMER, REACH, 1.0)  # 4 m ahead: 4 - 0.5 >= 1
-    way = shapely.LineString([(1.2, 0.0), (9.5, 0.0), (9.5, 3.0)])
-    assert not passes_ahead(way, CLAIM, CLAIMER, REACH, 1.0)  # 1.2 m: 0.7 < 1
+    """In ahead on the claimer's way, along it and out at the far end: it passes ahead
+    when it comes in far enough ahead."""
+    assert passes_ahead(line((6.0, -1.0), (6.0, 0.0), (9.5, 0.0), (9.5, 3.0)), CLAIM,
+                        CLAIMER, REACH, 1.0)
+    assert not passes_ahead(line((2.0, -1.0), (2.0, 0.0), (9.5, 0.0), (9.5, 3.0)), CLAIM,
+                            CLAIMER, REACH, 1.0)
+
+
+def test_not_beside_the_claim_nor_into_it() -> None:
+    assert not passes_ahead(line((8.0, 1.0), (8.0, 3.0)), CLAIM, CLAIMER, REACH, 1.0)
+    assert not passes_ahead(line((8.0, 3.0), (8.0, 0.0)), CLAIM, CLAIMER, REACH, 1.0)
+
+
+def reference(x: float, margin: float) -> bool | None:
+    """``passes_ahead`` of ``across(x)`` worked out by hand: its points 0.1 m apart (those
+    within 0.5 m of y = 0 inside the claim, reached after their distance from (x, -3))
+    against the claimer's points 0.1 m apart from x = 0 (the first within ``REACH`` of a
+    point is when the claimer comes to it); None where a comparison is a tie."""
+    grid = [i / 10 for i in range(101)]
+    out = True
+    for i in range(61):
+        s, y = i / 10, i / 10 - 3.0
+        if abs(abs(y) - 0.5) < 1e-6:
+            return None  # on the claim's edge
+        if abs(y) > 0.5:
+            continue
+        comes = next((a for a in grid if math.hypot(a - x, y) <= REACH), math.inf)
+        if abs(s + margin - comes) < 1e-6:
+            return None
+        out &= s + margin <= comes
+    return out
+
+
+@given(x=st.floats(1.0, 9.0), ahead=st.floats(0.0, 5.0), margin=st.floats(0.0, 5.0),
+       less=st.floats(0.0, 5.0))
+def test_passing_ahead_against_a_hand_reference(x, ahead, margin, less) -> None:
+    """As the reference says; and monotone, as the rule means: the crossing farther along
+    the claimer's way, or a smaller margin, keeps a way that passes ahead passing."""
+    got = passes_ahead(across(x), CLAIM, CLAIMER, REACH, margin)
+    if (want := reference(x, margin)) is not None:
+        assert got == want
+    if got:
+        assert passes_ahead(across(min(9.0, x + ahead)), CLAIM, CLAIMER, REACH, margin)
+        assert passes_ahead(across(x), CLAIM, CLAIMER, REACH, max(0.0, margin - less))
 
 
 def test_heeded_claims_gives_an_object_passing_ahead_the_near_part_only() -> None:
     near = shapely.box(0.0, -0.5, 2.0, 0.5)
     claimer = ObjectState(0, status="active", rank=0, claim=CLAIM, near=near, way=CLAIMER)
-    me = ObjectState(1, status="active", rank=1, way=exit_north(8.0))
+    me = ObjectState(1, status="active", rank=1, way=across(8.0))
     heeded = heeded_claims([claimer, me], me, 0.0, 0.0, [0.25, 0.25], 1.0)
     assert heeded == [(0, near, near)]
     stays = heeded_claims([claimer, me], me, 0.0, 0.0, [0.25, 0.25], math.inf)
     assert stays == [(0, CLAIM, CLAIM)]
-    me.way = exit_north(0.8)
+    me.way = across(2.0)
     assert heeded_claims([claimer, me], me, 0.0, 0.0, [0.25, 0.25], 1.0) == [
         (0, CLAIM, CLAIM)]
-

@@ -60,26 +60,30 @@ def passes_ahead(way: shapely.LineString, region: shapely.Geometry,
                  claimer_way: shapely.LineString, reach: float, margin: float,
                  step: float = PASS_STEP) -> bool:
     """Whether a plan whose ``way`` (its centre's path on to its goal) goes through a
-    higher-ranked object's claim ``region`` passes it ahead of that object: its goal lies
-    outside the claim, and it passes every point of its way inside the claim, going at
+    higher-ranked object's claim ``region`` passes it ahead of that object. Its goal lies
+    outside the claim, its way does not run towards the claiming object (the point where
+    it leaves the claim is no nearer that object along its own way, ``claimer_way``, than
+    where it enters: they would meet head-on), and either it stands in the claim already
+    (it is in that object's way: waiting there only makes that one come to it, so it
+    leaves by its way), or it passes every point of its way inside the claim, going at
     the claiming object's pace, ``margin`` m of travel before that object's centre comes
-    within ``reach`` of the point along its own way (``claimer_way``). Both ways are
-    taken at points ``step`` m apart. An object ahead on the other's way going the same
-    direction passes ahead when it is more than ``reach`` and ``margin`` ahead; one
-    crossing or going towards it, when its way through is short against the gap. (An
-    object standing in another's claim is in its way already: waiting there only makes
-    that one come to it.) False when the way ends inside the claim or ``margin`` is
-    infinite."""
+    within ``reach`` of the point. Both ways are taken at points ``step`` m apart. False
+    when the way does not go through the claim (its robots may still come in), ends
+    inside it, or ``margin`` is infinite."""
     if not math.isfinite(margin):
         return False
     if region.intersects(shapely.points(shapely.get_coordinates(way)[-1])):
         return False
     s, points = _along(way, step)
     inside = shapely.intersects(region, shapely.points(points))
+    if not inside.any():
+        return False  # it does not go through: its robots may still come in
     a, theirs = _along(claimer_way, step)
     near = np.hypot(*np.moveaxis(points[inside, None] - theirs[None], -1, 0)) <= reach
     comes = np.where(near.any(axis=1), a[np.argmax(near, axis=1)], np.inf)
-    return bool(np.all(s[inside] + margin <= comes))
+    if comes[-1] < comes[0] - step:
+        return False  # through it towards the other: they would meet head-on
+    return bool(inside[0] or np.all(s[inside] + margin <= comes))
 
 
 def _along(line: shapely.LineString, step: float) -> tuple[np.ndarray, np.ndarray]:

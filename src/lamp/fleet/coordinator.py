@@ -12,9 +12,10 @@ simulator. Design (``docs/fleet.md``):
   lower-priority segment may not end with its object and robots deeper in a higher
   object's *claim* (the rest of its plan, ``regions.claims``) than they began (crossing
   one, or leaving it, is allowed; a plan that only crosses the claim of an object standing
-  waiting heeds its near part, ``cross_waiting``, and with ``cross_near`` any claim's):
-  loads never meet head-on in a door. The claim of an object whose planner found no plan
-  stays, binding only the objects outside it then.
+  waiting heeds its near part, ``cross_waiting``, and with ``cross_near`` any claim's; so
+  does one that passes through it ahead of its object, or leaves it, never towards that
+  object, ``admission.passes_ahead``): loads never meet head-on in a door. The claim of
+  an object whose planner found no plan stays, binding only the objects outside it then.
 - **Admission.** A segment starts only if it is compatible with every running segment
   (robots row by row on the shared clock, objects by the space they may take:
   ``spacetime.compatible``), respects higher claims, and its bodies as planned overlap
@@ -25,7 +26,8 @@ simulator. Design (``docs/fleet.md``):
   objects still move waits for a change too.
 - **Clock.** Admitted segments are re-timed on a common row grid (``segments.on_grid``),
   with rows appended in which their robots hold for the simulator's settle time, and run
-  together until the first ends (or a push watch stops one); that loop plans its next
+  together until the first ends (or a push watch stops one, or its robots fell off their
+  rows too often: ``Segment.rejoin``); that loop plans its next
   segment while the others hold their place in their rows (simulated time stands still
   while loops plan). Only when every running segment ends together does the simulator
   settle as it does after a sequential segment.
