@@ -1,18 +1,19 @@
-"""``Segment.rejoin`` and its limit: robots off their rows move straight back to them, and a
-segment whose robots had to ``REJOIN_LIMIT`` times (they push what does not give, and
-every event set them back) ends there, stopped, so its loop sees the stall and plans anew
-(``Fleet._advance``)."""
+"""``Segment.rejoin`` and its limit (``fleet_rejoin_limit``): robots off their rows move
+straight back to them, and with a limit a segment whose robots had to that many times
+(they push what does not give, and every event set them back) ends there, stopped, so
+its loop sees the stall and plans anew (``Fleet._advance``)."""
 
 from __future__ import annotations
 
 import numpy as np
 from fleet_fakes import fleet_at_starts
 
-from lamp.fleet.segments import REJOIN_GAP, REJOIN_LIMIT, Segment
+from lamp.fleet.segments import REJOIN_GAP, Segment
 from lamp.scene import scene_from_dict
 from lamp.scene.model import Rectangle
 
 BOX = Rectangle((0.4, 0.3))
+LIMIT = 10
 R = 0.1
 
 
@@ -43,14 +44,21 @@ def test_a_nudged_robot_moves_straight_back_to_its_next_row() -> None:
 
 def test_the_limit_th_rejoin_ends_the_segment_where_it_stands() -> None:
     seg = _segment(n=200)
-    for i in range(1, REJOIN_LIMIT):
-        seg.rejoin(seg.rows[:, seg.cursor] + [0.0, 0.1], 0.02)
+    for i in range(1, LIMIT):
+        seg.rejoin(seg.rows[:, seg.cursor] + [0.0, 0.1], 0.02, LIMIT)
         assert seg.rejoined == i and not seg.done
         seg.cursor += 2  # a little progress, then held back again
     rows = seg.rows.copy()
-    seg.rejoin(seg.rows[:, seg.cursor] + [0.0, 0.1], 0.02)
+    seg.rejoin(seg.rows[:, seg.cursor] + [0.0, 0.1], 0.02, LIMIT)
     assert seg.done and seg.stopped_at is not None
     np.testing.assert_array_equal(seg.rows, rows)
+
+
+def test_without_a_limit_it_rejoins_for_ever() -> None:
+    seg = _segment(n=200)
+    for i in range(1, 3 * LIMIT):
+        seg.rejoin(seg.rows[:, seg.cursor] + [0.0, 0.1], 0.02)
+        assert seg.rejoined == i and not seg.done
 
 
 def test_the_fleet_hands_a_segment_ended_so_back_to_its_loop_stopped() -> None:
@@ -61,11 +69,11 @@ def test_the_fleet_hands_a_segment_ended_so_back_to_its_loop_stopped() -> None:
         "robots": {"starts": [[0.5, 0.5], [0.5, 1.0]]},
         "objects": [{"type": "rectangle", "size": [0.4, 0.3], "start": [2.0, 1.5, 0.0],
                      "goal": [3.0, 1.5, 0.0]}]})
-    fleet = fleet_at_starts(scene)
+    fleet = fleet_at_starts(scene, rejoin_limit=LIMIT)
     o = fleet.objects[0]
     o.status, o.team, o.rank = "active", [0], 0
     seg = _segment(start=(0.5, 0.7))  # its next row 0.22 m from the robot at (0.5, 0.5)
-    seg.rejoined = REJOIN_LIMIT - 1
+    seg.rejoined = LIMIT - 1
     o.running = seg
     fleet._advance()
     assert o.running is None and o.ready

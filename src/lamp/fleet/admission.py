@@ -31,7 +31,7 @@ from lamp.fleet.spacetime import compatible
 from lamp.fleet.state import ObjectState
 from lamp.scene.model import Scene
 
-__all__ = ["CLAIM_AREA_SLACK", "CROSSING", "PASS_MARGIN", "PASS_STEP", "crosses",
+__all__ = ["CLAIM_AREA_SLACK", "CROSSING", "PASS_STEP", "crosses",
            "heeded_claims", "passes_ahead", "meets_moving", "meets_standing", "standing_in"]
 
 #: A segment may end with this much more of its bodies' area (m^2) inside a higher claim
@@ -39,10 +39,6 @@ __all__ = ["CLAIM_AREA_SLACK", "CROSSING", "PASS_MARGIN", "PASS_STEP", "crosses"
 CLAIM_AREA_SLACK = 1e-4
 #: A way that runs at most this far (m) inside a claim, and ends outside it, crosses it.
 CROSSING = 1.5
-#: A plan may go through a higher-ranked object's claim when it passes each point of it
-#: at least this much (m) of travel before that object comes near it
-#: (:func:`passes_ahead`; ``fleet_pass_margin``'s default).
-PASS_MARGIN = 1.0
 #: The spacing (m) of the points at which :func:`passes_ahead` compares two ways.
 PASS_STEP = 0.1
 

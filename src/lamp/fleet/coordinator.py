@@ -12,9 +12,10 @@ simulator. Design (``docs/fleet.md``):
   lower-priority segment may not end with its object and robots deeper in a higher
   object's *claim* (the rest of its plan, ``regions.claims``) than they began (crossing
   one, or leaving it, is allowed; a plan that only crosses the claim of an object standing
-  waiting heeds its near part, ``cross_waiting``, and with ``cross_near`` any claim's; so
-  does one that passes through it ahead of its object, or leaves it, never towards that
-  object, ``admission.passes_ahead``): loads never meet head-on in a door. The claim of
+  waiting heeds its near part, ``cross_waiting``, and with ``cross_near`` any claim's; with
+  ``pass_margin``, so does one that passes through it ahead of its object, or leaves it,
+  never towards that object, ``admission.passes_ahead``): loads never meet head-on in a
+  door. The claim of
   an object whose planner found no plan stays, binding only the objects outside it then.
 - **Admission.** A segment starts only if it is compatible with every running segment
   (robots row by row on the shared clock, objects by the space they may take:
@@ -26,8 +27,8 @@ simulator. Design (``docs/fleet.md``):
   objects still move waits for a change too.
 - **Clock.** Admitted segments are re-timed on a common row grid (``segments.on_grid``),
   with rows appended in which their robots hold for the simulator's settle time, and run
-  together until the first ends (or a push watch stops one, or its robots fell off their
-  rows too often: ``Segment.rejoin``); that loop plans its next
+  together until the first ends (or a push watch stops one, or, with ``rejoin_limit``,
+  its robots fell off their rows too often: ``Segment.rejoin``); that loop plans its next
   segment while the others hold their place in their rows (simulated time stands still
   while loops plan). Only when every running segment ends together does the simulator
   settle as it does after a sequential segment.
@@ -53,7 +54,6 @@ import shapely
 from lamp.contract.events import RunObserver
 from lamp.contract.runner import ObjectOutcome
 from lamp.fleet.admission import (
-    PASS_MARGIN,
     heeded_claims,
     meets_moving,
     meets_standing,
@@ -95,14 +95,15 @@ class Fleet:
                  ObjectOutcome], timeline: Callable[[Any, float, np.ndarray], None],
                  observers: Sequence[RunObserver] = (), row_step: float = 0.02,
                  reinforce_reach: float = 0.0, cross_near: float = 0.0,
-                 cross_waiting: float = CLAIM_NEAR, pass_margin: float = PASS_MARGIN
-                 ) -> None:
+                 cross_waiting: float = CLAIM_NEAR, pass_margin: float = math.inf,
+                 rejoin_limit: int = 0) -> None:
         self.scene, self.executor, self.observers = scene, executor, list(observers)
         self.object_main, self.timeline = object_main, timeline
         self.grid, self.reinforce_reach = float(row_step), float(reinforce_reach)  # 0: off
         #: near reach (m) crossing any claim / a waiting object's claim; 0: the whole claim
         self.cross_near, self.cross_waiting = float(cross_near), float(cross_waiting)
         self.pass_margin = float(pass_margin)  # admission.passes_ahead; inf: off
+        self.rejoin_limit = int(rejoin_limit)  # Segment.rejoin; 0: none
         self.reach = [o.shape.bounding_radius + scene.robot_radius for o in scene.objects]
         #: rows a segment's robots hold at its end while others move: the settle time
         self.hold_rows = math.ceil(SETTLE_TIME * float(scene.physics.robot_speed) / self.grid
@@ -347,7 +348,7 @@ class Fleet:
         running = [o.running for o in self.objects if o.running is not None]
         now = np.asarray(self.executor.robot_positions, float)
         for s in running:  # robots nudged off their rows (``Segment.rejoin``) rejoin them
-            s.rejoin(now[s.team], self.grid)
+            s.rejoin(now[s.team], self.grid, self.rejoin_limit)
         if any(s.done for s in running):  # one rejoined too often: it ends, nothing runs
             return self._ended(running)
         out, paths, done, fired = run_together(self.executor, running)

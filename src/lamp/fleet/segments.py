@@ -26,7 +26,7 @@ from lamp.geometry.shapes import to_shapely
 from lamp.scene.model import Shape
 from lamp.sim.simulator import SETTLE_TIME
 
-__all__ = ["REJOIN_GAP", "REJOIN_LIMIT", "Segment", "TOUCH_TOLERANCE", "on_grid", "run_together"]
+__all__ = ["REJOIN_GAP", "Segment", "TOUCH_TOLERANCE", "on_grid", "run_together"]
 
 #: A robot that starts a segment near its object (left in contact by the last push) counts
 #: as pushing once it comes this much (m) nearer than it stood.
@@ -34,10 +34,6 @@ TOUCH_TOLERANCE = 0.002
 #: A robot farther than this (m) from its next row moves back to it first (the simulator
 #: takes paths that start within ``MAX_START_GAP`` = 0.05 m of the robots).
 REJOIN_GAP = 0.03
-#: A segment whose robots had to move back to their rows this many times ends at the
-#: next (:meth:`Segment.rejoin`): they push what does not give, and every event set them
-#: back. (At 96 robots and 32 loads a push ran 305 events so, 80 s and more.)
-REJOIN_LIMIT = 10
 
 
 def on_grid(start: np.ndarray, paths: np.ndarray, row_step: float) -> np.ndarray:
@@ -115,17 +111,17 @@ class Segment:
     def done(self) -> bool:
         return self.cursor >= self.rows.shape[1] or self.stopped_at is not None
 
-    def rejoin(self, positions: np.ndarray, row_step: float) -> None:
+    def rejoin(self, positions: np.ndarray, row_step: float, limit: int = 0) -> None:
         """Robots that stand more than ``REJOIN_GAP`` from the next row (nudged while they
         held, or held back by what they push) first move straight back to it: rows are
-        inserted before it. The ``REJOIN_LIMIT``-th time the segment ends instead, stopped
+        inserted before it. With a ``limit``, the ``limit``-th time the segment ends instead, stopped
         where it stands (``stopped_at``, as a push watch stops one): its loop sees what
         the push achieved, a stall or drift, and plans anew."""
         gap = np.hypot(*(np.asarray(positions, float) - self.rows[:, self.cursor]).T)
         if gap.max() <= REJOIN_GAP:
             return
         self.rejoined += 1
-        if self.rejoined >= REJOIN_LIMIT:
+        if 0 < limit <= self.rejoined:
             self.stopped_at = 0
             return
         back = straight_moves(np.asarray(positions, float), self.rows[:, self.cursor], row_step)

@@ -88,6 +88,7 @@ def run_concurrently(scene: Any, executor: Executor, runner: ObjectRunner, recor
                   reinforce_reach=runner.config.fleet_reinforce_reach,
                   cross_near=runner.config.fleet_cross_near,
                   cross_waiting=runner.config.fleet_cross_waiting,
-                  pass_margin=runner.config.fleet_pass_margin)
+                  pass_margin=runner.config.fleet_pass_margin,
+                  rejoin_limit=runner.config.fleet_rejoin_limit)
     outcomes = fleet.run()
     return outcomes, fleet.stats()

@@ -199,13 +199,20 @@ class PlannerConfig:
                                        "(m) of its planned travel; 0: the whole claim.",
                                        low=0.0)
 
-    #: The concurrent schedule only (``admission.passes_ahead``); measured in
-    #: ``docs/fleet.md`` (Coordination).
-    fleet_pass_margin: float = param(1.0, "Concurrent schedule: a plan may go through a "
-                                     "higher-ranked object's claim when it passes each "
-                                     "point of it this much (m) of travel before that "
-                                     "object comes near; inf: it waits for that object "
-                                     "to pass.", low=0.0, unbounded=True)
+    #: The concurrent schedule only (``admission.passes_ahead``; ``Segment.rejoin``);
+    #: off by default: with both on (1 m, 10) 96 robots and 32 loads in aisles took 236 s
+    #: instead of 312 s, but at 24 x 8 a jammed push ended so ran its planner out of
+    #: expansions; measured in ``docs/fleet.md`` (Coordination, Execution).
+    fleet_pass_margin: float = param(math.inf, "Concurrent schedule: a plan may go "
+                                     "through a higher-ranked object's claim when it "
+                                     "passes each point of it this much (m) of travel "
+                                     "before that object comes near, or leave a claim it "
+                                     "stands in; inf: it waits for that object to pass.",
+                                     low=0.0, unbounded=True)
+    fleet_rejoin_limit: int = param(0, "Concurrent schedule: a segment whose robots had "
+                                    "to move back to their rows this many times (held "
+                                    "back by what they push) ends, stopped; 0: never.",
+                                    low=0)
 
     def __post_init__(self) -> None:
         check_fields(self)
@@ -237,7 +244,7 @@ LOOP_PARAMS = ("planning_time_limit", "max_segments", "drift_position", "drift_o
                "continuous_push_gap",
                "sensing_sigma", "sensing_readings", "space_cache_mb", "fleet_park_clear",
                "fleet_reinforce_reach", "fleet_cross_near", "fleet_cross_waiting",
-               "fleet_pass_margin")
+               "fleet_pass_margin", "fleet_rejoin_limit")
 VERIFY_PARAMS = ("k", "max_budget", "gspi_attempts_per_budget", "gspi_time_limit",
                  "contact_tolerance")
 LATTICE_PARAMS = ("lattice_step", "n_headings", "robot_match_tolerance")
