@@ -31,8 +31,8 @@ from lamp.fleet.spacetime import compatible
 from lamp.fleet.state import ObjectState
 from lamp.scene.model import Scene
 
-__all__ = ["CLAIM_AREA_SLACK", "CROSSING", "PASS_STEP", "crosses",
-           "heeded_claims", "passes_ahead", "meets_moving", "meets_standing", "standing_in"]
+__all__ = ["CLAIM_AREA_SLACK", "CROSSING", "PASS_STEP", "crosses", "heeded_claims",
+           "meets_moving", "meets_standing", "passes_ahead", "standing_in"]
 
 #: A segment may end with this much more of its bodies' area (m^2) inside a higher claim
 #: than it started with (rounding of the footprints).
