@@ -1,6 +1,6 @@
 """``Segment.rejoin`` and its limit (``fleet_rejoin_limit``): robots off their rows move
-straight back to them, and with a limit a segment whose robots had to that many times
-(they push what does not give, and every event set them back) ends there, stopped, so
+straight back to them, and with a limit a segment whose robots had to rejoin them that
+many times (they push what does not give, and every event set them back) ends there, so
 its loop sees the stall and plans anew (``Fleet._advance``)."""
 
 from __future__ import annotations

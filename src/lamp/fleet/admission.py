@@ -153,12 +153,11 @@ def heeded_claims(objects: Sequence[ObjectState], me: ObjectState, cross_near: f
     for o in objects:
         if o.rank >= me.rank or o.claim is None or me.index in o.exempt:
             continue
-        near = o.near if o.near is not None else o.claim
-        if (me.way is not None and o.way is not None and math.isfinite(pass_margin)
+        if (math.isfinite(pass_margin) and me.way is not None and o.way is not None
                 and passes_ahead(me.way, o.claim, o.way, reach[me.index] + reach[o.index],
                                  pass_margin)):
-            out.append((o.index, near, near))
+            out.append((o.index, o.near, o.near))
         else:
-            out.append((o.index, o.claim, near if cross_near > 0
+            out.append((o.index, o.claim, o.near if cross_near > 0
                         or (cross_waiting > 0 and o.held_up) else o.claim))
     return out

@@ -15,8 +15,8 @@ simulator. Design (``docs/fleet.md``):
   waiting heeds its near part, ``cross_waiting``, and with ``cross_near`` any claim's; with
   ``pass_margin``, so does one that passes through it ahead of its object, or leaves it,
   never towards that object, ``admission.passes_ahead``): loads never meet head-on in a
-  door. The claim of
-  an object whose planner found no plan stays, binding only the objects outside it then.
+  door. The claim of an object whose planner found no plan stays, binding only the
+  objects outside it then.
 - **Admission.** A segment starts only if it is compatible with every running segment
   (robots row by row on the shared clock, objects by the space they may take:
   ``spacetime.compatible``), respects higher claims, and its bodies as planned overlap
@@ -53,12 +53,7 @@ import shapely
 
 from lamp.contract.events import RunObserver
 from lamp.contract.runner import ObjectOutcome
-from lamp.fleet.admission import (
-    heeded_claims,
-    meets_moving,
-    meets_standing,
-    standing_in,
-)
+from lamp.fleet.admission import heeded_claims, meets_moving, meets_standing, standing_in
 from lamp.fleet.handover import better_team
 from lamp.fleet.makeway import make_way
 from lamp.fleet.objects import given_up
@@ -350,7 +345,8 @@ class Fleet:
         for s in running:  # robots nudged off their rows (``Segment.rejoin``) rejoin them
             s.rejoin(now[s.team], self.grid, self.rejoin_limit)
         if any(s.done for s in running):  # one rejoined too often: it ends, nothing runs
-            return self._ended(running)
+            self._ended(running)
+            return
         out, paths, done, fired = run_together(self.executor, running)
         self.robot_time.charge([s.team for s in running], self.owner, paths,
                                float(out.sim_time))

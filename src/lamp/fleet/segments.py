@@ -114,9 +114,9 @@ class Segment:
     def rejoin(self, positions: np.ndarray, row_step: float, limit: int = 0) -> None:
         """Robots that stand more than ``REJOIN_GAP`` from the next row (nudged while they
         held, or held back by what they push) first move straight back to it: rows are
-        inserted before it. With a ``limit``, the ``limit``-th time the segment ends instead, stopped
-        where it stands (``stopped_at``, as a push watch stops one): its loop sees what
-        the push achieved, a stall or drift, and plans anew."""
+        inserted before it. With a ``limit`` (0: none), the ``limit``-th time the segment
+        ends instead, stopped where it stands (``stopped_at``, as a push watch stops one):
+        its loop sees what the push achieved, a stall or drift, and plans anew."""
         gap = np.hypot(*(np.asarray(positions, float) - self.rows[:, self.cursor]).T)
         if gap.max() <= REJOIN_GAP:
             return
