@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import copy
 import json
+import math
 from pathlib import Path
 
 import pytest
@@ -305,10 +306,13 @@ def test_a_plan_made_in_the_world_as_it_stands_is_not_declined() -> None:
     assert outcome(events_since=1) == (False, True)  # declined
 
 
-def _moving_fleet(scene, cross_near: float = 0.0, cross_waiting: float = 0.0):
+def _moving_fleet(scene, cross_near: float = 0.0, cross_waiting: float = 0.0,
+                  pass_margin: float = math.inf):
     """A ``Fleet`` on ``scene`` whose objects all move, ranked in file order, over an
-    executor that only reports the scene's start poses (no simulator)."""
-    fleet = fleet_at_starts(scene, cross_near=cross_near, cross_waiting=cross_waiting)
+    executor that only reports the scene's start poses (no simulator); passing ahead
+    (``pass_margin``, tested in ``test_fleet_passing``) off unless asked for."""
+    fleet = fleet_at_starts(scene, cross_near=cross_near, cross_waiting=cross_waiting,
+                            pass_margin=pass_margin)
     for k, o in enumerate(fleet.objects):
         o.status, o.rank = "active", k
     return fleet

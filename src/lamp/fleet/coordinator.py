@@ -12,9 +12,9 @@ simulator. Design (``docs/fleet.md``):
   lower-priority segment may not end with its object and robots deeper in a higher
   object's *claim* (the rest of its plan, ``regions.claims``) than they began (crossing
   one, or leaving it, is allowed; a plan that only crosses the claim of an object standing
-  waiting heeds its near part, ``cross_waiting``, and with ``cross_near`` any claim's; with
-  ``pass_margin``, so does one that passes through it ahead of its object, or leaves it,
-  never towards that object, ``admission.passes_ahead``): loads never meet head-on in a
+  waiting heeds its near part, ``cross_waiting``, and with ``cross_near`` any claim's; so
+  does one that passes through it ``pass_margin`` ahead of its object, or leaves it, never
+  towards that object, ``admission.passes_ahead``): loads never meet head-on in a
   door. The claim of an object whose planner found no plan stays, binding only the
   objects outside it then.
 - **Admission.** A segment starts only if it is compatible with every running segment
@@ -27,11 +27,11 @@ simulator. Design (``docs/fleet.md``):
   objects still move waits for a change too.
 - **Clock.** Admitted segments are re-timed on a common row grid (``segments.on_grid``),
   with rows appended in which their robots hold for the simulator's settle time, and run
-  together until the first ends (or a push watch stops one, or, with ``rejoin_limit``,
-  its robots fell off their rows too often: ``Segment.rejoin``); that loop plans its next
-  segment while the others hold their place in their rows (simulated time stands still
-  while loops plan). Only when every running segment ends together does the simulator
-  settle as it does after a sequential segment.
+  together until the first ends (or a push watch stops one, or its robots, held back,
+  spent its ``rejoin_slack`` moving back to their rows: ``Segment.rejoin``); that loop
+  plans its next segment while the others hold their place in their rows (simulated time
+  stands still while loops plan). Only when every running segment ends together does the
+  simulator settle as it does after a sequential segment.
 - **Liveness.** When nothing runs and nothing waits on a change, an object standing in
   a blocked one's way moves aside or takes its robots (``fleet.makeway``); else planners
   waiting on a change plan in the world as it is (as sequentially), claims dropped, or the
@@ -65,6 +65,7 @@ from lamp.fleet.teams import allocate, near_way, nearest, reinforce, start_order
 from lamp.fleet.turns import Turns
 from lamp.fleet.utilisation import RobotTime, schedule_stats
 from lamp.fleet.view import FleetExecution, FleetView
+from lamp.planners.config import PASS_MARGIN, REJOIN_SLACK
 from lamp.scene.model import Scene
 from lamp.sim.simulator import SETTLE_TIME
 
@@ -90,15 +91,16 @@ class Fleet:
                  ObjectOutcome], timeline: Callable[[Any, float, np.ndarray], None],
                  observers: Sequence[RunObserver] = (), row_step: float = 0.02,
                  reinforce_reach: float = 0.0, cross_near: float = 0.0,
-                 cross_waiting: float = CLAIM_NEAR, pass_margin: float = math.inf,
-                 rejoin_limit: int = 0) -> None:
+                 cross_waiting: float = CLAIM_NEAR, pass_margin: float = PASS_MARGIN,
+                 rejoin_limit: int = 0, rejoin_slack: float = REJOIN_SLACK) -> None:
         self.scene, self.executor, self.observers = scene, executor, list(observers)
         self.object_main, self.timeline = object_main, timeline
         self.grid, self.reinforce_reach = float(row_step), float(reinforce_reach)  # 0: off
         #: near reach (m) crossing any claim / a waiting object's claim; 0: the whole claim
         self.cross_near, self.cross_waiting = float(cross_near), float(cross_waiting)
         self.pass_margin = float(pass_margin)  # admission.passes_ahead; inf: off
-        self.rejoin_limit = int(rejoin_limit)  # Segment.rejoin; 0: none
+        #: Segment.rejoin's limit (0: none) and slack (inf: none)
+        self.rejoin_limit, self.rejoin_slack = int(rejoin_limit), float(rejoin_slack)
         self.reach = [o.shape.bounding_radius + scene.robot_radius for o in scene.objects]
         #: rows a segment's robots hold at its end while others move: the settle time
         self.hold_rows = math.ceil(SETTLE_TIME * float(scene.physics.robot_speed) / self.grid
@@ -343,8 +345,8 @@ class Fleet:
         running = [o.running for o in self.objects if o.running is not None]
         now = np.asarray(self.executor.robot_positions, float)
         for s in running:  # robots nudged off their rows (``Segment.rejoin``) rejoin them
-            s.rejoin(now[s.team], self.grid, self.rejoin_limit)
-        if any(s.done for s in running):  # one rejoined too often: it ends, nothing runs
+            s.rejoin(now[s.team], self.grid, self.rejoin_limit, self.rejoin_slack)
+        if any(s.done for s in running):  # one spent its rejoins: it ends, nothing runs
             self._ended(running)
             return
         out, paths, done, fired = run_together(self.executor, running)

@@ -23,10 +23,12 @@ from lamp.contract.events import TRACE_EVERY
 from lamp.contract.trajectory import straight_moves
 from lamp.fleet.regions import OBJECT_MARGIN, swept
 from lamp.geometry.shapes import to_shapely
+from lamp.planners.config import REJOIN_SLACK
 from lamp.scene.model import Shape
 from lamp.sim.simulator import SETTLE_TIME
 
-__all__ = ["REJOIN_GAP", "Segment", "TOUCH_TOLERANCE", "on_grid", "run_together"]
+__all__ = ["REJOIN_GAP", "REJOIN_SLACK", "Segment", "TOUCH_TOLERANCE", "on_grid",
+           "run_together"]
 
 #: A robot that starts a segment near its object (left in contact by the last push) counts
 #: as pushing once it comes this much (m) nearer than it stood.
@@ -72,6 +74,9 @@ class Segment:
     left: bool = False
     stopped_at: int | None = None
     rejoined: int = 0  # times its robots moved back to their rows (:meth:`rejoin`)
+    #: its rows when submitted, and how many its rejoins have inserted since
+    planned: int = field(init=False)
+    added: int = field(default=0, init=False)
     #: the first row at which a robot may touch the object (:meth:`first_touch`); before
     #: it the object stands at its first planned pose
     touch: int = field(init=False)
@@ -83,6 +88,7 @@ class Segment:
 
     def __post_init__(self) -> None:
         self.touch = self.first_touch()
+        self.planned = int(self.rows.shape[1])
 
     def first_touch(self) -> int:
         """The first row from which the segment's robots may move the object: the start
@@ -111,20 +117,29 @@ class Segment:
     def done(self) -> bool:
         return self.cursor >= self.rows.shape[1] or self.stopped_at is not None
 
-    def rejoin(self, positions: np.ndarray, row_step: float, limit: int = 0) -> None:
+    def rejoin(self, positions: np.ndarray, row_step: float, limit: int = 0,
+               slack: float = REJOIN_SLACK) -> None:
         """Robots that stand more than ``REJOIN_GAP`` from the next row (nudged while they
         held, or held back by what they push) first move straight back to it: rows are
-        inserted before it. With a ``limit`` (0: none), the ``limit``-th time the segment
-        ends instead, stopped where it stands (``stopped_at``, as a push watch stops one):
-        its loop sees what the push achieved, a stall or drift, and plans anew."""
+        inserted before it. The segment ends instead, stopped where it stands
+        (``stopped_at``, as a push watch stops one), when those rows would take the rows
+        inserted over its life past ``slack`` times its planned rows (``inf``: never), or
+        at the ``limit``-th rejoin (0: no limit); its loop sees what the push achieved, a
+        stall or drift, and plans anew.
+
+        Guarantee (tested, Hypothesis): ``added <= slack * planned`` always, so a segment
+        whose every event runs at least one of its rows ends within ``(1 + slack) *
+        planned`` events, whatever holds its robots back; a sequential run's push ends
+        on time, here the slack is what a jammed push is given on top."""
         gap = np.hypot(*(np.asarray(positions, float) - self.rows[:, self.cursor]).T)
         if gap.max() <= REJOIN_GAP:
             return
         self.rejoined += 1
-        if 0 < limit <= self.rejoined:
+        back = straight_moves(np.asarray(positions, float), self.rows[:, self.cursor], row_step)
+        if 0 < limit <= self.rejoined or self.added + back.shape[1] > slack * self.planned:
             self.stopped_at = 0
             return
-        back = straight_moves(np.asarray(positions, float), self.rows[:, self.cursor], row_step)
+        self.added += back.shape[1]
         self.rows = np.concatenate([back, self.rows[:, self.cursor:]], axis=1)
         self.spaces.pop("core", None)
         # a push under way goes on moving the object; one not begun begins as late as the

@@ -89,6 +89,7 @@ def run_concurrently(scene: Any, executor: Executor, runner: ObjectRunner, recor
                   cross_near=runner.config.fleet_cross_near,
                   cross_waiting=runner.config.fleet_cross_waiting,
                   pass_margin=runner.config.fleet_pass_margin,
-                  rejoin_limit=runner.config.fleet_rejoin_limit)
+                  rejoin_limit=runner.config.fleet_rejoin_limit,
+                  rejoin_slack=runner.config.fleet_rejoin_slack)
     outcomes = fleet.run()
     return outcomes, fleet.stats()

@@ -55,6 +55,17 @@ SEGMENTS_PER_METRE = 30.0
 #: ``fleet_cross_near`` undid most of its gains on the ``fleet`` family, 2 m is what was
 #: measured).
 CLAIM_NEAR = 2.0
+#: How far ahead (m of travel) a plan in the concurrent schedule must pass each point of
+#: a higher-ranked object's claim to go through it (``fleet.admission.passes_ahead``;
+#: ``fleet_pass_margin``'s default). 1 m is what was measured (``docs/fleet.md``,
+#: Coordination).
+PASS_MARGIN = 1.0
+#: The rows a segment's rejoins may insert in the concurrent schedule, as a share of its
+#: planned rows; past it the segment ends (``fleet.segments.Segment.rejoin``;
+#: ``fleet_rejoin_slack``'s default). A push jammed on a shelf corner otherwise ran event
+#: after event without ending (305 rejoins in one segment at 96 robots and 32 loads); a
+#: nudged robot's rejoin inserts a few rows. Measured in ``docs/fleet.md`` (Execution).
+REJOIN_SLACK = 1.0
 
 
 def segment_limit(max_segments: int | None, distance: float | Callable[[], float]) -> int:
@@ -199,11 +210,10 @@ class PlannerConfig:
                                        "(m) of its planned travel; 0: the whole claim.",
                                        low=0.0)
 
-    #: The concurrent schedule only (``admission.passes_ahead``; ``Segment.rejoin``);
-    #: off by default: with both on (1 m, 10) 96 robots and 32 loads in aisles took 236 s
-    #: instead of 312 s, but at 24 x 8 a jammed push ended so ran its planner out of
-    #: expansions; measured in ``docs/fleet.md`` (Coordination, Execution).
-    fleet_pass_margin: float = param(math.inf, "Concurrent schedule: a plan may go "
+    #: The concurrent schedule only (``admission.passes_ahead``; ``Segment.rejoin``). On
+    #: by default since 2026-12-05 with the rejoin slack: 96 robots and 32 loads in aisles
+    #: 312 -> 261 s; measured in ``docs/fleet.md`` (Coordination, Execution).
+    fleet_pass_margin: float = param(PASS_MARGIN, "Concurrent schedule: a plan may go "
                                      "through a higher-ranked object's claim when it "
                                      "passes each point of it this much (m) of travel "
                                      "before that object comes near, or leave a claim it "
@@ -213,6 +223,11 @@ class PlannerConfig:
                                     "to move back to their rows this many times (held "
                                     "back by what they push) ends, stopped; 0: never.",
                                     low=0)
+    fleet_rejoin_slack: float = param(REJOIN_SLACK, "Concurrent schedule: a segment whose "
+                                      "robots' moves back to their rows (held back by "
+                                      "what they push) would add more than this share "
+                                      "of its planned rows ends, stopped; inf: never.",
+                                      low=0.0, unbounded=True)
 
     def __post_init__(self) -> None:
         check_fields(self)
@@ -244,7 +259,7 @@ LOOP_PARAMS = ("planning_time_limit", "max_segments", "drift_position", "drift_o
                "continuous_push_gap",
                "sensing_sigma", "sensing_readings", "space_cache_mb", "fleet_park_clear",
                "fleet_reinforce_reach", "fleet_cross_near", "fleet_cross_waiting",
-               "fleet_pass_margin", "fleet_rejoin_limit")
+               "fleet_pass_margin", "fleet_rejoin_limit", "fleet_rejoin_slack")
 VERIFY_PARAMS = ("k", "max_budget", "gspi_attempts_per_budget", "gspi_time_limit",
                  "contact_tolerance")
 LATTICE_PARAMS = ("lattice_step", "n_headings", "robot_match_tolerance")
