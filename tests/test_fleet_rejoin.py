@@ -128,4 +128,4 @@ def test_the_fleet_hands_a_segment_ended_so_back_to_its_loop_stopped(limit: int,
     fleet._advance()
     assert o.running is None and o.ready
     assert o.reply is not None and o.reply.stopped_at is not None
-    assert fleet.clock == 0.0 and fleet.counts["events"] == 0
+    assert fleet.clock == 0.0 and fleet.counts["events"] == 0 and fleet.counts["jammed"] == 1

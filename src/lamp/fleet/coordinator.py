@@ -114,7 +114,7 @@ class Fleet:
         self.counts = dict.fromkeys((
             "admitted", "declined", "waited", "forced", "blocked", "merged", "grown",
             "reinforced", "replaced", "handed_over", "events", "transit_hops",
-            "parking_moves", "made_way"), 0)
+            "parking_moves", "made_way", "jammed"), 0)
         self.made_way: set[tuple[int, int]] = set()  # (j, k): j made way for k (makeway)
         self.cuts = goal_cuts(scene, scene.object_starts())  # k starts after cuts[k] are done
         self._handover_checked: set[tuple[int, tuple[int, ...], tuple[int, ...]]] = set()
@@ -346,7 +346,8 @@ class Fleet:
         now = np.asarray(self.executor.robot_positions, float)
         for s in running:  # robots nudged off their rows (``Segment.rejoin``) rejoin them
             s.rejoin(now[s.team], self.grid, self.rejoin_limit, self.rejoin_slack)
-        if any(s.done for s in running):  # one spent its rejoins: it ends, nothing runs
+            self.counts["jammed"] += s.done  # it spent its slack (or limit): it ends
+        if any(s.done for s in running):  # nothing runs: its loop goes on first
             self._ended(running)
             return
         out, paths, done, fired = run_together(self.executor, running)
