@@ -20,6 +20,7 @@ from lamp.cli import app
 from lamp.errors import InputError
 from lamp.fleet.regions import CLAIM_NEAR
 from lamp.pipeline import RunRequest
+from lamp.planners.config import PASS_MARGIN, REJOIN_SLACK
 from lamp.record.safety import recorded_teams
 from lamp.scene import scene_from_dict
 
@@ -440,18 +441,37 @@ def test_a_crossing_heeds_only_the_near_part_of_a_waiting_objects_claim(
 def test_the_crossing_settings_reach_the_fleet(monkeypatch, params, want) -> None:
     """``lamp.solve(params=...)`` hands ``fleet_cross_waiting`` (default ``CLAIM_NEAR``)
     and ``fleet_cross_near`` to the concurrent schedule's ``Fleet``."""
+    assert _fleet_settings(monkeypatch, params, "cross_near", "cross_waiting") == (0.0, want)
+
+
+@pytest.mark.parametrize("params, want", [
+    ({}, (PASS_MARGIN, 0, REJOIN_SLACK)),
+    ({"fleet_pass_margin": math.inf, "fleet_rejoin_slack": math.inf}, (math.inf, 0, math.inf)),
+    ({"fleet_rejoin_limit": 10, "fleet_rejoin_slack": 0.5}, (PASS_MARGIN, 10, 0.5))])
+def test_the_passing_and_rejoin_settings_reach_the_fleet(monkeypatch, params, want) -> None:
+    """``lamp.solve(params=...)`` hands ``fleet_pass_margin``, ``fleet_rejoin_limit`` and
+    ``fleet_rejoin_slack`` (defaults ``PASS_MARGIN``, 0, ``REJOIN_SLACK``: passing ahead
+    and the slack on, the limit off) to the concurrent schedule's ``Fleet``."""
+    assert _fleet_settings(monkeypatch, params, "pass_margin", "rejoin_limit",
+                           "rejoin_slack") == want
+
+
+def _fleet_settings(monkeypatch, params: dict, *names: str) -> tuple:
+    """The ``names`` attributes of the ``Fleet`` that ``lamp.solve(params=params)`` builds
+    for a two-box concurrent scene (its run stopped before anything moves)."""
     from lamp.fleet.coordinator import Fleet
 
-    seen: list[tuple[float, float]] = []
+    seen: list[tuple] = []
 
     class Seen(Exception):
         pass
 
     def run(self):
-        seen.append((self.cross_near, self.cross_waiting))
+        seen.append(tuple(getattr(self, n) for n in names))
         raise Seen
 
     monkeypatch.setattr(Fleet, "run", run)
     with pytest.raises(Seen):
         lamp.solve(scene_from_dict(_two_boxes(5.0, (1.2, 2.2), 4.2)), "lazy", 0, params=params)
-    assert seen == [(0.0, want)]
+    assert len(seen) == 1
+    return seen[0]
