@@ -24,7 +24,9 @@ simulator. Design (``docs/fleet.md``):
   loop plans anew, ``WORLD_CHANGED``; not before the first event after its loop took its
   world, ``world_taken``: that plan saw the world as it is, and would be made again).
   Otherwise it waits for the next event. A planner that finds no plan while other
-  objects still move waits for a change too.
+  objects still move waits for a change too: an object placed or given up, an object
+  that stood in the space it needs (``teams.needed_space``) gone from it, or
+  ``BLOCKED_WAKE_EVENTS`` events.
 - **Clock.** Admitted segments are re-timed on a common row grid (``segments.on_grid``),
   with rows appended in which their robots hold for the simulator's settle time, and run
   together until the first ends (or a push watch stops one, or its robots, held back,
@@ -61,7 +63,7 @@ from lamp.fleet.precedence import goal_cuts
 from lamp.fleet.regions import CLAIM_NEAR, claims
 from lamp.fleet.segments import Segment, on_grid, run_together
 from lamp.fleet.state import FAILED, FREE, ObjectState
-from lamp.fleet.teams import allocate, near_way, nearest, reinforce, start_order
+from lamp.fleet.teams import allocate, near_way, nearest, needed_space, reinforce, start_order
 from lamp.fleet.turns import Turns
 from lamp.fleet.utilisation import RobotTime, schedule_stats
 from lamp.fleet.view import FleetExecution, FleetView
@@ -72,7 +74,8 @@ from lamp.sim.simulator import SETTLE_TIME
 __all__ = ["BLOCKED_WAKE_EVENTS", "Fleet"]
 
 #: A planner that found no plan while others moved plans again after this many events
-#: (segments ending) at the latest, sooner when an object is placed or given up.
+#: (segments ending) at the latest, sooner when an object is placed or given up or one
+#: that stood in its way has left (``Fleet._wake_blocked``).
 BLOCKED_WAKE_EVENTS = 6
 
 
@@ -407,13 +410,22 @@ class Fleet:
 
     def _wake_blocked(self) -> None:
         """Planners waiting on a change plan again once an object was placed or given up,
-        or after ``BLOCKED_WAKE_EVENTS`` events (a failed search is costly: not at every
-        step of the others)."""
+        once an object that stood in the space they need (its body or a robot of its
+        sub-team: ``ObjectState.blockers``) has left it, or after
+        ``BLOCKED_WAKE_EVENTS`` events (a failed search is costly: not at every step of
+        the others). Whether one left is looked at once per event; the objects' poses are
+        read only then (under sensing noise, a draw of the sensor's)."""
+        now, poses = self.counts["events"], None
         for o in self.objects:
             if o.blocked_at is None:
                 continue
             finished, events = o.blocked_at
-            if self.finished > finished or self.counts["events"] - events >= BLOCKED_WAKE_EVENTS:
+            left = False
+            if o.blockers and now > o.looked_at:
+                o.looked_at = now
+                poses = self.executor.object_poses if poses is None else poses
+                left = not o.blockers <= self._inside(o.blocked_in, poses)
+            if self.finished > finished or now - events >= BLOCKED_WAKE_EVENTS or left:
                 o.blocked_at, o.wake, o.ready = None, True, True
 
     # ------------------------------------------------------------------ a loop's executor
@@ -464,15 +476,25 @@ class Fleet:
         if not any(other.index != k and other.status in ("active", "waiting")
                    for other in self.objects):
             return False
+        poses = np.asarray(ex.object_poses, float)
         # its last claim binds only those outside it (module docstring, Priority)
-        o.exempt = self._inside(o.claim) if o.claim is not None else frozenset()
-        o.blocked_at = (self.finished, self.counts["events"])
+        o.exempt = self._inside(o.claim, poses) if o.claim is not None else frozenset()
+        obj = self.scene.objects[k]
+        o.blocked_in = needed_space(obj.shape, poses[k], obj.goal if o.detour is None
+                                    else o.detour, np.asarray(ex.robot_positions, float)[
+                                        o.team, :2], self.scene.robot_radius, o.claim)
+        o.blockers = self._inside(o.blocked_in, poses) - {k}
+        o.blocked_at, o.looked_at = (self.finished, self.counts["events"]), self.counts["events"]
         self.counts["blocked"] += 1
         self.turns.pause(k)
         return o.wake
 
-    def _inside(self, region: shapely.Geometry) -> frozenset[int]:
-        return standing_in(region, self.scene, self.executor.object_poses,
+    def _inside(self, region: shapely.Geometry, poses: np.ndarray | None = None
+                ) -> frozenset[int]:
+        """The objects whose body (at ``poses``, else as read now) or sub-team's robots
+        stand in ``region`` (``admission.standing_in``)."""
+        return standing_in(region, self.scene,
+                           self.executor.object_poses if poses is None else poses,
                            self.executor.robot_positions,
                            {p.index: p.team for p in self.objects
                             if p.status in ("active", "waiting")})

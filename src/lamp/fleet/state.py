@@ -39,6 +39,11 @@ class ObjectState:
     ready: bool = False  # its thread has something to resume with
     #: (objects finished, events) when its planner failed; None: not waiting on a change
     blocked_at: tuple[int, int] | None = None
+    #: the space it needs (``teams.needed_space``) when its planner failed, and the
+    #: objects standing in it then (their bodies or robots): one leaving wakes it
+    blocked_in: shapely.Geometry | None = None
+    blockers: frozenset[int] = frozenset()
+    looked_at: int = -1  # the event at which it last looked whether one left
     wake: bool = False  # the answer to ``plan_failed``
     needs_team: bool = False  # its thread waits for robots (``wait_for_team``)
     #: a pose to move to before its goal: it stands in a blocked object's way

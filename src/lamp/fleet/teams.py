@@ -31,9 +31,8 @@ from lamp.geometry.shapes import to_shapely
 from lamp.scene.model import Scene, Shape
 
 __all__ = ["GROW_REACH", "MIN_TEAM", "allocate", "chain_depths", "corridor", "goal_blocks",
-           "in_the_way",
-           "least_conflict_order", "near_way", "nearest", "planar_distance", "reinforce",
-           "start_order"]
+           "in_the_way", "least_conflict_order", "near_way", "nearest", "needed_space",
+           "planar_distance", "reinforce", "start_order"]
 
 #: The smallest sub-team an object starts with while other objects are moving.
 MIN_TEAM = 2
@@ -211,3 +210,20 @@ def near_way(scene: Scene, k: int, pose: np.ndarray, pool: Sequence[int],
     way = corridor(obj.shape, pose, obj.goal, scene.robot_radius)
     pts = shapely.points(np.asarray(robot_positions, float)[list(pool)].reshape(-1, 2))
     return [i for i, d in zip(pool, shapely.distance(way, pts), strict=True) if d <= reach]
+
+
+def needed_space(shape: Shape, pose: np.ndarray, goal: np.ndarray, team: np.ndarray,
+                 robot_radius: float, claim: shapely.Geometry | None = None
+                 ) -> shapely.Geometry:
+    """The space an object of ``shape`` at ``pose`` needs to be reached by its sub-team
+    (``team``, (N, 2) robot centres) and moved to ``goal``: its :func:`corridor`, the
+    convex hull of its footprint and the robots grown by a robot diameter (their
+    approach), and ``claim`` (its last plan's, ``regions.claims``) when given. A body
+    standing in it may be what a planner that finds no plan finds no way past
+    (``Fleet.plan_failed``)."""
+    pose = np.asarray(pose, float)
+    body = to_shapely(shape, pose)
+    approach = shapely.union(body, shapely.multipoints(np.asarray(team, float).reshape(-1, 2)))
+    parts = [corridor(shape, pose, goal, robot_radius),
+             approach.convex_hull.buffer(2 * float(robot_radius))]
+    return shapely.union_all(parts + ([claim] if claim is not None else []))
