@@ -1,6 +1,6 @@
 """A planner that finds no plan while other objects move (``Fleet.plan_failed``): the
 space it needs (``teams.needed_space``), who stands in it, and when it plans again
-(``Fleet._wake_blocked``)."""
+(``fleet.blocked``)."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ from fleet_fakes import fleet_at_starts
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from lamp.fleet.coordinator import BLOCKED_WAKE_EVENTS
+from lamp.fleet.blocked import BLOCKED_WAKE_EVENTS, wake_blocked
 from lamp.fleet.teams import needed_space
 from lamp.geometry.shapes import to_shapely
 from lamp.scene import scene_from_dict
@@ -78,8 +78,8 @@ def _blocked_fleet():
 
 
 def test_a_blocked_planner_wakes_once_what_stood_in_its_way_has_left() -> None:
-    """``Fleet.plan_failed`` notes the objects standing in the space its object needs
-    (body or sub-team robot: box 1, by its robot 2); ``_wake_blocked`` wakes it at the
+    """``Fleet.plan_failed`` (``blocked.note_blocked``) notes the objects standing in the space its object needs
+    (body or sub-team robot: box 1, by its robot 2); ``wake_blocked`` wakes it at the
     first event at which one of them has left that space, before ``BLOCKED_WAKE_EVENTS``
     events; not while it only moves within it, and not between events."""
     fleet, robots, o = _blocked_fleet()
@@ -90,13 +90,13 @@ def test_a_blocked_planner_wakes_once_what_stood_in_its_way_has_left() -> None:
         if position is not None:
             robots[2] = position
         fleet.counts["events"] += 1
-        fleet._wake_blocked()
+        wake_blocked(fleet)
         return o.blocked_at is None
 
     assert not event()  # it still stands there
     assert not event((3.1, 0.8))  # it moved along the way, still in it
     robots[2] = (2.5, 2.7)  # it left: looked at only at the next event
-    fleet._wake_blocked()
+    wake_blocked(fleet)
     assert o.blocked_at is not None
     assert event()
     assert o.wake and o.ready
@@ -114,5 +114,5 @@ def test_with_nobody_in_its_way_a_blocked_planner_waits_for_the_events() -> None
     for n in range(1, BLOCKED_WAKE_EVENTS + 1):
         robots[3] = (2.8 + 0.1 * n, 2.2)
         fleet.counts["events"] += 1
-        fleet._wake_blocked()
+        wake_blocked(fleet)
         assert (o.blocked_at is None) == (n == BLOCKED_WAKE_EVENTS)

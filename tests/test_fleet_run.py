@@ -321,7 +321,7 @@ def _moving_fleet(scene, cross_near: float = 0.0, cross_waiting: float = 0.0,
 
 def test_a_blocked_objects_claim_binds_only_those_outside_it() -> None:
     """``Fleet.plan_failed``: the claim of an object whose planner failed stays, but binds
-    only the objects outside it then (``Fleet._inside``): one standing in its way may go
+    only the objects outside it then (``Fleet.inside``): one standing in its way may go
     on through it (it may be what it waits for), one outside may not come deeper in (to
     meet it head-on in an aisle)."""
 
@@ -337,7 +337,7 @@ def test_a_blocked_objects_claim_binds_only_those_outside_it() -> None:
     fleet = _moving_fleet(scene)
     aisle = shapely.box(2.0, 0.4, 6.0, 1.2)  # object 0's way: object 1 stands in it
     fleet.objects[0].claim = aisle
-    fleet.objects[0].exempt = fleet._inside(aisle)
+    fleet.objects[0].exempt = fleet.inside(aisle)
     assert fleet.objects[0].exempt == {1}
 
     def deeper(k: int, dy: float) -> Segment:  # object k pushed dy down, into the aisle

@@ -24,9 +24,7 @@ simulator. Design (``docs/fleet.md``):
   loop plans anew, ``WORLD_CHANGED``; not before the first event after its loop took its
   world, ``world_taken``: that plan saw the world as it is, and would be made again).
   Otherwise it waits for the next event. A planner that finds no plan while other
-  objects still move waits for a change too: an object placed or given up, an object
-  that stood in the space it needs (``teams.needed_space``) gone from it, or
-  ``BLOCKED_WAKE_EVENTS`` events.
+  objects still move waits for a change too (``fleet.blocked``).
 - **Clock.** Admitted segments are re-timed on a common row grid (``segments.on_grid``),
   with rows appended in which their robots hold for the simulator's settle time, and run
   together until the first ends (or a push watch stops one, or its robots, held back,
@@ -56,6 +54,7 @@ import shapely
 from lamp.contract.events import RunObserver
 from lamp.contract.runner import ObjectOutcome
 from lamp.fleet.admission import heeded_claims, meets_moving, meets_standing, standing_in
+from lamp.fleet.blocked import BLOCKED_WAKE_EVENTS, note_blocked, wake_blocked
 from lamp.fleet.handover import better_team
 from lamp.fleet.makeway import make_way
 from lamp.fleet.objects import given_up
@@ -63,7 +62,7 @@ from lamp.fleet.precedence import goal_cuts
 from lamp.fleet.regions import CLAIM_NEAR, claims
 from lamp.fleet.segments import Segment, on_grid, run_together
 from lamp.fleet.state import FAILED, FREE, ObjectState
-from lamp.fleet.teams import allocate, near_way, nearest, needed_space, reinforce, start_order
+from lamp.fleet.teams import allocate, near_way, nearest, reinforce, start_order
 from lamp.fleet.turns import Turns
 from lamp.fleet.utilisation import RobotTime, schedule_stats
 from lamp.fleet.view import FleetExecution, FleetView
@@ -71,12 +70,7 @@ from lamp.planners.config import PASS_MARGIN, REJOIN_SLACK
 from lamp.scene.model import Scene
 from lamp.sim.simulator import SETTLE_TIME
 
-__all__ = ["BLOCKED_WAKE_EVENTS", "Fleet"]
-
-#: A planner that found no plan while others moved plans again after this many events
-#: (segments ending) at the latest, sooner when an object is placed or given up or one
-#: that stood in its way has left (``Fleet._wake_blocked``).
-BLOCKED_WAKE_EVENTS = 6
+__all__ = ["BLOCKED_WAKE_EVENTS", "Fleet"]  # the first: ``fleet.blocked``'s, for callers
 
 
 class Fleet:
@@ -133,7 +127,7 @@ class Fleet:
         try:
             while not all(o.status in ("placed", "failed") for o in self.objects):
                 self._release()
-                self._wake_blocked()
+                wake_blocked(self)
                 if self._resume_ready():
                     continue
                 self._admit(force=False)
@@ -378,7 +372,7 @@ class Fleet:
                 o.reply = self._reply(s.team, left_workspace=s.left, stopped_at=s.stopped_at,
                                       sim_time=s.sim_time)
                 o.ready = True
-        self._wake_blocked()
+        wake_blocked(self)
 
     def _reply(self, team: Sequence[int], **outcome: Any) -> FleetExecution:
         """A loop's reply: the objects as observed now and ``team``'s robots."""
@@ -407,26 +401,6 @@ class Fleet:
                     self.reteam(o, [*o.team, *nearest(free, self.executor.robot_positions,
                                                        self.executor.object_poses[k], 1)],
                                  "replaced")
-
-    def _wake_blocked(self) -> None:
-        """Planners waiting on a change plan again once an object was placed or given up,
-        once an object that stood in the space they need (its body or a robot of its
-        sub-team: ``ObjectState.blockers``) has left it, or after
-        ``BLOCKED_WAKE_EVENTS`` events (a failed search is costly: not at every step of
-        the others). Whether one left is looked at once per event; the objects' poses are
-        read only then (under sensing noise, a draw of the sensor's)."""
-        now, poses = self.counts["events"], None
-        for o in self.objects:
-            if o.blocked_at is None:
-                continue
-            finished, events = o.blocked_at
-            left = False
-            if o.blockers and now > o.looked_at:
-                o.looked_at = now
-                poses = self.executor.object_poses if poses is None else poses
-                left = not o.blockers <= self._inside(o.blocked_in, poses)
-            if self.finished > finished or now - events >= BLOCKED_WAKE_EVENTS or left:
-                o.blocked_at, o.wake, o.ready = None, True, True
 
     # ------------------------------------------------------------------ a loop's executor
     def view(self, k: int) -> FleetView:
@@ -478,18 +452,13 @@ class Fleet:
             return False
         poses = np.asarray(ex.object_poses, float)
         # its last claim binds only those outside it (module docstring, Priority)
-        o.exempt = self._inside(o.claim, poses) if o.claim is not None else frozenset()
-        obj = self.scene.objects[k]
-        o.blocked_in = needed_space(obj.shape, poses[k], obj.goal if o.detour is None
-                                    else o.detour, np.asarray(ex.robot_positions, float)[
-                                        o.team, :2], self.scene.robot_radius, o.claim)
-        o.blockers = self._inside(o.blocked_in, poses) - {k}
-        o.blocked_at, o.looked_at = (self.finished, self.counts["events"]), self.counts["events"]
+        o.exempt = self.inside(o.claim, poses) if o.claim is not None else frozenset()
+        note_blocked(self, o, poses)
         self.counts["blocked"] += 1
         self.turns.pause(k)
         return o.wake
 
-    def _inside(self, region: shapely.Geometry, poses: np.ndarray | None = None
+    def inside(self, region: shapely.Geometry, poses: np.ndarray | None = None
                 ) -> frozenset[int]:
         """The objects whose body (at ``poses``, else as read now) or sub-team's robots
         stand in ``region`` (``admission.standing_in``)."""
