@@ -132,7 +132,7 @@ def main() -> None:
     if len(ratios) > 1:
         print(f"median over the {len(ratios)} seeds of {args.seeds} with a ratio: "
               f"{float(np.median(ratios)):.3f} "
-              f"({min(ratios):.2f}-{max(ratios):.2f})")
+              f"({min(ratios):.3f}-{max(ratios):.3f})")
 
 
 if __name__ == "__main__":

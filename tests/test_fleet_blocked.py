@@ -45,7 +45,9 @@ def test_needed_space_is_the_way_the_approach_and_the_claim(seed, n, disk, with_
     shape = Circle(0.2) if disk else Rectangle((0.4, 0.25))
     pose, goal = rng.uniform(1, 5, 3), rng.uniform(1, 5, 3)
     team = rng.uniform(0, 6, (n, 2))
-    claim = shapely.box(*sorted(rng.uniform(0, 6, 2)), 5.5, 5.8) if with_claim else None
+    x0, y0 = rng.uniform(0, 5, 2)
+    claim = shapely.box(x0, y0, x0 + rng.uniform(0.1, 1), y0 + rng.uniform(0.1, 1)) \
+        if with_claim else None
     space = needed_space(shape, pose, goal, team, R, claim)
     for point in rng.uniform(-0.5, 6.5, (300, 2)):
         d = _brute_distance(shape, pose, goal, team, claim, point)
@@ -56,17 +58,21 @@ def test_needed_space_is_the_way_the_approach_and_the_claim(seed, n, disk, with_
         assert space.contains(part)
 
 
-def _blocked_fleet():
+def _blocked_fleet(third_box: bool = False):
     """A 6 x 3 m room: box 0 pushed along y = 0.8 by robots 0 and 1, box 1 along y = 2.2
-    by robots 2 and 3; robot 2 stands in box 0's way (at x = 2.5). Box 0's planner has
-    just found no plan: (fleet, robot positions, box 0's state)."""
+    by robots 2 and 3; robot 2 stands in box 0's way (at x = 2.5); with ``third_box`` a
+    box 2, not yet started, stands in it too (at x = 3.2). Box 0's planner has just found
+    no plan: (fleet, robot positions, box 0's state)."""
     box = {"type": "rectangle", "size": [0.4, 0.3]}
+    objects = [{**box, "start": [1.2, 0.8, 0.0], "goal": [3.8, 0.8, 0.0]},
+               {**box, "start": [3.3, 2.2, 0.0], "goal": [5.0, 2.2, 0.0]}]
+    if third_box:
+        objects.append({**box, "start": [3.2, 0.8, 0.0], "goal": [5.0, 1.5, 0.0]})
     scene = scene_from_dict({
         "format": "lamp-scene/1", "name": "blocked", "workspace": [6.0, 3.0],
         "schedule": "concurrent",
         "robots": {"radius": R, "starts": [[0.6, 0.6], [0.6, 1.0], [2.5, 0.8], [2.8, 2.2]]},
-        "objects": [{**box, "start": [1.2, 0.8, 0.0], "goal": [3.8, 0.8, 0.0]},
-                    {**box, "start": [3.3, 2.2, 0.0], "goal": [5.0, 2.2, 0.0]}]})
+        "objects": objects})
     fleet = fleet_at_starts(scene)
     fleet.turns = SimpleNamespace(pause=lambda k: None)  # no loop threads here
     for k, team in enumerate(([0, 1], [2, 3])):
@@ -78,8 +84,9 @@ def _blocked_fleet():
 
 
 def test_a_blocked_planner_wakes_once_what_stood_in_its_way_has_left() -> None:
-    """``Fleet.plan_failed`` (``blocked.note_blocked``) notes the objects standing in the space its object needs
-    (body or sub-team robot: box 1, by its robot 2); ``wake_blocked`` wakes it at the
+    """``Fleet.plan_failed`` (``blocked.note_blocked``) notes the objects standing in the
+    space its object needs (body or sub-team robot: box 1, by its robot 2);
+    ``wake_blocked`` wakes it at the
     first event at which one of them has left that space, before ``BLOCKED_WAKE_EVENTS``
     events; not while it only moves within it, and not between events."""
     fleet, robots, o = _blocked_fleet()
@@ -116,3 +123,15 @@ def test_with_nobody_in_its_way_a_blocked_planner_waits_for_the_events() -> None
         fleet.counts["events"] += 1
         wake_blocked(fleet)
         assert (o.blocked_at is None) == (n == BLOCKED_WAKE_EVENTS)
+
+
+def test_one_blocker_gone_wakes_it_while_another_stays() -> None:
+    """Two objects in its way (box 1 by its robot 2, box 2 by its body, not yet started):
+    the first event at which one of them has left wakes it, the other still standing
+    there."""
+    fleet, robots, o = _blocked_fleet(third_box=True)
+    assert o.blockers == {1, 2}
+    robots[2] = (2.5, 2.7)
+    fleet.counts["events"] += 1
+    wake_blocked(fleet)
+    assert o.blocked_at is None and o.wake
