@@ -52,10 +52,7 @@ def test_standing_in_the_claim_it_leaves_by_its_way_whatever_the_gap() -> None:
 
 def test_never_towards_the_claimer() -> None:
     """Head-on: standing in the claim, or coming in far ahead, running along it towards
-    the claimer before leaving: no. (Only the way's entry into the claim and its exit
-    are compared, against ``HEAD_ON`` times the travel between them: a run at the
-    claimer between sideways legs inside the claim counts only when it is steep
-    overall; 1.5 m at it between two 0.5 m legs is not, and may pass.)"""
+    the claimer before leaving: no."""
     assert not passes_ahead(line((8.0, 0.0), (3.0, 0.0), (3.0, 3.0)), CLAIM, CLAIMER,
                             REACH, 1.0)
     assert not passes_ahead(line((9.5, 3.0), (9.5, 0.0), (5.0, 0.0), (5.0, 3.0)), CLAIM,
