@@ -31,8 +31,8 @@ from lamp.fleet.spacetime import compatible
 from lamp.fleet.state import ObjectState
 from lamp.scene.model import Scene
 
-__all__ = ["CLAIM_AREA_SLACK", "CROSSING", "HEAD_ON", "PASS_STEP", "crosses",
-           "heeded_claims", "meets_moving", "meets_standing", "passes_ahead", "standing_in"]
+__all__ = ["CLAIM_AREA_SLACK", "CROSSING", "PASS_STEP", "crosses", "heeded_claims",
+           "meets_moving", "meets_standing", "passes_ahead", "standing_in"]
 
 #: A segment may end with this much more of its bodies' area (m^2) inside a higher claim
 #: than it started with (rounding of the footprints).
@@ -41,10 +41,6 @@ CLAIM_AREA_SLACK = 1e-4
 CROSSING = 1.5
 #: The spacing (m) of the points at which :func:`passes_ahead` compares two ways.
 PASS_STEP = 0.1
-#: A way through a claim runs at the claiming object (head-on) when that object comes to
-#: where it leaves the claim sooner than to where it enters by more than this share of
-#: the way's travel inside (about cos 45 degrees: steeper than a diagonal), and a step.
-HEAD_ON = 0.7071
 
 
 def crosses(way: shapely.Geometry, region: shapely.Geometry) -> bool:
@@ -61,12 +57,11 @@ def passes_ahead(way: shapely.LineString, region: shapely.Geometry,
                  step: float = PASS_STEP) -> bool:
     """Whether a plan whose ``way`` (its centre's path on to its goal) goes through a
     higher-ranked object's claim ``region`` passes it ahead of that object. Its goal lies
-    outside the claim, its way does not run at the claiming object (that object, along
-    its own way ``claimer_way``, comes to the point where it leaves the claim no sooner
-    than to where it enters, less ``HEAD_ON`` times its travel inside: steeper, they
-    would meet head-on; a way crossing at an angle does not), and either it stands in
-    the claim already (it is in that object's way: waiting there only makes that one
-    come to it, so it leaves by its way), or it passes every point of its way inside the claim, going at
+    outside the claim, its way does not run towards the claiming object (the point where
+    it leaves the claim is no nearer that object along its own way, ``claimer_way``, than
+    where it enters: they would meet head-on), and either it stands in the claim already
+    (it is in that object's way: waiting there only makes that one come to it, so it
+    leaves by its way), or it passes every point of its way inside the claim, going at
     the claiming object's pace, ``margin`` m of travel before that object's centre comes
     within ``reach`` of the point. Both ways are taken at points ``step`` m apart. False
     when the way does not go through the claim (its robots may still come in), ends
@@ -82,10 +77,8 @@ def passes_ahead(way: shapely.LineString, region: shapely.Geometry,
     a, theirs = _along(claimer_way, step)
     near = np.hypot(*np.moveaxis(points[inside, None] - theirs[None], -1, 0)) <= reach
     comes = np.where(near.any(axis=1), a[np.argmax(near, axis=1)], np.inf)
-    travel = s[inside][-1] - s[inside][0]
-    with np.errstate(invalid="ignore"):  # inf - inf: never reached, so never head-on
-        if comes[0] - comes[-1] > HEAD_ON * travel + step:
-            return False  # through it towards the other, steeper than a diagonal: head-on
+    if comes[-1] < comes[0] - step:
+        return False  # through it towards the other: they would meet head-on
     return bool(inside[0] or np.all(s[inside] + margin <= comes))
 
 
