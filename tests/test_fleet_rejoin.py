@@ -15,7 +15,8 @@ from fleet_fakes import fleet_at_starts
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from lamp.fleet.segments import REJOIN_GAP, REJOIN_SLACK, Segment
+from lamp.fleet.segments import REJOIN_GAP, Segment
+from lamp.planners.config import REJOIN_SLACK
 from lamp.scene import scene_from_dict
 from lamp.scene.model import Rectangle
 

@@ -54,7 +54,7 @@ import shapely
 from lamp.contract.events import RunObserver
 from lamp.contract.runner import ObjectOutcome
 from lamp.fleet.admission import heeded_claims, meets_moving, meets_standing, standing_in
-from lamp.fleet.blocked import BLOCKED_WAKE_EVENTS, note_blocked, wake_blocked
+from lamp.fleet.blocked import note_blocked, wake_blocked
 from lamp.fleet.handover import better_team
 from lamp.fleet.makeway import make_way
 from lamp.fleet.objects import given_up
@@ -70,7 +70,7 @@ from lamp.planners.config import PASS_MARGIN, REJOIN_SLACK
 from lamp.scene.model import Scene
 from lamp.sim.simulator import SETTLE_TIME
 
-__all__ = ["BLOCKED_WAKE_EVENTS", "Fleet"]  # the first: ``fleet.blocked``'s, for callers
+__all__ = ["Fleet"]
 
 
 class Fleet:

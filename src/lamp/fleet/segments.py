@@ -27,8 +27,7 @@ from lamp.planners.config import REJOIN_SLACK
 from lamp.scene.model import Shape
 from lamp.sim.simulator import SETTLE_TIME
 
-__all__ = ["REJOIN_GAP", "REJOIN_SLACK", "Segment", "TOUCH_TOLERANCE", "on_grid",
-           "run_together"]
+__all__ = ["REJOIN_GAP", "Segment", "TOUCH_TOLERANCE", "on_grid", "run_together"]
 
 #: A robot that starts a segment near its object (left in contact by the last push) counts
 #: as pushing once it comes this much (m) nearer than it stood.
