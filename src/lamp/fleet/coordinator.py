@@ -125,8 +125,10 @@ class Fleet:
     def run(self) -> list[ObjectOutcome]:
         """Move every object; their outcomes in object order."""
         try:
-            while not all(o.status in ("placed", "failed") for o in self.objects):
+            while not self._all_done():
                 self._release()
+                if self._all_done():  # the last waiting ones given up
+                    break
                 wake_blocked(self)
                 if self._resume_ready():
                     continue
@@ -153,9 +155,10 @@ class Fleet:
                 ready.append(o.index)
             elif o.status == "waiting":
                 after = self.scene.objects[o.index].after
-                if any(self.objects[k].status == "failed" for k in after):
-                    self._give_up(o, "not started: an object it waits for (after) was not "
-                                  "placed")
+                failed = [k for k in after if self.objects[k].status == "failed"]
+                if failed:
+                    self._give_up(o, f"not started: object {failed[0]}, which it waits for "
+                                  f"(after), was not placed")
                 elif self.may_start(o.index):
                     ready.append(o.index)
         if ready:
@@ -163,6 +166,9 @@ class Fleet:
         if self.reinforce_reach > 0 and not self._any_waits():
             self._reinforce()
         self._hand_over()
+
+    def _all_done(self) -> bool:
+        return all(o.status in ("placed", "failed") for o in self.objects)
 
     def may_start(self, k: int) -> bool:
         """Whether object ``k`` may start: its ``after`` objects are placed and those its

@@ -66,12 +66,13 @@ from lamp.scene.physics import (
     DEFAULT_PHYSICS,
     OBJECT_RANGES,
     PHYSICS_RANGES,
+    Bound,
     ObjectPhysics,
     Physics,
     check_range,
 )
 
-__all__ = ["DEFAULT_ROBOT_RADIUS", "FORMAT", "MAX_WORKSPACE_SIDE", "SceneError", "load_scene", "scene_from_dict"]
+__all__ = ["DEFAULT_ROBOT_RADIUS", "FORMAT", "MAX_ANGLE", "MAX_WORKSPACE_SIDE", "SceneError", "load_scene", "scene_from_dict"]
 
 FORMAT = "lamp-scene/1"
 DEFAULT_ROBOT_RADIUS = DEFAULT_TEAM.radius
@@ -79,6 +80,10 @@ DEFAULT_ROBOT_RADIUS = DEFAULT_TEAM.radius
 #: headings) keeps one validity byte per pose, 64 M poses at 200 m x 200 m, filled only
 #: where a search goes; beyond that a scene is refused rather than run out of memory.
 MAX_WORKSPACE_SIDE = 200.0
+#: Largest |angle| (rad) of a pose or an obstacle: float64 holds such an angle to 1e-10 rad;
+#: far beyond it a heading is rounding noise (at 1e308 every digit is) and the simulator's
+#: hinge joints go unstable (MuJoCo's limit on a joint's value is 1e10).
+MAX_ANGLE = 1e6
 SHAPE_TYPES = ("circle", "rectangle", "polygon")
 
 # Allowed keys per mapping: (required, optional).
@@ -195,6 +200,21 @@ def _vector(ctx: Ctx, v: Any, field: str, n: int, names: str, **kw: Any) -> tupl
     return tuple(_number(ctx, c, f"{field}[{i}]", **kw) for i, c in enumerate(v))
 
 
+def _angle(ctx: Ctx, v: Any, field: str) -> float:
+    """A finite angle of at most ``MAX_ANGLE`` in magnitude."""
+    a = _number(ctx, v, field)
+    if abs(a) > MAX_ANGLE:
+        ctx.fail(field, f"an angle of at most {MAX_ANGLE:g} rad in magnitude (radians, "
+                 f"counter-clockwise), got {show(v)}")
+    return a
+
+
+def _pose(ctx: Ctx, v: Any, field: str) -> tuple[float, float, float]:
+    """``[x, y, theta]`` with ``theta`` an angle (``_angle``)."""
+    x, y, _ = _vector(ctx, v, field, 3, "x, y, theta")
+    return x, y, _angle(ctx, v[2], f"{field}[2]")
+
+
 def _string(ctx: Ctx, v: Any, field: str) -> str:
     if not isinstance(v, str):
         ctx.fail(field, f"must be a string (quote it in YAML), got {show(v)} ({value_kind(v)})")
@@ -282,7 +302,7 @@ def _obstacle(ctx: Ctx, v: Any, field: str) -> Obstacle:
         r = _number(ctx, d["radius"], f"{field}.radius", positive=True)
         return Obstacle(Circle(r), (cx, cy, 0.0))
     size = _vector(ctx, d["size"], f"{field}.size", 2, "sx, sy", positive=True)
-    angle = _number(ctx, d["angle"], f"{field}.angle") if "angle" in d else 0.0
+    angle = _angle(ctx, d["angle"], f"{field}.angle") if "angle" in d else 0.0
     return Obstacle(Rectangle(size), (cx, cy, angle))
 
 
@@ -290,8 +310,8 @@ def _object(ctx: Ctx, v: Any, field: str) -> SceneObject:
     kind = _shape_type(ctx, v, field)
     d = _mapping(ctx, v, field, _OBJECT_KEYS[kind])
     shape = _shape(ctx, d, field, kind)
-    start = _vector(ctx, d["start"], f"{field}.start", 3, "x, y, theta")
-    goal = _vector(ctx, d["goal"], f"{field}.goal", 3, "x, y, theta")
+    start = _pose(ctx, d["start"], f"{field}.start")
+    goal = _pose(ctx, d["goal"], f"{field}.goal")
     phys = {k: _ranged(ctx, d[k], f"{field}.{k}", OBJECT_RANGES[k]) for k in OBJECT_RANGES
             if k in d}
     after = _after(ctx, d.get("after") or [], f"{field}.after")
@@ -333,10 +353,10 @@ def _check_order(ctx: Ctx, objects: tuple[SceneObject, ...]) -> None:
                  + " (each waits for the next to be placed)")
 
 
-def _ranged(ctx: Ctx, v: Any, field: str, bounds: tuple[float, float]) -> float:
+def _ranged(ctx: Ctx, v: Any, field: str, bound: Bound) -> float:
     """A number within a physical parameter's range (``lamp.scene.physics``)."""
     x = _number(ctx, v, field)
-    why = check_range(field, x, *bounds)
+    why = check_range(field, x, bound)
     if why is not None:
         ctx.fail(field, why)
     return x

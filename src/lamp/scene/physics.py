@@ -7,9 +7,9 @@ Scene format (``lamp-scene/1``, all optional, additive)::
     objects: [{..., mass: 1.0, friction: 0.5}]
 
 This module owns the defaults (the simulator's calibrated values: a file without these
-keys means what it always meant) and the ranges a value must lie in (the ranges the
-simulator was checked for; beyond them a scene is refused naming the field and the
-range, not run into an unstable simulation). ``lamp.sim.mjcf`` and ``lamp.sim.simulator``
+keys means what it always meant) and the ranges a value must lie in, each end with its
+reason (what the simulator serves: its time step, its memory, its contacts); beyond them a
+scene is refused naming the field and the range, not run into an unstable simulation. ``lamp.sim.mjcf`` and ``lamp.sim.simulator``
 read :class:`Physics` and the per-object :class:`ObjectPhysics` where the simulator is
 built.
 """
@@ -22,39 +22,58 @@ from typing import Any
 
 from lamp.geometry.team import DEFAULT_TEAM
 
-__all__ = ["DEFAULT_PHYSICS", "OBJECT_RANGES", "PHYSICS_RANGES", "ObjectPhysics", "Physics",
-           "check_range"]
+__all__ = ["DEFAULT_PHYSICS", "OBJECT_RANGES", "PHYSICS_RANGES", "Bound", "ObjectPhysics",
+           "Physics", "check_range"]
 
-#: Valid (lowest, highest) value per field, bounds excluded below and included above:
-#: friction is a Coulomb coefficient, damping N s/m per kg of object mass, speed m/s,
-#: force N per axis, mass kg.
-PHYSICS_RANGES: dict[str, tuple[float, float]] = {
-    "contact_friction": (0.0, 2.0),
-    "ground_damping": (0.0, 500.0),
-    "robot_speed": (0.0, 2.0),
-    "robot_force_limit": (0.0, 1000.0),
+
+@dataclass(frozen=True)
+class Bound:
+    """The values a physical field may take, ``low <= value <= high``, and why."""
+
+    low: float
+    high: float
+    why: str
+
+
+#: Valid values per field, both ends included, with the reason for each end: friction is a
+#: Coulomb coefficient, damping N s/m per kg of object mass, speed m/s, force N per axis,
+#: mass kg. ``tests/test_physics.py`` pushes an object at both ends of every range and
+#: checks the simulation stays stable there.
+PHYSICS_RANGES: dict[str, Bound] = {
+    "contact_friction": Bound(0.01, 2.0, "Coulomb coefficients of real materials (wet ice "
+                              "to rubber on rubber); the contact model was checked there"),
+    "ground_damping": Bound(0.1, 500.0, "a released object's speed decays with time "
+                            "constant 1/damping: 10 s at the low end (it coasts long after "
+                            "a push), 2 ms (one physics step) at the high end"),
+    "robot_speed": Bound(0.05, 2.0, "a motion is simulated step by step in memory, 10/speed "
+                         "physics steps per 2 cm row (200 at 0.05 m/s); the robots' "
+                         "controller tracks its target up to 2 m/s"),
+    "robot_force_limit": Bound(0.1, 1000.0, "the actuators of a 2.2 kg robot, from "
+                               "barely moving it to 1000 N: the range the contacts were "
+                               "checked for"),
 }
-OBJECT_RANGES: dict[str, tuple[float, float]] = {
-    "mass": (0.0, 100.0),
-    "friction": (0.0, 2.0),
+OBJECT_RANGES: dict[str, Bound] = {
+    "mass": Bound(0.01, 100.0, "MuJoCo refuses moving bodies of almost no mass; 10 g to "
+                  "100 kg against 2.2 kg robots is the range the contacts were checked for"),
+    "friction": PHYSICS_RANGES["contact_friction"],
 }
 
 
-def check_range(name: str, value: Any, low: float, high: float) -> str | None:
-    """Why ``value`` is not a number in (``low``, ``high``] (None when it is)."""
+def check_range(name: str, value: Any, bound: Bound) -> str | None:
+    """Why ``value`` is not a number in ``bound`` (None when it is)."""
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
         return f"must be a finite number, got {value!r}"
-    if not low < value <= high:
-        return f"must be in ({low:g}, {high:g}], got {value:g}"
+    if not bound.low <= value <= bound.high:
+        return f"must be in [{bound.low:g}, {bound.high:g}] ({bound.why}), got {value:g}"
     return None
 
 
-def _validate(obj: Any, ranges: dict[str, tuple[float, float]]) -> None:
+def _validate(obj: Any, ranges: dict[str, Bound]) -> None:
     for f in fields(obj):
         value = getattr(obj, f.name)
         if value is None:
             continue
-        why = check_range(f.name, value, *ranges[f.name])
+        why = check_range(f.name, value, ranges[f.name])
         if why is not None:
             raise ValueError(f"{type(obj).__name__}.{f.name}: {why}")
         object.__setattr__(obj, f.name, float(value))

@@ -13,7 +13,7 @@ from typing import Any
 
 from lamp.scene.loader import DEFAULT_ROBOT_RADIUS, FORMAT, MAX_WORKSPACE_SIDE
 from lamp.scene.model import SCHEDULES
-from lamp.scene.physics import DEFAULT_PHYSICS, OBJECT_RANGES, PHYSICS_RANGES
+from lamp.scene.physics import DEFAULT_PHYSICS, OBJECT_RANGES, PHYSICS_RANGES, Bound
 
 SCHEMA_ID = "urn:lamp:scene-format:1"
 
@@ -38,10 +38,9 @@ def _points(description: str) -> dict[str, Any]:
             "description": description}
 
 
-def _ranged(bounds: tuple[float, float], description: str,
-            default: float | None = None) -> dict[str, Any]:
-    out: dict[str, Any] = {"type": ["number", "null"], "exclusiveMinimum": bounds[0],
-                           "maximum": bounds[1], "description": description}
+def _ranged(bound: Bound, description: str, default: float | None = None) -> dict[str, Any]:
+    out: dict[str, Any] = {"type": ["number", "null"], "minimum": bound.low,
+                           "maximum": bound.high, "description": f"{description}: {bound.why}"}
     if default is not None:
         out["default"] = default
     return out

@@ -17,6 +17,7 @@ from lamp.sim.simulator import (
     Trace,
     footprint_outside,
 )
+from lamp.sim.stability import SimulationError
 
 __all__ = [
     "MAX_START_GAP",
@@ -26,6 +27,7 @@ __all__ = [
     "WORKSPACE_TOLERANCE",
     "ExecutionResult",
     "SimState",
+    "SimulationError",
     "Simulator",
     "Trace",
     "footprint_outside",

@@ -54,13 +54,8 @@ from lamp.geometry.se2 import wrap_angle
 from lamp.geometry.shapes import local_outline
 from lamp.geometry.team import DEFAULT_TEAM
 from lamp.scene.model import Circle, Scene, Shape
-from lamp.sim.mjcf import (
-    ROBOT_KP,
-    ROBOT_KV,
-    BuiltModel,
-    ObjectBody,
-    build_model,
-)
+from lamp.sim.mjcf import ROBOT_KP, ROBOT_KV, BuiltModel, ObjectBody, build_model
+from lamp.sim.stability import StabilityWatch, install_warning_handler
 
 #: Speed of the robots along their paths [m/s] (the fastest robot of each row).
 ROBOT_SPEED = DEFAULT_TEAM.speed
@@ -73,6 +68,7 @@ SETTLE_TIME = 0.2
 #: Slack on the workspace border before an object counts as outside [m].
 WORKSPACE_TOLERANCE = 0.002
 
+install_warning_handler()  # MuJoCo's warnings to the log, not to MUJOCO_LOG.TXT
 _STATE_SPEC = mujoco.mjtState.mjSTATE_INTEGRATION
 _ROLLOUT_SPEC = mujoco.mjtState.mjSTATE_FULLPHYSICS
 _STEP_SLACK = 1e-9  # tolerance on MAX_STEP / MAX_START_GAP comparisons
@@ -313,6 +309,7 @@ class Simulator:
                 step. Until it fires the result is bit-identical to an unwatched call.
 
         Raises:
+            SimulationError: the state turned non-finite or huge (``lamp.sim.stability``).
             ValueError: malformed paths (shape, non-finite values, a step too long, a start
                 too far from the robot) or a bad ``record_every`` / ``settle_time``.
         """
@@ -326,6 +323,7 @@ class Simulator:
         stopped_at: int | None = None
 
         start_time = self.data.time
+        watch = StabilityWatch(self.data)
         first = np.empty(self._nroll)
         mujoco.mj_getState(self.model, self.data, first, _ROLLOUT_SPEC)
         objects_left = self._outside(first[None]).any(axis=0)
@@ -342,6 +340,7 @@ class Simulator:
                 keep = (steps % record_every == 0) | (steps == n_steps)
                 rows.append(states[keep])
             lo += len(states)
+            watch.check(lo, start_time, float(self.model.opt.timestep))
             if (stop is not None and stopped_at is None and lo < n_steps - n_settle
                     and stop(self.object_poses)):
                 # the paths end here: hold where the robots are, then settle
