@@ -5,6 +5,7 @@ refused by name."""
 from __future__ import annotations
 
 import json
+import sys
 
 import numpy as np
 import pytest
@@ -21,7 +22,7 @@ from lamp.pipeline import RunRequest
 from lamp.planners.closed_loop import ClosedLoop, LoopRecord
 from lamp.planners.config import PlannerConfig
 from lamp.scene import scene_from_dict
-from lamp.sim import Simulator
+from lamp.sim import SETTLE_TIME, Simulator
 from lamp.sim.disturbed import DisturbedExecutor
 
 SCENE = {**TINY, "objects": [{"type": "rectangle", "size": [0.3, 0.2],
@@ -323,3 +324,58 @@ def test_a_failed_robot_is_braked_where_it_stands(scene):
     ex.execute(rest)  # robot 1 backs off
     assert np.linalg.norm(shoved - place) > 0.01
     assert np.linalg.norm(ex.robot_positions[0] - shoved) < 0.005
+
+
+class _SpySensor(DisturbedExecutor):
+    """A disturbed executor that checks what the planner side reads: every pose a push
+    watch is handed must be a sensor reading, not the true state; and the true poses may be
+    read only where an object's final success is judged."""
+
+    JUDGES = {"lamp.planners.runner.run_object", "lamp.fleet.objects.main"}
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.watch_reads, self.oracle_reads, self.truth_readers = 0, [], set()
+
+    @property
+    def true_object_poses(self):
+        caller = sys._getframe(1)
+        self.truth_readers.add(f"{caller.f_globals['__name__']}.{caller.f_code.co_name}")
+        return super().true_object_poses
+
+    def execute(self, robot_paths, record_every=None, stop=None, settle_time=SETTLE_TIME):
+        if stop is not None:
+            planner_stop = stop
+
+            def stop(poses):
+                self.watch_reads += 1
+                if np.array_equal(poses, self.sim.object_poses):
+                    self.oracle_reads.append(round(self.sim.time, 3))
+                return planner_stop(poses)
+        return super().execute(robot_paths, record_every=record_every, stop=stop,
+                               settle_time=settle_time)
+
+
+#: A box pushed straight through a passage 5 cm wider than it: a watched push.
+PASSAGE = {**TINY, "workspace": [2.4, 1.2],
+           "robots": {"radius": 0.05, "starts": [[0.15, 0.4], [0.15, 0.6], [0.15, 0.8]]},
+           "obstacles": [{"type": "rectangle", "center": [1.2, 0.875], "size": [0.6, 0.3]},
+                         {"type": "rectangle", "center": [1.2, 0.325], "size": [0.6, 0.3]}],
+           "objects": [{"type": "rectangle", "size": [0.3, 0.2], "start": [0.55, 0.6, 0.0],
+                        "goal": [1.95, 0.6, 0.0]}]}
+
+
+@pytest.mark.parametrize("schedule", ["sequential", "concurrent"])
+def test_under_sensing_noise_the_planner_side_never_reads_the_truth(schedule, monkeypatch):
+    import lamp.sim.disturbed as disturbed
+
+    spies = []
+    monkeypatch.setattr(disturbed, "DisturbedExecutor",
+                        lambda *a, **k: spies.append(_SpySensor(*a, **k)) or spies[-1])
+    d = Disturbances(sensing_noise=0.01, actuation_noise=0.05)
+    lamp.solve(scene_from_dict(PASSAGE), "lazy", 0, model=GeometricProposer(), disturbances=d,
+               schedule=schedule, max_segments=20)
+    spy, = spies
+    assert spy.watch_reads > 0  # the push watch was consulted
+    assert not spy.oracle_reads, f"the watch read true poses at t = {spy.oracle_reads[:5]} s"
+    assert spy.truth_readers <= _SpySensor.JUDGES, spy.truth_readers

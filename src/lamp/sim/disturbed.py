@@ -3,9 +3,10 @@ knocked pushes (``lamp.contract.disturb``).
 
 :class:`DisturbedExecutor` wraps a :class:`~lamp.sim.Simulator` the way a Gymnasium wrapper
 wraps an environment: the closed loop drives it through the same ``Executor`` protocol and
-cannot tell. What the loop observes (``object_poses``, the result's ``object_poses``) carries
-the sensing noise; the simulator's true state is ``true_object_poses`` and the recorded
-trace, so the recording and the success verdict are the truth. With no disturbance every
+cannot tell. Everything the loop observes carries the sensing noise: ``object_poses``, the
+result's ``object_poses``, and the poses a push watch (``execute``'s ``stop``) is called
+with, a fresh reading at each check. The simulator's true state is ``true_object_poses``
+and the recorded trace, so the recording and the final success verdict are the truth. With no disturbance every
 call passes straight through (bit-identical). Deterministic for its seed.
 
 Timing of a failure: the rows of a path are reached at the documented times (row t -> t+1
@@ -80,6 +81,9 @@ class DisturbedExecutor:
         if not self.disturbances.active:
             return self.sim.execute(paths, record_every=record_every, stop=stop,
                                     settle_time=settle_time)
+        if stop is not None and self.disturbances.sensing_noise > 0:
+            watch = stop  # the push watch reads the sensor, never the true poses
+            stop = lambda _true_poses: watch(self._observe())  # noqa: E731
         paths = self._imprecise(paths)
         paths = self._fail(paths)
         if self.disturbances.push_disturbance > 0 and paths.shape[1] > 2:
