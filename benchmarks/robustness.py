@@ -5,10 +5,12 @@
     python benchmarks/robustness.py runs/none runs/noise-low runs/noise-high \
         runs/one-robot-fails --out docs/results/robustness
 
-Per preset and planner: success rate, mean executed segments, segments against the same
-scene's undisturbed run (on scenes both solved; needs the ``none`` folder), median makespan
-in simulated seconds, and median planning time per segment. Writes ``report.md`` and
-``robustness.png`` into ``--out`` and prints the table.
+Per preset and planner: how many runs the disturbance happened in, the success rate over
+those runs only (a run it missed, a failure that never fired, counts as not disturbed,
+never as survived), mean executed segments, segments against the same scene's undisturbed
+run (on scenes both solved; needs the ``none`` folder), median makespan in simulated
+seconds, and median planning time per segment. Writes ``report.md`` and ``robustness.png``
+into ``--out`` and prints the table.
 """
 
 from __future__ import annotations
@@ -33,12 +35,22 @@ def load(folder: Path) -> tuple[str, list[dict]]:
     return config.get("disturb", "none"), list(latest.values())
 
 
+def disturbed(record: dict) -> bool:
+    """Whether the run's disturbance happened: a robot failure fired (a run without one
+    was not disturbed by it); noise and knocks act in every run that moved at all."""
+    d = record.get("disturbances") or {}
+    if d.get("robot_failures") or d.get("working_failures"):
+        return bool(d.get("robot_failures_fired"))
+    return True
+
+
 def rows(runs: dict[str, list[dict]]) -> list[dict]:
     base = {(r["suite"], r["scene"], r["planner"], r["seed"]): r for r in runs.get("none", [])}
     out = []
     for preset, records in runs.items():
         for planner in sorted({r["planner"] for r in records}):
-            mine = [r for r in records if r["planner"] == planner]
+            every = [r for r in records if r["planner"] == planner]
+            mine = [r for r in every if disturbed(r)]
             ok = [r for r in mine if r.get("success")]
             ratios = []
             for r in ok:
@@ -48,7 +60,8 @@ def rows(runs: dict[str, list[dict]]) -> list[dict]:
             per_seg = [r["planning_time_per_segment_s"] for r in mine
                        if r.get("planning_time_per_segment_s") is not None]
             out.append({
-                "preset": preset, "planner": planner, "runs": len(mine),
+                "preset": preset, "planner": planner, "runs": len(every),
+                "disturbed": len(mine),
                 "success": 100.0 * len(ok) / len(mine) if mine else 0.0,
                 "segments": statistics.fmean(r["segments"] for r in mine) if mine else 0.0,
                 "segment_ratio": statistics.median(ratios) if ratios else None,
@@ -60,15 +73,16 @@ def rows(runs: dict[str, list[dict]]) -> list[dict]:
 
 
 def markdown(table: list[dict]) -> str:
-    head = ("| disturbance | planner | runs | success | segments (mean) | segments / "
-            "undisturbed (median, both solved) | makespan (median, s) | planning per "
-            "segment (median, s) |\n|---|---|---|---|---|---|---|---|\n")
+    head = ("| disturbance | planner | runs | disturbed | success (of disturbed) | segments "
+            "(mean) | segments / undisturbed (median, both solved) | makespan (median, s) | "
+            "planning per segment (median, s) |\n|---|---|---|---|---|---|---|---|---|\n")
 
     def f(v, fmt):
         return "-" if v is None else format(v, fmt)
 
     return head + "".join(
         f"| {r['preset']} | {LABELS.get(r['planner'], r['planner'])} | {r['runs']} | "
+        f"{r['disturbed']} | "
         f"{r['success']:.0f}% | {r['segments']:.1f} | {f(r['segment_ratio'], '.2f')} | "
         f"{f(r['makespan_s'], '.1f')} | {f(r['planning_per_segment_s'], '.3f')} |\n"
         for r in table)

@@ -264,16 +264,16 @@ def test_cli_disturbance_options(tmp_path):
 
 
 def test_bench_disturb_presets(tmp_path):
-    from lamp.bench.disturb import FAILURE_HORIZON, disturbances_for
+    from lamp.bench.disturb import FAILURE_FRACTION, disturbances_for
     from lamp.suites.registry import suite_scenes
 
     scene = suite_scenes("maze")[0]
     a = disturbances_for("one-robot-fails", scene, 0)
     assert a == disturbances_for("one-robot-fails", scene, 0)  # deterministic
     assert a != disturbances_for("one-robot-fails", scene, 1)
-    (robot, when), = a.robot_failures
-    travel = float(np.hypot(*(scene.object_goals()[0, :2] - scene.object_starts()[0, :2])))
-    assert 0 <= robot < scene.n_robots and 0 <= when <= 0.5 * FAILURE_HORIZON * travel / 0.25
+    assert not a.robot_failures
+    (robot, fraction), = a.working_failures
+    assert 0 <= robot < scene.n_robots and FAILURE_FRACTION[0] <= fraction <= FAILURE_FRACTION[1]
     assert disturbances_for("noise-high", scene, 0).sensing_noise == 0.01
     runner = CliRunner()
     base = ["bench", "--suites", "maze", "--scenes", "1", "--out", str(tmp_path / "b"),
@@ -379,3 +379,35 @@ def test_under_sensing_noise_the_planner_side_never_reads_the_truth(schedule, mo
     assert spy.watch_reads > 0  # the push watch was consulted
     assert not spy.oracle_reads, f"the watch read true poses at t = {spy.oracle_reads[:5]} s"
     assert spy.truth_readers <= _SpySensor.JUDGES, spy.truth_readers
+
+
+@pytest.mark.parametrize("schedule", ["sequential", "concurrent"])
+def test_a_working_failure_fires_in_the_first_motion_that_moves_its_robot(scene, schedule):
+    """``one-robot-fails``'s kind of failure: however short the run, the robot stops during
+    its first motion, the result says when, and it stands still from then on."""
+    d = Disturbances(working_failures=((2, 0.5),))
+    res = lamp.solve(scene, "lazy", 0, model=GeometricProposer(), disturbances=d,
+                     schedule=schedule)
+    out = res.to_dict()
+    (robot, when), = out["disturbances"]["robot_failures_fired"]
+    assert robot == 2 and 0.0 < when < res.makespan_s
+    assert out["disturbances"]["working_failures"] == [[2, 0.5]]
+    rec = res.recording.arrays
+    later = rec["robots"][rec["times"] >= when + 0.2, 2]
+    assert np.all(np.linalg.norm(later - later[0], axis=1) < 0.02)
+    moved = rec["robots"][rec["times"] <= when, 2]
+    assert np.linalg.norm(moved[-1] - moved[0]) > 0.0  # it stopped while working
+
+
+def test_a_timed_failure_after_the_run_is_reported_as_not_fired(scene):
+    d = Disturbances(robot_failures=((1, 1e5),))
+    out = lamp.solve(scene, "lazy", 0, model=GeometricProposer(), disturbances=d).to_dict()
+    assert out["disturbances"]["robot_failures_fired"] == []
+    assert out["stats"]["failed_robots"] == {}
+
+
+def test_working_failures_are_validated():
+    with pytest.raises(InputError, match=r"working_failures: robot 0: a fraction in \[0, 1\)"):
+        Disturbances(working_failures=((0, 1.0),))
+    with pytest.raises(InputError, match="named twice"):
+        Disturbances(robot_failures=((0, 1.0),), working_failures=((0, 0.5),))

@@ -72,8 +72,10 @@ def execute(request: RunRequest, observers: Sequence[RunObserver] = (),
     result.makespan_s = recorder.sim_time_s
     result.params = request.param_values()
     result.disturbances = request.disturbances.to_dict()
-    if request.disturbances.robot_failures:
+    if request.disturbances.failing_robots:
         result.stats["failed_robots"] = {str(k): [round(float(v), 4) for v in place]
                                          for k, place in sorted(executor.failed.items())}
+        result.disturbances["robot_failures_fired"] = [
+            [k, round(t, 4)] for k, t in sorted(executor.fired.items())]
     result.recording = recorder.finish(request.planner, int(request.seed), result.to_dict())
     return result
