@@ -9,18 +9,27 @@ Printed per map, robot count and seed: planning time of the call (the map's spac
 lattices are built once per map beforehand, as a fleet planner reuses them; that set-up
 is printed per map), Gspi steps, makespan (metres: the time at unit speed of the
 synchronised plan, i.e. the sum over steps of the longest move), the slowest robot's path
-length, the sum of path lengths, the assignment's bottleneck bound, and whether the
-independent checker (``tests/fleet_checker.py``) accepts the plan; then medians per map
-and robot count, and the peak memory of the process.
+length, the sum of path lengths, Gspi's assignment bottleneck ``B*`` (lattice distances),
+the lower bound ``LB`` and our makespan / ``LB``, and whether the independent checker
+(``tests/fleet_checker.py``) accepts the plan; then medians per map and robot count, and
+the peak memory of the process.
 
-With ``--tswap ADAPTER`` (a script that runs TSWAP's public implementation, built from its
-source outside this repository), the same instances are solved by TSWAP in its sum and
-bottleneck assignment modes and printed beside ours (its makespan and sum of path
-lengths converted to metres at one cell per time step).
+``LB`` is the bottleneck assignment of straight-line start-goal distances
+(``lamp.mrmp.assignment.straight_line_bottleneck``): any planner whose robots take
+interchangeable goals and move at unit speed needs at least this long, since some robot
+must cover it; it ignores obstacles and other robots, so no planner need reach it.
+
+With ``--tswap ADAPTER`` (``benchmarks/tswap/adapter.py``, which runs TSWAP's public
+implementation built from its source outside this repository: see
+``benchmarks/tswap/README.md``), the same instances are solved by TSWAP, first in its
+default mode (``app -s TSWAP`` without ``-m``: bottleneck, then least sum), which is the
+column our makespan is divided by, then in the modes of ``--tswap-modes`` after it. Its
+makespan and sum of path lengths are converted to metres at one cell (``--cell``) per time
+step; its time is its own ``comp_time``; the adapter checks each TSWAP plan on the grid.
 
 Run: ``python benchmarks/bench_fleet.py [--maps random-64-64-20] [--robots 100,200,400,800]
-[--seeds 3] [--tswap /path/to/adapter.py]``; ``--quick``: random-32-32-20 and
-random-64-64-20 at 100 and 400 robots, one seed.
+[--seeds 3] [--tswap benchmarks/tswap/adapter.py --tswap-bin BUILD/app]``; ``--quick``:
+random-32-32-20 and random-64-64-20 at 100 and 400 robots, one seed.
 """
 
 from __future__ import annotations
@@ -47,6 +56,7 @@ from fleet_checker import check_fleet_plan  # noqa: E402
 
 from lamp.geometry.robot_space import RobotSpace  # noqa: E402
 from lamp.mrmp import plan_paths  # noqa: E402
+from lamp.mrmp.assignment import straight_line_bottleneck  # noqa: E402
 from lamp.mrmp.distance_field import get_lattice  # noqa: E402
 from lamp.mrmp.gspi import warmup  # noqa: E402
 from lamp.scene.mapf import load_grid_map, random_instance  # noqa: E402
@@ -73,18 +83,28 @@ def cells_of(gm, pts: np.ndarray) -> np.ndarray:
 
 
 def run_tswap(adapter: str, map_path: Path, gm, S: np.ndarray, G: np.ndarray,
-              mode: str) -> dict:
+              mode: str, tswap_bin: str | None = None) -> dict:
+    """TSWAP's result on one instance through the adapter (``solved``, ``makespan`` in
+    steps, ``sum_of_path_lengths`` in cells, ``runtime_ms``), or ``solved: False`` and
+    ``error``."""
     with tempfile.TemporaryDirectory() as tmp:
         fs, fg = Path(tmp) / "s.txt", Path(tmp) / "g.txt"
         np.savetxt(fs, cells_of(gm, S), fmt="%d")
         np.savetxt(fg, cells_of(gm, G), fmt="%d")
-        out = subprocess.run([sys.executable, adapter, "--map", str(map_path), "--starts",
-                              str(fs), "--goals", str(fg), "--mode", mode, "--json"],
-                             capture_output=True, text=True, timeout=600)
+        cmd = [sys.executable, adapter, "--map", str(map_path), "--starts", str(fs),
+               "--goals", str(fg), "--mode", mode, "--json"]
+        if tswap_bin:
+            cmd += ["--bin", tswap_bin]
+        out = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
     try:
         return json.loads(out.stdout.strip().splitlines()[-1])
     except (json.JSONDecodeError, IndexError):
         return {"solved": False, "error": (out.stderr or out.stdout)[-200:]}
+
+
+def _med(values: list[float]) -> str:
+    """Median to two decimals, ``-`` for none."""
+    return f"{np.median(values):.2f}" if values else "-"
 
 
 def main() -> None:
@@ -95,7 +115,12 @@ def main() -> None:
     ap.add_argument("--cell", type=float, default=0.15)
     ap.add_argument("--map-dir", type=Path, default=MAP_DIR, help="folder of the .map files")
     ap.add_argument("--time-limit", type=float, default=60.0)
-    ap.add_argument("--tswap", default=None, help="TSWAP adapter script (optional)")
+    ap.add_argument("--tswap", default=None,
+                    help="TSWAP adapter script, benchmarks/tswap/adapter.py (optional)")
+    ap.add_argument("--tswap-bin", default=None,
+                    help="TSWAP's binary, passed to the adapter (else its $TSWAP_BIN)")
+    ap.add_argument("--tswap-modes", default="bottleneck,linear",
+                    help="TSWAP modes run after its default, as extra columns")
     ap.add_argument("--no-check", action="store_true", help="skip the independent checker")
     ap.add_argument("--quick", action="store_true")
     a = ap.parse_args()
@@ -104,10 +129,14 @@ def main() -> None:
     seeds = a.seeds
     if a.quick:
         maps, robots, seeds = ["random-32-32-20", "random-64-64-20"], [100, 400], 1
+    modes = ["default"] + [m for m in a.tswap_modes.split(",") if m and m != "default"]
+    if not a.tswap:
+        modes = []
     warmup()
     print("map | robots | seed | time s | steps | makespan m | slowest path m | sum m | "
-          "bound m | valid" + (" | TSWAP sum: makespan m / sum m / ms | TSWAP bottleneck: "
-                               "makespan m / sum m / ms" if a.tswap else ""))
+          "Gspi B* m | LB m | makespan / LB | valid"
+          + "".join(f" | TSWAP {m}: makespan m / sum m / ms" for m in modes)
+          + (" | TSWAP default makespan / LB | makespan / TSWAP default" if modes else ""))
     summary: list[tuple] = []
     for name in maps:
         path = a.map_dir / f"{name}.map"
@@ -132,41 +161,68 @@ def main() -> None:
                 plan = plan_paths(space, S, G, time_limit=a.time_limit, seed=seed)
                 dt = time.perf_counter() - t
                 mk, slow, tot = plan_figures(plan.paths)
+                lb = straight_line_bottleneck(S, G)
                 if a.no_check:
                     ok = "-"
                 else:
                     errs = check_fleet_plan(gm.scene.to_dict(), S, G, plan, RADIUS)
                     ok = "yes" if not errs else "NO: " + errs[0]
                 ok = ok if plan.success else f"failed ({plan.status.value})"
+                good = plan.success and ok in ("yes", "-")
                 line = (f"{name} | {n} | {seed} | {dt:.3f} | {plan.iterations} | {mk:.2f} | "
                         f"{slow:.2f} | {tot:.1f} | "
-                        f"{plan.stats.get('assignment_bound', float('nan')):.2f} | {ok}")
+                        f"{plan.stats.get('assignment_bound', float('nan')):.2f} | "
+                        f"{lb:.2f} | {mk / lb:.2f} | {ok}")
                 ts = {}
-                if a.tswap:
-                    for mode in ("sum", "bottleneck"):
-                        r = run_tswap(a.tswap, path, gm, S, G, mode)
-                        ts[mode] = r
-                        if r.get("solved"):
-                            line += (f" | {r['makespan'] * a.cell:.2f} / "
-                                     f"{r.get('sum_of_path_lengths', float('nan')) * a.cell:.1f}"
-                                     f" / {r.get('runtime_ms', float('nan')):.0f}")
-                        else:
-                            line += f" | failed {r.get('error', '')[:40]}"
+                for mode in modes:
+                    r = run_tswap(a.tswap, path, gm, S, G, mode, a.tswap_bin)
+                    if r.get("solved"):
+                        r["makespan_m"] = r["makespan"] * a.cell
+                        r["sum_m"] = r.get("sum_of_path_lengths", float("nan")) * a.cell
+                        line += (f" | {r['makespan_m']:.2f} / {r['sum_m']:.1f}"
+                                 f" / {r.get('runtime_ms', float('nan')):.0f}")
+                    else:
+                        line += f" | failed {r.get('error', '')[:60]!r}"
+                    ts[mode] = r
+                if modes:
+                    d = ts["default"]
+                    line += (f" | {d['makespan_m'] / lb:.2f} | {mk / d['makespan_m']:.2f}"
+                             if d.get("solved") and d["makespan"] > 0 else " | - | -")
                 print(line, flush=True)
-                rows.append((dt, mk, tot, plan.success and ok == "yes", ts))
+                rows.append({"dt": dt, "mk": mk, "tot": tot, "good": good, "lb": lb,
+                             "ts": ts})
             summary.append((name, n, rows))
-    print("\nmedians | map | robots | solved+valid | time s | makespan m | sum m"
-          + (" | makespan / TSWAP sum-mode makespan" if a.tswap else ""))
+    print("\nmedians over the seeds (ratios: medians of the per-instance ratios)")
+    head = ("| map | robots | LB m | ours: solved, valid | time s | makespan m | / LB "
+            "| sum m")
+    if modes:
+        head += (" | TSWAP default: solved | time ms | makespan m | / LB | sum m "
+                 "| ours / TSWAP default"
+                 + "".join(f" | TSWAP {m}: makespan m / ms" for m in modes[1:]))
+    print(head + " |")
     for name, n, rows in summary:
-        dt = np.median([r[0] for r in rows])
-        mk = np.median([r[1] for r in rows])
-        tot = np.median([r[2] for r in rows])
-        good = sum(r[3] for r in rows)
-        line = f"| {name} | {n} | {good}/{len(rows)} | {dt:.3f} | {mk:.2f} | {tot:.1f}"
-        if a.tswap:
-            ratio = [r[1] / (r[4]["sum"]["makespan"] * a.cell) for r in rows
-                     if r[4].get("sum", {}).get("solved") and r[4]["sum"]["makespan"] > 0]
-            line += f" | {np.median(ratio):.2f}" if ratio else " | -"
+        lb = [r["lb"] for r in rows]
+        line = (f"| {name} | {n} | {_med(lb)} | {sum(r['good'] for r in rows)}/{len(rows)} | "
+                f"{np.median([r['dt'] for r in rows]):.3f} | "
+                f"{_med([r['mk'] for r in rows])} | "
+                f"{_med([r['mk'] / r['lb'] for r in rows])} | "
+                f"{np.median([r['tot'] for r in rows]):.0f}")
+        for k, mode in enumerate(modes):
+            done = [r for r in rows if r["ts"][mode].get("solved")]
+            ms = [r["ts"][mode]["runtime_ms"] for r in done]
+            mks = [r["ts"][mode]["makespan_m"] for r in done]
+            if k == 0:
+                line += (f" | {len(done)}/{len(rows)} | "
+                         + (f"{np.median(ms):.0f}" if ms else "-")
+                         + f" | {_med(mks)} | "
+                         f"{_med([r['ts'][mode]['makespan_m'] / r['lb'] for r in done])} | "
+                         + (f"{np.median([r['ts'][mode]['sum_m'] for r in done]):.0f}"
+                            if done else "-") + " | "
+                         + _med([r["mk"] / r["ts"][mode]["makespan_m"] for r in done
+                                 if r["ts"][mode]["makespan"] > 0]))
+            else:
+                line += (f" | {_med(mks)} / " + (f"{np.median(ms):.0f}" if ms else "-")
+                         + ("" if len(done) == len(rows) else f" ({len(done)} solved)"))
         print(line + " |")
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(f"\npeak memory (RSS) {peak:.0f} MB")

@@ -32,7 +32,7 @@ from scipy.sparse.csgraph import maximum_bipartite_matching
 from lamp.mrmp.goal_distances import GoalDistances, hval, hval_below, start_costs
 from lamp.mrmp.gspi_kernels import Graph
 
-__all__ = ["ASSIGNMENTS", "Assignment", "assign"]
+__all__ = ["ASSIGNMENTS", "Assignment", "assign", "straight_line_bottleneck"]
 
 #: The objectives of the initial assignment (``plan_paths(assignment=...)``).
 ASSIGNMENTS = ("bottleneck", "sum")
@@ -64,6 +64,44 @@ def _perfect(M: int, N: int, pm: np.ndarray, pi: np.ndarray) -> np.ndarray:
         return np.full(M, -1, dtype=np.int64)
     g = csr_matrix((np.ones(len(pm)), (pm, pi)), shape=(M, N))
     return np.asarray(maximum_bipartite_matching(g, perm_type="column"), dtype=np.int64)
+
+
+def straight_line_bottleneck(S: np.ndarray, G: np.ndarray) -> float:
+    """The least, over the assignments giving every goal ``G[m]`` its own robot ``S[i]``,
+    of the longest straight-line start-goal distance (same units as the points).
+
+    A lower bound on the makespan at unit speed of any plan that brings robots with
+    interchangeable goals from ``S`` onto every goal, whatever the map: some robot must
+    cover at least this distance. Exact: bisection over the distinct distances between
+    the largest nearest-robot distance of a goal and the longest distance of a least-sum
+    assignment, each threshold tried as a least-sum assignment of the 0/1 matrix "longer
+    than the threshold" (dense; Hopcroft-Karp on the sparse pairs can take seconds when
+    one goal is left over); the result is one of the distances. Raises ``ValueError``
+    with fewer robots than goals.
+    """
+    S = np.asarray(S, dtype=float).reshape(-1, 2)
+    G = np.asarray(G, dtype=float).reshape(-1, 2)
+    N, M = len(S), len(G)
+    if M == 0:
+        return 0.0
+    if N < M:
+        raise ValueError(f"{N} robots cannot reach {M} goals")
+    E = np.hypot(G[:, None, 0] - S[None, :, 0], G[:, None, 1] - S[None, :, 1])  # (M, N)
+    floor = E.min(axis=1).max()  # every goal needs some robot
+    if N == M:
+        floor = max(floor, E.min(axis=0).max())  # and every robot some goal
+    rows, cols = linear_sum_assignment(E)
+    top = E[rows, cols].max()  # one assignment's longest distance
+    vals = np.unique(E[(floor <= E) & (top >= E)])
+    a, b = 0, len(vals) - 1  # the answer is in vals[a..b]
+    while a < b:
+        mid = (a + b) // 2
+        rows, cols = linear_sum_assignment(vals[mid] < E)
+        if (E[rows, cols] > vals[mid]).any():
+            a = mid + 1
+        else:
+            b = mid
+    return float(vals[a])
 
 
 def _unreached(G: np.ndarray, no_link: np.ndarray, unreachable: np.ndarray) -> str:
