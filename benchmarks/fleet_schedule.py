@@ -24,6 +24,7 @@ import statistics
 from pathlib import Path
 
 from lamp.contract.model import MAX_ROBOTS
+from lamp.scene.bounds import makespan_lower_bound
 from lamp.scene.loader import load_scene
 from lamp.suites.registry import resolve_scene
 
@@ -67,14 +68,17 @@ def _makespan(rec: dict | None) -> str:
 def table(seq: Path, con: Path, peer: Path | None) -> str:
     s_recs, c_recs = _records(seq), _records(con)
     p_recs = _records(peer) if peer else {}
-    rows = ["| scene | robots | objects | map (m) | seq ok | seq makespan (s) | conc ok | "
-            "conc makespan (s) | ratio | plan/seg seq (s) | plan/seg conc (s) | working | "
-            "collisions | peer ok | peer makespan (s) |",
-            "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
-    ratios, big, ok, hits, checked = [], [], 0, 0, 0
+    rows = ["| scene | robots | objects | map (m) | lower bound (s) | seq ok | seq makespan (s) | "
+            "conc ok | conc makespan (s) | conc / bound | ratio | plan/seg seq (s) | "
+            "plan/seg conc (s) | working | collisions | peer ok | peer makespan (s) |",
+            "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    ratios, big, over, ok, hits, checked = [], [], [], 0, 0, 0
     for name in sorted(c_recs):
         c, s, p = c_recs[name], s_recs.get(name), p_recs.get(name)
         scene = _scene(c)
+        bound = makespan_lower_bound(scene).seconds
+        if c["success"] and bound:
+            over.append(c["makespan_s"] / bound)
         ratio = None
         if s and c["success"] and s["success"]:
             ratio = c["makespan_s"] / s["makespan_s"]
@@ -89,9 +93,10 @@ def table(seq: Path, con: Path, peer: Path | None) -> str:
         fleet = c.get("stats", {}).get("fleet", {})
         rows.append("| " + " | ".join([
             name, str(scene.n_robots), str(len(scene.objects)),
-            f"{scene.workspace[0]:.0f} x {scene.workspace[1]:.0f}",
+            f"{scene.workspace[0]:.0f} x {scene.workspace[1]:.0f}", _f(bound),
             "-" if s is None else ("yes" if s["success"] else "no"),
             _makespan(s), "yes" if c["success"] else "no", _makespan(c),
+            _f(c["makespan_s"] / bound if c["success"] and bound else None, ".2f"),
             _f(ratio, ".2f"), _f(s and s.get("planning_time_per_segment_s"), ".3f"),
             _f(c.get("planning_time_per_segment_s"), ".3f"),
             _f(fleet.get("utilisation", {}).get("working"), ".2f"),
@@ -110,6 +115,8 @@ def table(seq: Path, con: Path, peer: Path | None) -> str:
         f"{_f(statistics.median(ratios) if ratios else None, '.2f')}; on the "
         f"{len(big)} with at least {3 * MAX_ROBOTS} robots: median "
         f"{_f(statistics.median(big) if big else None, '.2f')}",
+        f"- concurrent makespan / lower bound (`lamp.scene.bounds`; {len(over)} placed every "
+        f"object): median {_f(statistics.median(over) if over else None, '.2f')}",
         f"- collisions found by the safety check: {hits} in {checked} recordings",
     ]
     return "\n".join(rows + summary) + "\n"

@@ -208,6 +208,8 @@ def summary_line(d: dict[str, Any]) -> str:
         + (f" ({per:.3f} s per segment)" if per is not None else "")
         + (f"  makespan: {d['makespan_s']:.1f} s simulated" if "makespan_s" in d
            else f"  makespan: {d['makespan']} steps")
+        + (f" (lower bound {d['makespan_lower_bound_s']:.1f} s, {ratio:.2f}x)"
+           if (ratio := d.get("makespan_over_bound")) is not None else "")
         + f"  wall time: {d['wall_time_s']:.1f} s"
     )
 

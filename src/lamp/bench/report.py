@@ -57,6 +57,7 @@ from lamp.bench.tables import (  # noqa: F401 - re-exported: the report's number
     iros_summary,
     load_config,
     load_results,
+    makespan_bound_table,
     mapush_criteria_table,
     mapush_success,
     median_planning_time_table,
@@ -126,8 +127,11 @@ def full_horizon_markdown(table: dict[str, dict[str, Rate]], fams: Sequence[str]
 
 
 def median_markdown(table: dict[str, dict[str, tuple[float | None, int]]],
-                    fams: Sequence[str]) -> str:
-    rows = [[_label(p)] + [f"{_fmt_s(row[f][0])} (n={row[f][1]})" for f in [*fams, "all"]]
+                    fams: Sequence[str], fmt: str | None = None) -> str:
+    def cell(v: float | None) -> str:
+        return _fmt_s(v) if fmt is None or v is None else format(v, fmt)
+
+    rows = [[_label(p)] + [f"{cell(row[f][0])} (n={row[f][1]})" for f in [*fams, "all"]]
             for p, row in table.items()]
     return _table(["method", *fams, "all"], rows)
 
@@ -283,6 +287,16 @@ def build_report(run_dir: str | Path) -> Path:
                "executed segments (n = solved runs); the paper reports about "
                f"{PAPER_LAZY_MEDIAN_S} s for LAMP-Lazy.", "",
                median_markdown(median_planning_time_table(records), fams), ""]
+        bounds = makespan_bound_table(records)
+        if any(n for row in bounds.values() for _, n in row.values()):
+            md += ["## Makespan over its lower bound", "",
+                   "Median over the solved runs of each cell of the simulated makespan "
+                   "divided by the scene's makespan lower bound (for each object, the "
+                   "nearest robot's straight drive to touch it plus the object's "
+                   "straight-line travel to within the success tolerance, at the robots' "
+                   "speed, maximised over objects: no run can be shorter; "
+                   "`lamp.scene.bounds`).", "",
+                   median_markdown(bounds, fams, ".2f"), ""]
         figs = []
         if plot_planning_time(records, fail_value, run_dir / "planning_time.png"):
             figs.append("![planning time per segment](planning_time.png)")

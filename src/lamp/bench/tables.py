@@ -10,7 +10,7 @@ from __future__ import annotations
 import json
 import math
 from collections import Counter
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -215,6 +215,21 @@ def median_planning_time_table(records: Sequence[dict[str, Any]]
     ("median approximately 2-3 s per segment"). Failed runs are left out here (the
     violin figure shows them at the failure line).
     """
+    return _median_table(records, lambda r: (v[0] if (v := scenario_planning_time(r, math.inf))
+                                             is not None else None))
+
+
+def makespan_bound_table(records: Sequence[dict[str, Any]]
+                         ) -> dict[str, dict[str, tuple[float | None, int]]]:
+    """Median makespan over its lower bound (``makespan_over_bound``, result.json; the bound
+    is ``lamp.scene.bounds``'): planner -> family -> (median, n solved runs with one)."""
+    return _median_table(records, lambda r: r.get("makespan_over_bound"))
+
+
+def _median_table(records: Sequence[dict[str, Any]], value: Callable[[dict[str, Any]], Any]
+                  ) -> dict[str, dict[str, tuple[float | None, int]]]:
+    """planner -> family (and ``"all"``) -> (median of ``value`` over the solved runs where
+    it is not None, their number)."""
     recs = family_records(records)
     fams = families(recs)
     out: dict[str, dict[str, tuple[float | None, int]]] = {}
@@ -222,8 +237,8 @@ def median_planning_time_table(records: Sequence[dict[str, Any]]
         mine = [r for r in recs if r["planner"] == p and r.get("success")]
         row = {}
         for fam in [*fams, "all"]:
-            vals = [v[0] for r in mine if fam in ("all", r["suite"])
-                    for v in [scenario_planning_time(r, math.inf)] if v is not None]
+            vals = [float(v) for r in mine if fam in ("all", r["suite"])
+                    if (v := value(r)) is not None]
             row[fam] = (float(np.median(vals)) if vals else None, len(vals))
         out[p] = row
     return out

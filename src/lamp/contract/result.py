@@ -64,6 +64,9 @@ class RunResult:
     params: dict[str, Any] = field(default_factory=dict)
     #: The run's disturbances (``lamp.contract.disturb.Disturbances.to_dict``).
     disturbances: dict[str, Any] = field(default_factory=dict)
+    #: A lower bound on any run's makespan of this scene [s]
+    #: (``lamp.scene.bounds.makespan_lower_bound``); None where not computed.
+    makespan_lower_bound_s: float | None = None
     #: The run's ``lamp.record.Recording`` (set by ``lamp.solve``); not part of result.json.
     recording: Any = field(default=None, repr=False, compare=False)
 
@@ -121,6 +124,9 @@ class RunResult:
             ),
             "makespan": int(self.makespan),
             "makespan_s": round(float(self.makespan_s), 6),
+            "makespan_lower_bound_s": (None if (b := self.makespan_lower_bound_s) is None
+                                       else round(float(b), 6)),
+            "makespan_over_bound": (round(float(self.makespan_s) / b, 4) if b else None),
             "replans": int(self.replans),
             "wall_time_s": round(float(self.wall_time_s), 3),
             "stats": self.stats,

@@ -16,6 +16,7 @@ from lamp.contract.result import RunResult
 from lamp.contract.runner import ObjectRunner
 from lamp.pipeline.request import RunRequest
 from lamp.pipeline.schedule import run_concurrently, run_in_order
+from lamp.scene.bounds import makespan_lower_bound
 
 __all__ = ["execute", "object_runner"]
 
@@ -70,6 +71,7 @@ def execute(request: RunRequest, observers: Sequence[RunObserver] = (),
     if fleet_stats is not None:
         result.stats["fleet"] = fleet_stats
     result.makespan_s = recorder.sim_time_s
+    result.makespan_lower_bound_s = makespan_lower_bound(scene).seconds
     result.params = request.param_values()
     result.disturbances = request.disturbances.to_dict()
     if request.disturbances.failing_robots:

@@ -1,0 +1,81 @@
+"""The makespan lower bound (``lamp.scene.bounds``): a brute force over robots and objects
+agrees with it, and no executed run is shorter than it."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+import shapely
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scenes import TINY
+
+import lamp
+from lamp.contract.goals import SUCCESS_POSITION_TOL
+from lamp.manip import GeometricProposer
+from lamp.scene import scene_from_dict
+from lamp.scene.bounds import makespan_lower_bound
+
+
+def _brute(d: dict) -> float:
+    """The bound from the scene dict with Shapely's buffered disks and boxes (no lamp
+    geometry): every robot against every object, the worst object."""
+    r = d["robots"]["radius"]
+    speed = d["robots"].get("speed", 0.25)
+    worst = 0.0
+    for o in d["objects"]:
+        x, y, th = o["start"]
+        if o["type"] == "circle":
+            foot = shapely.Point(x, y).buffer(o["radius"], 4096)
+        else:
+            sx, sy = o["size"]
+            box = shapely.box(-sx / 2, -sy / 2, sx / 2, sy / 2)
+            foot = shapely.affinity.translate(shapely.affinity.rotate(
+                box, th, origin=(0, 0), use_radians=True), x, y)
+        reach = min(max(0.0, shapely.Point(p).distance(foot) - r) for p in d["robots"]["starts"])
+        travel = max(0.0, math.dist(o["goal"][:2], o["start"][:2]) - SUCCESS_POSITION_TOL)
+        worst = max(worst, (reach + travel) / speed)
+    return worst
+
+
+@st.composite
+def scenes(draw) -> dict:
+    objects, cells = [], draw(st.permutations([(i, j) for i in range(4) for j in range(3)]))
+    for k in range(draw(st.integers(1, 3))):
+        (i, j), (gi, gj) = cells[2 * k], cells[2 * k + 1]
+        th, gth = draw(st.floats(-3.1, 3.1)), draw(st.floats(-3.1, 3.1))
+        start, goal = [0.9 + 0.7 * i, 0.4 + 0.7 * j, th], [0.9 + 0.7 * gi, 0.4 + 0.7 * gj, gth]
+        if draw(st.booleans()):
+            objects.append({"type": "circle", "radius": draw(st.floats(0.05, 0.2)),
+                            "start": start, "goal": goal})
+        else:
+            objects.append({"type": "rectangle", "size": [draw(st.floats(0.05, 0.3)),
+                                                          draw(st.floats(0.05, 0.3))],
+                            "start": start, "goal": goal})
+    robots = [[0.15, 0.3 + 0.25 * i] for i in range(draw(st.integers(1, 6)))]
+    return {"format": "lamp-scene/1", "name": "b", "workspace": [4.0, 2.2],
+            "robots": {"radius": 0.05, "speed": draw(st.sampled_from([0.1, 0.25, 1.0])),
+                       "starts": robots}, "objects": objects}
+
+
+@settings(max_examples=60)
+@given(scenes())
+def test_the_bound_equals_a_brute_force(d):
+    bound = makespan_lower_bound(scene_from_dict(d))
+    assert bound.seconds == pytest.approx(_brute(d), rel=1e-6, abs=1e-6)
+    assert bound.seconds == max(bound.per_object)
+    assert bound.per_object[bound.critical_object] == bound.seconds
+
+
+@pytest.mark.parametrize("schedule", ["sequential", "concurrent"])
+def test_no_run_is_shorter_than_the_bound(schedule):
+    scene = scene_from_dict({**TINY, "objects": [
+        {"type": "rectangle", "size": [0.3, 0.2], "start": [0.7, 1.0, 0.0],
+         "goal": [1.6, 1.2, 0.5]}]})
+    res = lamp.solve(scene, "lazy", 0, model=GeometricProposer(), schedule=schedule)
+    d = res.to_dict()
+    assert d["success"]
+    assert 0 < d["makespan_lower_bound_s"] <= d["makespan_s"]
+    assert d["makespan_over_bound"] == pytest.approx(d["makespan_s"] / d["makespan_lower_bound_s"],
+                                                     rel=1e-3)
