@@ -210,9 +210,8 @@ class PlannerConfig:
                                        "(m) of its planned travel; 0: the whole claim.",
                                        low=0.0)
 
-    #: The concurrent schedule only (``admission.passes_ahead``; ``Segment.rejoin``). On
-    #: by default since 2026-12-05 with the rejoin slack: 96 robots and 32 loads in aisles
-    #: 312 -> 261 s; measured in ``docs/fleet.md`` (Coordination, Execution).
+    #: The concurrent schedule only (``admission.passes_ahead``; ``Segment.rejoin``);
+    #: measured in ``docs/fleet.md`` (Coordination, Execution).
     fleet_pass_margin: float = param(PASS_MARGIN, "Concurrent schedule: a plan may go "
                                      "through a higher-ranked object's claim when it "
                                      "passes each point of it this much (m) of travel "

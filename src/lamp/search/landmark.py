@@ -233,9 +233,9 @@ def route_length(space: ObjectSpace, start: tuple[float, float], goal: tuple[flo
     sees it: the shortest 8-connected path over the passable positions (module docstring)
     of the grid of side ``step`` through ``start`` to a position within two steps of
     ``goal``, plus the octile distance from there (the least such sum). None when no
-    position near the goal is connected to the start. (Until 2026-12-05 an off-grid goal
-    was valued as :meth:`LandmarkPotential.at` values it, which near a wall mixes in the
-    positions beyond it: a goal walled off from the start got a length, not None.)
+    position near the goal is connected to the start. An off-grid goal is not valued as
+    :meth:`LandmarkPotential.at` values it: near a wall that mixes in the positions beyond
+    it, and a goal walled off from the start would get a length, not None.
 
     Guarantees (``tests/test_landmark.py``): on a map without obstacles it is the octile
     distance from start to goal (within a grid step); it is never below the straight-line
