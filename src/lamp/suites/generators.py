@@ -205,21 +205,29 @@ LAYOUTS: dict[str, Callable[..., Layout]] = {
 }
 
 
-def generate_scene(family: str, index: int, *, full_checks: bool = True) -> Generated:
-    """Generate scene ``index`` (0-based) of ``family``; deterministic in (family, index).
+def generate_scene(family: str, index: int, *, full_checks: bool = True,
+                   seed: int = SUITE_SEED) -> Generated:
+    """Generate scene ``index`` (0-based) of ``family``; deterministic in (family, index,
+    seed).
 
     ``full_checks=False`` skips the clearance-ladder routes and robot reachability of the
-    accepted attempt (used by tests that only compare the scene dict).
+    accepted attempt (used by tests that only compare the scene dict). ``seed``: the base
+    seed of the random stream; the suites' is ``SUITE_SEED``, any other draws maps of the
+    same family apart from them, named ``<family>-<seed>-NN`` (the MAPush-style baseline's
+    training maps, ``lamp.rl.maps``).
     """
     if family not in FAMILIES:
         raise ValueError(f"family must be one of {', '.join(FAMILIES)}; got {family!r}")
     if not (isinstance(index, int) and 0 <= index < SCENES_PER_FAMILY):
         raise ValueError(f"index must be an int in [0, {SCENES_PER_FAMILY}), got {index!r}")
-    rng = np.random.default_rng([SUITE_SEED, FAMILIES.index(family), index])
+    if not (isinstance(seed, int) and not isinstance(seed, bool) and seed >= 0):
+        raise ValueError(f"seed must be an int >= 0, got {seed!r}")
+    rng = np.random.default_rng([seed, FAMILIES.index(family), index])
     want_tight = wants_tight(family, index)
     obj = sample_object(rng, index)
     shape = shape_from_dict(obj.shape)
-    name = scene_name(family, index)
+    name = (scene_name(family, index) if seed == SUITE_SEED
+            else f"{family}-{seed}-{index + 1:02d}")
     rejected: dict[str, int] = {}
 
     def reject(why: str) -> None:
