@@ -10,8 +10,10 @@ Adaptive subgoal choice: the lookahead starts at ``lamp.rl.tasks.SUBGOAL_AHEAD``
 by half again (up to the start value) after one it reached.
 
 Mid level: the PPO policy (``lamp.rl.policy``) drives all robots with velocity commands in
-``lamp.env.PushCore`` on the run's own simulator, until the object is within
-``SUBGOAL_TOLERANCE`` of the subgoal or ``SUBGOAL_TIME`` has passed.
+``lamp.env.PushCore`` on the run's own simulator, at the speed it was trained for (the
+scene's ``robots.speed``: a scene at another speed is refused, ``check_scene``), until the
+object is within ``SUBGOAL_TOLERANCE`` of the subgoal or the policy's subgoal time (its
+training episodes' length, ``lamp.rl.tasks.SUBGOAL_TIME``) has passed.
 
 An object's run ends when its position is within the strict 0.1 m of the goal, after
 ``OBJECT_TIME_LIMIT`` simulated seconds (MAPush's two minutes), when no object path exists,
@@ -58,10 +60,12 @@ STOP_RADIUS = SUCCESS_POSITION_TOL
 
 
 def check_scene(scene: Scene, policy=None) -> None:
-    """``lamp.errors.InputError`` (a ValueError) when the policy cannot drive ``scene``
-    (another number of robots)."""
+    """``lamp.errors.InputError`` (a ValueError) when the policy cannot drive ``scene``:
+    another number of robots, or robots at another speed (``robots.speed``) than it was
+    trained for (it would then drive them at its own, unlike every other planner)."""
     from lamp.errors import InputError
     from lamp.rl.policy import load_policy
+    from lamp.rl.tasks import check_speed
 
     policy = policy or load_policy()
     if scene.n_robots != policy.info.n_robots:
@@ -69,6 +73,10 @@ def check_scene(scene: Scene, policy=None) -> None:
             f"planner mapush: scene {scene.name!r} has {scene.n_robots} robots, but the "
             f"mid-level policy was trained for {policy.info.n_robots}"
         )
+    try:
+        check_speed([scene], policy.robot_speed, "planner mapush")
+    except ValueError as exc:
+        raise InputError(str(exc)) from None
 
 
 @dataclass
@@ -126,7 +134,7 @@ def run_object(scene: Scene, index: int, sim, policy, record: MapushRecord,
     (see the module docstring)."""
     from lamp.env.core import PushConfig, PushCore
     from lamp.env.gym_env import observation_space
-    from lamp.rl.tasks import SUBGOAL_AHEAD, SUBGOAL_TIME, SUBGOAL_TOLERANCE, along, pose_at
+    from lamp.rl.tasks import SUBGOAL_AHEAD, SUBGOAL_TOLERANCE, along, pose_at
 
     settings = {k: v for k, v in policy.info.env_settings.items()
                 if k in ("frame_skip", "max_speed", "patch_size", "patch_spacing",
@@ -139,6 +147,7 @@ def run_object(scene: Scene, index: int, sim, policy, record: MapushRecord,
     obs_space = observation_space(core)
     policy.check_env(core.n_robots, obs_space, f"scene {scene.name!r}")
     goal = scene.objects[index].goal
+    subgoal_time = policy.subgoal_time
     lookahead = SUBGOAL_AHEAD
     every = trace_stride(config.frame_skip)  # env steps per recorded state
     segments, reason, left = 0, "", False
@@ -163,7 +172,7 @@ def run_object(scene: Scene, index: int, sim, policy, record: MapushRecord,
         t_sub = core.time
         rows = [(core.steps, core.robot_positions().copy(), core.object_poses())]
         reached = False
-        while core.time - t_sub < SUBGOAL_TIME - 1e-9 and core.time < time_limit - 1e-9:
+        while core.time - t_sub < subgoal_time - 1e-9 and core.time < time_limit - 1e-9:
             out = core.step(policy.act(obs_space, core.observe()))
             q = core.object_poses()[index]
             d_goal = math.hypot(*(q[:2] - np.asarray(goal[:2])))

@@ -36,10 +36,13 @@ def train_cmd(
     eval_episodes: int = typer.Option(50, help="Held-out episodes per evaluation and task."),
     sims: int = typer.Option(16, help="Simulations stepped together."),
     threads: int = typer.Option(1, help="Torch threads."),
+    map_seed: int = typer.Option(1, help="Base seed of the training maps (the paper "
+                                 "families' generators; never the benchmark suites' seed)."),
     resume: bool = typer.Option(False, "--resume", help="Continue the run in OUT from its "
                                 "last evaluation (same settings)."),
 ) -> None:
-    """Train with PPO; write OUT/policy.pt, OUT/policy.json, OUT/curve.json, OUT/curve.png
+    """Train with PPO on generated maps apart from the benchmark scenes, evaluating on the
+    benchmark scenes; write OUT/policy.pt, OUT/policy.json, OUT/curve.json, OUT/curve.png
     (and OUT/ppo.zip, the state --resume continues from)."""
     from lamp.cli_support import fail_input
 
@@ -48,7 +51,8 @@ def train_cmd(
 
     try:
         settings = TrainSettings(steps=steps, seed=seed, eval_every=eval_every,
-                                 eval_episodes=eval_episodes, threads=threads, n_sims=sims)
+                                 eval_episodes=eval_episodes, threads=threads, n_sims=sims,
+                                 map_seed=map_seed)
     except ValueError as exc:
         fail_input(str(exc))
 
@@ -75,10 +79,11 @@ def eval_cmd(
         None, help="Policy file (.pt with its .json beside it); default: the shipped one."),
     episodes: int = typer.Option(100, help="Held-out episodes."),
     seed: int = typer.Option(10_000, help="Seed of the episodes (training uses seeds < 10)."),
-    task: str = typer.Option("open", help="open (MAPush's protocol: no obstacles) or maps "
-                                          "(the paper maps with their obstacles)."),
+    task: str = typer.Option("open", help="open (MAPush's protocol: the benchmark maps "
+                                          "without obstacles) or maps (with them)."),
 ) -> None:
-    """Subgoal success of a policy on held-out episodes of the mid-level task."""
+    """Subgoal success of a policy on held-out episodes of the mid-level task, on the
+    benchmark scenes (which training never sees)."""
     from lamp.cli_support import fail_input
 
     _threads(1)

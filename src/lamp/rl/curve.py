@@ -17,7 +17,7 @@ def plot_curve(record: dict[str, Any], path: str | Path) -> None:
     fig = Figure(figsize=(5.5, 3.4), dpi=110)
     ax = fig.add_subplot()
     for key, label in (("success_open", "open space (MAPush's protocol)"),
-                       ("success_maps", "paper maps, with obstacles")):
+                       ("success_maps", "benchmark maps, with obstacles")):
         ax.plot(steps, [100.0 * c[key] for c in record["curve"]], marker="o", label=label)
     ax.axhline(60, color="grey", lw=0.8, ls="--")
     ax.set_xlabel("PPO steps, per robot [millions]")

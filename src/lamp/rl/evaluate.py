@@ -7,9 +7,10 @@ and reports the share that reached the subgoal and the mean final distance to it
 Episodes run side by side in ``TeamVecEnv`` (``SIMS`` simulations, one batched policy
 call per step); simulation e runs a fixed quota of episodes and only its first ``quota``
 count, so the set of episodes, and the result, depends on (task, episodes, seed) only,
-not on which episodes end first. Training draws its episodes with other seeds
-(``lamp.rl.train``), so these are held out: the maps are shared (as MAPush trains and
-tests on random maps of one generator), the poses, subgoals and robot placements are new.
+not on which episodes end first. The episodes are drawn on the benchmark scenes (the
+paper families' 100 suite scenes, ``suite_scenes``), which training never sees: it trains
+on maps of the same generators drawn apart from them (``lamp.rl.maps``). Scenes whose
+``robots.speed`` is not the policy's are refused (ValueError naming the scene).
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from lamp.rl.tasks import TRAIN_SUITES, mid_level_config, task_stage
+from lamp.rl.tasks import FAMILIES, check_speed, mid_level_config, task_stage
 
 #: Simulations stepped side by side.
 SIMS = 10
@@ -38,18 +39,19 @@ class EvalResult:
     mean_time: float  # simulated seconds per episode, mean
 
 
-def suite_scenes(suites=TRAIN_SUITES):
-    """The scenes of ``suites`` (the maps the mid-level task draws from)."""
+def suite_scenes(suites=FAMILIES):
+    """The benchmark scenes of ``suites`` (where evaluation episodes are drawn)."""
     from lamp.suites.registry import resolve_scene, suite_files
 
     return [resolve_scene(p.stem) for s in suites for p in suite_files(s)]
 
 
 def policy_config(policy):
-    """The mid-level ``PushConfig`` with the policy's own control and patch settings."""
+    """The mid-level ``PushConfig`` with the policy's own speed, time, control and patch
+    settings."""
     env = policy.info.env_settings
-    keep = {k: env[k] for k in ("max_speed", "patch_size", "patch_spacing", "patch_range")
-            if k in env}
+    keep = {k: env[k] for k in ("max_speed", "time_limit", "patch_size", "patch_spacing",
+                                "patch_range") if k in env}
     return mid_level_config(frame_skip=int(env.get("frame_skip", 10)), **keep)
 
 
@@ -66,8 +68,10 @@ def evaluate(policy, task: str = "open", episodes: int = 100, seed: int = EVAL_S
         raise ValueError(f"episodes = {episodes!r}: must be an integer >= 1")
     sims = min(SIMS, episodes)
     quota = [episodes // sims + (e < episodes % sims) for e in range(sims)]
-    env = TeamVecEnv(scenes or suite_scenes(), sims, seed, policy_config(policy),
-                     stage=task_stage(task))
+    scenes = scenes or suite_scenes()
+    config = policy_config(policy)
+    check_speed(scenes, config.max_speed, "evaluate")
+    env = TeamVecEnv(scenes, sims, seed, config, stage=task_stage(task))
     obs = env.reset()
     done = [0] * sims
     kept: list[dict[str, float]] = []

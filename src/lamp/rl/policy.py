@@ -73,6 +73,18 @@ class PushPolicy:
                 f"says obs_dim = {info.obs_dim}"
             )
 
+    @property
+    def robot_speed(self) -> float:
+        """The robots' speed the policy was trained for [m/s]: the speed of a full-scale
+        command (``env_settings["max_speed"]``; ``PushConfig``'s 0.5 when not recorded)."""
+        return float(self.info.env_settings.get("max_speed", 0.5))
+
+    @property
+    def subgoal_time(self) -> float:
+        """Simulated seconds per subgoal the policy was trained with (its episodes'
+        ``time_limit``)."""
+        return float(self.info.env_settings.get("time_limit", 8.0))
+
     def check_env(self, n_robots: int, obs_space: spaces.Dict, what: str) -> None:
         """ValueError naming ``what`` when the environment does not fit the policy."""
         if n_robots != self.info.n_robots:

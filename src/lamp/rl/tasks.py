@@ -2,12 +2,16 @@
 
 This is what the MAPush-style high level (``lamp.baselines.mapush``) asks of the policy:
 the object ``SUBGOAL_AHEAD`` metres further along its obstacle-aware lattice path, within
-``SUBGOAL_TOLERANCE`` (orientation ignored), in ``SUBGOAL_TIME`` simulated seconds.
+``SUBGOAL_TOLERANCE`` (orientation ignored), in ``SUBGOAL_TIME`` simulated seconds, with
+the robots driving at ``ROBOT_SPEED`` (every planner's speed: the scene format's default
+``robots.speed``). The time is what a robot at that speed needs to drive ``SUBGOAL_DRIVE``
+metres, so the task is stated in distances and scales with the speed.
 
-Episodes (``EpisodeSampler``) are drawn from the paper suites' maps: a pose along the
-object's lattice path from its start to its goal, the subgoal further along that path,
-and the robots scattered in free space up to ``scatter`` metres from the object's
-bounding circle. Two *tasks*:
+Episodes (``EpisodeSampler``) are drawn from a list of maps (training: maps of the paper
+families' generators with seeds of their own, ``lamp.rl.maps``; evaluation: the benchmark
+scenes, ``lamp.rl.evaluate``): a pose along the object's lattice path from its start to
+its goal, the subgoal further along that path, and the robots scattered in free space up
+to ``scatter`` metres from the object's bounding circle. Two *tasks*:
 
 * ``open``: the same map with its obstacles removed (the workspace border stays). This is
   MAPush's mid-level protocol (its mid level trains and is measured in open space; the
@@ -30,18 +34,28 @@ import numpy as np
 
 from lamp.geometry.robot_space import RobotSpace
 from lamp.scene.model import Scene
+from lamp.scene.physics import DEFAULT_PHYSICS
 
 #: Distance along the object path from the object to its subgoal [m] (high and mid level).
 SUBGOAL_AHEAD = 0.5
 #: The mid level's success radius around a subgoal [m].
 SUBGOAL_TOLERANCE = 0.15
-#: Simulated time the mid level gets per subgoal [s].
-SUBGOAL_TIME = 8.0
+#: The robots' driving speed of the mid-level task [m/s]: the scene format's default
+#: ``robots.speed``, what every other planner's robots drive at. A policy drives scenes at
+#: this speed only (``lamp.baselines.mapush.check_scene``).
+ROBOT_SPEED = DEFAULT_PHYSICS.robot_speed
+#: Driving distance the mid level gets per subgoal [m] (a robot may have to go round the
+#: object before it pushes).
+SUBGOAL_DRIVE = 4.0
+#: Simulated time the mid level gets per subgoal [s]: ``SUBGOAL_DRIVE`` at ``ROBOT_SPEED``
+#: (16 s at 0.25 m/s).
+SUBGOAL_TIME = SUBGOAL_DRIVE / ROBOT_SPEED
 #: Robots start at most this far from the object's bounding circle [m] (suite scenes place
 #: them up to about 0.6 m away; later subgoals find them right at the object).
 ROBOT_SCATTER = 0.8
-#: Training families (the paper's suites).
-TRAIN_SUITES = ("random", "maze", "tilt", "warehouse")
+#: The paper's single-object families: training maps come from their generators
+#: (``lamp.rl.maps``), evaluation episodes from their benchmark suites.
+FAMILIES = ("random", "maze", "tilt", "warehouse")
 #: The two tasks (see the module docstring).
 TASKS = ("open", "maps")
 
@@ -182,10 +196,22 @@ MID_REWARD = {"behind": 1.0}
 
 
 def mid_level_config(frame_skip: int = MID_FRAME_SKIP, **settings: Any):
-    """The ``PushConfig`` of the mid-level task (``settings`` override other fields, e.g. a
-    trained policy's patch settings)."""
+    """The ``PushConfig`` of the mid-level task: robots at ``ROBOT_SPEED``, ``SUBGOAL_TIME``
+    per episode (``settings`` override fields, e.g. a trained policy's speed, time and
+    patch settings)."""
     from lamp.env.core import PushConfig, RewardWeights
 
+    fields = {"max_speed": ROBOT_SPEED, "time_limit": SUBGOAL_TIME, **settings}
     return PushConfig(position_tolerance=SUBGOAL_TOLERANCE, orientation_tolerance=None,
-                      time_limit=SUBGOAL_TIME, frame="goal", frame_skip=frame_skip,
-                      reward=RewardWeights(**MID_REWARD), **settings)
+                      frame="goal", frame_skip=frame_skip,
+                      reward=RewardWeights(**MID_REWARD), **fields)
+
+
+def check_speed(scenes, speed: float, what: str) -> None:
+    """ValueError naming the first of ``scenes`` whose ``robots.speed`` is not ``speed``
+    (``what``: who refuses it)."""
+    for sc in scenes:
+        if not math.isclose(sc.physics.robot_speed, speed, rel_tol=0, abs_tol=1e-9):
+            raise ValueError(f"{what}: scene {sc.name!r} has robots.speed = "
+                             f"{sc.physics.robot_speed:g} m/s, but the mid-level policy is "
+                             f"trained for {speed:g} m/s")

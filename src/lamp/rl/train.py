@@ -5,7 +5,11 @@ in ``TeamVecEnv`` (``n_sims`` simulations of the mid-level task stepped together
 batched forward pass per step), through the ``Curriculum`` of ``lamp.rl.tasks``: robots
 start close to the object in open space, then scatter to the full distance, then half of
 the episodes are on the cluttered maps. The reward is ``lamp.env``'s with MAPush's "robots
-behind the object" term (``lamp.rl.tasks.MID_REWARD``).
+behind the object" term (``lamp.rl.tasks.MID_REWARD``). The robots drive at
+``lamp.rl.tasks.ROBOT_SPEED`` (the scenes' default ``robots.speed``; training scenes at
+another speed are refused). Training maps: ``lamp.rl.maps`` (the paper families'
+generators on streams apart from the benchmark suites'); the held-out evaluations along
+the way run on the benchmark scenes themselves, which training never sees.
 
 ``train(out, settings)`` writes ``OUT/policy.pt`` + ``policy.json`` (``lamp.rl.policy``)
 and ``OUT/curve.json``: held-out subgoal success (``lamp.rl.evaluate``, both tasks)
@@ -24,12 +28,20 @@ from pathlib import Path
 from typing import Any
 
 from lamp.rl.evaluate import EVAL_SEED, evaluate, suite_scenes
+from lamp.rl.maps import (
+    MAPS_PER_FAMILY,
+    TRAIN_MAP_SEED,
+    check_map_seed,
+    maps_record,
+    training_maps,
+)
 from lamp.rl.tasks import (
     MID_REWARD,
     SUBGOAL_AHEAD,
     SUBGOAL_TIME,
     SUBGOAL_TOLERANCE,
     Curriculum,
+    check_speed,
     mid_level_config,
 )
 
@@ -49,8 +61,11 @@ class TrainSettings:
     batch: int = 2048
     epochs: int = 5
     learning_rate: float = 3e-4
+    map_seed: int = TRAIN_MAP_SEED  # base seed of the training maps (lamp.rl.maps)
+    maps_per_family: int = MAPS_PER_FAMILY
 
     def __post_init__(self) -> None:
+        check_map_seed(self.map_seed, self.maps_per_family)
         for name in ("steps", "eval_every", "eval_episodes", "threads", "n_sims", "rollout",
                      "batch", "epochs"):
             v = getattr(self, name)
@@ -96,9 +111,12 @@ def info_kwargs(n_robots: int, obs_dim: int, config, settings: TrainSettings,
 
 
 def train(out: str | Path, settings: TrainSettings, scenes=None, progress=None,
-          resume: bool = False) -> dict[str, Any]:
+          resume: bool = False, eval_scenes=None) -> dict[str, Any]:
     """Train, evaluate along the way and write the policy and curve into ``out``; returns
-    the curve record. ``progress(entry)`` is called with every curve entry.
+    the curve record. ``progress(entry)`` is called with every curve entry. ``scenes``:
+    the training maps (default: ``lamp.rl.maps.training_maps`` of the settings' map seed);
+    ``eval_scenes``: the maps of the held-out evaluations (default: the benchmark scenes).
+    ValueError naming the scene when one has another ``robots.speed`` than the task's.
 
     ``resume``: continue the run in ``out`` from its last evaluation (the PPO state saved
     there, ``ppo.zip``) instead of starting again; its settings must be these, except
@@ -116,16 +134,24 @@ def train(out: str | Path, settings: TrainSettings, scenes=None, progress=None,
     from lamp.rl.vec import TeamVecEnv
 
     torch.set_num_threads(settings.threads)
-    scenes = scenes or suite_scenes()
     config = mid_level_config()
+    maps = None
+    if scenes is None:
+        scenes = training_maps(settings.map_seed, settings.maps_per_family)
+        maps = maps_record(settings.map_seed, settings.maps_per_family)
+    eval_scenes = eval_scenes or suite_scenes()
+    check_speed(scenes, config.max_speed, "lamp rl train")
     env = TeamVecEnv(scenes, settings.n_sims, settings.seed, config, Curriculum(),
                      total_steps=settings.steps)
     n = env.n_robots
     out = Path(out)
     head = {"seed": settings.seed, "settings": {**asdict(settings), "hidden": list(settings.hidden)},
-            "robots": n, "scenes": len(scenes), "subgoal_ahead": SUBGOAL_AHEAD,
-            "subgoal_tolerance": SUBGOAL_TOLERANCE, "subgoal_time": SUBGOAL_TIME,
-            "frame_skip": config.frame_skip, "reward": MID_REWARD}
+            "robots": n, "scenes": len(scenes),
+            "maps": maps or {"given": sorted(s.name for s in scenes)},
+            "eval_maps": _maps_named(eval_scenes), "robot_speed": config.max_speed,
+            "subgoal_ahead": SUBGOAL_AHEAD, "subgoal_tolerance": SUBGOAL_TOLERANCE,
+            "subgoal_time": SUBGOAL_TIME, "frame_skip": config.frame_skip,
+            "reward": MID_REWARD}
     curve: list[dict[str, Any]] = []
     if resume:
         curve, model = _resumed(out, head, env)
@@ -145,7 +171,7 @@ def train(out: str | Path, settings: TrainSettings, scenes=None, progress=None,
 
     def run_eval(step: int) -> None:
         policy = actor({})
-        res = {t: evaluate(policy, t, settings.eval_episodes, EVAL_SEED, scenes=scenes)
+        res = {t: evaluate(policy, t, settings.eval_episodes, EVAL_SEED, scenes=eval_scenes)
                for t in ("open", "maps")}
         recent = env.finished[seen[0]:]
         seen[0] = len(env.finished)
@@ -210,7 +236,7 @@ def _resumed(out: Path, head: dict[str, Any], env):
             return {k: v for k, v in value.items() if k != "steps"}
         return value
 
-    for key in ("seed", "settings", "robots", "scenes"):
+    for key in ("seed", "settings", "robots", "scenes", "maps", "robot_speed"):
         if same(key, old.get(key)) != same(key, head[key]):
             raise ValueError(f"{out / 'curve.json'}: the run to resume has {key} = "
                              f"{old.get(key)!r}, this one {head[key]!r}")
@@ -219,3 +245,16 @@ def _resumed(out: Path, head: dict[str, Any], env):
     for e, sampler in enumerate(env.samplers):
         sampler.rng = np.random.default_rng([head["seed"], e, env.robot_steps])
     return list(old["curve"]), model
+
+
+def _maps_named(scenes) -> dict[str, Any]:
+    """The evaluation maps as a record: the benchmark suites they come from (scene count
+    per suite, by name), or their names."""
+    from collections import Counter
+
+    from lamp.suites.registry import SUITES
+
+    suites = Counter(s.name.rsplit("-", 1)[0] for s in scenes)
+    if set(suites) <= set(SUITES):
+        return {"suites": dict(suites), "maps": len(scenes)}
+    return {"given": sorted(s.name for s in scenes)}
