@@ -39,7 +39,7 @@ def disturbed(record: dict) -> bool:
     """Whether the run's disturbance happened: a robot failure fired (a run without one
     was not disturbed by it); noise and knocks act in every run that moved at all."""
     d = record.get("disturbances") or {}
-    if d.get("robot_failures") or d.get("working_failures"):
+    if d.get("robot_failures"):
         return bool(d.get("robot_failures_fired"))
     return True
 

@@ -1,12 +1,13 @@
 """``lamp bench --disturb PRESET``: the disturbances of each job of a robustness sweep.
 
 The presets are ``lamp.contract.disturb.PRESETS`` plus ``one-robot-fails``: one robot,
-drawn per scene and seed, stops for good during the first motion in which it moves, at a
-fraction of that motion drawn from ``FAILURE_FRACTION`` (``Disturbances.working_failures``).
-So the failure fires in every run in which that robot works at all, whatever the schedule
-and however long the run; the result says when (``disturbances.robot_failures_fired``),
-and a run in which it did not fire counts as not disturbed. Deterministic for the scene and
-seed.
+drawn per scene and seed, stops for good at a time drawn from ``FAILURE_FRACTION`` of the
+earliest time at which any object of the scene could be placed (the least of the objects'
+own bounds in ``lamp.scene.bounds``: the nearest robot's drive to touch it plus its
+straight-line travel, at the robots' speed). No run places an object before that time, so
+the failure fires in every run that places one, at the same time for every planner; the
+result says when (``disturbances.robot_failures_fired``), and a run that ended before it
+counts as not disturbed. Deterministic for the scene and seed.
 """
 
 from __future__ import annotations
@@ -16,12 +17,13 @@ import zlib
 import numpy as np
 
 from lamp.contract.disturb import PRESETS, Disturbances
+from lamp.scene.bounds import makespan_lower_bound
 from lamp.scene.model import Scene
 
 __all__ = ["DISTURB_PRESETS", "FAILURE_FRACTION", "disturbances_for"]
 
-#: Where in its first motion the failing robot stops: a fraction drawn from this range.
-FAILURE_FRACTION = (0.1, 0.9)
+#: When the failing robot stops: this fraction (drawn) of the earliest possible placement.
+FAILURE_FRACTION = (0.2, 0.8)
 DISTURB_PRESETS = (*PRESETS, "one-robot-fails")
 
 
@@ -33,5 +35,7 @@ def disturbances_for(preset: str, scene: Scene, seed: int) -> Disturbances:
         raise ValueError(f"unknown disturbance preset {preset!r}; expected one of: "
                          f"{', '.join(DISTURB_PRESETS)}")
     rng = np.random.default_rng([zlib.crc32(scene.name.encode()), int(seed)])
+    earliest = min(makespan_lower_bound(scene).per_object)
     robot = int(rng.integers(scene.n_robots))
-    return Disturbances(working_failures=((robot, float(rng.uniform(*FAILURE_FRACTION))),))
+    when = float(rng.uniform(*FAILURE_FRACTION)) * earliest
+    return Disturbances(robot_failures=((robot, when),))

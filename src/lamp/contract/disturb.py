@@ -8,10 +8,6 @@ deterministic for the run's seed.
   ``1 + e`` and turned by ``e'`` rad, ``e, e'`` ~ N(0, fraction), per robot and row;
 - ``robot_failures``: (robot, simulated time) pairs: the robot stops for good at that time
   and stays where it stopped, an obstacle to the others;
-- ``working_failures``: (robot, fraction) pairs: the robot stops for good during the first
-  motion in which it moves, at that fraction of the rows over which it moves (a failure
-  that fires in every run in which the robot works; ``lamp bench --disturb
-  one-robot-fails``);
 - ``push_disturbance`` (N s): during every segment, at a random instant, the object being
   pushed receives an impulse of this size in a random direction.
 
@@ -51,7 +47,6 @@ class Disturbances:
     actuation_noise: float = 0.0
     robot_failures: tuple[tuple[int, float], ...] = ()
     push_disturbance: float = 0.0
-    working_failures: tuple[tuple[int, float], ...] = ()
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "sensing_noise",
@@ -60,59 +55,41 @@ class Disturbances:
                            _level("actuation_noise", self.actuation_noise, MAX_ACTUATION_NOISE))
         object.__setattr__(self, "push_disturbance",
                            _level("push_disturbance", self.push_disturbance, MAX_PUSH_IMPULSE))
-        timed = _pairs("robot_failures", self.robot_failures, "a time >= 0 s",
-                       lambda t: t >= 0)
-        working = _pairs("working_failures", self.working_failures, "a fraction in [0, 1)",
-                         lambda f: 0 <= f < 1)
-        robots = [r for r, _ in timed + working]
+        failures = []
+        for item in self.robot_failures:
+            try:
+                robot, when = item
+            except (TypeError, ValueError):
+                raise InputError(f"robot_failures: (robot, time) pairs, got {item!r}") from None
+            if isinstance(robot, bool) or not isinstance(robot, int) or robot < 0:
+                raise InputError(f"robot_failures: robot index >= 0, got {robot!r}")
+            if isinstance(when, bool) or not isinstance(when, (int, float)) \
+                    or not math.isfinite(when) or when < 0:
+                raise InputError(f"robot_failures: robot {robot}: a time >= 0 s, got {when!r}")
+            failures.append((robot, float(when)))
+        robots = [r for r, _ in failures]
         if len(set(robots)) != len(robots):
             raise InputError(f"robot_failures: robot {robots} named twice")
-        object.__setattr__(self, "robot_failures", tuple(sorted(timed, key=lambda f: f[1])))
-        object.__setattr__(self, "working_failures", tuple(sorted(working)))
+        object.__setattr__(self, "robot_failures", tuple(sorted(failures, key=lambda f: f[1])))
 
     @property
     def active(self) -> bool:
         """Whether anything is disturbed at all."""
         return self != NO_DISTURBANCE
 
-    @property
-    def failing_robots(self) -> list[int]:
-        """The robots that are to fail, at a time or while working."""
-        return [r for r, _ in self.robot_failures + self.working_failures]
-
     def check_robots(self, n_robots: int) -> None:
         """``InputError`` for a failing robot the scene does not have, or for all of them."""
-        for robot in self.failing_robots:
+        for robot, _ in self.robot_failures:
             if robot >= n_robots:
                 raise InputError(f"robot_failures: robot {robot}: the scene has robots "
                                  f"0..{n_robots - 1}")
-        if self.failing_robots and len(self.failing_robots) >= n_robots:
+        if self.robot_failures and len(self.robot_failures) >= n_robots:
             raise InputError("robot_failures: every robot would fail; at least one must remain")
 
     def to_dict(self) -> dict[str, Any]:
-        out = {"sensing_noise": self.sensing_noise, "actuation_noise": self.actuation_noise,
-               "robot_failures": [list(f) for f in self.robot_failures],
-               "push_disturbance": self.push_disturbance}
-        if self.working_failures:
-            out["working_failures"] = [list(f) for f in self.working_failures]
-        return out
-
-
-def _pairs(name: str, items: Any, what: str, ok: Any) -> list[tuple[int, float]]:
-    """``items`` as validated (robot index, number) pairs; ``InputError`` naming ``name``."""
-    out = []
-    for item in items:
-        try:
-            robot, value = item
-        except (TypeError, ValueError):
-            raise InputError(f"{name}: (robot, value) pairs, got {item!r}") from None
-        if isinstance(robot, bool) or not isinstance(robot, int) or robot < 0:
-            raise InputError(f"{name}: robot index >= 0, got {robot!r}")
-        if isinstance(value, bool) or not isinstance(value, (int, float)) \
-                or not math.isfinite(value) or not ok(value):
-            raise InputError(f"{name}: robot {robot}: {what}, got {value!r}")
-        out.append((robot, float(value)))
-    return out
+        return {"sensing_noise": self.sensing_noise, "actuation_noise": self.actuation_noise,
+                "robot_failures": [list(f) for f in self.robot_failures],
+                "push_disturbance": self.push_disturbance}
 
 
 NO_DISTURBANCE = Disturbances()

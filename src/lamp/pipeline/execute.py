@@ -74,7 +74,7 @@ def execute(request: RunRequest, observers: Sequence[RunObserver] = (),
     result.makespan_lower_bound_s = makespan_lower_bound(scene).seconds
     result.params = request.param_values()
     result.disturbances = request.disturbances.to_dict()
-    if request.disturbances.failing_robots:
+    if request.disturbances.robot_failures:
         result.stats["failed_robots"] = {str(k): [round(float(v), 4) for v in place]
                                          for k, place in sorted(executor.failed.items())}
         result.disturbances["robot_failures_fired"] = [

@@ -12,10 +12,9 @@ call passes straight through (bit-identical). Deterministic for its seed.
 Timing of a failure: the rows of a path are reached at the documented times (row t -> t+1
 lasts the longest robot step over the scene's robot speed, ``lamp.sim.simulator``), so a
 robot failing at time T holds, from the first row reached at or after T, the place of that
-row (``failed`` maps it to that place, ``fired`` to that row's time); a working failure
-picks its row in the first call that moves its robot. In every later call the robot holds
-where it is at the call's start: a braked robot that a pushed object may shove, not a
-spring back to its place.
+row (``failed`` maps it to that place, ``fired`` to that row's time); in every later call
+it holds where it is at the call's start: a braked robot that a pushed object may shove,
+not a spring back to its place.
 """
 
 from __future__ import annotations
@@ -44,7 +43,6 @@ class DisturbedExecutor:
         #: robot -> the simulated time it stopped at (the time its stopping row is reached)
         self.fired: dict[int, float] = {}
         self._pending = list(disturbances.robot_failures)
-        self._working = list(disturbances.working_failures)
 
     # ------------------------------------------------------------------ observation
     @property
@@ -123,26 +121,18 @@ class DisturbedExecutor:
 
     def _fail(self, paths: np.ndarray) -> np.ndarray:
         """Failed robots hold where they stopped; a failure due in this call stops its robot
-        at the first row reached at or after its time; a working failure stops its robot in
-        the first call that moves it, at its fraction of the rows over which it moves."""
+        at the first row reached at or after its time."""
         paths = paths.copy()
         times = self._row_times(paths)
-        due: list[tuple[int, int]] = []  # (robot, the row it stops at)
-        for robot, when in list(self._pending):
-            if times[-1] >= when:
-                due.append((robot, int(np.searchsorted(times, when))))
-                self._pending.remove((robot, when))
-        for robot, fraction in list(self._working):
-            moving = np.flatnonzero(np.any(np.diff(paths[robot], axis=0) != 0.0, axis=1))
-            if moving.size:
-                first, last = int(moving[0]), int(moving[-1]) + 1
-                due.append((robot, first + int(fraction * (last - first))))
-                self._working.remove((robot, fraction))
         fresh = set()
-        for robot, row in due:
+        for robot, when in list(self._pending):
+            if times[-1] < when:
+                continue
+            row = int(np.searchsorted(times, when))
             self.failed[robot] = paths[robot, row].copy()
             self.fired[robot] = float(times[row])
             paths[robot, row:] = self.failed[robot]
+            self._pending.remove((robot, when))
             fresh.add(robot)
         now = self.sim.robot_positions
         for robot in self.failed:
