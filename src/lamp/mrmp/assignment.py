@@ -93,15 +93,20 @@ def straight_line_bottleneck(S: np.ndarray, G: np.ndarray) -> float:
     rows, cols = linear_sum_assignment(E)
     top = E[rows, cols].max()  # one assignment's longest distance
     vals = np.unique(E[(floor <= E) & (top >= E)])
-    a, b = 0, len(vals) - 1  # the answer is in vals[a..b]
+    return float(vals[_least_threshold(E, vals, 0, len(vals) - 1)])
+
+
+def _least_threshold(C: np.ndarray, vals: np.ndarray, a: int, b: int) -> int:
+    """The least ``i`` in ``[a, b]`` such that the pairs with ``C <= vals[i]`` match every
+    row of ``C`` (binary search; ``b`` must be such an index)."""
     while a < b:
         mid = (a + b) // 2
-        rows, cols = linear_sum_assignment(vals[mid] < E)
-        if (E[rows, cols] > vals[mid]).any():
+        rows, cols = linear_sum_assignment(vals[mid] < C)
+        if (C[rows, cols] > vals[mid]).any():
             a = mid + 1
         else:
             b = mid
-    return float(vals[a])
+    return a
 
 
 def _unreached(G: np.ndarray, no_link: np.ndarray, unreachable: np.ndarray) -> str:
@@ -169,14 +174,7 @@ def _dense(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray, G: np.ndarray,
         if C[rows, cols].max() <= floor:
             return _chosen(C, rows, cols)
     vals = np.unique(C[np.isfinite(C)])
-    a, b = (0, len(vals) - 1) if bottleneck else (len(vals) - 1,) * 2
-    while a < b:  # least t such that the pairs within t match every goal
-        mid = (a + b) // 2
-        rows, cols = linear_sum_assignment(vals[mid] < C)
-        if (C[rows, cols] > vals[mid]).any():
-            a = mid + 1
-        else:
-            b = mid
+    a = _least_threshold(C, vals, 0 if bottleneck else len(vals) - 1, len(vals) - 1)
     W = np.where(vals[a] >= C, C, _BIG)
     rows, cols = linear_sum_assignment(W)
     if np.any(W[rows, cols] >= _BIG):
