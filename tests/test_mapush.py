@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -448,3 +449,24 @@ def test_training_maps_are_apart_from_the_benchmark_scenes():
     assert not {_content(s) for s in sample} & {_content(s) for s in bench}
     assert _content(sample[0]) == _content(training_maps(maps["seed"], 1)[0])  # determinism
     assert all(s.physics.robot_speed == ROBOT_SPEED for s in sample)
+
+
+def test_last_subgoal_is_the_goal_reached_at_the_stop_radius(tmp_path, ppo_env):
+    """An object between the stop radius (0.1 m) and the policy's success radius (0.15 m)
+    of its goal is not "at its subgoal": with a policy that does not move, each subgoal
+    lasts its full time (one segment per subgoal time, not one per step)."""
+    from lamp.rl.policy import PushPolicy
+    from lamp.sim.simulator import Simulator
+
+    tiny = _tiny_policy(tmp_path, ppo_env)
+    still = PushPolicy([(np.zeros((8, tiny.info.obs_dim)), np.zeros(8)),
+                        (np.zeros((2, 8)), np.zeros(2))],
+                       replace(tiny.info, hidden=(8,)))
+    d = json.loads(json.dumps(SHORT))
+    d["objects"][0]["start"] = [1.18, 1.0, 0.0]  # 0.12 m from its goal
+    scene = scene_from_dict(d)
+    record = MapushRecord()
+    res = run_object(scene, 0, Simulator(scene), still, record,
+                     time_limit=2 * still.subgoal_time)
+    assert res.segments == 2 and abs(res.position_error - 0.12) < 1e-3, res
+    assert record.mapush_success and not res.success

@@ -165,7 +165,9 @@ def run_object(scene: Scene, index: int, sim, policy, record: MapushRecord,
             reason = "no object path"
             break
         rest = along(path)[-1]
-        sub = np.asarray(goal, float) if rest <= lookahead else pose_at(path, lookahead)
+        last = rest <= lookahead  # the subgoal is the goal: reached at STOP_RADIUS only
+        sub = np.asarray(goal, float) if last else pose_at(path, lookahead)
+        reach = STOP_RADIUS if last else SUBGOAL_TOLERANCE
         core.set_goal(sub)
         record.planning_time_s.append(dt)
         segments += 1
@@ -180,7 +182,7 @@ def run_object(scene: Scene, index: int, sim, policy, record: MapushRecord,
                 record.mapush_success, record.mapush_time_s = True, core.time
             if out.info["left_workspace"]:
                 left = True
-            elif math.hypot(*(q[:2] - sub[:2])) <= SUBGOAL_TOLERANCE or d_goal <= STOP_RADIUS:
+            elif math.hypot(*(q[:2] - sub[:2])) <= reach or d_goal <= STOP_RADIUS:
                 reached = True
             if core.steps % every == 0 or left or reached:
                 rows.append((core.steps, core.robot_positions().copy(), core.object_poses()))
