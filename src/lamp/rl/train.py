@@ -126,7 +126,6 @@ def train(out: str | Path, settings: TrainSettings, scenes=None, progress=None,
     reproducible but not identical to an uninterrupted one. ValueError naming the file
     when there is nothing to resume or the settings differ."""
     import torch
-    from stable_baselines3 import PPO
     from stable_baselines3.common.callbacks import BaseCallback
     from stable_baselines3.common.logger import Logger
 
@@ -145,22 +144,12 @@ def train(out: str | Path, settings: TrainSettings, scenes=None, progress=None,
                      total_steps=settings.steps)
     n = env.n_robots
     out = Path(out)
-    head = {"seed": settings.seed, "settings": {**asdict(settings), "hidden": list(settings.hidden)},
-            "robots": n, "scenes": len(scenes),
-            "maps": maps or {"given": sorted(s.name for s in scenes)},
-            "eval_maps": _maps_named(eval_scenes), "robot_speed": config.max_speed,
-            "subgoal_ahead": SUBGOAL_AHEAD, "subgoal_tolerance": SUBGOAL_TOLERANCE,
-            "subgoal_time": SUBGOAL_TIME, "frame_skip": config.frame_skip,
-            "reward": MID_REWARD}
+    head = _head(settings, scenes, maps, eval_scenes, n, config)
     curve: list[dict[str, Any]] = []
     if resume:
         curve, model = _resumed(out, head, env)
     else:
-        model = PPO("MlpPolicy", env, seed=settings.seed, device="cpu",
-                    n_steps=settings.rollout, batch_size=settings.batch,
-                    n_epochs=settings.epochs, learning_rate=settings.learning_rate, gamma=0.99,
-                    gae_lambda=0.95, ent_coef=0.0,
-                    policy_kwargs={"net_arch": list(settings.hidden)}, verbose=0)
+        model = _new_ppo(env, settings)
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter() - (curve[-1]["wall_s"] if curve else 0.0)
     seen = [0]
@@ -218,6 +207,29 @@ def train(out: str | Path, settings: TrainSettings, scenes=None, progress=None,
     actor(final).save(out / "policy.pt")
     write_json_atomic(out / "curve.json", record)
     return record
+
+
+def _new_ppo(env, settings: TrainSettings):
+    """A fresh PPO learner of ``settings`` on ``env`` (the shipped policy's hyperparameters)."""
+    from stable_baselines3 import PPO
+
+    return PPO("MlpPolicy", env, seed=settings.seed, device="cpu", n_steps=settings.rollout,
+               batch_size=settings.batch, n_epochs=settings.epochs,
+               learning_rate=settings.learning_rate, gamma=0.99, gae_lambda=0.95,
+               ent_coef=0.0, policy_kwargs={"net_arch": list(settings.hidden)}, verbose=0)
+
+
+def _head(settings: TrainSettings, scenes, maps: dict[str, Any] | None, eval_scenes,
+          n_robots: int, config) -> dict[str, Any]:
+    """What a run's curve and policy record about its settings, maps and task."""
+    return {"seed": settings.seed,
+            "settings": {**asdict(settings), "hidden": list(settings.hidden)},
+            "robots": n_robots, "scenes": len(scenes),
+            "maps": maps or {"given": sorted(s.name for s in scenes)},
+            "eval_maps": _maps_named(eval_scenes), "robot_speed": config.max_speed,
+            "subgoal_ahead": SUBGOAL_AHEAD, "subgoal_tolerance": SUBGOAL_TOLERANCE,
+            "subgoal_time": SUBGOAL_TIME, "frame_skip": config.frame_skip,
+            "reward": MID_REWARD}
 
 
 def _resumed(out: Path, head: dict[str, Any], env):
