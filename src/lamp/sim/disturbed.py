@@ -6,8 +6,9 @@ wraps an environment: the closed loop drives it through the same ``Executor`` pr
 cannot tell. Everything the loop observes carries the sensing noise: ``object_poses``, the
 result's ``object_poses``, and the poses a push watch (``execute``'s ``stop``) is called
 with, a fresh reading at each check. The simulator's true state is ``true_object_poses``
-and the recorded trace, so the recording and the final success verdict are the truth. With no disturbance every
-call passes straight through (bit-identical). Deterministic for its seed.
+and the recorded trace, so the recording and the final success verdict are the truth. With
+no disturbance every call passes straight through (bit-identical). Deterministic for its
+seed.
 
 Timing of a failure: the rows of a path are reached at the documented times (row t -> t+1
 lasts the longest robot step over the scene's robot speed, ``lamp.sim.simulator``), so a
