@@ -77,8 +77,9 @@ def table(seq: Path, con: Path, peer: Path | None) -> str:
         c, s, p = c_recs[name], s_recs.get(name), p_recs.get(name)
         scene = _scene(c)
         bound = makespan_lower_bound(scene).seconds
-        if c["success"] and bound:
-            over.append(c["makespan_s"] / bound)
+        c_over = c["makespan_s"] / bound if c["success"] and bound else None
+        if c_over is not None:
+            over.append(c_over)
         ratio = None
         if s and c["success"] and s["success"]:
             ratio = c["makespan_s"] / s["makespan_s"]
@@ -96,7 +97,7 @@ def table(seq: Path, con: Path, peer: Path | None) -> str:
             f"{scene.workspace[0]:.0f} x {scene.workspace[1]:.0f}", _f(bound),
             "-" if s is None else ("yes" if s["success"] else "no"),
             _makespan(s), "yes" if c["success"] else "no", _makespan(c),
-            _f(c["makespan_s"] / bound if c["success"] and bound else None, ".2f"),
+            _f(c_over, ".2f"),
             _f(ratio, ".2f"), _f(s and s.get("planning_time_per_segment_s"), ".3f"),
             _f(c.get("planning_time_per_segment_s"), ".3f"),
             _f(fleet.get("utilisation", {}).get("working"), ".2f"),

@@ -46,10 +46,6 @@ class MakespanBound:
     critical_object: int
     per_object: tuple[float, ...]
 
-    def ratio(self, makespan_s: float) -> float | None:
-        """``makespan_s`` over the bound (None when the bound is 0: nothing to move)."""
-        return makespan_s / self.seconds if self.seconds > 0 else None
-
 
 def makespan_lower_bound(scene: Scene) -> MakespanBound:
     """The lower bound of the module docstring for ``scene``."""

@@ -9,9 +9,9 @@ Scene format (``lamp-scene/1``, all optional, additive)::
 This module owns the defaults (the simulator's calibrated values: a file without these
 keys means what it always meant) and the ranges a value must lie in, each end with its
 reason (what the simulator serves: its time step, its memory, its contacts); beyond them a
-scene is refused naming the field and the range, not run into an unstable simulation. ``lamp.sim.mjcf`` and ``lamp.sim.simulator``
-read :class:`Physics` and the per-object :class:`ObjectPhysics` where the simulator is
-built.
+scene is refused naming the field and the range, not run into an unstable simulation.
+``lamp.sim.mjcf`` and ``lamp.sim.simulator`` read :class:`Physics` and the per-object
+:class:`ObjectPhysics` where the simulator is built.
 """
 
 from __future__ import annotations
