@@ -76,7 +76,7 @@ def test_solve_signature_and_docstring() -> None:
     for name in names():
         assert f'"{name}"' in lamp.solve.__doc__
     hints = typing.get_type_hints(lamp.solve)
-    assert set(typing.get_args(hints["planner"])) == set(names())
+    assert hints["planner"] is str  # the names are the registry's alone
     assert hints["return"] is RunResult
 
 

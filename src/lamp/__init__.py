@@ -25,7 +25,7 @@ except _metadata.PackageNotFoundError:  # running from a source tree that is not
 from lamp._lazy import lazy_getattr
 from lamp.contract.disturb import Disturbances
 from lamp.contract.result import RunResult
-from lamp.planners.config import PlannerConfig, PlannerName
+from lamp.planners.config import PlannerConfig
 from lamp.progress import ProgressCallback
 from lamp.scene.model import Scene
 
@@ -45,7 +45,7 @@ if TYPE_CHECKING:
 __getattr__ = lazy_getattr("lamp", _EXPORTS, globals())
 
 
-def solve(scene: Scene | str | Path, planner: PlannerName = "lazy", seed: int = 0, *,
+def solve(scene: Scene | str | Path, planner: str = "lazy", seed: int = 0, *,
           model: str | Path | Any = "learned", config: PlannerConfig | None = None,
           params: Mapping[str, Any] | None = None, time_limit: float | None = None,
           max_segments: int | None = None, disturbances: Disturbances | None = None,
@@ -59,7 +59,8 @@ def solve(scene: Scene | str | Path, planner: PlannerName = "lazy", seed: int = 
         planner: ``"lazy"`` (LAMP-Lazy, default), ``"astar"`` (LAMP-A*, open loop),
             ``"astar-replan"`` (LAMP-A*, replanning on drift), ``"gco-ori"`` (GCo with its
             0.2 m buffer), ``"gco-var"`` (GCo with zero buffer) or ``"mapush"`` (the
-            MAPush-style RL baseline: lattice subgoals and a PPO pushing policy).
+            MAPush-style RL baseline: lattice subgoals and a PPO pushing policy): a name
+            of ``lamp.pipeline.registry.names()``.
         seed: random seed; the same scene, planner and seed give the same result.
         model: ``"learned"`` (the shipped checkpoint), ``"geometric"``, the path of a
             checkpoint written by ``lamp model train``, or a proposer object.

@@ -10,12 +10,10 @@ from typing import Any
 
 import numpy as np
 
+from lamp.bench.presentation import color, label, marker
 from lamp.bench.tables import (
     IrosRun,
     PathCost,
-    _color,
-    _label,
-    _marker,
     families,
     family_records,
     planning_time_points,
@@ -37,7 +35,7 @@ def _violin_axes(ax, points: dict[str, list[tuple[str, float, bool]]], fail_valu
         if vals.size >= 2 and np.ptp(vals) > 0:
             parts = ax.violinplot([vals], positions=[i], widths=0.8, showextrema=False)
             for body in parts["bodies"]:
-                body.set_facecolor(_color(p))
+                body.set_facecolor(color(p))
                 body.set_alpha(0.3)
         if vals.size:
             ax.boxplot([vals], positions=[i], widths=0.12, showfliers=False,
@@ -53,7 +51,8 @@ def _violin_axes(ax, points: dict[str, list[tuple[str, float, bool]]], fail_valu
     ax.axhline(math.log10(fail_value), color="black", ls="--", lw=1)
     ax.text(len(names) - 0.5, math.log10(fail_value), f" failed ({fail_value:g} s)",
             va="bottom", ha="right", fontsize=7)
-    ax.set_xticks(range(len(names)), [_label(p) for p in names], rotation=20, fontsize=8)
+    ax.set_xticks(range(len(names)), [label(p) for p in names], rotation=20,
+                  fontsize=8)
     data = [math.log10(max(v, floor)) for pts in points.values() for _, v, _ in pts]
     lo = max(math.floor(min(data, default=0.0)), -3)
     hi = math.ceil(math.log10(fail_value) + 0.3)
@@ -109,9 +108,9 @@ def plot_path_cost(costs: dict[str, PathCost], path: Path) -> Path | None:
             ratio = f"{pc.mean_ratio:.2f}"
         else:
             xs, ys, ratio = [], [], "-"
-        ax.scatter(xs, ys, marker=_marker(base), color=_color(base),
+        ax.scatter(xs, ys, marker=marker(base), color=color(base),
                    s=22, alpha=0.8,
-                   label=f"{_label(base)}: n={pc.n}, ratio={ratio}, "
+                   label=f"{label(base)}: n={pc.n}, ratio={ratio}, "
                          f"DNF {pc.dnf_baseline}/{pc.dnf_reference}")
     ax.plot([0, hi * 1.05], [0, hi * 1.05], color="black", lw=0.8, ls="--")
     ax.set_xlim(0, hi * 1.05)
@@ -137,8 +136,8 @@ def plot_iros(runs: Sequence[IrosRun], path: Path) -> Path | None:
         if not run.planning_time_s:
             continue
         ax.plot(range(1, len(run.planning_time_s) + 1), run.planning_time_s, marker=".",
-                lw=0.8, color=_color(run.planner),
-                label=f"{_label(run.planner)} (seed {run.seed})")
+                lw=0.8, color=color(run.planner),
+                label=f"{label(run.planner)} (seed {run.seed})")
     ax.set_yscale("log")
     ax.set_xlabel("executed segment")
     ax.set_ylabel("planning time (s)")

@@ -33,6 +33,7 @@ from pathlib import Path
 from typing import Any
 
 from lamp.bench.jobs import RESULTS_FILE
+from lamp.bench.presentation import label, paper_full_horizon, paper_success, rank
 from lamp.bench.tables import (  # noqa: F401 - re-exported: the report's numbers
     FAMILY_ORDER,
     IROS_SUITE,
@@ -45,10 +46,6 @@ from lamp.bench.tables import (  # noqa: F401 - re-exported: the report's number
     IrosRun,
     PathCost,
     Rate,
-    _color,
-    _label,
-    _marker,
-    _rank,
     failure_line,
     failure_reasons,
     families,
@@ -61,8 +58,6 @@ from lamp.bench.tables import (  # noqa: F401 - re-exported: the report's number
     mapush_criteria_table,
     mapush_success,
     median_planning_time_table,
-    paper_full_horizon,
-    paper_success,
     path_cost_comparison,
     planners,
     planning_time_points,
@@ -94,14 +89,15 @@ def _paper(value: float | None) -> str:
 def success_markdown(table: dict[str, dict[str, Rate]], fams: Sequence[str]) -> str:
     rows = []
     if any(f in FAMILY_ORDER for f in fams) and "mapush" not in table:
+        paper = paper_success(MAPUSH_PLANNER)
         rows.append(["MAPush (paper only, not run)"]
-                    + [(f"[paper {paper_success('mapush')[f]:.0f}%]" if f in FAMILY_ORDER
-                        else "-") for f in fams] + ["-"])
+                    + [(f"[paper {paper[f]:.0f}%]" if f in FAMILY_ORDER else "-")
+                       for f in fams] + ["-"])
     for p, row in table.items():
         # the paper's MAPush row counts MAPush's criterion: it is beside that one instead
         ref = {} if p == MAPUSH_PLANNER else paper_success(p)
-        label = _label(p) + (" (strict criterion)" if p == MAPUSH_PLANNER else "")
-        rows.append([label] + [row[f].cell() + _paper(ref.get(f)) for f in fams]
+        method = label(p) + (" (strict criterion)" if p == MAPUSH_PLANNER else "")
+        rows.append([method] + [row[f].cell() + _paper(ref.get(f)) for f in fams]
                     + [row["all"].cell()])
     return _table(["method", *fams, "all"], rows)
 
@@ -121,7 +117,7 @@ def full_horizon_markdown(table: dict[str, dict[str, Rate]], fams: Sequence[str]
     rows = []
     for p, row in table.items():
         ref = paper_full_horizon(p)
-        rows.append([_label(p)] + [row[f].cell() + _paper(ref.get(f)) for f in fams]
+        rows.append([label(p)] + [row[f].cell() + _paper(ref.get(f)) for f in fams]
                     + [row["all"].cell()])
     return _table(["method", *fams, "all"], rows)
 
@@ -131,7 +127,7 @@ def median_markdown(table: dict[str, dict[str, tuple[float | None, int]]],
     def cell(v: float | None) -> str:
         return _fmt_s(v) if fmt is None or v is None else format(v, fmt)
 
-    rows = [[_label(p)] + [f"{cell(row[f][0])} (n={row[f][1]})" for f in [*fams, "all"]]
+    rows = [[label(p)] + [f"{cell(row[f][0])} (n={row[f][1]})" for f in [*fams, "all"]]
             for p, row in table.items()]
     return _table(["method", *fams, "all"], rows)
 
@@ -140,7 +136,7 @@ def path_cost_markdown(costs: dict[str, PathCost]) -> str:
     rows = []
     for base, pc in costs.items():
         rows.append([
-            f"LAMP-Lazy vs {_label(base)}", str(pc.n),
+            f"LAMP-Lazy vs {label(base)}", str(pc.n),
             "-" if pc.mean_ratio is None else f"{pc.mean_ratio:.3f}",
             "-" if pc.median_ratio is None else f"{pc.median_ratio:.3f}",
             str(pc.dnf_baseline), str(pc.dnf_reference), str(pc.both_failed)])
@@ -156,7 +152,7 @@ def iros_markdown(runs: Sequence[IrosRun], run_dir: Path) -> str:
     rows = []
     for run in runs:
         n_ok = sum(bool(o.get("success")) for o in run.objects)
-        rows.append([_label(run.planner), str(run.seed), "yes" if run.success else "no",
+        rows.append([label(run.planner), str(run.seed), "yes" if run.success else "no",
                      f"{n_ok}/{len(run.objects)}", str(run.segments),
                      _fmt_s(run.mean_planning_time_s), _fmt_s(run.total_planning_time_s),
                      str(run.makespan), run.status])
@@ -177,9 +173,10 @@ def iros_markdown(runs: Sequence[IrosRun], run_dir: Path) -> str:
                          _fmt_s(None if pt is None else float(pt)), _fmt_s(per),
                          "yes" if o.get("full_horizon_plan") else "no",
                          (o.get("failure_reason") or "").replace("|", "/")])
-        parts.append(f"**{_label(run.planner)}, seed {run.seed}**: per object\n\n" + _table(
-            ["object", "success", "segments", "planning time (s)", "per segment (s)",
-             "full-horizon plan", "failure reason"], orow))
+        parts.append(f"**{label(run.planner)}, seed {run.seed}**: per object\n\n"
+                     + _table(["object", "success", "segments", "planning time (s)",
+                               "per segment (s)", "full-horizon plan", "failure reason"],
+                              orow))
     gif = run_dir / "iros.gif"
     if gif.exists():
         parts.append("Animation of the LAMP-Lazy assembly: [iros.gif](iros.gif)\n\n"
@@ -204,7 +201,7 @@ def _config_markdown(config: dict[str, Any], records: Sequence[dict[str, Any]]) 
     # lines without a run id are older than the first line with one
     first = min((rid for c in by_run.values() for rid in c if rid is not None), default=None)
     older = ("" if not first else " (run 0)" if first == 1 else f" (runs 0-{first - 1})")
-    for p, c in sorted(by_run.items(), key=lambda kv: _rank(kv[0])):
+    for p, c in sorted(by_run.items(), key=lambda kv: rank(kv[0])):
         parts = []
         for rid, n in sorted(c.items(), key=lambda kv: (kv[0] is None, kv[0] or 0)):
             if rid is None:
@@ -213,7 +210,7 @@ def _config_markdown(config: dict[str, Any], records: Sequence[dict[str, Any]]) 
                 s = sessions[rid] if 0 <= rid < len(sessions) else {}
                 commit = (s.get("git_commit") or "unknown")[:10]
                 parts.append(f"{n} from run {rid} (commit `{commit}`)")
-        origin.append(f"{_label(p)}: " + ", ".join(parts))
+        origin.append(f"{label(p)}: " + ", ".join(parts))
     if origin:
         lines.append("- the records counted (the newest per job): " + "; ".join(origin))
     if config:
@@ -234,15 +231,15 @@ def _config_markdown(config: dict[str, Any], records: Sequence[dict[str, Any]]) 
         other = config.get("planner_planning_limits_s")
         if other:
             lines.append("- planning limits per object used by each planner: "
-                         + ", ".join(f"{_label(k)} {v:g} s" for k, v in other.items()))
+                         + ", ".join(f"{label(k)} {v:g} s" for k, v in other.items()))
     else:
         lines.append("- no config.json in this folder: caps and provenance unknown")
     counts = status_counts(records)
     lines.append("- runs recorded: " + ", ".join(
-        f"{_label(p)} {sum(c.values())}"
+        f"{label(p)} {sum(c.values())}"
         + (" (" + ", ".join(f"{k} {v}" for k, v in sorted(c.items()) if k != "ok") + ")"
            if any(k != "ok" for k in c) else "")
-        for p, c in sorted(counts.items(), key=lambda kv: _rank(kv[0]))))
+        for p, c in sorted(counts.items(), key=lambda kv: rank(kv[0]))))
     return "\n".join(lines)
 
 
@@ -320,8 +317,8 @@ def build_report(run_dir: str | Path) -> Path:
                 md += ["![path cost](path_cost.png)", ""]
         reasons = failure_reasons(main)
         if reasons:
-            rows = [[_label(p), "; ".join(f"{k}: {v}" for k, v in c.most_common())]
-                    for p, c in sorted(reasons.items(), key=lambda kv: _rank(kv[0]))]
+            rows = [[label(p), "; ".join(f"{k}: {v}" for k, v in c.most_common())]
+                    for p, c in sorted(reasons.items(), key=lambda kv: rank(kv[0]))]
             md += ["## Failure reasons", "", _table(["method", "reasons (runs)"], rows), ""]
     runs = iros_summary(records)
     n_obj = max((len(r.objects) for r in runs), default=9)

@@ -1,6 +1,5 @@
-"""The numbers of the benchmark report, computed from ``DIR/results.jsonl`` alone: loading,
-the per-planner facts the report shows (from ``lamp.pipeline.registry``), and the pure table
-functions (:func:`success_table`, :func:`full_horizon_table`,
+"""The numbers of the benchmark report, computed from ``DIR/results.jsonl`` alone: loading
+and the pure table functions (:func:`success_table`, :func:`full_horizon_table`,
 :func:`median_planning_time_table`, :func:`path_cost_comparison`, :func:`iros_summary` ...)
 that the tests check against hand-computed values. Definitions: :mod:`lamp.bench.report`.
 """
@@ -18,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from lamp.bench.jobs import RESULTS_FILE, JobKey, latest_by_key, read_records, record_key
-from lamp.pipeline import registry
+from lamp.bench.presentation import rank, table_ii_planners, table_order
 
 #: The paper's four map families, in its column order.
 FAMILY_ORDER = ("random", "maze", "tilt", "warehouse")
@@ -27,7 +26,7 @@ IROS_SUITE = "iros"
 REFERENCE_PLANNER = "lazy"
 
 # Per-planner facts (row order, labels, colours, markers, the paper's Table I and II
-# figures, which planners are LAMP's) come from ``lamp.pipeline.registry``. The paper's
+# figures, the rows of Table II) come from ``lamp.bench.presentation``. The paper's
 # MAPush row counts MAPush's own criterion (:data:`MAPUSH_CRITERION`), every other row the
 # strict one.
 #: The MAPush baseline's own success criterion (paper, footnote to Sec. V-A), recorded per
@@ -106,32 +105,6 @@ def load_config(run_dir: str | Path) -> dict[str, Any]:
         return {}
 
 
-def _spec(planner: str) -> registry.PlannerSpec | None:
-    """The registered planner, or None for a name recorded by a planner since removed."""
-    try:
-        return registry.get(planner)
-    except ValueError:
-        return None
-
-
-def _rank(planner: str) -> int:
-    """The planner's row in the paper's tables (unknown planners last)."""
-    spec = _spec(planner)
-    return spec.row if spec is not None else 1 << 30
-
-
-def paper_success(planner: str) -> dict[str, float]:
-    """Table I of the paper (success rate, %) per family for ``planner`` ({} if none)."""
-    spec = _spec(planner)
-    return dict(spec.paper_success) if spec is not None else {}
-
-
-def paper_full_horizon(planner: str) -> dict[str, float]:
-    """Table II of the paper (full-horizon plan rate, %) per family ({} if none)."""
-    spec = _spec(planner)
-    return dict(spec.paper_full_horizon) if spec is not None else {}
-
-
 def _ordered(names: Iterable[str], order: Sequence[str]) -> list[str]:
     names = set(names)
     return [n for n in order if n in names] + sorted(names - set(order))
@@ -143,7 +116,7 @@ def families(records: Iterable[dict[str, Any]]) -> list[str]:
 
 
 def planners(records: Iterable[dict[str, Any]]) -> list[str]:
-    return _ordered((r["planner"] for r in records), registry.table_order())
+    return _ordered((r["planner"] for r in records), table_order())
 
 
 def family_records(records: Iterable[dict[str, Any]]) -> list[dict[str, Any]]:
@@ -203,7 +176,7 @@ def mapush_criteria_table(records: Sequence[dict[str, Any]]) -> dict[str, dict[s
 
 def full_horizon_table(records: Sequence[dict[str, Any]]) -> dict[str, dict[str, Rate]]:
     """Table II: full-horizon plan rate of the LAMP planners per family (plus ``"all"``)."""
-    return _rate_table(records, run_full_horizon, only=registry.lamp_planners())
+    return _rate_table(records, run_full_horizon, only=table_ii_planners())
 
 
 def median_planning_time_table(records: Sequence[dict[str, Any]]
@@ -377,7 +350,7 @@ def iros_summary(records: Sequence[dict[str, Any]]) -> list[IrosRun]:
             # one definition of "per segment" everywhere: all planning over executed segments
             mean_planning_time_s=(total / seg) if seg else None, planning_time_s=times,
             makespan=int(r.get("makespan") or 0)))
-    runs.sort(key=lambda x: (_rank(x.planner), x.planner, x.seed))
+    runs.sort(key=lambda x: (rank(x.planner), x.planner, x.seed))
     return runs
 
 
@@ -390,18 +363,3 @@ def failure_line(config: dict[str, Any], records: Sequence[dict[str, Any]]) -> f
     caps = [float(r["time_cap_s"]) for r in records if r.get("time_cap_s")]
     return max(caps) if caps else PAPER_PLANNING_LIMIT_S
 
-
-# ------------------------------------------------------------------------------ labels
-def _label(p: str) -> str:
-    spec = _spec(p)
-    return spec.label if spec is not None else p
-
-
-def _color(p: str) -> str:
-    spec = _spec(p)
-    return spec.color if spec is not None else registry.DEFAULT_COLOR
-
-
-def _marker(p: str) -> str:
-    spec = _spec(p)
-    return spec.marker if spec is not None else "o"
