@@ -1,7 +1,7 @@
 """Tests of ``lamp bench`` / ``lamp report``: jobs, resume, caps, the results file, the report.
 
-The planners are replaced by the stand-ins of ``lamp.bench.fake`` (job processes import them
-by name), so these tests exercise the machinery, not the planners, and run in seconds.
+The planners are replaced by the stand-ins of ``bench_fakes.py`` in this folder (job
+processes import them by name; ``conftest.py`` puts this folder on their path), so these tests exercise the machinery, not the planners, and run in seconds.
 """
 
 from __future__ import annotations
@@ -138,7 +138,7 @@ def test_rerun_repeats_a_planners_jobs_unless_redone_by_the_current_code():
     ([("a", None)], "a", False, set()),
 ])
 def test_current_runs_are_clean_runs_of_the_running_commit(sessions, commit, dirty, expected):
-    from lamp.bench.cli import current_runs
+    from lamp.bench.provenance import current_runs
 
     previous = {"sessions": [{"git_commit": c, "git_dirty": d} for c, d in sessions]}
     assert current_runs(previous, commit, dirty) == expected
@@ -204,7 +204,7 @@ def test_local_runner_records_timeout_error_and_crash_as_failures():
                           [0], time_cap_s=60.0)
     jobs = [dataclasses.replace(j, time_cap_s=1.0) if j.planner == "lazy" else j for j in jobs]
     outcomes = []
-    run_local(jobs, "lamp.bench.fake:mixed_job", 2, outcomes.append)
+    run_local(jobs, "bench_fakes:mixed_job", 2, outcomes.append)
     by = {o.job.planner: o for o in outcomes}
     assert {p: o.status for p, o in by.items()} == {
         "lazy": "timeout", "astar": "error", "astar-replan": "crashed", "gco-var": "ok"}
@@ -220,7 +220,7 @@ def test_local_runner_records_timeout_error_and_crash_as_failures():
     crashed = outcome_record(by["astar-replan"])
     assert not crashed["success"] and "exited with code 3" in crashed["failure_reason"]
     ok = outcome_record(by["gco-var"])
-    from lamp.bench.fake import synthetic_job
+    from bench_fakes import synthetic_job
 
     expected = synthetic_job(jobs[3])
     assert ok["success"] == expected["success"] and ok["makespan"] == expected["makespan"]
@@ -228,7 +228,7 @@ def test_local_runner_records_timeout_error_and_crash_as_failures():
 
 def test_job_function_must_be_importable():
     with pytest.raises(ValueError, match="cannot be imported"):
-        run_local([], "lamp.bench.fake:no_such_function", 1, lambda o: None)
+        run_local([], "bench_fakes:no_such_function", 1, lambda o: None)
     with pytest.raises(ValueError, match="top-level function"):
         run_local([], lambda job: {}, 1, lambda o: None)
 
@@ -246,7 +246,7 @@ def test_ray_backend_runs_the_same_jobs():
              logging_level="ERROR")
     try:
         outcomes = []
-        run_ray(jobs, "lamp.bench.fake:mixed_job", 2, outcomes.append, start_grace_s=3.0)
+        run_ray(jobs, "bench_fakes:mixed_job", 2, outcomes.append, start_grace_s=3.0)
     finally:
         ray.shutdown()
     assert {o.job.planner: o.status for o in outcomes} == {
@@ -436,7 +436,7 @@ def test_bench_end_to_end_resume_and_render(tmp_path):
     out = tmp_path / "run"
     args = ["bench", "--suite", f"{tmp_path}/suites/random,{tmp_path}/suites/iros",
             "--planners", "lazy,gco-var", "--workers", "2", "--out", str(out),
-            "--job-fn", "lamp.bench.fake:render_job", "--no-progress", "--render-iros",
+            "--job-fn", "bench_fakes:render_job", "--no-progress", "--render-iros",
             "--time-cap", "30", "--no-report"]  # the report has its own tests
     res = runner.invoke(app, args)
     assert res.exit_code == 0, res.output
@@ -484,7 +484,7 @@ def test_bench_rerun_replaces_one_planners_records(tmp_path, monkeypatch):
     folder = write_suite(tmp_path, "random", 2)
     out = tmp_path / "run"
     args = ["bench", "--suites", str(folder), "--planners", "lazy,gco-var", "--workers", "1",
-            "--out", str(out), "--job-fn", "lamp.bench.fake:synthetic_job", "--no-progress"]
+            "--out", str(out), "--job-fn", "bench_fakes:synthetic_job", "--no-progress"]
     assert runner.invoke(app, args).exit_code == 0
     res = runner.invoke(app, [*args, "--resume", "--rerun", "lazy"])
     assert res.exit_code == 0 and "0 to run" in res.output  # recorded by this very code
@@ -525,7 +525,7 @@ def test_bench_rerun_replaces_one_planners_records(tmp_path, monkeypatch):
 def test_bench_rejects_bad_input_with_exit_2(tmp_path, extra, message):
     folder = write_suite(tmp_path, "random", 1)
     args = ["bench", "--suite", str(folder), "--out", str(tmp_path / "run"),
-            "--job-fn", "lamp.bench.fake:synthetic_job", "--no-progress", *extra]
+            "--job-fn", "bench_fakes:synthetic_job", "--no-progress", *extra]
     res = runner.invoke(app, args)
     assert res.exit_code == 2, res.output
     assert message in res.output
@@ -538,12 +538,12 @@ def test_bench_param_reaches_the_jobs_and_the_config(tmp_path):
     with other parameters is refused."""
     import json
 
-    from lamp.bench import options
+    from lamp.cli import bench_options as options
 
     folder = write_suite(tmp_path, "random", 1)
     out = tmp_path / "run"
     args = ["bench", "--suites", str(folder), "--planners", "lazy,gco-var", "--workers", "1",
-            "--out", str(out), "--job-fn", "lamp.bench.fake:synthetic_job", "--no-progress"]
+            "--out", str(out), "--job-fn", "bench_fakes:synthetic_job", "--no-progress"]
     for bad, message in ((["--param", "astar.k=4"], "planner 'astar' is not among --planners"),
                          (["--param", "gco-var.max_plan_iterations=4"], "no parameter"),
                          (["--param", "lazy.k=-1"], "lazy.k: an integer >= 1")):
@@ -574,7 +574,7 @@ def test_dry_run_lists_jobs_without_writing(tmp_path):
 
 def test_fake_synthetic_job_is_deterministic():
     job = enumerate_jobs([suite("tilt", 1)], ["lazy"], [3])[0]
-    from lamp.bench.fake import synthetic_job
+    from bench_fakes import synthetic_job
 
     a, b = synthetic_job(job), synthetic_job(dataclasses.replace(job))
     assert a == b and a["segments"] == len(a["planning_time_s"])

@@ -199,7 +199,7 @@ def test_bench_and_report_write_the_database(tmp_path):
     out, db = tmp_path / "run", tmp_path / "dbs" / "results.sqlite"
     res = runner.invoke(app, ["bench", "--suites", str(folder), "--planners", "lazy,gco-var",
                               "--num-seeds", "2", "--out", str(out), "--db", str(db),
-                              "--job-fn", "lamp.bench.fake:synthetic_job", "--no-progress",
+                              "--job-fn", "bench_fakes:synthetic_job", "--no-progress",
                               "--no-report"])
     assert res.exit_code == 0, res.output
     assert f"wrote {db}" in res.output
@@ -234,7 +234,7 @@ def test_a_bad_db_path_is_refused_before_running(tmp_path, kind):
         target = blocker / "results.sqlite"
         message = "cannot write in"
     res = runner.invoke(app, ["bench", "--suites", str(folder), "--out", str(tmp_path / "run"),
-                              "--db", str(target), "--job-fn", "lamp.bench.fake:synthetic_job",
+                              "--db", str(target), "--job-fn", "bench_fakes:synthetic_job",
                               "--no-progress"])
     assert res.exit_code == 2, res.output
     assert "--db" in res.output and message in res.output and str(target) in res.output

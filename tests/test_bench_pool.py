@@ -19,9 +19,9 @@ from pathlib import Path
 
 import pytest
 import yaml
+from bench_fakes import pid_job
 from typer.testing import CliRunner
 
-from lamp.bench.fake import pid_job
 from lamp.bench.jobs import SuiteScene, enumerate_jobs, read_records
 from lamp.bench.pool import run_local
 from lamp.cli import app
@@ -61,7 +61,7 @@ def without_pid(result: dict) -> dict:
 def test_warm_workers_run_many_jobs_each():
     jobs = enumerate_jobs([suite("random", 3)], ["lazy", "gco-var"], [0, 1], time_cap_s=30.0)
     outcomes = []
-    run_local(jobs, "lamp.bench.fake:pid_job", 2, outcomes.append)
+    run_local(jobs, "bench_fakes:pid_job", 2, outcomes.append)
     assert sorted(o.job.key for o in outcomes) == sorted(j.key for j in jobs)
     assert {o.status for o in outcomes} == {"ok"}
     assert 1 <= len({pid_of(o) for o in outcomes}) <= 2 < len(jobs)
@@ -74,7 +74,7 @@ def test_warm_workers_run_many_jobs_each():
 def test_workers_retire_after_jobs_per_worker(per_worker):
     jobs = enumerate_jobs([suite("maze", 6)], ["gco-var"], [0], time_cap_s=30.0)
     outcomes = []
-    run_local(jobs, "lamp.bench.fake:pid_job", 1, outcomes.append, jobs_per_worker=per_worker)
+    run_local(jobs, "bench_fakes:pid_job", 1, outcomes.append, jobs_per_worker=per_worker)
     pids = [pid_of(o) for o in outcomes]
     assert len(set(pids)) == len(jobs) // per_worker
     assert pids == [p for p in dict.fromkeys(pids) for _ in range(per_worker)]
@@ -87,7 +87,7 @@ def test_a_worker_lost_to_a_timeout_or_crash_is_replaced():
     jobs = [dataclasses.replace(j, time_cap_s=1.0) if j.planner == "lazy" else j for j in jobs]
     outcomes = []
     t0 = time.monotonic()
-    run_local(jobs, "lamp.bench.fake:mixed_job", 1, outcomes.append)
+    run_local(jobs, "bench_fakes:mixed_job", 1, outcomes.append)
     # the two sleeping jobs (a minute each) were cut at their 1 s cap: well under the 120 s
     # they would take, with room for restarting workers on a loaded machine
     assert time.monotonic() - t0 < 100.0
@@ -143,7 +143,7 @@ def _bench_process(tmp_path: Path, n_scenes: int = 2) -> tuple[subprocess.Popen,
     proc = subprocess.Popen(
         [sys.executable, "-c", "from lamp.cli import app; app()", "bench", "--suites",
          str(folder), "--planners", "lazy", "--workers", "2", "--out", str(tmp_path / "run"),
-         "--job-fn", "lamp.bench.fake:announce_and_sleep_job", "--no-progress"],
+         "--job-fn", "bench_fakes:announce_and_sleep_job", "--no-progress"],
         env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     return proc, scratch
 
@@ -206,7 +206,7 @@ def test_resume_with_nothing_to_do_adds_no_run(tmp_path):
     folder = write_suite(tmp_path, "warehouse", 2)
     out = tmp_path / "run"
     args = ["bench", "--suites", str(folder), "--planners", "lazy,gco-var", "--out", str(out),
-            "--job-fn", "lamp.bench.fake:synthetic_job", "--no-progress", "--workers", "2"]
+            "--job-fn", "bench_fakes:synthetic_job", "--no-progress", "--workers", "2"]
     res = runner.invoke(app, args)
     assert res.exit_code == 0, res.output
     report = (out / "report.md").read_text()
@@ -227,7 +227,7 @@ def test_jobs_per_worker_option(tmp_path):
     folder = write_suite(tmp_path, "maze", 3)
     out = tmp_path / "run"
     res = runner.invoke(app, ["bench", "--suites", str(folder), "--planners", "gco-var",
-                              "--out", str(out), "--job-fn", "lamp.bench.fake:pid_job",
+                              "--out", str(out), "--job-fn", "bench_fakes:pid_job",
                               "--no-progress", "--workers", "1", "--jobs-per-worker", "1",
                               "--no-report"])
     assert res.exit_code == 0, res.output
@@ -247,7 +247,7 @@ def test_a_worker_that_cannot_start_stops_the_run_with_a_message(tmp_path, monke
     (tmp_path / "missing").mkdir()
     (tmp_path / "missing" / "vanishing_jobs.py").write_text(
         "import os\nif os.environ.get('LAMP_BENCH_TEST_WORKER'):\n    raise ImportError('gone')\n"
-        "from lamp.bench.fake import synthetic_job as job\n")
+        "from bench_fakes import synthetic_job as job\n")
     monkeypatch.setenv("LAMP_BENCH_TEST_WORKER", "")
     import vanishing_jobs  # noqa: F401 - imported here, before the workers exist
 

@@ -234,7 +234,7 @@ def test_run_progress_quiet_verbose_and_summary(small: Path, tmp_path: Path) -> 
 def test_progress_on_a_terminal_is_a_status_line() -> None:
     import io
 
-    from lamp.cli_support import RunProgress
+    from lamp.cli.support import RunProgress
     from lamp.progress import ProgressEvent
 
     stream = io.StringIO()

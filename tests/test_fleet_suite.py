@@ -14,7 +14,8 @@ import shapely
 from typer.testing import CliRunner
 
 from lamp.bench.jobs import load_suite
-from lamp.bench.options import DEFAULT_SUITES
+from lamp.cli.bench_options import DEFAULT_SUITES
+from lamp.cli.suite import suite_app
 from lamp.geometry.shapes import narrowest_width, obstacle_geometry, to_shapely
 from lamp.geometry.team import DEFAULT_TEAM
 from lamp.planners.limits import check_scene_limits
@@ -25,7 +26,6 @@ from lamp.suites import checks as C
 from lamp.suites import fleet as F
 from lamp.suites import fleet_checks as FC
 from lamp.suites import fleet_warehouse as FW
-from lamp.suites.cli import suite_app
 from lamp.suites.registry import (
     list_suites,
     scene_yaml,
@@ -451,7 +451,7 @@ def test_each_draw_is_announced_with_why_the_ones_before_failed() -> None:
 def test_drawing_a_scene_shows_a_status_line_on_a_terminal_only() -> None:
     import io
 
-    from lamp.suites.cli import DrawProgress
+    from lamp.cli.suite import DrawProgress
 
     stream = io.StringIO()
     with DrawProgress(stream=stream, terminal=True) as shown:

@@ -2,10 +2,10 @@
 
 The layers, bottom to top (``LAYERS``): what a module of one layer may import at run time is
 its own layer and the layers below (``if TYPE_CHECKING:`` imports excepted). The command
-line glue (``CLI_MODULES``: ``lamp.cli``, ``lamp.cli_support``, every ``*/cli.py``...) sits
-on top of everything. Checked statically over every module, and by importing leaf modules
-in a fresh interpreter and looking at what got loaded. Also: no import cycle among the
-modules, no module over ``MAX_LINES`` lines and no function over ``MAX_FUNCTION_LINES``.
+line, the ``lamp.cli`` package and nothing else, is the top layer. Checked statically over
+every module, and by importing leaf modules in a fresh interpreter and looking at what got
+loaded. Also: no import cycle among the modules, no module over ``MAX_LINES`` lines and no
+function over ``MAX_FUNCTION_LINES``.
 """
 
 from __future__ import annotations
@@ -39,9 +39,10 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("pipeline",),
     ("bench",),
     ("demo",),
+    ("cli",),  # the command line: parses, loads, calls, writes; may import any layer
 )
-#: The command line: parses, loads, calls, writes; may import any layer.
-CLI_MODULES = ("lamp", "lamp.cli", "lamp.cli_support", "lamp.bench.options")
+#: The package root: its top-level names load their modules lazily (``lamp._lazy``).
+ROOT = "lamp"
 MAX_LINES = 500
 LEVEL = {name: i for i, names in enumerate(LAYERS) for name in names}
 
@@ -78,17 +79,36 @@ def _runtime_imports(path: Path) -> set[str]:
     return {m for m in found if m == "lamp" or m.startswith("lamp.")}
 
 
+def _all_imports(path: Path) -> set[str]:
+    """Every module ``path`` names in an import statement, wherever the statement is."""
+    found: set[str] = set()
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            found.add(node.module)
+        elif isinstance(node, ast.Import):
+            found.update(a.name for a in node.names)
+    return found
+
+
 def _layer(module: str) -> int | None:
-    """The layer of a lamp module; None for the command line glue (above every layer)."""
-    if module in CLI_MODULES or module.endswith(".cli"):
+    """The layer of a lamp module; None for the package root (in no layer)."""
+    if module == ROOT:
         return None
-    parts = module.split(".")
-    return LEVEL[parts[1]]
+    return LEVEL[module.split(".")[1]]
 
 
 def test_every_package_has_a_layer():
-    tops = {m.split(".")[1] for m in MODULES if m != "lamp"}
-    assert tops - set(LEVEL) - {"cli", "cli_support"} == set()
+    tops = {m.split(".")[1] for m in MODULES if m != ROOT}
+    assert tops - set(LEVEL) == set()
+
+
+def test_the_command_line_is_the_cli_package_alone():
+    """Every command lives in ``lamp.cli``: no ``cli`` module elsewhere, and nothing below
+    the top layer imports typer."""
+    assert [m for m in MODULES if m.endswith(".cli") and m != "lamp.cli"] == []
+    typer_users = [m for m, p in MODULES.items() if _layer(m) != LEVEL["cli"]
+                   and "typer" in {n.split(".")[0] for n in _all_imports(p)}]
+    assert typer_users == []
 
 
 def test_layers_import_only_downward():
@@ -98,7 +118,7 @@ def test_layers_import_only_downward():
         if mine is None:
             continue
         for target in _runtime_imports(path):
-            theirs = _layer(target) if target != "lamp" else None
+            theirs = _layer(target)
             if theirs is None or theirs > mine:
                 bad.append(f"{module} (layer {mine}) imports {target} (layer {theirs})")
     assert not bad, "\n".join(bad)
@@ -145,7 +165,7 @@ def test_cycle_finder_finds_cycles():
 
 
 def test_no_import_cycles():
-    graph = {m: {t for t in _runtime_imports(p) if t in MODULES and t != m and t != "lamp"}
+    graph = {m: {t for t in _runtime_imports(p) if t in MODULES and t != m and t != ROOT}
              for m, p in MODULES.items()}
     assert _cycles(graph) == []
 

@@ -255,8 +255,8 @@ def test_same_seed_same_recording(scene, proposer, solved):
 def test_bench_job_saves_its_recording(scene, tmp_path):
     """``lamp bench --record``: a job with ``recording_to`` leaves a loadable recording of
     exactly the run its result line describes."""
-    from lamp.bench.cli import canonical_command
     from lamp.bench.jobs import Job
+    from lamp.bench.provenance import canonical_command
     from lamp.bench.runner import solve_job
 
     job = Job(suite="t", scene_name="tiny", scene_file="tiny.json", scene=scene,

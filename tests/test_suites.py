@@ -16,13 +16,13 @@ from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 import lamp
+from lamp.cli.suite import suite_app
 from lamp.geometry.shapes import obstacle_geometry, to_shapely
 from lamp.scene import scene_from_dict
 from lamp.scene.model import Circle, Obstacle, Rectangle
 from lamp.suites import checks as C
 from lamp.suites import generators as G
 from lamp.suites import iros
-from lamp.suites.cli import suite_app
 from lamp.suites.registry import (
     export_suite,
     list_suites,

@@ -4,8 +4,9 @@
 - :mod:`lamp.bench.runner`: jobs in isolated processes under a wall-clock cap each, locally
   (:mod:`lamp.bench.pool`, warm worker processes) or on Ray;
 - :mod:`lamp.bench.report`: the paper's Tables I-II, figures and ``report.md``;
-- :mod:`lamp.bench.db`: the results as an SQLite database (``--db``, docs/bench-db.md);
-- :mod:`lamp.bench.cli`: the two commands; :mod:`lamp.bench.fake`: stand-in job functions.
+- :mod:`lamp.bench.db`: the results as an SQLite database (``--db``, docs/bench-db.md).
+
+The commands themselves are :mod:`lamp.cli.bench`.
 
 Matplotlib, Ray and the planners are imported only where they are used (the planners
 inside the job processes).

@@ -14,8 +14,9 @@ other job. The parent process alone writes ``results.jsonl`` (through
 
 The function that runs one job is injectable (``job_fn``: a ``"module:function"`` string or
 an importable top-level function taking a :class:`~lamp.bench.jobs.Job` and returning a
-result.json ``dict``), so the machinery can be tested without the planners
-(:mod:`lamp.bench.fake`).
+result.json ``dict``), so the machinery can be tested without the planners (the tests'
+stand-ins, ``tests/bench_fakes.py``). Every job process imports it by that name: its module
+must be importable there too (the tests put their folder on ``PYTHONPATH``).
 """
 
 from __future__ import annotations

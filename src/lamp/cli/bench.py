@@ -1,14 +1,13 @@
 """``lamp bench`` and ``lamp report``: run the paper's experiments and rebuild their report.
 
-Registered by ``lamp.cli`` as ``app.command("bench")(bench_command)`` and
-``app.command("report")(report_command)``. Exit status: 0 when the run finished (whatever
-the planners' outcomes), 2 for bad input (unknown suite or planner, bad numbers, a non-empty
-output folder without ``--resume``, caps differing from the run being resumed, Ray missing,
-an unusable ``--db`` path, ``--rerun`` without ``--resume`` or naming a planner not run), 1 when no worker process can start, 130 when interrupted and 143
-when terminated (``SIGTERM``); after either, no worker process is left running, the scratch
+Exit status: 0 when the run finished (whatever the planners' outcomes), 2 for bad input
+(unknown suite or planner, bad numbers, a non-empty output folder without ``--resume``,
+caps differing from the run being resumed, Ray missing, an unusable ``--db`` path,
+``--rerun`` without ``--resume`` or naming a planner not run), 1 when no worker process can
+start, 130 when interrupted and 143 when terminated (``SIGTERM``); after either, no worker process is left running, the scratch
 folder is removed, and the run continues with ``--resume``.
 
-The options and their checks are :mod:`lamp.bench.options`; what ``config.json`` records
+The options and their checks are :mod:`lamp.cli.bench_options`; what ``config.json`` records
 is :mod:`lamp.bench.provenance`.
 """
 from __future__ import annotations
@@ -24,7 +23,7 @@ from typing import Any
 
 import typer
 
-from lamp.bench import options as opt
+import lamp.cli.bench_options as opt
 from lamp.bench import provenance
 from lamp.bench.jobs import (
     RESULTS_FILE,
@@ -34,22 +33,9 @@ from lamp.bench.jobs import (
     pending_jobs,
     read_records,
 )
-from lamp.bench.options import (  # noqa: F401  (re-exported: the bench CLI's names)
-    DEFAULT_PLANNING_LIMIT,
-    DEFAULT_SUITES,
-    DEFAULT_TIME_CAP,
-    check_resume_config,
-    known_planners,
-)
-from lamp.bench.options import fail as _fail
-from lamp.bench.provenance import (  # noqa: F401  (re-exported: the bench CLI's names)
-    CONFIG_FILE,
-    canonical_command,
-    current_runs,
-    machine_info,
-    planner_limits,
-    write_config,
-)
+from lamp.bench.provenance import CONFIG_FILE, canonical_command, current_runs, write_config
+from lamp.cli.bench_options import check_resume_config
+from lamp.cli.support import fail_input as _fail
 
 #: A rendering job gets this many times its usual cap (frame capture and GIF encoding).
 RENDER_CAP_FACTOR = 2.0

@@ -1,8 +1,8 @@
 """``lamp rl ...``: train and evaluate the mid-level pushing policy of the ``mapush``
 baseline.
 
-Registered by ``lamp.cli`` as the ``rl`` group; commands parse arguments, call
-``lamp.rl.train`` / ``lamp.rl.evaluate`` and write or print their results.
+Commands parse arguments, call ``lamp.rl.train`` / ``lamp.rl.evaluate`` and write or print
+their results.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from typing import Optional
 
 import typer
 
-from lamp.cli_support import lamp_typer
+from lamp.cli.support import lamp_typer
 
 rl_app = lamp_typer(
     help="The MAPush-style baseline's pushing policy (PPO, one actor shared by the robots).",
@@ -44,7 +44,7 @@ def train_cmd(
     """Train with PPO on generated maps apart from the benchmark scenes, evaluating on the
     benchmark scenes; write OUT/policy.pt, OUT/policy.json, OUT/curve.json, OUT/curve.png
     (and OUT/ppo.zip, the state --resume continues from)."""
-    from lamp.cli_support import fail_input
+    from lamp.cli.support import fail_input
 
     _threads(threads)
     from lamp.rl.train import TrainSettings, train
@@ -84,7 +84,7 @@ def eval_cmd(
 ) -> None:
     """Subgoal success of a policy on held-out episodes of the mid-level task, on the
     benchmark scenes (which training never sees)."""
-    from lamp.cli_support import fail_input
+    from lamp.cli.support import fail_input
 
     _threads(1)
     from lamp.rl.evaluate import evaluate

@@ -1,10 +1,9 @@
-"""The ``lamp`` command line: parses arguments, loads inputs, calls the library, writes outputs.
+"""``lamp run``, ``lamp demo`` and ``lamp warmup``: plan and execute a scene, write its outputs.
 
-Sub-command groups live beside the code they drive (``lamp.suites.cli``, ``lamp.manip.cli``,
-``lamp.bench.cli``, ``lamp.scene.cli``); this module only wires them together; shared checks
-and the progress display are in ``lamp.cli_support``. Exit status: 0 when a run finished
-(whatever its outcome; ``lamp run --check`` exits 1 when the task failed), 2 for bad input
-(checked before any planning), 1 for an internal error.
+Every run is one ``lamp.pipeline.RunRequest``, its inputs checked before anything is planned
+or written (:func:`_build_request`); :func:`_run_and_write` runs it and writes the run
+folder, result.json last. Exit status: 0 when a run finished (whatever its outcome;
+``lamp run --check`` exits 1 when the task failed), 2 for bad input, 1 for an internal error.
 """
 
 from __future__ import annotations
@@ -13,69 +12,23 @@ from pathlib import Path
 
 import typer
 
-from lamp.cli_support import (
+from lamp.cli.support import (
     RunProgress,
     check_choice,
     check_model_option,
     check_writable_dir,
-    check_writable_file,
     fail_input,
-    image_format,
-    lamp_typer,
+    load_scene_or_exit,
     print_summary,
-    version_callback,
 )
 from lamp.errors import InputError
 from lamp.pipeline import registry
 from lamp.pipeline.registry import planning_limit_help
 from lamp.planners.config import PAPER_MAX_SEGMENTS, SEGMENTS_PER_METRE
-from lamp.scene import SceneError
-
-app = lamp_typer(
-    help="LAMP: long-horizon multi-robot collaborative manipulation planning.",
-    no_args_is_help=True,
-    add_completion=True,
-)
 
 PLANNER_HELP = "Planner: " + "; ".join(f"{s.name}: {s.description}" for s in registry.specs())
 MODEL_HELP = ("Manipulation model: learned (the shipped checkpoint), geometric, or a checkpoint "
               "file written by `lamp model train`.")
-
-
-@app.callback()
-def main(
-    version: bool = typer.Option(False, "--version", "-V", callback=version_callback,
-                                 is_eager=True, help="Print the installed version and exit."),
-) -> None:
-    """LAMP: long-horizon multi-robot collaborative manipulation planning."""
-
-
-def load_scene_or_exit(path: Path):
-    """The scene file at ``path``, or the built-in suite scene of that name
-    (``lamp run maze-07``); exit 2 naming what is wrong otherwise."""
-    from lamp.suites.registry import resolve_scene
-
-    try:
-        return resolve_scene(path)
-    except SceneError as exc:
-        fail_input(str(exc))
-
-
-@app.command()
-def show(
-    scene_file: Path = typer.Argument(..., help="Scene file (YAML or JSON), or a built-in "
-                                      "scene by name (maze-07).", show_default=False),
-    out: Path = typer.Option(Path("scene.png"), "--out", "-o",
-                             help="Image to write: .png, .svg or .pdf (by its extension)."),
-) -> None:
-    """Draw a scene: workspace, obstacles, robots, object start and goal outlines."""
-    fmt = image_format(out)
-    check_writable_file(out)
-    scene = load_scene_or_exit(scene_file)
-    from lamp.viz.scene_plot import save_scene_image
-
-    save_scene_image(scene, out, fmt=fmt)
-    typer.echo(f"wrote {out}")
 
 
 def _run_and_write(request, out: Path, progress: RunProgress, render: bool = False,
@@ -195,7 +148,7 @@ def _print_params(planner: str) -> None:
 
     spec = registry.get(check_choice("--planner", planner, registry.names(), "planner"))
     rows = param_table(spec.default_config(), spec.params)
-    table = Table(title=f"parameters of {spec.name} ({spec.label}): --param {spec.name}.NAME=VALUE")
+    table = Table(title=f"parameters of {spec.name} ({spec.description}): --param {spec.name}.NAME=VALUE")
     for col in ("name", "default", "valid", "meaning"):
         table.add_column(col)
     for row in rows:
@@ -224,7 +177,6 @@ PARAM_HELP = ("Set one of the planner's parameters, PLANNER.NAME=VALUE (repeatab
               "--help-params lists them), e.g. lazy.max_plan_iterations=400.")
 
 
-@app.command()
 def run(
     scene_file: Path = typer.Argument(None, help="Scene file (YAML or JSON), or a built-in "
                                       "scene by name (maze-07).", show_default=False),
@@ -286,7 +238,6 @@ def run(
         raise typer.Exit(code=1)
 
 
-@app.command()
 def demo(
     out: Path = typer.Option(Path("lamp-demo"), "--out", "-o", help=OUT_HELP),
     seed: int = typer.Option(0, "--seed", "-s", help="Random seed."),
@@ -304,7 +255,6 @@ def demo(
     _run_and_write(request, out, progress, render=True, html=True)
 
 
-@app.command()
 def warmup() -> None:
     """Compile the Numba kernels now (cached on disk), so that no run pays for it later."""
     from lamp.pipeline.warmup import warm_up
@@ -317,109 +267,3 @@ def warmup() -> None:
     else:
         typer.echo(f"kernels already compiled (loaded from the disk cache; warm-up "
                    f"{report.seconds:.1f} s)")
-
-
-@app.command("render")
-def render_command(
-    run_dir: Path = typer.Argument(..., help="A run folder holding recording.json + .npz."),
-    out: Path = typer.Option(..., "--out", "-o", help="File to write: .gif, .mp4 (needs "
-                             "imageio-ffmpeg), .png (one still), .html (replay viewer) or "
-                             ".mcap (Foxglove; needs mcap)."),
-    at: int = typer.Option(None, "--at", help="PNG: draw the end of segment N, counted as in "
-                           "the pictures (1 = the first; default: the final state)."),
-    size: int = typer.Option(640, "--size", help="Pixels on the picture's longer side."),
-    fps: float = typer.Option(15.0, "--fps", help="Frames per second of video."),
-    speed: float = typer.Option(None, "--speed", help="Simulated seconds per video second "
-                                "(default: the video lasts at most 20 s)."),
-    follow: float = typer.Option(None, "--follow", help="Camera window in metres that "
-                                 "follows the moved object (default: whole workspace)."),
-    min_robot_px: float = typer.Option(3.0, "--min-robot-px", help="Smallest robot radius "
-                                       "drawn, in pixels."),
-    trail: float = typer.Option(4.0, "--trail", help="Robot trail length in simulated s."),
-) -> None:
-    """Draw a recorded run again, without replanning: GIF, MP4, PNG still, HTML viewer, or
-    export it to MCAP for Foxglove."""
-    from lamp.record import RecordingError, load_recording
-    from lamp.viz.replay import RenderOptions, render
-
-    try:
-        recording = load_recording(run_dir)
-    except RecordingError as exc:
-        fail_input(str(exc))
-    try:
-        if at is not None and out.suffix.lower() != ".png":
-            raise ValueError("at: only a .png still takes --at")
-        if at is not None and not 1 <= at <= recording.n_segments:
-            raise ValueError(f"at: segment {at} does not exist (the run has "
-                             f"{recording.n_segments} segments: 1..{recording.n_segments})")
-        options = RenderOptions(size=size, fps=fps, speed=speed, trail_s=trail,
-                                min_robot_px=min_robot_px, follow=follow,
-                                at=None if at is None else at - 1)
-        stats = render(recording, out, options)
-    except ValueError as exc:  # "field: problem" -> "--option: problem"
-        field, _, problem = str(exc).partition(": ")
-        flags = {"trail_s": "--trail", "min_robot_px": "--min-robot-px"}
-        flag = flags.get(field, f"--{field}")
-        fail_input(f"{flag}: {problem}" if problem else str(exc))
-    except RuntimeError as exc:
-        fail_input(str(exc))
-    frames = f" ({stats.frames} frames)" if stats.frames > 1 else ""
-    typer.echo(f"wrote {out}{frames} in {stats.seconds:.1f} s")
-
-
-@app.command("timeline")
-def timeline_command(
-    run_dir: Path = typer.Argument(..., help="A run folder holding recording.json + .npz."),
-    out: Path = typer.Option(..., "--out", "-o", help="Picture to write: .png, .svg or .pdf."),
-    width: float = typer.Option(10.0, "--width", help="Picture width in inches."),
-) -> None:
-    """Draw where a run's robot-time went: one bar per robot over simulated time, coloured
-    by the object its sub-team pushes (moving, holding, idle), objects' placements marked."""
-    from lamp.record import RecordingError, load_recording
-    from lamp.viz.timeline import save_timeline
-
-    image_format(out)
-    check_writable_file(out)
-    try:
-        recording = load_recording(run_dir)
-        save_timeline(recording, out, width_in=width)
-    except RecordingError as exc:
-        fail_input(str(exc))
-    except ValueError as exc:  # "field: problem" -> "--field: problem"
-        fail_input(f"--{exc}")
-    typer.echo(f"wrote {out}")
-
-
-def _register_groups() -> None:
-    from lamp.scene.cli import schema_command, validate_command
-    from lamp.suites.cli import suite_app
-
-    app.command("validate")(validate_command)
-    app.command("schema")(schema_command)
-    app.add_typer(suite_app, name="suite")
-    try:
-        from lamp.manip.cli import model_app
-
-        app.add_typer(model_app, name="model")
-    except ImportError:  # pragma: no cover - only while the module is being written
-        pass
-    try:
-        from lamp.rl.cli import rl_app
-
-        app.add_typer(rl_app, name="rl")
-    except ImportError:  # pragma: no cover - the rl extra is not installed
-        pass
-    try:
-        from lamp.bench.cli import bench_command, report_command
-
-        app.command("bench")(bench_command)
-        app.command("report")(report_command)
-    except ImportError:  # pragma: no cover
-        pass
-
-
-_register_groups()
-
-
-if __name__ == "__main__":
-    app()

@@ -1,9 +1,14 @@
 """Stand-in job functions: exercise the benchmark machinery without running the planners.
 
-``lamp bench --job-fn lamp.bench.fake:synthetic_job ...`` produces plausible,
-deterministic result.json objects in milliseconds (a dry run of the whole pipeline,
-report included); the others model the ways a real job ends badly. They live in the
-package (not in ``tests/``) because job processes, Ray workers included, import them by name.
+``lamp bench --job-fn bench_fakes:synthetic_job ...`` produces plausible, deterministic
+result.json objects in milliseconds (a dry run of the whole pipeline, report included); the
+others model the ways a real job ends badly.
+
+Job processes import a job function by its ``"module:function"`` name, so this module must
+be importable in every one of them: a local pool's spawned workers inherit ``sys.path``,
+but a ``lamp bench`` subprocess and Ray's workers do not. ``conftest.py`` therefore puts
+this folder on ``PYTHONPATH`` for the whole test session; outside the tests, run
+``PYTHONPATH=tests lamp bench --job-fn bench_fakes:synthetic_job ...``.
 """
 
 from __future__ import annotations

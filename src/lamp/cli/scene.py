@@ -1,7 +1,4 @@
-"""``lamp validate`` and ``lamp schema``: check scene files, print the scene JSON Schema.
-
-Registered by ``lamp.cli`` as top-level commands.
-"""
+"""``lamp validate`` and ``lamp schema``: check scene files, print the scene JSON Schema."""
 
 from __future__ import annotations
 
@@ -10,7 +7,7 @@ from pathlib import Path
 
 import typer
 
-from lamp.cli_support import fail_input
+from lamp.cli.support import fail_input
 from lamp.scene.loader import SceneError, load_scene
 from lamp.scene.model import Scene
 from lamp.scene.save import SCENE_SUFFIXES

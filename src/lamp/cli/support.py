@@ -111,6 +111,18 @@ def check_writable_file(path: Path, option: str = "--out") -> Path:
     return path
 
 
+def load_scene_or_exit(path: Path):
+    """The scene file at ``path``, or the built-in suite scene of that name
+    (``lamp run maze-07``); exit 2 naming what is wrong otherwise."""
+    from lamp.scene import SceneError
+    from lamp.suites.registry import resolve_scene
+
+    try:
+        return resolve_scene(path)
+    except SceneError as exc:
+        fail_input(str(exc))
+
+
 def image_format(path: Path, option: str = "--out") -> str:
     """The image format named by ``path``'s extension; exit 2 for any other extension."""
     from lamp.viz.scene_plot import SCENE_IMAGE_FORMATS

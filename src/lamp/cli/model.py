@@ -1,7 +1,7 @@
 """``lamp model ...``: generate push data, train and evaluate the manipulation model.
 
-Registered by ``lamp.cli`` as the ``model`` group. Commands only parse arguments, call the
-library (``lamp.manip.dataset`` / ``train`` / ``evaluate``) and write files.
+Commands only parse arguments, call the library (``lamp.manip.dataset`` / ``train`` /
+``evaluate``) and write files.
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ from pathlib import Path
 
 import typer
 
-from lamp.cli_support import fail_input, lamp_typer
+from lamp.cli.support import fail_input, lamp_typer
 
 model_app = lamp_typer(
     help="The learned manipulation model: push data, training, evaluation.",
@@ -126,7 +126,7 @@ def eval_cmd(
                                "(flow-noscale)."),
 ) -> None:
     """Execute proposals for held-out shapes and motions in the simulator; report accuracy."""
-    from lamp.cli_support import check_model_option, check_writable_file, fail_input
+    from lamp.cli.support import check_model_option, check_writable_file, fail_input
 
     k = k_alias if k_alias is not None else proposals
     if k < 1 or cases < 1:

@@ -8,7 +8,7 @@ from typing import Any
 
 import typer
 
-from lamp.cli_support import StatusLine, fail_input, lamp_typer
+from lamp.cli.support import StatusLine, fail_input, lamp_typer
 from lamp.suites.registry import SUITES, export_suite, suite_files
 
 suite_app = lamp_typer(help="Built-in benchmark suites.", no_args_is_help=True)
@@ -33,7 +33,7 @@ def export_command(
 ) -> None:
     """Write a suite's scene files (and its manifest.json) to DIRECTORY."""
     if name not in SUITES:
-        from lamp.cli_support import did_you_mean
+        from lamp.cli.support import did_you_mean
 
         fail_input(f"unknown suite {name!r}; valid names: {', '.join(SUITES)}"
                    + did_you_mean(name, SUITES))

@@ -1,6 +1,6 @@
 """The options of ``lamp bench`` and their checks, before anything is run or written.
 
-The ``typer`` declarations live here so that :func:`lamp.bench.cli.bench_command` reads as
+The ``typer`` declarations live here so that :func:`lamp.cli.bench.bench_command` reads as
 what it does. :func:`check_options` accepts the command's values or exits with status 2 and
 an ``error: --OPTION: ...`` line on stderr (:func:`fail`); it never touches the output folder.
 """
@@ -14,7 +14,7 @@ from typing import Any
 import typer
 
 from lamp.bench.runner import BACKENDS, DEFAULT_JOB_FN
-from lamp.cli_support import fail_input
+from lamp.cli.support import fail_input
 from lamp.pipeline import registry
 
 DEFAULT_SUITES = "random,maze,tilt,warehouse"
@@ -120,7 +120,7 @@ DB = typer.Option(None, "--db", help="Also write the results as an SQLite "
 # ------------------------------------------------------------------------------ the checks
 def check_planners(planners: str, rerun: str, resume: bool) -> tuple[list[str], list[str]]:
     """``--planners`` and ``--rerun`` as lists, every name registered and rerun a subset."""
-    from lamp.cli_support import did_you_mean
+    from lamp.cli.support import did_you_mean
 
     known = known_planners()
     planner_list = split_list(planners)
@@ -142,7 +142,7 @@ def check_planners(planners: str, rerun: str, resume: bool) -> tuple[list[str], 
 def check_suites(suite: str) -> list[str]:
     """``--suites`` as a list of built-in suite names or existing folders."""
     from lamp.bench.jobs import builtin_suites
-    from lamp.cli_support import did_you_mean
+    from lamp.cli.support import did_you_mean
 
     suite_list = split_list(suite)
     if not suite_list:
@@ -198,7 +198,7 @@ def check_options(*, planners: str, rerun: str, resume: bool, suite: str, model:
                   planning_limit: float, scenes: int | None, job_fn: str, db: Path | None,
                   dry_run: bool) -> tuple[list[str], list[str], list[str], str]:
     """``(planners, rerun, suites, model)`` checked, in the order ``lamp bench`` reports them."""
-    from lamp.cli_support import check_model_option
+    from lamp.cli.support import check_model_option
 
     planner_list, rerun_list = check_planners(planners, rerun, resume)
     suite_list = check_suites(suite)

@@ -1,0 +1,5 @@
+"""``python -m lamp.cli``: the ``lamp`` command."""
+
+from lamp.cli import app
+
+app()
