@@ -1,6 +1,6 @@
 """Compiled (Numba) planar primitives shared by the compiled clearance checkers.
 
-``lamp.geometry.robot_space`` (robot disks) and ``lamp.suites._kernels`` (the suites' exact
+``lamp.geometry.robot_space`` (robot disks) and ``lamp.suites.kernels`` (the suites' exact
 object checker) measure distances to polygon edges, and Gspi's robot-robot conflict test
 (``lamp.mrmp.gspi``) the closest approach of two linear motions; the point-to-segment
 distance they all need lives here once. Functions are inlined into their callers (``inline="always"``),

@@ -63,14 +63,14 @@ from lamp.geometry.object_space import ObjectSpace
 from lamp.scene.model import Scene
 from lamp.search.landmark import LandmarkPotential
 from lamp.search.lattice_primitives import (
-    _REVERSE,
     BLOCKED,
     FREE,
     PRIMITIVES,
+    REVERSE,
     UNKNOWN,
-    _successor_kernel,
     check_lattice_args,
     primitive_costs,
+    successor_kernel,
 )
 from lamp.search.metric import OCTILE_MINOR, TWO_PI, lattice_metric, motion_cost
 
@@ -144,7 +144,7 @@ class ObjectLattice:
 
         self._prim, self._prim_cost, self._prim_reach = primitive_costs(step, self.w_rot, dtheta)
         self._prim_cost_list = self._prim_cost.tolist()
-        self._rev = np.array(_REVERSE, dtype=np.int64)
+        self._rev = np.array(REVERSE, dtype=np.int64)
         self._out_ids = np.empty(len(PRIMITIVES), dtype=np.int64)
         self._out_prim = np.empty(len(PRIMITIVES), dtype=np.int64)
         # zero-filled (UNKNOWN): the pages of nodes never looked at stay untouched, so the
@@ -278,7 +278,7 @@ class ObjectLattice:
         if self.space.grid.capped:
             x, y, _ = self._xyt(u)
             self.space.prepare_point(x, y, self._prim_reach)
-        n, n_pose, n_motion = _successor_kernel(
+        n, n_pose, n_motion = successor_kernel(
             int(u), self.n_j, self.n_headings, self.i_min, self.j_min,
             self.anchor[0], self.anchor[1], self.anchor[2], self.step, self.dtheta,
             self._prim, self._rev, self._node_valid, self._edge_valid,

@@ -1,11 +1,11 @@
 """The motion primitives of the SE(2) lattice (:mod:`lamp.search.lattice`) and their checks.
 
 ``PRIMITIVES`` are the 26 lattice offsets ``(di, dj, dk)`` (8 translations times {-1, 0, +1}
-heading bins, and the 2 pure rotations), ``_REVERSE`` the index of each one's reverse.
+heading bins, and the 2 pure rotations), ``REVERSE`` the index of each one's reverse.
 :func:`check_lattice_args` refuses a lattice whose primitives leave the model's range (or
 whose arguments are malformed) with a ValueError naming the argument;
 :func:`primitive_costs` gives each primitive's cost and the farthest one's reach.
-:func:`_successor_kernel` lists a node's valid edges, checking and caching
+:func:`successor_kernel` lists a node's valid edges, checking and caching
 (``UNKNOWN``/``BLOCKED``/``FREE`` in ``int8`` arrays) only what is not known yet; each
 motion is checked once, from its lower-id end, and stored for both directions.
 """
@@ -35,9 +35,8 @@ PRIMITIVES: tuple[tuple[int, int, int], ...] = tuple(
     for dk in (-1, 0, 1)
     if (di, dj, dk) != (0, 0, 0)
 )
-#: index of the reverse primitive
-_REVERSE = tuple(PRIMITIVES.index((-di, -dj, -dk)) for di, dj, dk in PRIMITIVES)
-
+#: The index of each primitive's reverse (``PRIMITIVES[REVERSE[p]]`` undoes ``PRIMITIVES[p]``).
+REVERSE = tuple(PRIMITIVES.index((-di, -dj, -dk)) for di, dj, dk in PRIMITIVES)
 
 
 def check_lattice_args(
@@ -82,7 +81,7 @@ def primitive_costs(step: float, w_rot: float, dtheta: float
 
 
 @numba.njit(cache=True)
-def _successor_kernel(
+def successor_kernel(
     u: int,
     n_j: int,
     n_k: int,

@@ -7,7 +7,7 @@ prescribes) these checks answer:
   ``find_route`` runs A* over an SE(2) lattice (``resolution`` m, ``n_headings`` headings
   over the shape's symmetry period: pi for rectangles, none for circles), keeping a
   required clearance ``tau`` between the object and every obstacle, the other objects
-  and the border. Clearances are exact (``lamp.suites._kernels``) and every lattice move
+  and the border. Clearances are exact (``lamp.suites.kernels``) and every lattice move
   is certified by bisection with a Lipschitz bound, so a returned route is free with
   clearance >= ``tau`` everywhere, not only at its waypoints. The route is then
   shortcut (certified straight SE(2) motions) and its length (path of the object's
@@ -40,7 +40,7 @@ from numpy.typing import ArrayLike
 from scipy import ndimage
 
 from lamp.scene.model import Obstacle, Scene
-from lamp.suites import _kernels as K
+from lamp.suites import kernels as K
 from lamp.suites.routes import (  # noqa: F401 - re-exported: the checks' public API
     CLEARANCE_LADDER,
     FREE_CLEARANCE,

@@ -28,7 +28,7 @@ centreline, follow it to the first bay's centre, rotate to the next leg's headin
 slide to the goal and rotate to its heading. The witness is sampled every
 ``WITNESS_STEP`` m and ``WITNESS_ROT_STEP`` rad; every sample has exact clearance (the
 suite kernels, zero inflation) >= ``WITNESS_MIN_CLEARANCE``, and every motion between two
-samples is certified to keep it (``_kernels.motion_ok``, bisection on the Lipschitz
+samples is certified to keep it (``kernels.motion_ok``, bisection on the Lipschitz
 bound). Every robot reaches the object's contact ring (``checks.robot_reach`` on a
 ``REACH_RESOLUTION`` grid). An attempt that fails any check is redrawn.
 
@@ -45,9 +45,9 @@ from typing import Any
 import numpy as np
 
 from lamp.scene.model import Scene, shape_from_dict
-from lamp.suites import _kernels as K
 from lamp.suites import checks as C
 from lamp.suites import corridor_layout as CL
+from lamp.suites import kernels as K
 from lamp.suites.generators import parse_scene, place_robots, scene_dict
 from lamp.suites.layout import (
     ROBOT_RADIUS,

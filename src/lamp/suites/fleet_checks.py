@@ -30,8 +30,8 @@ import numpy as np
 from scipy import ndimage
 
 from lamp.scene.model import Obstacle, Scene
-from lamp.suites import _kernels as K
 from lamp.suites import checks as C
+from lamp.suites import kernels as K
 
 #: least fraction of an object's contact ring the robots must reach
 MIN_RING = 0.5

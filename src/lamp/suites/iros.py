@@ -30,8 +30,8 @@ import numpy as np
 
 from lamp.scene.loader import scene_from_dict
 from lamp.scene.model import Circle, Obstacle, Scene
-from lamp.suites import _kernels as K
 from lamp.suites import checks as C
+from lamp.suites import kernels as K
 from lamp.suites.layout import circle, rect, rnd
 
 WORKSPACE = (5.0, 4.0)

@@ -11,8 +11,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from lamp.scene.model import Scene, Shape
-from lamp.suites import _kernels as K
-from lamp.suites import _search_kernels as S
+from lamp.suites import kernels as K
+from lamp.suites import search_kernels as S
 from lamp.suites.world import World, footprint_of, object_world
 
 #: clearance (m) kept by the "obstacle-free" route: small, but large enough that the

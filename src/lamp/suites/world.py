@@ -1,5 +1,5 @@
 """The exact clearance world of the scene checks: obstacles and object footprints as
-padded convex pieces for the compiled kernels (``lamp.suites._kernels``)."""
+padded convex pieces for the compiled kernels (``lamp.suites.kernels``)."""
 
 from __future__ import annotations
 
@@ -14,13 +14,13 @@ from numpy.typing import ArrayLike
 
 from lamp.geometry.shapes import local_outline, obstacle_geometry
 from lamp.scene.model import Circle, Obstacle, Rectangle, Scene, Shape
-from lamp.suites import _kernels as K
+from lamp.suites import kernels as K
 
 
 # --------------------------------------------------------------------------- world
 @dataclass(frozen=True)
 class World:
-    """Static obstacles as convex pieces for the kernels (see ``_kernels`` docstring)."""
+    """Static obstacles as convex pieces for the kernels (see ``kernels`` docstring)."""
 
     width: float
     height: float

@@ -212,9 +212,11 @@ def write_animation(
     return AnimationStats(path, len(frames), len(chosen), render_s, write_s)
 
 
-def _palette_image(first: np.ndarray, extra: Sequence[str] = ()) -> Any:
-    """One 256-colour palette for the whole GIF: the first frame plus swatches of every
-    colour the frames may show later (objects, robots, path, edges, and ``extra``)."""
+def palette_image(first: np.ndarray, extra: Sequence[str] = ()) -> Any:
+    """One 256-colour palette for a whole GIF (a PIL image to ``quantize`` each frame
+    with): the first frame ``first`` (H, W, 3 ``uint8``) plus swatches of every colour the
+    frames may show later (objects, robots, path, edges, and ``extra``), so that no later
+    frame's colours shift. The animation and the recording replay share it."""
     from matplotlib.colors import to_rgb
     from PIL import Image
 
@@ -258,7 +260,7 @@ def _write_gif(
         t0 = time.perf_counter()
         rgb = renderer.render(frames[int(i)], int(i))
         if palette is None:
-            palette = _palette_image(rgb)
+            palette = palette_image(rgb)
         images.append(Image.fromarray(rgb).quantize(palette=palette, dither=Image.Dither.NONE))
         render_s += time.perf_counter() - t0
     t0 = time.perf_counter()

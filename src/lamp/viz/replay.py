@@ -244,14 +244,14 @@ def _write_gif(renderer: ReplayRenderer, rows: np.ndarray, tmp: Path, fps: float
     """One shared palette (from the first frame plus every layer colour), no dithering."""
     from PIL import Image
 
-    from lamp.viz.animation import _palette_image
+    from lamp.viz.animation import palette_image
 
     images, palette, last = [], None, None
     for row in rows:
         if row != last:
             rgb = renderer.render(int(row))
             if palette is None:
-                palette = _palette_image(rgb, extra=(TRAIL_COLOR,))
+                palette = palette_image(rgb, extra=(TRAIL_COLOR,))
             image = Image.fromarray(rgb).quantize(palette=palette, dither=Image.Dither.NONE)
             last = row
         images.append(image)

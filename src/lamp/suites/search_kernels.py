@@ -1,10 +1,10 @@
 """Compiled (Numba) lattice search and path shortcutting behind ``lamp.suites.routes``.
 
 :func:`lattice_astar` is A* over the SE(2) lattice whose nodes are checked with the exact
-clearances of :mod:`lamp.suites._kernels` (computed lazily, cached per node) and whose moves
-are certified by :func:`lamp.suites._kernels.motion_ok`; :func:`shortcut` greedily drops
+clearances of :mod:`lamp.suites.kernels` (computed lazily, cached per node) and whose moves
+are certified by :func:`lamp.suites.kernels.motion_ok`; :func:`shortcut` greedily drops
 waypoints of a certified polyline, keeping it certified. The world and object arrays follow
-the conventions of :mod:`lamp.suites._kernels`.
+the conventions of :mod:`lamp.suites.kernels`.
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ import math
 import numba
 import numpy as np
 
-from lamp.suites._kernels import BIG, motion_ok, pose_clearance
+from lamp.suites.kernels import BIG, motion_ok, pose_clearance
 
 
 @numba.njit(cache=True)

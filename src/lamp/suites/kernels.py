@@ -1,6 +1,6 @@
 """Compiled (Numba) exact-clearance and motion-certification kernels behind ``lamp.suites.checks``.
 
-The lattice search and path shortcutting built on them are ``lamp.suites._search_kernels``.
+The lattice search and path shortcutting built on them are ``lamp.suites.search_kernels``.
 
 These kernels compute *exact* Euclidean clearances between convex pieces (disks and convex
 polygons) and certify straight SE(2) motions by bisection with a Lipschitz bound, so the
