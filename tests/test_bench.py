@@ -538,7 +538,7 @@ def test_bench_param_reaches_the_jobs_and_the_config(tmp_path):
     with other parameters is refused."""
     import json
 
-    from lamp.cli import bench_options as options
+    from lamp.bench.request import BenchRequest
 
     folder = write_suite(tmp_path, "random", 1)
     out = tmp_path / "run"
@@ -557,8 +557,11 @@ def test_bench_param_reaches_the_jobs_and_the_config(tmp_path):
     assert "--param lazy.max_plan_iterations=300" in config["sessions"][-1]["command"]
     res = runner.invoke(app, [*args, "--resume", "--param", "lazy.max_plan_iterations=200"])
     assert res.exit_code == 2 and "params" in res.output
-    by_planner, texts = options.check_params(["lazy.k=4", "lazy.edge_penalty=2"], ["lazy"])
+    request = BenchRequest(out=out, suites=(str(folder),), planners=("lazy",),
+                           params=("lazy.k=4", "lazy.edge_penalty=2"))
+    by_planner = request.planner_params
     assert by_planner == {"lazy": (("edge_penalty", "2"), ("k", "4"))}
+    assert request.params == ("lazy.edge_penalty=2", "lazy.k=4")
     jobs = enumerate_jobs([suite("tilt", 1)], ["lazy", "gco-var"], [0], params=by_planner)
     assert [j.params for j in jobs] == [by_planner["lazy"], ()]
 

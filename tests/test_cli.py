@@ -13,8 +13,8 @@ import shutil
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
-import click
 import pytest
 import typer
 from typer.testing import CliRunner
@@ -91,22 +91,32 @@ def test_shell_completion_is_available() -> None:
     assert "complete" in res.stdout and "_LAMP_COMPLETE" in res.stdout, res.stdout
 
 
-def _visible_options(cmd: click.Command, path: str = "lamp"):
-    if isinstance(cmd, click.Group):
-        for name, sub in cmd.commands.items():
+def _visible_options(cmd: Any, path: str = "lamp"):
+    """``(command path, option)`` for every option ``--help`` shows, in every command.
+    Duck-typed: Typer may bring its own copy of Click, whose classes are not ``click``'s."""
+    commands = getattr(cmd, "commands", None)
+    if commands is not None:
+        for name, sub in commands.items():
             yield from _visible_options(sub, f"{path} {name}")
         return
     for p in cmd.params:
-        if isinstance(p, click.Option) and not p.hidden:
+        if p.param_type_name == "option" and not p.hidden:
             yield path, p
 
 
+def test_the_option_walk_sees_every_command() -> None:
+    paths = {path for path, _ in _visible_options(typer.main.get_command(app))}
+    assert {"lamp run", "lamp bench", "lamp model eval", "lamp suite fleet-scene"} <= paths
+
+
 def test_every_option_shows_its_default() -> None:
-    """An option without a value of its own says in --help what happens when it is left out."""
+    """An option without a value of its own says in --help what happens when it is left out
+    (a ``show_default`` text, or its help saying what the default is)."""
     missing = [f"{path} {p.opts[0]}" for path, p in _visible_options(typer.main.get_command(app))
                if not p.is_flag and not p.required and p.name != "help"
                and p.show_default is not False
-               and p.default is None and not isinstance(p.show_default, str)]
+               and p.default is None and not isinstance(p.show_default, str)
+               and not re.search(r"default|when not given", p.help or "")]
     assert missing == []
 
 
@@ -123,11 +133,46 @@ def test_one_spelling_per_idea_old_ones_hidden() -> None:
     assert "--proposals" in eval_help and not re.search(r"--k\b", eval_help)
 
 
+#: Long options that mean different things in different commands, kept because both
+#: meanings are documented: ``lamp render --size`` (pixels), ``lamp suite fleet-scene
+#: --size`` (the map's width and height in metres).
+SAME_NAME_OTHER_MEANING = {"--size"}
+
+
+def test_an_option_means_the_same_in_every_command() -> None:
+    """A short option stands for one long option everywhere; each of the shared ideas has
+    its one spelling (a seed is ``-s/--seed``, an output ``-o/--out``, ``-q/--quiet`` prints
+    nothing but errors); a visible ``--record`` is ``lamp bench``'s alone."""
+    options = list(_visible_options(typer.main.get_command(app)))
+    longs_of_short: dict[str, set[str]] = {}
+    for _, p in options:  # --planner and --planners (lamp bench) are one idea
+        longs = {o.removesuffix("s") for o in p.opts if o.startswith("--")}
+        for short in (o for o in p.opts if not o.startswith("--")):
+            longs_of_short.setdefault(short, set()).update(longs)
+    assert {s: ls for s, ls in longs_of_short.items() if len(ls) > 1} == {}
+    for long, short in (("--seed", "-s"), ("--out", "-o"), ("--model", "-m"),
+                        ("--workers", "-j"), ("--quiet", "-q"), ("--planner", "-p"),
+                        ("--planners", "-p")):
+        missing = [path for path, p in options if long in p.opts and short not in p.opts]
+        assert missing == [], f"{long} without {short} in {missing}"
+    quiet = {path for path, p in options if "--quiet" in p.opts}
+    assert quiet == {"lamp run", "lamp demo", "lamp bench"}
+    assert {path for path, p in options if "--record" in p.opts} == {"lamp bench"}
+    meanings: dict[str, set[str]] = {}
+    for _, p in options:
+        for long in (o for o in p.opts if o.startswith("--")):
+            meanings.setdefault(long, set()).add(p.name)
+    assert {o for o, names in meanings.items() if len(names) > 1} <= SAME_NAME_OTHER_MEANING
+
+
 def test_old_spellings_still_work(small: Path, no_planning) -> None:
     res = runner.invoke(app, ["run", str(small), "--time-limit", "-1"])
     assert res.exit_code == 2 and "--planning-limit: must be positive" in res.stderr
     res = runner.invoke(app, ["model", "eval", "--k", "0"])
     assert res.exit_code == 2 and "--proposals" in res.stderr
+    for flag in ("--record", "--no-record", "--store-in-checkpoint"):  # checked before running
+        res = runner.invoke(app, ["model", "eval", flag, "--proposals", "0"])
+        assert res.exit_code == 2 and "--proposals" in res.stderr, res.output
     res = runner.invoke(app, ["bench", "--suite", "iros", "--time-limit", "-1", "--out",
                               str(small.parent / "b"), "--dry-run"])
     assert res.exit_code == 2 and "--planning-limit must be positive" in res.stderr

@@ -14,7 +14,7 @@ import shapely
 from typer.testing import CliRunner
 
 from lamp.bench.jobs import load_suite
-from lamp.cli.bench_options import DEFAULT_SUITES
+from lamp.bench.request import DEFAULT_SUITES
 from lamp.cli.suite import suite_app
 from lamp.geometry.shapes import narrowest_width, obstacle_geometry, to_shapely
 from lamp.geometry.team import DEFAULT_TEAM

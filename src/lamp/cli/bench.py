@@ -15,7 +15,7 @@ from __future__ import annotations
 import json
 import signal
 from collections import Counter
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import replace
 from pathlib import Path
@@ -33,8 +33,8 @@ from lamp.bench.jobs import (
     pending_jobs,
     read_records,
 )
-from lamp.bench.provenance import CONFIG_FILE, canonical_command, current_runs, write_config
-from lamp.cli.bench_options import check_resume_config
+from lamp.bench.provenance import CONFIG_FILE, current_runs, write_config
+from lamp.bench.request import BenchRequest
 from lamp.cli.support import fail_input as _fail
 
 #: A rendering job gets this many times its usual cap (frame capture and GIF encoding).
@@ -112,6 +112,7 @@ def bench_command(
     rerun: str = opt.RERUN,
     report: bool = opt.REPORT,
     progress: bool = opt.PROGRESS,
+    quiet: bool = opt.QUIET,
     dry_run: bool = opt.DRY_RUN,
     job_fn: str = opt.JOB_FN,
     jobs_per_worker: int = opt.JOBS_PER_WORKER,
@@ -121,92 +122,90 @@ def bench_command(
     schedule: str = opt.SCHEDULE,
 ) -> None:
     """Run planners over benchmark suites; write results.jsonl, config.json and report.md."""
-    suite = suite_alias if suite_alias is not None else suite
-    seeds = seeds_alias if seeds_alias is not None else seeds
-    if planning_limit_alias is not None:
-        planning_limit = planning_limit_alias
-    planner_list, rerun_list, suite_list, model = opt.check_options(
-        planners=planners, rerun=rerun, resume=resume, suite=suite, model=model,
-        backend=backend, seeds=seeds, workers=workers, time_cap=time_cap,
-        planning_limit=planning_limit, scenes=scenes, job_fn=job_fn, db=db, dry_run=dry_run)
-    param_map, param_texts = opt.check_params(param, planner_list)
-    disturb = opt.check_disturb(disturb, planner_list)
-    schedule = opt.check_schedule(schedule)
-    previous = _previous_config(out, resume=resume, dry_run=dry_run, time_cap=time_cap,
-                                planning_limit=planning_limit, model=model, job_fn=job_fn,
-                                params=param_texts, disturb=disturb, schedule=schedule)
-    jobs = _load_jobs(suite_list, planner_list, seeds, scenes=scenes, model=model,
-                      time_cap=time_cap, planning_limit=planning_limit, params=param_map,
-                      disturb=disturb, schedule=schedule)
-    if render_iros and not any(j.suite == "iros" for j in jobs):
+    request = BenchRequest(  # checks every value (bad input: exit 2)
+        out=out, suites=tuple((suite_alias if suite_alias is not None else suite).split(",")),
+        planners=tuple(planners.split(",")),
+        seeds=seeds_alias if seeds_alias is not None else seeds, scenes=scenes, model=model,
+        time_cap=time_cap, planning_limit=(planning_limit_alias if planning_limit_alias
+                                           is not None else planning_limit),
+        params=tuple(param or ()), disturb=disturb, schedule=schedule, workers=workers,
+        backend=backend, ray_address=ray_address, jobs_per_worker=jobs_per_worker,
+        job_fn=job_fn, resume=resume, retry_errors=retry_errors, rerun=tuple(rerun.split(",")),
+        record=record, render_iros=render_iros, report=report, db=db, dry_run=dry_run,
+        progress=progress, quiet=quiet)
+    run_bench(request)
+
+
+def run_bench(request: BenchRequest) -> None:
+    """Run ``request``: check the output folder, list the jobs, run those pending, write the
+    report (and the database); exit status as the module says."""
+    out, say = request.out, _say(request)
+    previous = _previous_config(request)
+    jobs = _load_jobs(request)
+    if request.render_iros and not any(j.suite == "iros" for j in jobs):
         _fail("--render-iros needs the iros suite in --suites")
-    records = read_records(out / RESULTS_FILE) if resume else []
-    current = current_runs(previous, *provenance.code_version(out)) if rerun_list else set()
-    pending = pending_jobs(jobs, records, retry_errors=retry_errors, rerun=rerun_list,
-                           current_runs=current)
-    if render_iros:
-        pending = _render_jobs(jobs, pending, out, time_cap)
-    if record:
+    records = read_records(out / RESULTS_FILE) if request.resume else []
+    current = (current_runs(previous, *provenance.code_version(out)) if request.rerun
+               else set())
+    pending = pending_jobs(jobs, records, retry_errors=request.retry_errors,
+                           rerun=list(request.rerun), current_runs=current)
+    if request.render_iros:
+        pending = _render_jobs(jobs, pending, out, request.time_cap)
+    if request.record:
         pending = _with_recordings(pending, out)
-    _print_plan(jobs, pending, planners=len(planner_list), seeds=seeds, resume=resume,
-                rerun=rerun_list, dry_run=dry_run)
-    if dry_run:
+    _print_plan(jobs, pending, request)
+    if request.dry_run:
         return
 
     if pending:  # a resume with nothing to do records no new run
-        _run_pending(pending, jobs, out, previous, suite_list=suite_list,
-                     planner_list=planner_list, seeds=seeds, workers=workers,
-                     time_cap=time_cap, planning_limit=planning_limit, model=model,
-                     backend=backend, ray_address=ray_address, scenes=scenes,
-                     render_iros=render_iros, job_fn=job_fn, record=record,
-                     jobs_per_worker=jobs_per_worker, progress=progress, params=param_texts,
-                     disturb=disturb, schedule=schedule)
+        _run_pending(pending, jobs, previous, request)
     has_results = (out / RESULTS_FILE).exists()
-    if report and has_results:
-        _write_report(out)
-    if db is not None and has_results:
+    if request.report and has_results:
+        _write_report(out, say)
+    if request.db is not None and has_results:
         from lamp.bench.db import write_db
 
-        typer.echo(f"wrote {write_db(out, db)}")
+        say(f"wrote {write_db(out, request.db)}")
 
 
-def _previous_config(out: Path, *, resume: bool, dry_run: bool, time_cap: float,
-                     planning_limit: float, model: str, job_fn: str,
-                     params: list[str], disturb: str = "none",
-                     schedule: str | None = None) -> dict[str, Any]:
-    """The config.json of the run resumed in ``out`` ({} if none); exits 2 when ``out`` is
-    not a folder, is not empty without ``--resume``, or was run with other settings."""
+def _say(request: BenchRequest) -> Callable[[str], None]:
+    """What prints a line of the run's chatter on stdout: ``typer.echo``, or nothing when
+    ``--quiet``."""
+    return (lambda _line: None) if request.quiet else typer.echo
+
+
+def _previous_config(request: BenchRequest) -> dict[str, Any]:
+    """The config.json of the run resumed in ``--out`` ({} if none); exits 2 when the
+    folder is not a folder, is not empty without ``--resume``, or was run with other
+    settings."""
+    out = request.out
     previous: dict[str, Any] = {}
-    if not dry_run and out.exists():
+    if not request.dry_run and out.exists():
         if not out.is_dir():
             _fail(f"--out: {out} exists and is not a folder")
-        if any(out.iterdir()) and not resume:
+        if any(out.iterdir()) and not request.resume:
             _fail(f"--out: {out} is not empty; pass --resume to continue the run recorded "
                   "there, or choose a new folder")
-    if resume and (out / CONFIG_FILE).exists():
+    if request.resume and (out / CONFIG_FILE).exists():
         try:
             previous = json.loads((out / CONFIG_FILE).read_text())
         except json.JSONDecodeError:
             previous = {}
-        check_resume_config(previous, time_cap=time_cap, planning_limit=planning_limit,
-                            model=model, job_fn=job_fn, params=params, disturb=disturb,
-                            schedule=schedule)
+        request.check_resumable(previous)
     return previous
 
 
-def _load_jobs(suite_list: list[str], planner_list: list[str], seeds: int, *,
-               scenes: int | None, model: str, time_cap: float, planning_limit: float,
-               params: dict[str, tuple[tuple[str, str], ...]] | None = None,
-               disturb: str = "none", schedule: str | None = None) -> list[Job]:
+def _load_jobs(request: BenchRequest) -> list[Job]:
     """Every job of the run (see :func:`lamp.bench.jobs.enumerate_jobs`); a suite that
     fails to load exits 2."""
     try:
-        loaded = [load_suite(name) for name in suite_list]
-        seed_list = list(range(seeds))
-        return enumerate_jobs(loaded, planner_list, seed_list, scenes_per_suite=scenes,
-                              model=model, time_cap_s=time_cap,
-                              planning_limit_s=planning_limit, params=params,
-                              disturb=disturb, schedule=schedule)
+        loaded = [load_suite(name) for name in request.suites]
+        return enumerate_jobs(loaded, list(request.planners), request.seed_list,
+                              scenes_per_suite=request.scenes, model=request.model,
+                              time_cap_s=request.time_cap,
+                              planning_limit_s=request.planning_limit,
+                              params=request.planner_params, disturb=request.disturb,
+                              schedule=request.schedule)
     except ValueError as exc:
         _fail(f"--suites: {exc}")
     except Exception as exc:  # a scene that fails to load is bad input too
@@ -220,53 +219,50 @@ def _with_recordings(pending: list[Job], out: Path) -> list[Job]:
             if j.record else j for j in pending]
 
 
-def _print_plan(jobs: list[Job], pending: list[Job], *, planners: int, seeds: int,
-                resume: bool, rerun: list[str], dry_run: bool) -> None:
-    """Say how many jobs there are and how many will run; with ``--dry-run``, which."""
+def _print_plan(jobs: list[Job], pending: list[Job], request: BenchRequest) -> None:
+    """Say how many jobs there are and how many will run; with ``--dry-run``, which (even
+    when ``--quiet``: the list is what a dry run is for)."""
+    say = typer.echo if request.dry_run else _say(request)
     per = Counter((j.suite, j.planner) for j in pending if j.record)
-    typer.echo(f"{len(jobs)} jobs ({len({(j.suite, j.scene_name) for j in jobs})} scenes x "
-               f"{planners} planners x {seeds} seeds); {len(pending)} to run"
-               + (f", {len(jobs) - sum(per.values())} already recorded" if resume else "")
-               + (f"; re-running {', '.join(rerun)}" if rerun else ""))
-    if dry_run:
+    say(f"{len(jobs)} jobs ({len({(j.suite, j.scene_name) for j in jobs})} scenes x "
+        f"{len(request.planners)} planners x {request.seeds} seeds); {len(pending)} to run"
+        + (f", {len(jobs) - sum(per.values())} already recorded" if request.resume else "")
+        + (f"; re-running {', '.join(request.rerun)}" if request.rerun else ""))
+    if request.dry_run:
         for (s, p), n in sorted(per.items()):
-            typer.echo(f"  {s:12s} {p:14s} {n}")
+            say(f"  {s:12s} {p:14s} {n}")
         for j in pending:
             if j.render_to:
-                typer.echo(f"  renders {j.render_to} ({j.label})")
+                say(f"  renders {j.render_to} ({j.label})")
             if j.recording_to:
-                typer.echo(f"  records into {j.recording_to} ({j.label})")
+                say(f"  records into {j.recording_to} ({j.label})")
 
 
-def _run_pending(pending: list[Job], jobs: list[Job], out: Path, previous: dict[str, Any], *,
-                 suite_list: list[str], planner_list: list[str], seeds: int, workers: int,
-                 time_cap: float, planning_limit: float, model: str, backend: str,
-                 ray_address: str | None, scenes: int | None, render_iros: bool, job_fn: str,
-                 record: bool, jobs_per_worker: int, progress: bool,
-                 params: list[str] | None = None, disturb: str = "none",
-                 schedule: str | None = None) -> None:
+def _run_pending(pending: list[Job], jobs: list[Job], previous: dict[str, Any],
+                 request: BenchRequest) -> None:
     """Record this invocation in config.json and run ``pending``; exit 130/143 if stopped."""
-    command = canonical_command(
-        suite_list, planner_list, seeds=seeds, workers=workers, out=out, time_cap=time_cap,
-        planning_limit=planning_limit, model=model, backend=backend, scenes=scenes,
-        render_iros=render_iros, job_fn=job_fn, record=record,
-        jobs_per_worker=jobs_per_worker, params=params, disturb=disturb, schedule=schedule)
+    out, say = request.out, _say(request)
     out.mkdir(parents=True, exist_ok=True)
     run_id = len(previous.get("sessions") or [])
-    write_config(out, previous, command=command, suites=list(dict.fromkeys(j.suite for j in jobs)),
-                 planners=planner_list,
-                 seeds=list(range(seeds)), workers=workers, backend=backend, model=model,
-                 time_cap=time_cap, planning_limit=planning_limit, scenes=scenes, job_fn=job_fn,
-                 params=params, disturb=disturb, schedule=schedule)
+    write_config(out, previous, command=request.command_line(),
+                 suites=list(dict.fromkeys(j.suite for j in jobs)),
+                 planners=list(request.planners), seeds=request.seed_list,
+                 workers=request.workers, backend=request.backend, model=request.model,
+                 time_cap=request.time_cap, planning_limit=request.planning_limit,
+                 scenes=request.scenes, job_fn=request.job_fn, params=list(request.params),
+                 disturb=request.disturb, schedule=request.schedule)
     from lamp.bench.pool import WorkerStartError
     from lamp.bench.runner import execute
 
     stopped, code = "", 0
     try:
         with on_sigterm():
-            summary = execute(pending, out, job_fn=job_fn, backend=backend, workers=workers,
-                              ray_address=ray_address, progress=progress, log_dir=out / "logs",
-                              jobs_per_worker=jobs_per_worker or None, run_id=run_id)
+            summary = execute(pending, out, job_fn=request.job_fn, backend=request.backend,
+                              workers=request.workers, ray_address=request.ray_address,
+                              progress=request.show_progress,
+                              echo=(lambda _line: None) if request.quiet else None,
+                              log_dir=out / "logs",
+                              jobs_per_worker=request.jobs_per_worker or None, run_id=run_id)
     except KeyboardInterrupt:
         stopped, code = "interrupted", 130
     except Terminated:
@@ -279,23 +275,24 @@ def _run_pending(pending: list[Job], jobs: list[Job], out: Path, previous: dict[
                    "the same command plus --resume", err=True)
         raise typer.Exit(code=code)
     done = sum(summary.statuses.values())
-    typer.echo(f"ran {done} jobs in {summary.wall_time_s:.0f} s: {summary.successes} solved; "
-               + ", ".join(f"{k} {v}" for k, v in sorted(summary.statuses.items())))
+    say(f"ran {done} jobs in {summary.wall_time_s:.0f} s: {summary.successes} solved; "
+        + ", ".join(f"{k} {v}" for k, v in sorted(summary.statuses.items())))
     for path in summary.rendered:
-        typer.echo(f"wrote {path}")
+        say(f"wrote {path}")
 
 
-def _write_report(run_dir: Path) -> None:
+def _write_report(run_dir: Path, say: Callable[[str], None] = typer.echo) -> None:
+    """Write ``run_dir/report.md``; ``say`` the success rates (Table I) and where it went."""
     from lamp.bench.report import build_report, family_records, load_results, success_table
 
     path = build_report(run_dir)
     records = load_results(run_dir)
     table = success_table(records)
     if family_records(records):
-        typer.echo("success rate (Table I):")
+        say("success rate (Table I):")
         for p, row in table.items():
-            typer.echo(f"  {p:14s} " + "  ".join(f"{f} {r.percent()}" for f, r in row.items()))
-    typer.echo(f"wrote {path}")
+            say(f"  {p:14s} " + "  ".join(f"{f} {r.percent()}" for f, r in row.items()))
+    say(f"wrote {path}")
 
 
 def report_command(

@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import os
 from pathlib import Path
+from typing import Optional
 
 import typer
 
@@ -35,7 +36,7 @@ def _threads(n: int) -> None:
 def data_cmd(
     out: Path = typer.Option(DEFAULT_DATA, "--out", "-o", help="Dataset file (.npz) to write."),
     attempts: int = typer.Option(26000, help="Pushes to simulate (about 80% are kept)."),
-    seed: int = typer.Option(0, help="Seed of the generator."),
+    seed: int = typer.Option(0, "--seed", "-s", help="Seed of the generator."),
     workers: int = typer.Option(max(1, os.cpu_count() or 1), "--workers", "-j",
                                 help="Worker processes."),
     accept_translation: float = typer.Option(0.1, help="Keep pushes within this error \\[m]."),
@@ -59,7 +60,7 @@ def train_cmd(
     run_dir: Path = typer.Option(Path("data/manip_run"), "--run-dir",
                                  help="Run directory (resumes from it if it holds a state)."),
     epochs: int = typer.Option(30, help="Total epochs (a resumed run continues up to this)."),
-    seed: int = typer.Option(0, help="Seed (initialisation, split, batches)."),
+    seed: int = typer.Option(0, "--seed", "-s", help="Seed (initialisation, split, batches)."),
     threads: int = typer.Option(1, help="Torch threads."),
     max_minutes: float = typer.Option(None, help="Stop after the epoch crossing this budget.",
                                       show_default="no budget"),
@@ -112,12 +113,16 @@ def eval_cmd(
     cases: int = typer.Option(60, help="Held-out (shape, motion) cases per budget."),
     proposals: int = typer.Option(4, "--proposals", help="Proposals executed per case."),
     k_alias: int = typer.Option(None, "--k", hidden=True, help="Old spelling of --proposals."),
-    seed: int = typer.Option(12345, help="Seed of the held-out cases."),
+    seed: int = typer.Option(12345, "--seed", "-s", help="Seed of the held-out cases."),
     threads: int = typer.Option(1, help="Torch threads."),
-    out: Path = typer.Option(None, "--out", help="Write the report as JSON here.",
+    out: Path = typer.Option(None, "--out", "-o", help="Write the report as JSON here.",
                              show_default="printed only"),
     geometric: bool = typer.Option(True, help="Run the geometric proposer side by side."),
-    record: bool = typer.Option(False, help="Add the figures to the checkpoint's .json."),
+    record: bool = typer.Option(False, "--store-in-checkpoint/--no-store-in-checkpoint",
+                                help="Add the figures to the checkpoint's .json."),
+    record_alias: Optional[bool] = typer.Option(  # noqa: UP045 (typer reads the annotation)
+        None, "--record/--no-record", hidden=True, help="Old spelling of "
+        "--store-in-checkpoint (lamp bench --record saves recordings)."),
     polygons: bool = typer.Option(False, help="Also evaluate on random convex polygons "
                                   "(out of the training distribution)."),
     large: bool = typer.Option(False, help="Also evaluate on large objects (bars 1.0-1.5 m, "
@@ -129,6 +134,7 @@ def eval_cmd(
     from lamp.cli.support import check_model_option, check_writable_file, fail_input
 
     k = k_alias if k_alias is not None else proposals
+    record = record_alias if record_alias is not None else record
     if k < 1 or cases < 1:
         fail_input(f"--proposals and --cases must be >= 1, got {k} and {cases}")
     if model == "geometric":

@@ -31,7 +31,7 @@ def _threads(threads: int) -> None:
 def train_cmd(
     out: Path = typer.Option(Path("lamp-rl"), "--out", "-o", help="Output folder."),
     steps: int = typer.Option(6_000_000, help="PPO steps, counted per robot."),
-    seed: int = typer.Option(0, help="Seed (same seed, same run)."),
+    seed: int = typer.Option(0, "--seed", "-s", help="Seed (same seed, same run)."),
     eval_every: int = typer.Option(500_000, help="Steps between held-out evaluations."),
     eval_episodes: int = typer.Option(50, help="Held-out episodes per evaluation and task."),
     sims: int = typer.Option(16, help="Simulations stepped together."),
@@ -78,7 +78,8 @@ def eval_cmd(
     policy: Optional[Path] = typer.Argument(  # noqa: UP045 (typer reads the annotation)
         None, help="Policy file (.pt with its .json beside it); default: the shipped one."),
     episodes: int = typer.Option(100, help="Held-out episodes."),
-    seed: int = typer.Option(10_000, help="Seed of the episodes (training uses seeds < 10)."),
+    seed: int = typer.Option(10_000, "--seed", "-s",
+                             help="Seed of the episodes (training uses seeds < 10)."),
     task: str = typer.Option("open", help="open (MAPush's protocol: the benchmark maps "
                                           "without obstacles) or maps (with them)."),
 ) -> None:

@@ -82,7 +82,7 @@ def fleet_scene_command(
     cell: float = typer.Option(0.5, "--cell", help="Side (m) of a .map file's cells."),
     objects: int = typer.Option(16, "--objects", help="Objects to move."),
     robots: int = typer.Option(48, "--robots", help="Robots (at least one per object)."),
-    seed: int = typer.Option(0, "--seed", help="Generator seed."),
+    seed: int = typer.Option(0, "--seed", "-s", help="Generator seed."),
 ) -> None:
     """Generate a scene of the ``fleet`` family's kinds at any size, or on your own map
     (``--map``), with its generator and checks (every object has a certified route and
