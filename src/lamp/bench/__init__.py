@@ -4,7 +4,8 @@
 - :mod:`lamp.bench.runner`: jobs in isolated processes under a wall-clock cap each, locally
   (:mod:`lamp.bench.pool`, warm worker processes) or on Ray;
 - :mod:`lamp.bench.report`: the paper's Tables I-II, figures and ``report.md``;
-- :mod:`lamp.bench.db`: the results as an SQLite database (``--db``, docs/bench-db.md).
+- :mod:`lamp.bench.db`: the results as an SQLite database (``--db``, docs/bench-db.md);
+- :mod:`lamp.bench.request`: one invocation's settings, checked (:class:`BenchRequest`).
 
 The commands themselves are :mod:`lamp.cli.bench`.
 
