@@ -4,12 +4,15 @@ Exit status: 0 when the run finished (whatever the planners' outcomes), 2 for ba
 (unknown suite or planner, bad numbers, a non-empty output folder without ``--resume``,
 caps differing from the run being resumed, Ray missing, an unusable ``--db`` path,
 ``--rerun`` without ``--resume`` or naming a planner not run), 1 when no worker process can
-start, 130 when interrupted and 143 when terminated (``SIGTERM``); after either, no worker process is left running, the scratch
-folder is removed, and the run continues with ``--resume``.
+start, 130 when interrupted and 143 when terminated (``SIGTERM``); after either, no worker
+process is left running, the scratch folder is removed, and the run continues with
+``--resume``.
 
-The options and their checks are :mod:`lamp.cli.bench_options`; what ``config.json`` records
-is :mod:`lamp.bench.provenance`.
+The options are declared in :mod:`lamp.cli.bench_options`; :func:`bench_command` turns
+them into one :class:`~lamp.bench.request.BenchRequest`, which checks them, and hands it to
+:func:`run_bench`. What ``config.json`` records is :mod:`lamp.bench.provenance`.
 """
+
 from __future__ import annotations
 
 import json
@@ -122,17 +125,21 @@ def bench_command(
     schedule: str = opt.SCHEDULE,
 ) -> None:
     """Run planners over benchmark suites; write results.jsonl, config.json and report.md."""
+    if suite_alias is not None:  # the old spellings
+        suite = suite_alias
+    if seeds_alias is not None:
+        seeds = seeds_alias
+    if planning_limit_alias is not None:
+        planning_limit = planning_limit_alias
     request = BenchRequest(  # checks every value (bad input: exit 2)
-        out=out, suites=tuple((suite_alias if suite_alias is not None else suite).split(",")),
-        planners=tuple(planners.split(",")),
-        seeds=seeds_alias if seeds_alias is not None else seeds, scenes=scenes, model=model,
-        time_cap=time_cap, planning_limit=(planning_limit_alias if planning_limit_alias
-                                           is not None else planning_limit),
-        params=tuple(param or ()), disturb=disturb, schedule=schedule, workers=workers,
-        backend=backend, ray_address=ray_address, jobs_per_worker=jobs_per_worker,
-        job_fn=job_fn, resume=resume, retry_errors=retry_errors, rerun=tuple(rerun.split(",")),
-        record=record, render_iros=render_iros, report=report, db=db, dry_run=dry_run,
-        progress=progress, quiet=quiet)
+        out=out, suites=tuple(suite.split(",")), planners=tuple(planners.split(",")),
+        seeds=seeds, scenes=scenes, model=model, time_cap=time_cap,
+        planning_limit=planning_limit, params=tuple(param or ()), disturb=disturb,
+        schedule=schedule, workers=workers, backend=backend, ray_address=ray_address,
+        jobs_per_worker=jobs_per_worker, job_fn=job_fn, resume=resume,
+        retry_errors=retry_errors, rerun=tuple(rerun.split(",")), record=record,
+        render_iros=render_iros, report=report, db=db, dry_run=dry_run, progress=progress,
+        quiet=quiet)
     run_bench(request)
 
 
