@@ -108,7 +108,7 @@ def test_proposals_are_cached_per_motion_budget_and_attempt(motion, attempts) ->
     v = make()
     first = {}
     for a in attempts:
-        props = v.proposals(np.array(motion) / 1000.0, 2, a)  # mm and mrad
+        props = v.proposals.get(np.array(motion) / 1000.0, 2, a)  # mm and mrad
         assert first.setdefault(a, props) is props
     assert v.stats.model_calls == len(set(attempts))
     assert v.stats.cache_hits == len(attempts) - len(set(attempts))
@@ -116,8 +116,8 @@ def test_proposals_are_cached_per_motion_budget_and_attempt(motion, attempts) ->
 
 def test_sample_is_one_uncached_draw() -> None:
     v = make()
-    a = v.sample(np.array([0.1, 0.0, 0.0]), 3, seed=5)
-    b = v.sample(np.array([0.1, 0.0, 0.0]), 3, seed=5)
+    a = v.proposals.sample(np.array([0.1, 0.0, 0.0]), 3, seed=5)
+    b = v.proposals.sample(np.array([0.1, 0.0, 0.0]), 3, seed=5)
     assert a.shape[0] == 3 and np.array_equal(a, b)  # deterministic for a seed
     assert v.stats.model_calls == 2 and v.stats.cache_hits == 0
 

@@ -10,8 +10,9 @@ from lamp.contract.trajectory import MAX_STEP, densify
 from lamp.geometry import se2
 from lamp.geometry.shapes import signed_distance
 from lamp.manip import GeometricProposer
+from lamp.planners.collide import pairwise_min_distance, usable_mask
 from lamp.planners.config import PlannerConfig
-from lamp.planners.task import ManipulationTask, pairwise_min_distance
+from lamp.planners.task import ManipulationTask
 from lamp.suites.registry import suite_scenes
 
 SCENE = suite_scenes("maze")[3]  # cluttered: many proposals collide somewhere
@@ -38,8 +39,8 @@ motions = st.tuples(st.floats(-0.2, 0.2), st.floats(-0.2, 0.2), st.floats(-0.5, 
        motion=motions, budget=st.integers(1, 3), attempt=st.integers(0, 2))
 def test_usable_mask_matches_collide(x, y, theta, motion, budget, attempt) -> None:
     q_from = np.array([x, y, theta])
-    cands = TASK.verifier.push_candidates(np.array(motion), budget, attempt)
-    mask = TASK.verifier.usable_mask(q_from, cands)
+    cands = TASK.verifier.proposals.push_candidates(np.array(motion), budget, attempt)
+    mask = usable_mask(TASK, q_from, cands)
     direct = np.array([not collide(TASK, q_from, p) for p in cands.pushes_local])
     assert mask.tolist() == direct.tolist()
 

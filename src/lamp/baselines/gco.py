@@ -96,7 +96,8 @@ class GCoPlanner:
         motion = se2.relative(q_O, q_to)
         budget = min(self.verifier.n_robots, self.config.max_budget)
         seed = (self.seed * 7919 + self.iteration) % (2**31 - 1)
-        pushes_local = self.verifier.sample(motion, budget, seed)  # one sample, no Collide
+        # one fresh sample, no Collide
+        pushes_local = self.verifier.proposals.sample(motion, budget, seed)
         trans = self.verifier.route_push(q_O, q_to, q_R, pushes_local, deadline=deadline)
         if trans is None:
             return Plan.failed(PlanStatus.PUSH_UNREACHABLE)

@@ -27,14 +27,8 @@ from lamp.geometry.exact_space import ExactSpace
 from lamp.geometry.object_space import ObjectSpace
 from lamp.geometry.robot_space import RobotSpace
 from lamp.planners.config import PlannerConfig
-from lamp.planners.verifier import (  # noqa: F401  (re-exported: their old home)
-    GspiRouter,
-    PushCandidates,
-    TaskStats,
-    Verifier,
-    VerifierParams,
-    pairwise_min_distance,
-)
+from lamp.planners.robot_routing import GspiRouter
+from lamp.planners.verifier import TaskStats, Verifier, VerifierParams
 from lamp.scene.model import Scene, Shape
 from lamp.search.landmark import route_length
 

@@ -2,12 +2,13 @@
 
 A :class:`Verifier` is built from three narrow pieces and a few numbers:
 
-- a manipulation model (``lamp.manip.proposals.ProposalModel``): motion -> K proposals;
-- a :class:`RobotValidity`: the robots' free space with the manipulated object at a
-  given pose (free points, free segments, nearest free spot) over a window of the map,
-  and without the object around it;
-- a :class:`MultiRobotPlanner`: paths for all robots to goals in such a space (Gspi,
-  :class:`GspiRouter`);
+- a manipulation model (``lamp.manip.proposals.ProposalModel``): motion -> K proposals,
+  asked through its :class:`~lamp.planners.proposal_cache.ProposalCache`;
+- a :class:`~lamp.planners.robot_routing.RobotValidity`: the robots' free space with the
+  manipulated object at a given pose (free points, free segments, nearest free spot) over
+  a window of the map, and without the object around it;
+- a :class:`~lamp.planners.robot_routing.MultiRobotPlanner`: paths for all robots to
+  goals in such a space (Gspi, ``GspiRouter``);
 - :class:`VerifierParams` (from ``PlannerConfig``).
 
 It owns its proposal cache and its counters (:class:`TaskStats`). Planners hold a
@@ -16,12 +17,13 @@ It owns its proposal cache and its counters (:class:`TaskStats`). Planners hold 
 ``verify`` follows the algorithm (paper Sec. III-A-1): for each budget B = min(N,
 max_budget) down to 1 (line 19), draw K proposals from the manipulation model (line 20),
 drop those whose contacts or push paths collide with the obstacles, the border, the object
-or each other (line 21, ``Collide``), pair robots with contacts by shortest distance and
-send unpaired robots to waiting spots out of the push's way (line 22, ``Reassign``), and
-ask the multi-robot planner (Gspi) for approach paths T_move (line 23). The first success
-returns the transition T_R = T_move (+) T_manip (line 24); otherwise ``verify``
-returns None (line 25, failure). ``sample`` is the unverified path the GCo baselines take: one
-fresh model sample, no ``Collide``.
+or each other (line 21, ``Collide``: ``lamp.planners.collide``), pair robots with contacts
+by shortest distance (:func:`assign_to_contacts`) and send unpaired robots to waiting
+spots out of the push's way (line 22, ``Reassign``), and ask the multi-robot planner
+(Gspi) for approach paths T_move (line 23). The first success returns the transition T_R
+= T_move (+) T_manip (line 24, T_manip: :func:`push_paths`); otherwise ``verify`` returns
+None (line 25, failure). The GCo baselines take the unverified path instead: one fresh
+model sample (``proposals.sample``), no ``Collide``, then ``route_push``.
 """
 
 from __future__ import annotations
@@ -29,11 +31,13 @@ from __future__ import annotations
 import time
 from collections import Counter
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from scipy.optimize import linear_sum_assignment
 
-from lamp.contract.trajectory import MAX_STEP, concat, densify, straight_moves
+from lamp.contract.trajectory import concat, hold, retime, straight_moves
 from lamp.contract.transition import Transition
 from lamp.geometry import se2
 from lamp.geometry.shapes import signed_distance
@@ -44,30 +48,89 @@ from lamp.planners.bystanders import (
     route_movers,
     standing_on_goal,
 )
-from lamp.planners.verify import assign_to_contacts, push_paths
-from lamp.planners.verify_parts import (  # noqa: F401  (re-exported: their old home)
-    FreeSpace,
-    GspiRouter,
-    MultiRobotPlanner,
-    PushCandidates,
-    RobotValidity,
-    TaskStats,
-    VerifierParams,
-    pairwise_min_distance,
-    proposal_key,
-    stable_seed,
-)
+from lamp.planners.collide import usable_mask
+from lamp.planners.proposal_cache import ProposalCache
+from lamp.planners.robot_routing import MultiRobotPlanner, RobotValidity, Window
 from lamp.scene.model import Shape
 
-__all__ = ["FreeSpace", "GspiRouter", "MultiRobotPlanner", "PushCandidates", "RobotValidity",
-           "TaskStats", "Verifier", "VerifierParams", "pairwise_min_distance"]
+__all__ = ["TaskStats", "Verifier", "VerifierParams", "assign_to_contacts", "push_paths"]
 
 #: How far (m) the breadth-first search for a robot's waiting spot may go.
 WAIT_SEARCH_RADIUS = 1.0
 #: Multi-robot planner failures that a larger robot-space window may fix.
 _WINDOW_BOUND = frozenset({GspiStatus.UNREACHABLE, GspiStatus.STALLED, GspiStatus.STEP_BUDGET})
 
-Window = tuple[float, float, float, float]
+
+@dataclass(frozen=True)
+class VerifierParams:
+    """The ``PlannerConfig`` numbers ``Verify`` reads. Validated: positive counts and times,
+    a non-negative tolerance (``ValueError`` naming the field)."""
+
+    k: int = 16
+    max_budget: int = 3
+    gspi_attempts_per_budget: int = 3
+    contact_tolerance: float = 0.006
+    gspi_time_limit: float = 10.0
+
+    def __post_init__(self) -> None:
+        for name in ("k", "max_budget", "gspi_attempts_per_budget"):
+            v = getattr(self, name)
+            if not (isinstance(v, int) and not isinstance(v, bool) and v >= 1):
+                raise ValueError(f"{name}: a positive integer, got {v!r}")
+        if not self.gspi_time_limit > 0:
+            raise ValueError(f"gspi_time_limit: positive seconds, got {self.gspi_time_limit!r}")
+        if not self.contact_tolerance >= 0:
+            raise ValueError(f"contact_tolerance: >= 0, got {self.contact_tolerance!r}")
+
+    @classmethod
+    def from_config(cls, cfg: Any) -> VerifierParams:
+        return cls(k=cfg.k, max_budget=cfg.max_budget,
+                   gspi_attempts_per_budget=cfg.gspi_attempts_per_budget,
+                   contact_tolerance=cfg.contact_tolerance, gspi_time_limit=cfg.gspi_time_limit)
+
+
+@dataclass
+class TaskStats:
+    """Counters reported in result.json's ``stats``."""
+
+    verify_calls: int = 0
+    verify_success: int = 0
+    model_calls: int = 0
+    gspi_calls: int = 0
+    gspi_success: int = 0
+    #: Gspi calls ended by the wall-clock cap ``gspi_time_limit`` (0 on an unloaded
+    #: machine: then no result depended on the clock).
+    gspi_timeouts: int = 0
+    cache_hits: int = 0
+    #: vertices LAMP-Lazy's D* Lite expanded (its budget: ``lazy_max_expansions``)
+    search_expansions: int = 0
+    #: the most of them in one LAMP-Lazy ``plan`` call (a maximum: ``add`` keeps the larger)
+    max_plan_expansions: int = 0
+
+    def add(self, other: TaskStats) -> None:
+        for k, v in vars(other).items():
+            setattr(self, k, max(getattr(self, k), v) if k.startswith("max_")
+                    else getattr(self, k) + v)
+
+
+def assign_to_contacts(q_R: np.ndarray, contacts: np.ndarray) -> tuple[np.ndarray, float]:
+    """Optimal robot-to-contact pairing by Euclidean distance: (paired robot rows, total)."""
+    cost = np.linalg.norm(q_R[:, None, :] - contacts[None, :, :], axis=2)
+    rows, cols = linear_sum_assignment(cost)
+    return rows, float(cost[rows, cols].sum())
+
+
+def push_paths(end_of_move: np.ndarray, goal_of: np.ndarray, pushes_world: np.ndarray) -> np.ndarray:
+    """T_manip for all N robots: robot at contact j follows push j, the others hold."""
+    n = end_of_move.shape[0]
+    h = pushes_world.shape[1]
+    manip = hold(end_of_move, h)
+    for i in range(n):
+        j = int(goal_of[i])
+        if 0 <= j < pushes_world.shape[0]:
+            manip[i] = pushes_world[j]
+            manip[i, 0] = end_of_move[i]
+    return retime(manip)
 
 
 class Verifier:
@@ -77,93 +140,18 @@ class Verifier:
     def __init__(self, model: Any, shape: Shape, robot_radius: float, n_robots: int,
                  robots: RobotValidity, route: MultiRobotPlanner, params: VerifierParams,
                  seed: int = 0) -> None:
-        self.model = model
         self.shape = shape
         self.robot_radius = float(robot_radius)
         self.n_robots = int(n_robots)
         self.robots = robots
         self.route = route
         self.params = params
-        self.seed = int(seed)
         self.stats = TaskStats()
-        self._proposals: dict[tuple, list] = {}
-        self._candidates: dict[tuple, PushCandidates] = {}
-
-    # ------------------------------------------------------------------ proposals
-    def proposals(self, motion: np.ndarray, budget: int, attempt: int) -> list:
-        """K model proposals for ``motion`` (object frame) with ``budget`` robots.
-
-        Cached per (motion, budget, attempt): the object frame makes proposals independent
-        of where the object is, so lattice primitives are answered once (a repeat counts
-        in ``stats.cache_hits``, a model call in ``stats.model_calls``); a repeated
-        verification of the same edge (``attempt`` > 0) draws fresh samples, as the paper
-        relies on (Sec. III-A-1: "a different sampling in a future call may yield valid
-        manipulation trajectories").
-        """
-        key = proposal_key(motion, budget, attempt)
-        props = self._proposals.get(key)
-        if props is None:
-            props = self.model.propose(self.shape, motion=tuple(map(float, motion)),
-                                       budget=budget, k=self.params.k,
-                                       seed=stable_seed(self.seed, key))
-            self.stats.model_calls += 1
-            self._proposals[key] = props
-        else:
-            self.stats.cache_hits += 1
-        return props
-
-    def sample(self, motion: np.ndarray, budget: int, seed: int) -> np.ndarray:
-        """One fresh model sample's push paths (B, H, 2, object frame) for ``motion``:
-        never cached, never checked (``Collide`` is not applied); one ``model_calls``."""
-        self.stats.model_calls += 1
-        prop = self.model.propose(self.shape, motion=tuple(map(float, motion)), budget=budget,
-                                  k=1, seed=seed)[0]
-        return np.asarray(prop.pushes, float)
-
-    def push_candidates(self, motion: np.ndarray, budget: int, attempt: int) -> PushCandidates:
-        """``proposals`` prepared for ``Collide`` (see ``PushCandidates``), cached alike."""
-        key = proposal_key(motion, budget, attempt)
-        cands = self._candidates.get(key)
-        if cands is None:
-            cands = self._prepare(self.proposals(motion, budget, attempt))
-            self._candidates[key] = cands
-        else:
-            self.stats.cache_hits += 1
-        return cands
-
-    def _prepare(self, props: list) -> PushCandidates:
-        r = self.robot_radius
-        pushes = [np.asarray(p.pushes, float) for p in props]
-        dense = [densify(p, MAX_STEP / 2) for p in pushes]
-        ok = np.array([
-            bool(np.all(signed_distance(self.shape, p[:, 0]) >= r - self.params.contact_tolerance))
-            and pairwise_min_distance(d) >= 2 * r - 1e-9
-            for p, d in zip(pushes, dense, strict=True)
-        ], dtype=bool)
-        sizes = [d.shape[0] * d.shape[1] for d in dense]
-        points = np.concatenate([d.reshape(-1, 2) for d in dense]) if dense else np.zeros((0, 2))
-        return PushCandidates(pushes, ok, points,
-                              np.concatenate([[0], np.cumsum(sizes)]).astype(int))
+        #: The model's proposals for this object, cached; counted in ``stats``.
+        self.proposals = ProposalCache(model, shape, robot_radius, params.k,
+                                       params.contact_tolerance, seed, self.stats)
 
     # ------------------------------------------------------------------ Collide
-    def usable_mask(self, q_from: np.ndarray, cands: PushCandidates) -> np.ndarray:
-        """``Collide`` (Alg. 1 line 21) for all K candidates at once: which are usable at ``q_from``?
-
-        A proposal is rejected when a contact or any point of a push path leaves the robots'
-        free space (obstacles, other objects, border), when a contact lies inside the object
-        (deeper than ``contact_tolerance``), or when two pushing robots come closer than 2r.
-        The pose-independent tests come precomputed (``PushCandidates.intrinsic_ok``); the
-        free-space test is one query for all the candidates' points, in the robots' space
-        around ``q_from`` (a point beyond its window counts as not free).
-        """
-        ok = cands.intrinsic_ok.copy()
-        if not ok.any():
-            return ok
-        free = self.robots.static_space_near(q_from).is_free(
-            se2.transform_points(q_from, cands.dense_points))
-        ok &= np.logical_and.reduceat(free, cands.starts[:-1])
-        return ok
-
     def _usable_proposals(self, q_from: np.ndarray, q_R: np.ndarray, motion: np.ndarray,
                           budget: int, attempt: int) -> list[np.ndarray]:
         """Lines 20-21: the K proposals (C_R, T_manip) that pass ``Collide``, nearest to the robots first.
@@ -172,9 +160,9 @@ class Verifier:
         the candidates that need the shortest approach first, which shortens the makespan and
         keeps consecutive pushes in the same direction from reshuffling the robots.
         """
-        cands = self.push_candidates(motion, budget, attempt)
+        cands = self.proposals.push_candidates(motion, budget, attempt)
         kept: list[tuple[float, int, np.ndarray]] = []
-        for idx in np.flatnonzero(self.usable_mask(q_from, cands)):
+        for idx in np.flatnonzero(usable_mask(self.robots, q_from, cands)):
             pushes_local = cands.pushes_local[idx]
             contacts = se2.transform_points(q_from, pushes_local[:, 0])
             kept.append((assign_to_contacts(q_R, contacts)[1], int(idx), pushes_local))
