@@ -97,7 +97,8 @@ class FakeExecutor:
         if left:
             self.poses[0, 0] = -1.0  # off the map
         return SimpleNamespace(object_poses=self.poses.copy(), robot_positions=self.robots.copy(),
-                               left_workspace=left, trace=None)
+                               left_workspace=left, trace=None, stopped_at=None,
+                               declined=False)
 
 
 def exact(seg: int, d: np.ndarray) -> np.ndarray:
@@ -353,7 +354,7 @@ class SwervingExecutor(FakeExecutor):
         self.robots = paths[:, paths.shape[1] // 2 if stopped else -1].copy()
         return SimpleNamespace(object_poses=self.poses.copy(), robot_positions=self.robots.copy(),
                                left_workspace=False, trace=None,
-                               stopped_at=10 if stopped else None)
+                               stopped_at=10 if stopped else None, declined=False)
 
 
 def test_watch_stops_a_straight_push_in_a_tight_place_only() -> None:

@@ -134,7 +134,8 @@ class _StillExecutor:
         self.true[0, :2] += paths[0, -1] - paths[0, 0]
         self.robots = paths[:, -1]
         return SimpleNamespace(object_poses=self.object_poses, robot_positions=self.robots,
-                               left_workspace=False, trace=None)
+                               left_workspace=False, trace=None, stopped_at=None,
+                               declined=False)
 
 
 @pytest.mark.parametrize(("sigma_known", "thrash"), [(0.0, True), (0.01, False)])

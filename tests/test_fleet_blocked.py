@@ -12,7 +12,8 @@ from fleet_fakes import fleet_at_starts
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from lamp.fleet.blocked import BLOCKED_WAKE_EVENTS, wake_blocked
+from lamp.fleet.blocked import BLOCKED_WAKE_EVENTS
+from lamp.fleet.state import ObjectStatus
 from lamp.fleet.teams import needed_space
 from lamp.geometry.shapes import to_shapely
 from lamp.scene import scene_from_dict
@@ -77,7 +78,7 @@ def _blocked_fleet(third_box: bool = False):
     fleet.turns = SimpleNamespace(pause=lambda k: None)  # no loop threads here
     for k, team in enumerate(([0, 1], [2, 3])):
         o = fleet.objects[k]
-        o.status, o.rank, o.team = "active", k, team
+        o.status, o.rank, o.team = ObjectStatus.ACTIVE, k, team
         fleet.owner[team] = k
     assert fleet.plan_failed(0) is False  # waits for a change
     return fleet, fleet.executor.robot_positions, fleet.objects[0]
@@ -96,18 +97,18 @@ def test_a_blocked_planner_wakes_once_what_stood_in_its_way_has_left() -> None:
         """Robot 2 moves to ``position``; one event passes; whether box 0 woke."""
         if position is not None:
             robots[2] = position
-        fleet.counts["events"] += 1
-        wake_blocked(fleet)
+        fleet.stats.counts["events"] += 1
+        fleet._wake_blocked()
         return o.blocked_at is None
 
     assert not event()  # it still stands there
     assert not event((3.1, 0.8))  # it moved along the way, still in it
     robots[2] = (2.5, 2.7)  # it left: looked at only at the next event
-    wake_blocked(fleet)
+    fleet._wake_blocked()
     assert o.blocked_at is not None
     assert event()
-    assert o.wake and o.ready
-    assert fleet.counts["events"] < BLOCKED_WAKE_EVENTS
+    assert o.replan and o.ready
+    assert fleet.stats.counts["events"] < BLOCKED_WAKE_EVENTS
 
 
 def test_with_nobody_in_its_way_a_blocked_planner_waits_for_the_events() -> None:
@@ -120,8 +121,8 @@ def test_with_nobody_in_its_way_a_blocked_planner_waits_for_the_events() -> None
     assert o.blockers == frozenset()
     for n in range(1, BLOCKED_WAKE_EVENTS + 1):
         robots[3] = (2.8 + 0.1 * n, 2.2)
-        fleet.counts["events"] += 1
-        wake_blocked(fleet)
+        fleet.stats.counts["events"] += 1
+        fleet._wake_blocked()
         assert (o.blocked_at is None) == (n == BLOCKED_WAKE_EVENTS)
 
 
@@ -132,6 +133,6 @@ def test_one_blocker_gone_wakes_it_while_another_stays() -> None:
     fleet, robots, o = _blocked_fleet(third_box=True)
     assert o.blockers == {1, 2}
     robots[2] = (2.5, 2.7)
-    fleet.counts["events"] += 1
-    wake_blocked(fleet)
-    assert o.blocked_at is None and o.wake
+    fleet.stats.counts["events"] += 1
+    fleet._wake_blocked()
+    assert o.blocked_at is None and o.replan

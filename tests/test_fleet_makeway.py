@@ -20,12 +20,11 @@ from lamp.fleet.coordinator import Fleet
 from lamp.fleet.makeway import (
     BUFFER_STEP,
     buffer_pose,
-    detour_done,
-    make_way,
     standing_in_way,
     way_of,
     with_goal,
 )
+from lamp.fleet.state import ObjectStatus
 from lamp.geometry.object_space import ObjectSpace
 from lamp.geometry.primitives import Obstacle, Rectangle
 from lamp.geometry.shapes import obstacle_geometry, to_shapely
@@ -214,14 +213,14 @@ def _stuck_fleet(scene) -> Fleet:
     executor that only reports the start poses (no simulator)."""
     fleet = fleet_at_starts(scene)
     for k, o in enumerate(fleet.objects):
-        o.status, o.rank, o.team, o.blocked_at = "active", k, [3 * k, 3 * k + 1, 3 * k + 2], (0, 0)
+        o.status, o.rank, o.team, o.blocked_at = ObjectStatus.ACTIVE, k, [3 * k, 3 * k + 1, 3 * k + 2], (0, 0)
     return fleet
 
 
 def test_the_object_on_the_first_blocked_goal_moves_aside_once_per_pair() -> None:
     scene = _scene(SWAP)
     fleet = _stuck_fleet(scene)
-    assert make_way(fleet, fleet._ranked())
+    assert fleet._make_way(fleet.ranked())
     mover = fleet.objects[1]  # it stands on the goal of object 0, the first
     assert mover.detour is not None and mover.blocked_at is None and mover.ready
     assert fleet.objects[0].detour is None and fleet.objects[0].blocked_at is not None
@@ -230,17 +229,17 @@ def test_the_object_on_the_first_blocked_goal_moves_aside_once_per_pair() -> Non
                                2 * scene.robot_radius)
     # blocked again at the same places: object 0 makes way for object 1, then nobody
     mover.detour, mover.blocked_at = None, (0, 0)
-    assert make_way(fleet, fleet._ranked())
+    assert fleet._make_way(fleet.ranked())
     assert fleet.objects[0].detour is not None
     fleet.objects[0].detour, fleet.objects[0].blocked_at = None, (0, 0)
-    assert not make_way(fleet, fleet._ranked())
-    assert fleet.counts["made_way"] == 2
+    assert not fleet._make_way(fleet.ranked())
+    assert fleet.stats.counts["made_way"] == 2
 
 
 def test_a_detour_claims_its_way_to_the_buffer_not_to_the_goal() -> None:
     scene = _scene(SWAP)
     fleet = _stuck_fleet(scene)
-    make_way(fleet, fleet._ranked())
+    fleet._make_way(fleet.ranked())
     target = fleet.objects[1].detour
     fleet.announce(1, np.array([[4.0, 2.0, 0.0]]), np.array([target]))
     goal = to_shapely(scene.objects[1].shape, scene.objects[1].goal)
@@ -260,7 +259,7 @@ def _waiting_in_way(goal_of_1: list[float], third: bool = False) -> Fleet:
     scene = _scene(d)
     fleet = fleet_at_starts(scene)
     first = fleet.objects[0]
-    first.status, first.rank, first.team, first.blocked_at = "active", 0, list(range(6)), (0, 0)
+    first.status, first.rank, first.team, first.blocked_at = ObjectStatus.ACTIVE, 0, list(range(6)), (0, 0)
     fleet.owner[:] = 0
     fleet.started = 1
     return fleet
@@ -269,14 +268,14 @@ def _waiting_in_way(goal_of_1: list[float], third: bool = False) -> Fleet:
 def test_robots_go_to_the_object_in_the_way_and_it_moves_aside_when_its_own_way_is_shut():
     fleet = _waiting_in_way([2.0, 2.0, 0.0])  # its goal is where object 0 stands
     try:
-        assert make_way(fleet, fleet._ranked())
+        assert fleet._make_way(fleet.ranked())
         first, mover = fleet.objects
-        assert mover.status == "active" and mover.team == list(range(6)) and mover.ready
+        assert mover.status == ObjectStatus.ACTIVE and mover.team == list(range(6)) and mover.ready
         assert list(fleet.owner) == [1] * 6
         assert first.team == [] and first.blocked_at is None and first.ready
-        assert mover.detour is not None and fleet.counts["made_way"] == 1
+        assert mover.detour is not None and fleet.stats.counts["made_way"] == 1
         first.needs_team = True  # its loop ended and waits for robots
-        detour_done(fleet, 1)  # aside: the robots go back to the object it made way for
+        fleet.detour_done(1)  # aside: the robots go back to the object it made way for
         assert mover.detour is None and mover.team == [] and first.team == list(range(6))
         assert list(fleet.owner) == [0] * 6 and not first.needs_team and first.ready
     finally:
@@ -286,10 +285,10 @@ def test_robots_go_to_the_object_in_the_way_and_it_moves_aside_when_its_own_way_
 def test_robots_go_to_the_object_in_the_way_which_goes_straight_on_when_its_way_is_clear():
     fleet = _waiting_in_way([4.0, 3.3, 0.0])
     try:
-        assert make_way(fleet, fleet._ranked())
+        assert fleet._make_way(fleet.ranked())
         mover = fleet.objects[1]
         assert mover.team == list(range(6)) and mover.detour is None
-        assert fleet.counts["made_way"] == 0
+        assert fleet.stats.counts["made_way"] == 0
     finally:
         fleet.turns.close()
 
@@ -303,19 +302,19 @@ def test_an_object_precedence_holds_back_moves_aside_but_not_to_its_goal() -> No
     fleet.cuts[1] = {2}  # (as if) object 1's goal would cut the third's way
     try:
         assert not fleet.may_start(1)
-        assert make_way(fleet, fleet._ranked())
+        assert fleet._make_way(fleet.ranked())
         first, mover, third = fleet.objects
         assert mover.team == list(range(6)) and mover.detour is not None
-        assert fleet.counts["made_way"] == 1
+        assert fleet.stats.counts["made_way"] == 1
         # aside, with the object it made way for not waiting for robots (it got others):
         # its robots go free and it waits for robots until it may start
-        third.status = "active"
-        detour_done(fleet, 1)
+        third.status = ObjectStatus.ACTIVE
+        fleet.detour_done(1)
         assert mover.detour is None and mover.team == [] and list(fleet.owner) == [-1] * 6
         mover.needs_team = True  # its loop waits for robots
         fleet._release()
         assert mover.team == [] and mover.needs_team
-        third.status = "placed"  # now nothing holds it back
+        third.status = ObjectStatus.PLACED  # now nothing holds it back
         fleet._release()
         assert mover.team and not mover.needs_team
     finally:

@@ -18,8 +18,8 @@ from hypothesis import strategies as st
 
 from lamp.contract.model import MAX_ROBOTS
 from lamp.fleet.admission import CROSSING, crosses, meets_moving, meets_standing
+from lamp.fleet.config import CLAIM_NEAR
 from lamp.fleet.regions import (
-    CLAIM_NEAR,
     OBJECT_MARGIN,
     ROBOT_MARGIN,
     STATIC_SLACK,
@@ -586,7 +586,7 @@ def test_a_plan_that_crosses_a_higher_claim_heeds_only_its_near_part() -> None:
 def test_limit_reached_names_the_limit_that_ends_an_object() -> None:
     """An object whose last loop ended only for the world or the team (so another would
     follow) fails by the limit it ran out of, planning time first."""
-    from lamp.fleet.objects import limit_reached
+    from lamp.planners.series import limit_reached
 
     assert limit_reached(50, 10, 3, 12.0, 300.0) == ""
     assert limit_reached(50, 50, 3, 12.0, 300.0) == "segment limit reached (50)"

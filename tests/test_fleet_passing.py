@@ -12,7 +12,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from lamp.fleet.admission import heeded_claims, passes_ahead
-from lamp.fleet.state import ObjectState
+from lamp.fleet.state import ObjectState, ObjectStatus
 
 #: a straight claim along y = 0 from x = 0 to x = 10, 1 m wide; the claimer at x = 0
 CLAIMER = shapely.LineString([(0.0, 0.0), (10.0, 0.0)])
@@ -108,8 +108,8 @@ def test_passing_ahead_against_a_hand_reference(x, ahead, margin, less) -> None:
 
 def test_heeded_claims_gives_an_object_passing_ahead_the_near_part_only() -> None:
     near = shapely.box(0.0, -0.5, 2.0, 0.5)
-    claimer = ObjectState(0, status="active", rank=0, claim=CLAIM, near=near, way=CLAIMER)
-    me = ObjectState(1, status="active", rank=1, way=across(8.0))
+    claimer = ObjectState(0, status=ObjectStatus.ACTIVE, rank=0, claim=CLAIM, near=near, way=CLAIMER)
+    me = ObjectState(1, status=ObjectStatus.ACTIVE, rank=1, way=across(8.0))
     heeded = heeded_claims([claimer, me], me, 0.0, 0.0, [0.25, 0.25], 1.0)
     assert heeded == [(0, near, near)]
     stays = heeded_claims([claimer, me], me, 0.0, 0.0, [0.25, 0.25], math.inf)

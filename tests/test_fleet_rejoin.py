@@ -15,8 +15,9 @@ from fleet_fakes import fleet_at_starts
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from lamp.fleet.config import REJOIN_SLACK
 from lamp.fleet.segments import REJOIN_GAP, Segment
-from lamp.planners.config import REJOIN_SLACK
+from lamp.fleet.state import ObjectStatus
 from lamp.scene import scene_from_dict
 from lamp.scene.model import Rectangle
 
@@ -122,11 +123,11 @@ def test_the_fleet_hands_a_segment_ended_so_back_to_its_loop_stopped(limit: int,
                      "goal": [3.0, 1.5, 0.0]}]})
     fleet = fleet_at_starts(scene, rejoin_limit=limit, rejoin_slack=slack)
     o = fleet.objects[0]
-    o.status, o.team, o.rank = "active", [0], 0
+    o.status, o.team, o.rank = ObjectStatus.ACTIVE, [0], 0
     seg = _segment(start=(0.5, 0.7))  # its next row 0.22 m from the robot at (0.5, 0.5)
     seg.rejoined = limit - 1  # the limit-th rejoin; or 12 rows back, over half of 20
     o.running = seg
     fleet._advance()
     assert o.running is None and o.ready
     assert o.reply is not None and o.reply.stopped_at is not None
-    assert fleet.clock == 0.0 and fleet.counts["events"] == 0 and fleet.counts["jammed"] == 1
+    assert fleet.clock == 0.0 and fleet.stats.counts["events"] == 0 and fleet.stats.counts["jammed"] == 1

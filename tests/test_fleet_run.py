@@ -18,9 +18,9 @@ from typer.testing import CliRunner
 import lamp
 from lamp.cli import app
 from lamp.errors import InputError
-from lamp.fleet.regions import CLAIM_NEAR
+from lamp.fleet.config import CLAIM_NEAR, PASS_MARGIN, REJOIN_SLACK
+from lamp.fleet.state import ObjectStatus
 from lamp.pipeline import RunRequest
-from lamp.planners.config import PASS_MARGIN, REJOIN_SLACK
 from lamp.record.safety import recorded_teams
 from lamp.scene import scene_from_dict
 
@@ -293,10 +293,10 @@ def test_a_plan_made_in_the_world_as_it_stands_is_not_declined() -> None:
     def outcome(events_since: int) -> tuple[bool, bool]:
         fleet = fleet_at_starts(scene, robots)
         o = fleet.objects[0]
-        o.status, o.team = "active", [0]
+        o.status, o.team = ObjectStatus.ACTIVE, [0]
         fleet.owner[0] = 0
         fleet.world_taken(0)
-        fleet.counts["events"] += events_since  # segments that ended since
+        fleet.stats.counts["events"] += events_since  # segments that ended since
         rows = np.linspace(robots[0], robots[0] + [0.0, 0.1], 5)[None]
         o.request = Segment(0, [0], rows, np.array([scene.objects[0].start]), None,
                             scene.objects[0].shape, r)
@@ -315,7 +315,7 @@ def _moving_fleet(scene, cross_near: float = 0.0, cross_waiting: float = 0.0,
     fleet = fleet_at_starts(scene, cross_near=cross_near, cross_waiting=cross_waiting,
                             pass_margin=pass_margin)
     for k, o in enumerate(fleet.objects):
-        o.status, o.rank = "active", k
+        o.status, o.rank = ObjectStatus.ACTIVE, k
     return fleet
 
 
@@ -467,7 +467,7 @@ def _fleet_settings(monkeypatch, params: dict, *names: str) -> tuple:
         pass
 
     def run(self):
-        seen.append(tuple(getattr(self, n) for n in names))
+        seen.append(tuple(getattr(self.config, n) for n in names))
         raise Seen
 
     monkeypatch.setattr(Fleet, "run", run)

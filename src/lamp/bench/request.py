@@ -249,7 +249,8 @@ class BenchRequest:
     def _check_params(self) -> None:
         """Each ``--param`` names a planner of the run and one of its declared parameters,
         with a valid value; stored as sorted canonical texts."""
-        from lamp.contract.params import apply_overrides, parse_assignments
+        from lamp.contract.params import parse_assignments
+        from lamp.pipeline.request import configure
 
         by_planner: dict[str, dict[str, str]] = {}
         for planner, name, value in parse_assignments(self.params):
@@ -257,7 +258,7 @@ class BenchRequest:
                 _fail(f"--param {planner}.{name}={value}: planner {planner!r} is not among "
                       f"--planners ({', '.join(self.planners)})")
             spec = registry.get(planner)
-            apply_overrides(spec.default_config(), spec.params, {name: value}, planner)
+            configure(spec, {name: value})  # its own and, closed-loop, the fleet's
             by_planner.setdefault(planner, {})[name] = value
         object.__setattr__(self, "params", tuple(
             f"{p}.{n}={v}" for p in sorted(by_planner) for n, v in sorted(by_planner[p].items())))

@@ -144,10 +144,10 @@ def _print_params(planner: str) -> None:
     from rich.console import Console
     from rich.table import Table
 
-    from lamp.contract.params import param_table
+    from lamp.pipeline.request import param_rows
 
     spec = registry.get(check_choice("--planner", planner, registry.names(), "planner"))
-    rows = param_table(spec.default_config(), spec.params)
+    rows = param_rows(spec)
     table = Table(title=f"parameters of {spec.name} ({spec.description}): --param {spec.name}.NAME=VALUE")
     for col in ("name", "default", "valid", "meaning"):
         table.add_column(col)

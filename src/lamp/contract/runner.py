@@ -9,8 +9,9 @@ back. LAMP's closed loop (``lamp.planners.runner.ClosedLoopRunner``) and the MAP
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from enum import StrEnum
 from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
@@ -19,7 +20,8 @@ if TYPE_CHECKING:
     from lamp.contract.events import SegmentEvent
     from lamp.contract.result import ObjectResult
 
-__all__ = ["Execution", "Executor", "ObjectOutcome", "ObjectRunner"]
+__all__ = ["ALONE", "Execution", "Executor", "LoopEnd", "LoopHooks", "ObjectOutcome",
+           "ObjectRunner", "WorldExecutor"]
 
 
 class Execution(Protocol):
@@ -29,21 +31,16 @@ class Execution(Protocol):
     robot_positions: np.ndarray  # (N, 2)
     left_workspace: bool  # an object left the map during the segment
     trace: Any  # frames sampled every ``record_every`` physics steps, or None
+    #: the physics step at which ``stop`` ended the paths early; None: they ran to the end
+    stopped_at: int | None
+    #: the segment was not run: the world changed around its plan (a shared executor's
+    #: answer, ``LoopHooks``); the loop then ends with ``LoopEnd.WORLD_CHANGED``
+    declined: bool
 
 
 class Executor(Protocol):
     """Runs synchronised robot paths and reports the state they led to (``lamp.sim.Simulator``).
-
-    An executor shared with other moving objects (the fleet schedule's
-    ``lamp.fleet.view.FleetView``) may also offer, and the closed loop then uses:
-
-    - ``announce(segment, rest)``: told before each ``execute`` the object poses the
-      segment plans to pass ((P, 3)) and those the plan goes on to ((R, 3));
-    - ``plan_failed() -> bool``: called when the planner found no plan; True stops the
-      loop (``WORLD_CHANGED``) so that its runner plans anew once the world has changed;
-    - an ``Execution`` with ``declined = True``: the segment was not run (the world changed
-      around its plan); the loop stops with ``WORLD_CHANGED`` and counts nothing.
-    """
+    What an executor shared with others adds is a loop's :class:`LoopHooks`."""
 
     @property
     def object_poses(self) -> np.ndarray:
@@ -63,6 +60,75 @@ class Executor(Protocol):
         ...
 
 
+class WorldExecutor(Executor, Protocol):
+    """The executor of a whole run, every robot and object (``lamp.sim.Simulator``,
+    ``lamp.sim.disturbed.DisturbedExecutor``): what the schedulers and object runners
+    are handed."""
+
+    #: Whether the run may be disturbed (noisy readings, robots that fail): success is
+    #: then judged on ``true_object_poses``, and a robot that fails ends its team's loop.
+    disturbed: bool
+
+    @property
+    def true_object_poses(self) -> np.ndarray:
+        """(K, 3) the objects' true poses (``object_poses`` may be a noisy reading)."""
+        ...
+
+    @property
+    def failed(self) -> Mapping[int, np.ndarray]:
+        """The robots that stopped for good, and where (empty when none did)."""
+        ...
+
+
+class LoopEnd(StrEnum):
+    """How one closed loop ended (``ObjectOutcome.end``): for good, or so that its runner
+    plans anew."""
+
+    #: At its goal, or stopped for good (its result says which, and why).
+    FINISHED = "finished"
+    #: Its planner found no plan (for good, under its policy).
+    NO_PLAN = "no plan"
+    #: The world changed around its plan: its segment was declined, or its planner found
+    #: no plan while other objects moved (``LoopHooks.plan_failed``). Plan anew.
+    WORLD_CHANGED = "world changed"
+    #: A robot of its team failed, or robots joined it (``LoopHooks.team_changed``). Plan
+    #: anew with the team as it is.
+    TEAM_CHANGED = "team changed"
+
+
+def _never() -> bool:
+    return False
+
+
+def _ignore(segment: np.ndarray, rest: np.ndarray) -> None:
+    return None
+
+
+@dataclass(frozen=True)
+class LoopHooks:
+    """What the world around one closed loop adds to its executor; ``ALONE``: nothing (a
+    loop with the whole simulator to itself). A sub-team's view (``TeamView``,
+    ``lamp.fleet.view.FleetView``) gives its own.
+
+    - ``team_changed()``: asked after each segment; True ends the loop
+      (``LoopEnd.TEAM_CHANGED``);
+    - ``announce(segment, rest)``: told before each ``execute`` the object poses the
+      segment plans to pass ((P, 3)) and those the plan goes on to ((R, 3)): the fleet
+      schedule reserves space with them;
+    - ``plan_failed()``: called when the planner found no plan; True ends the loop
+      (``LoopEnd.WORLD_CHANGED``) so that its runner plans anew once the world changed;
+      False: the loop goes on under its policy as if alone.
+    """
+
+    team_changed: Callable[[], bool] = _never
+    announce: Callable[[np.ndarray, np.ndarray], None] = _ignore
+    plan_failed: Callable[[], bool] = _never
+
+
+#: The hooks of a loop alone in its world.
+ALONE = LoopHooks()
+
+
 @dataclass
 class ObjectOutcome:
     """What moving one object measured: its result, the planning time charged to each of
@@ -75,6 +141,8 @@ class ObjectOutcome:
     unexecuted_planning_s: float = 0.0
     #: Runner-specific figures of this object (MAPush's own criterion, say).
     extra: dict[str, Any] = field(default_factory=dict)
+    #: How its (last) closed loop ended.
+    end: LoopEnd = LoopEnd.FINISHED
 
 
 class ObjectRunner(Protocol):
@@ -83,7 +151,7 @@ class ObjectRunner(Protocol):
     #: Simulated seconds between the trace rows of its segments (the recording's rows).
     row_dt_s: float
 
-    def run_object(self, index: int, executor: Executor,
+    def run_object(self, index: int, executor: WorldExecutor,
                    observe: Callable[[SegmentEvent], None]) -> ObjectOutcome:
         """Move object ``index`` from where it is towards its goal; ``observe`` is called
         after every executed segment, in order."""

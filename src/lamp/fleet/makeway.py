@@ -13,7 +13,7 @@ robots, one team at a time). ``j`` then gets a *detour*: a pose to move to first
 (:func:`buffer_pose`), which its loop plans to and runs like a goal (LAMP's own loop and
 Verify; ``lamp.fleet.objects``; it stops there at any heading, the clearance being
 measured by the bounding radius); when it stands there, or finds no way there, the detour
-ends (:func:`detour_done`), the blocked planners plan again and ``j`` goes on to its own
+ends (``Fleet.detour_done``), the blocked planners plan again and ``j`` goes on to its own
 goal. A ``j`` without robots gets ``k``'s (``k`` waits for robots), and a detour only if
 its own way is shut too or it may not start yet (``Fleet.may_start``: its goal would cut
 the way of ``k`` or of another object not yet done, ``fleet.precedence``); else it goes
@@ -38,25 +38,21 @@ are walled off.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
-from dataclasses import replace
-from typing import TYPE_CHECKING
+from collections.abc import Callable, Sequence, Set
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import shapely
 
+from lamp.fleet.state import ObjectState, ObjectStatus
 from lamp.geometry.object_space import ObjectSpace
 from lamp.geometry.primitives import Obstacle
 from lamp.geometry.shapes import obstacle_geometry, to_shapely
 from lamp.scene.model import Scene
 from lamp.search.landmark import route_length, route_path
 
-if TYPE_CHECKING:
-    from lamp.fleet.coordinator import Fleet
-    from lamp.fleet.state import ObjectState
-
-__all__ = ["BUFFER_REACH", "BUFFER_STEP", "buffer_pose", "detour_done", "make_way",
-           "route_of", "standing_in_way", "way_of", "with_goal"]
+__all__ = ["BUFFER_REACH", "BUFFER_STEP", "MakeWay", "Move", "buffer_pose", "make_way",
+           "route_of", "stands_still", "standing_in_way", "way_of", "with_goal"]
 
 #: Grid (m) on which buffer positions are sought.
 BUFFER_STEP = 0.1
@@ -155,77 +151,76 @@ def with_goal(scene: Scene, k: int, goal: np.ndarray) -> Scene:
     return replace(scene, objects=tuple(objs))
 
 
-def _stands_still(fleet: Fleet, o: ObjectState) -> bool:
+def stands_still(o: ObjectState, objects: Sequence[ObjectState], scene: Scene) -> bool:
     """Whether ``o`` stays where it stands until something is done for it: its planner
     waits for a change (with robots), or it waits for robots, or to start (its ``after``
     objects placed); and it is on no detour."""
     if o.detour is not None:
         return False
-    if o.status == "active":
+    if o.status == ObjectStatus.ACTIVE:
         return (o.blocked_at is not None and bool(o.team)) or o.needs_team
-    return o.status == "waiting" and all(fleet.objects[a].status == "placed"
-                                         for a in fleet.scene.objects[o.index].after)
+    return o.status == ObjectStatus.WAITING and all(
+        objects[a].status == ObjectStatus.PLACED for a in scene.objects[o.index].after)
 
 
-def make_way(fleet: Fleet, blocked: list[ObjectState]) -> bool:
+@dataclass(frozen=True)
+class Move:
+    """Object ``j`` makes way for the blocked object ``k``: it moves to ``target`` first
+    (None: straight to its goal) with ``team``, its own robots or, when it has none,
+    ``k``'s (``k`` then waits for robots)."""
+
+    j: int
+    k: int
+    target: np.ndarray | None
+    team: list[int]
+
+
+@dataclass
+class MakeWay:
+    """What :func:`make_way` decided: the pairs it tried (each tried once, ``Fleet``
+    remembers them), its notes for the log ((what, object, detail)) and the move, if
+    any."""
+
+    tried: list[tuple[int, int]] = field(default_factory=list)
+    notes: list[tuple[str, int, str]] = field(default_factory=list)
+    move: Move | None = None
+
+
+def make_way(scene: Scene, objects: Sequence[ObjectState], blocked: Sequence[ObjectState],
+             poses: np.ndarray, robot_positions: np.ndarray, tried: Set[tuple[int, int]],
+             may_start: Callable[[int], bool]) -> MakeWay:
     """For the first of ``blocked`` (priority order) in whose way an object stands still
-    (module docstring): that object moves aside, or, without robots and with its own way
-    clear, gets the blocked one's robots and goes to its goal. True if one did."""
-    scene = fleet.scene
-    poses = np.asarray(fleet.executor.object_poses, float)
-    still = [p.index for p in fleet.objects if _stands_still(fleet, p)]
-    unplaced = [p.index for p in fleet.objects if p.status in ("active", "waiting")]
+    (module docstring; pairs in ``tried`` are not tried again): that object moves aside,
+    or, without robots and with its own way clear, gets the blocked one's robots and goes
+    to its goal (``may_start``: whether an object may start now). Objects at ``poses``,
+    robots at ``robot_positions``; the decision is ``Fleet``'s to apply."""
+    out = MakeWay()
+    poses = np.asarray(poses, float)
+    still = [p.index for p in objects if stands_still(p, objects, scene)]
+    unplaced = [p.index for p in objects if p.unplaced]
     for o in blocked:
         k = o.index
         way = way_of(scene, k, poses[k])
-        j = standing_in_way(scene, k, way, poses, [i for i in still
-                                                   if i != k and (i, k) not in fleet.made_way])
+        j = standing_in_way(scene, k, way, poses, [i for i in still if i != k and (i, k)
+                                                   not in tried and (i, k) not in out.tried])
         if j is None or not o.team:
             continue
-        fleet.made_way.add((j, k))
-        J = fleet.objects[j]
+        out.tried.append((j, k))
+        J = objects[j]
         team = J.team or list(o.team)
         target = None
         shut = standing_in_way(scene, j, way_of(scene, j, poses[j]), poses,
                                [i for i in unplaced if i != j]) is not None
-        if J.team or shut or not fleet.may_start(j):
+        if J.team or shut or not may_start(j):
             keep = [way.buffer(float(scene.objects[k].shape.bounding_radius))]
             keep += [to_shapely(scene.objects[i].shape, np.asarray(scene.objects[i].goal, float))
                      .buffer(2 * scene.robot_radius) for i in unplaced if i != j]
             placed = Obstacle(scene.objects[k].shape, scene.objects[k].goal)
-            target = buffer_pose(scene, j, poses, fleet.executor.robot_positions, team, keep,
-                                 (placed,))
-            fleet.log.append((fleet.clock, "make_way", j, f"for {k}: "
+            target = buffer_pose(scene, j, poses, robot_positions, team, keep, (placed,))
+            out.notes.append(("make_way", j, f"for {k}: "
                               f"{None if target is None else np.round(target, 2).tolist()}"))
             if target is None:
                 continue
-            fleet.counts["made_way"] += 1
-        J.detour, J.lent_by = target, None
-        if J.team:
-            J.blocked_at, J.wake, J.ready = None, True, True
-        else:  # the blocked object's robots go to the one in its way; it waits for robots
-            o.team, o.blocked_at, o.wake, o.ready = [], None, True, True
-            fleet.log.append((fleet.clock, "handed", j, f"robots {team} of {k}"))
-            fleet.give_team(j, team)
-            J.lent_by = k if target is not None else None  # back to k after the detour
-        return True
-    return False
-
-
-def detour_done(fleet: Fleet, j: int) -> None:
-    """Object ``j`` stands at its detour's end (or found no way there): the planners
-    waiting for a change plan again, and ``j`` goes on to its own goal; with robots lent
-    by the object it made way for, once that one has them back (if it still waits); and
-    only once it may start (``Fleet.may_start``): until then its robots go free and it
-    waits for robots where it stands, which ``Fleet`` gives it only then."""
-    J = fleet.objects[j]
-    J.detour, lender, J.lent_by = None, J.lent_by, None
-    for o in fleet.objects:
-        if o.blocked_at is not None:
-            o.blocked_at, o.wake, o.ready = None, True, True
-    if lender is not None and fleet.objects[lender].needs_team and J.team:
-        team, J.team = J.team, []
-        fleet.log.append((fleet.clock, "handed", lender, f"robots {team} back from {j}"))
-        fleet.give_team(lender, team)
-    elif J.team and not fleet.may_start(j):  # held back still (precedence): it waits aside
-        fleet.reteam(J, [], "freed: it may not start yet")
+        out.move = Move(j, k, target, list(team))
+        return out
+    return out

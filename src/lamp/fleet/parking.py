@@ -29,15 +29,16 @@ replan in the world as it is). Hence off by default.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
-from typing import Any
+from collections.abc import Callable, Sequence
 
 import numpy as np
 import shapely
 from scipy.ndimage import distance_transform_edt
 from scipy.sparse.csgraph import dijkstra
 
+from lamp.fleet.state import ObjectState
 from lamp.fleet.transit import Grid, free_grid, team_moves
+from lamp.fleet.view import FleetView
 from lamp.geometry.shapes import to_shapely
 from lamp.planners.bystanders import BYSTANDER_GAP
 from lamp.scene.model import Scene
@@ -50,14 +51,15 @@ PARK_OPEN = 0.3
 PARK_REACH = 5.0
 
 
-def needed_by_others(fleet: Any, k: int) -> shapely.Geometry | None:
-    """What the objects other than ``k`` that are not placed still need: their footprints
-    now and at their goals, and the claims (rest of the plan) of those moving."""
-    scene = fleet.scene
-    poses = np.asarray(fleet.executor.object_poses, float)
+def needed_by_others(scene: Scene, objects: Sequence[ObjectState], poses: np.ndarray,
+                     k: int) -> shapely.Geometry | None:
+    """What the objects other than ``k`` that are not placed still need (objects of
+    ``scene`` at ``poses``): their footprints now and at their goals, and the claims (rest
+    of the plan) of those moving."""
+    poses = np.asarray(poses, float)
     parts = []
-    for o in fleet.objects:
-        if o.index == k or o.status not in ("active", "waiting"):
+    for o in objects:
+        if o.index == k or not o.unplaced:
             continue
         shape = scene.objects[o.index].shape
         parts += [to_shapely(shape, poses[o.index]), to_shapely(shape, scene.objects[o.index].goal)]
@@ -110,7 +112,7 @@ def parking_targets(grid: Grid, keep: shapely.Geometry, positions: np.ndarray,
     return targets, moved, np.vstack(parts)
 
 
-def park(view: Any, world: Callable[[], Scene], k: int, keep: shapely.Geometry | None,
+def park(view: FleetView, world: Callable[[], Scene], k: int, keep: shapely.Geometry | None,
          clear: float, seed: int = 0) -> tuple[int, float]:
     """Move object ``k``'s sub-team (``view``; ``world()``: the world as it plans in it
     now) ``clear`` metres out of ``keep`` (module docstring); returns the moves run (0 or
@@ -130,4 +132,4 @@ def park(view: Any, world: Callable[[], Scene], k: int, keep: shapely.Geometry |
     if plan is None or not plan.success:
         return 0, planning
     reply = view.execute(plan.paths)
-    return (0 if getattr(reply, "declined", False) else 1), planning
+    return (0 if reply.declined else 1), planning

@@ -26,12 +26,12 @@ from __future__ import annotations
 import numpy as np
 import shapely
 
+from lamp.fleet.config import CLAIM_NEAR
 from lamp.geometry.se2 import interpolate, pose_distance
 from lamp.geometry.shapes import to_shapely, to_shapely_many
-from lamp.planners.config import CLAIM_NEAR  # its owner: the fleet's settings' default
 from lamp.scene.model import Shape
 
-__all__ = ["CLAIM_NEAR", "OBJECT_MARGIN", "ROBOT_MARGIN", "STATIC_SLACK", "claim", "claims",
+__all__ = ["OBJECT_MARGIN", "ROBOT_MARGIN", "STATIC_SLACK", "claim", "claims",
            "footprints", "robot_disks", "standing", "standing_robots", "swept"]
 
 #: Clearance (m) each moving robot keeps from another sub-team's space (half the gap).

@@ -21,9 +21,9 @@ import shapely
 
 from lamp.contract.events import TRACE_EVERY
 from lamp.contract.trajectory import straight_moves
+from lamp.fleet.config import REJOIN_SLACK
 from lamp.fleet.regions import OBJECT_MARGIN, swept
 from lamp.geometry.shapes import to_shapely
-from lamp.planners.config import REJOIN_SLACK
 from lamp.scene.model import Shape
 from lamp.sim.simulator import SETTLE_TIME
 

@@ -1,9 +1,20 @@
 """What the fleet schedule knows of each object (``Fleet.objects``): its status, sub-team,
-claim, the segment it submitted or runs, and its thread's state."""
+claim, the segment it submitted or runs, and its thread's state.
+
+An object's status is a small state machine (:class:`ObjectStatus`, the allowed moves in
+``TRANSITIONS``): ``waiting`` (not started) -> ``active`` (a sub-team moves it) ->
+``placed`` or ``failed``; a waiting object may also fail without starting (an object it
+waits for failed). :meth:`ObjectState.move_to` is the only way a status changes, and an
+illegal move raises :class:`IllegalTransition`. Guarantee (``tests/test_fleet_state.py``):
+every sequence of moves either follows ``TRANSITIONS`` or raises, leaving the state as it
+was.
+"""
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
+from enum import StrEnum
 
 import numpy as np
 import shapely
@@ -12,11 +23,39 @@ from lamp.contract.runner import ObjectOutcome
 from lamp.fleet.segments import Segment
 from lamp.fleet.view import FleetExecution
 
-__all__ = ["FAILED", "FREE", "ObjectState"]
+__all__ = ["FAILED_ROBOT", "FREE", "TRANSITIONS", "IllegalTransition", "ObjectState",
+           "ObjectStatus"]
 
 #: ``Fleet.owner`` of a robot in no sub-team, and of one that failed (it stays where it
 #: stopped, an obstacle to every plan, and is never given to a team again).
-FREE, FAILED = -1, -2
+FREE, FAILED_ROBOT = -1, -2
+
+
+class ObjectStatus(StrEnum):
+    """Where an object is in the schedule (module docstring)."""
+
+    WAITING = "waiting"
+    ACTIVE = "active"
+    PLACED = "placed"
+    FAILED = "failed"
+
+    @property
+    def done(self) -> bool:
+        """Placed or failed: it never moves again."""
+        return self in (ObjectStatus.PLACED, ObjectStatus.FAILED)
+
+
+#: The allowed moves between statuses.
+TRANSITIONS: Mapping[ObjectStatus, frozenset[ObjectStatus]] = {
+    ObjectStatus.WAITING: frozenset({ObjectStatus.ACTIVE, ObjectStatus.FAILED}),
+    ObjectStatus.ACTIVE: frozenset({ObjectStatus.PLACED, ObjectStatus.FAILED}),
+    ObjectStatus.PLACED: frozenset(),
+    ObjectStatus.FAILED: frozenset(),
+}
+
+
+class IllegalTransition(RuntimeError):
+    """A status move ``TRANSITIONS`` does not allow (a defect of the schedule)."""
 
 
 @dataclass
@@ -24,7 +63,7 @@ class ObjectState:
     """One object as the fleet schedule tracks it (``Fleet.objects``)."""
 
     index: int
-    status: str = "waiting"  # waiting -> active -> placed | failed
+    status: ObjectStatus = ObjectStatus.WAITING
     team: list[int] = field(default_factory=list)
     claim: shapely.Geometry | None = None
     #: its claim's near part and its way (``regions.claims``), with the claim
@@ -44,7 +83,7 @@ class ObjectState:
     blocked_in: shapely.Geometry | None = None
     blockers: frozenset[int] = frozenset()
     looked_at: int = -1  # the event at which it last looked whether one left
-    wake: bool = False  # the answer to ``plan_failed``
+    replan: bool = False  # the answer to ``plan_failed``: plan anew (True) or go on alone
     needs_team: bool = False  # its thread waits for robots (``wait_for_team``)
     #: a pose to move to before its goal: it stands in a blocked object's way
     #: (``fleet.makeway``); None: none
@@ -54,6 +93,25 @@ class ObjectState:
     world_at: int = -1  # the event after which its loop took its world (``Fleet.world_taken``)
     outcome: ObjectOutcome | None = None
     placed_at_s: float | None = None
+
+    def move_to(self, status: ObjectStatus) -> None:
+        """Its status becomes ``status``; :class:`IllegalTransition` (nothing changed)
+        when ``TRANSITIONS`` does not allow the move."""
+        status = ObjectStatus(status)
+        if status not in TRANSITIONS[self.status]:
+            raise IllegalTransition(f"object {self.index}: {self.status} -> {status} is not "
+                                    f"a move of the fleet schedule")
+        self.status = status
+
+    def resume(self, replan: bool = True) -> None:
+        """Its thread goes on at its next turn, no longer waiting for a change; ``replan``
+        is what its planner's ``plan_failed`` answers (plan anew, or go on alone)."""
+        self.blocked_at, self.replan, self.ready = None, replan, True
+
+    @property
+    def unplaced(self) -> bool:
+        """Waiting or active: it still has to reach its goal."""
+        return not self.status.done
 
     @property
     def held_up(self) -> bool:

@@ -43,6 +43,7 @@ import shapely
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
+from lamp.fleet.view import FleetView
 from lamp.geometry.robot_space import RobotSpace
 from lamp.geometry.shapes import obstacle_geometry, to_shapely
 from lamp.mrmp import plan_paths
@@ -303,7 +304,7 @@ def far_robots(field: Routes, positions: np.ndarray) -> np.ndarray:
     return np.asarray([math.isfinite(d) and d > TRANSIT_RADIUS for d in lengths], bool)
 
 
-def transit(view: Any, world: Callable[[], Scene], k: int, seed: int = 0
+def transit(view: FleetView, world: Callable[[], Scene], k: int, seed: int = 0
             ) -> tuple[int, float]:
     """Drive object ``k``'s sub-team (``view``: its executor; ``world()``: the world as the
     team plans in it now, its robots where they stand) to the object, hop by hop (module
@@ -327,8 +328,8 @@ def transit(view: Any, world: Callable[[], Scene], k: int, seed: int = 0
         if plan is None or not plan.success:
             break
         reply = view.execute(plan.paths)
-        if not getattr(reply, "declined", False):
+        if not reply.declined:
             runs += 1
-        if getattr(view, "team_changed", False):
+        if view.team_changed:
             break  # a robot failed or joined: the caller drives the new team
     return runs, planning

@@ -11,15 +11,28 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from lamp.geometry.clearance_kernels import bfs_collect
 
-if TYPE_CHECKING:
-    from lamp.geometry.robot_space import RobotSpace
+
+class ClearanceGrid(Protocol):
+    """What the search reads of a robot space (``RobotSpace`` is one): its clearance
+    field on a grid of ``resolution`` m from node ``origin``, the clearance a robot
+    needs (``threshold``), and the free nodes connected as a robot moves
+    (``free_grid``)."""
+
+    threshold: float
+    resolution: float
+    shape: tuple[int, int]
+    origin: tuple[int, int]
+    field: np.ndarray
+
+    @property
+    def free_grid(self) -> np.ndarray: ...
 
 
 def _clear_disks(ok: np.ndarray, avoid: ArrayLike, h: float, oi: int, oj: int) -> None:
@@ -90,7 +103,7 @@ def _search(p: np.ndarray, ok: np.ndarray, reach: np.ndarray, si: int, sj: int, 
 
 
 def nearest_free_spot(
-    space: RobotSpace,
+    space: ClearanceGrid,
     point: ArrayLike,
     avoid: np.ndarray | Sequence[Sequence[float]] | None = None,
     min_clearance: float | None = None,
@@ -98,7 +111,7 @@ def nearest_free_spot(
     accept: Callable[[np.ndarray], np.ndarray] | None = None,
     max_distance: float | None = None,
 ) -> np.ndarray | None:
-    """``space.nearest_free(point, ...)``: see :meth:`RobotSpace.nearest_free`."""
+    """``space.nearest_free(point, ...)``: see ``RobotSpace.nearest_free``."""
     p = np.asarray(point, dtype=np.float64).reshape(2)
     if not np.all(np.isfinite(p)):
         raise ValueError(f"point must be finite, got {point!r}")

@@ -57,9 +57,10 @@ def execute(request: RunRequest, observers: Sequence[RunObserver] = (),
     recorder = Recorder(scene, runner.row_dt_s)
     fleet_stats = None
     if scene.schedule == "concurrent":
-        outcomes, fleet_stats = run_concurrently(scene, executor, runner, recorder, observers)
+        outcomes, fleet_stats = run_concurrently(scene, executor, runner, recorder,
+                                                   request.fleet, observers)
     else:
-        outcomes = run_in_order(len(scene.objects), executor, runner, [recorder, *observers])
+        outcomes = run_in_order(scene, executor, runner, [recorder, *observers])
     result = RunResult(scene=scene.name, planner=request.planner, seed=int(request.seed))
     unexecuted = 0.0
     for o in outcomes:

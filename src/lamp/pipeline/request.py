@@ -18,16 +18,18 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import lamp.pipeline.registry as registry
 from lamp.contract.disturb import NO_DISTURBANCE, Disturbances
-from lamp.contract.params import apply_overrides, format_value
+from lamp.contract.params import apply_overrides, format_value, param_table
 from lamp.errors import InputError
+from lamp.fleet.config import PARAMS as FLEET_PARAMS
+from lamp.fleet.config import PREFIX, FleetConfig, split_overrides
 from lamp.manip.models import check_model, check_robot_radius, model_robot_radius
-from lamp.pipeline import registry
 from lamp.planners.config import PlannerConfig
 from lamp.planners.limits import check_scene_limits
 from lamp.scene.model import Scene
 
-__all__ = ["RunRequest"]
+__all__ = ["RunRequest", "configure", "param_names", "param_rows"]
 
 
 @dataclass(frozen=True)
@@ -36,8 +38,10 @@ class RunRequest:
 
     ``model``: the manipulation model, a name (``learned``, ``geometric``), a checkpoint
     path (stored resolved) or a proposer object; ``params``: the planner's parameters
-    (None: its defaults, ``PlannerSpec.default_config``). The same request gives the same
-    result: budgets are counts, wall-clock limits only outer caps.
+    (None: its defaults, ``PlannerSpec.default_config``); ``fleet``: the concurrent
+    schedule's settings (``lamp.fleet.config``; set with the ``fleet_`` parameters of a
+    closed-loop planner). The same request gives the same result: budgets are counts,
+    wall-clock limits only outer caps.
     """
 
     scene: Scene
@@ -47,6 +51,7 @@ class RunRequest:
     params: PlannerConfig | None = None
     #: What goes wrong during the run (``lamp.contract.disturb``; default: nothing).
     disturbances: Disturbances = NO_DISTURBANCE
+    fleet: FleetConfig = FleetConfig()
 
     def __post_init__(self) -> None:
         spec = registry.get(self.planner)  # InputError naming the planners
@@ -58,6 +63,8 @@ class RunRequest:
             object.__setattr__(self, "params", spec.default_config())
         elif not isinstance(self.params, PlannerConfig):
             raise InputError(f"params: a PlannerConfig, got {type(self.params).__name__}")
+        if not isinstance(self.fleet, FleetConfig):
+            raise InputError(f"fleet: a FleetConfig, got {type(self.fleet).__name__}")
         check_scene_limits(self.scene)
         if not isinstance(self.disturbances, Disturbances):
             raise InputError(f"disturbances: a Disturbances, got {self.disturbances!r}")
@@ -111,10 +118,9 @@ class RunRequest:
             scene = dataclasses.replace(scene, schedule=schedule)
         spec = registry.get(planner)
         if isinstance(params, PlannerConfig):
-            config = params
+            config, fleet = params, FleetConfig()
         else:
-            config = apply_overrides(spec.default_config(), spec.params, dict(params or {}),
-                                     spec.name)
+            config, fleet = configure(spec, params or {})
         shortcuts: dict[str, Any] = {}
         if planning_limit is not None:
             shortcuts["planning_time_limit"] = planning_limit
@@ -126,17 +132,48 @@ class RunRequest:
             shortcuts["sensing_sigma"] = disturbances.sensing_noise
         if shortcuts:
             config = dataclasses.replace(config, **shortcuts)  # validated: InputError
-        return cls(scene, planner, seed, model, config, disturbances)
+        return cls(scene, planner, seed, model, config, disturbances, fleet)
 
     def param_values(self) -> dict[str, Any]:
-        """The planner's declared parameters and their values (result.json's ``params``)."""
-        return {n: getattr(self.params, n) for n in self.spec.params}
+        """The planner's declared parameters and their values (result.json's ``params``),
+        the fleet's settings after them for a closed-loop planner."""
+        own = {n: getattr(self.params, n) for n in self.spec.params}
+        return {**own, **self.fleet.values()} if self.spec.closed_loop else own
 
     def describe(self) -> str:
         """One line: planner, seed, model and the parameters that differ from the defaults."""
-        default = self.spec.default_config()
-        changed = [f"{n}={format_value(getattr(self.params, n))}" for n in self.spec.params
-                   if getattr(self.params, n) != getattr(default, n)]
+        default = {**{n: getattr(self.spec.default_config(), n) for n in self.spec.params},
+                   **FleetConfig().values()}
+        changed = [f"{n}={format_value(v)}" for n, v in self.param_values().items()
+                   if v != default[n]]
         model = self.model if isinstance(self.model, str) else type(self.model).__name__
         return (f"{self.scene.name}: planner {self.planner}, seed {self.seed}, model {model}"
                 + (f", {' '.join(changed)}" if changed else ""))
+
+
+def configure(spec: registry.PlannerSpec, overrides: Mapping[str, Any]
+              ) -> tuple[PlannerConfig, FleetConfig]:
+    """``spec``'s defaults with ``overrides`` (name -> value or text) applied: its own
+    parameters, and for a closed-loop planner the fleet's (``fleet_`` + a
+    ``FleetConfig`` field). ``InputError`` naming the planner and the parameter for a name
+    it does not read or a bad value."""
+    own, fleet = dict(overrides), FleetConfig()
+    if spec.closed_loop:
+        own, fleet = split_overrides(own, spec.name)
+    return apply_overrides(spec.default_config(), param_names(spec), own, spec.name), fleet
+
+
+def param_rows(spec: registry.PlannerSpec) -> list[tuple[str, str, str, str]]:
+    """(name, default, rule, doc) of every parameter ``--param`` may set for ``spec``
+    (``--help-params``): its own, then the fleet's for a closed-loop planner."""
+    rows = param_table(spec.default_config(), spec.params)
+    if spec.closed_loop:
+        rows += [(PREFIX + n, *rest) for n, *rest in param_table(
+            FleetConfig(), [f.name for f in dataclasses.fields(FleetConfig)])]
+    return rows
+
+
+def param_names(spec: registry.PlannerSpec) -> tuple[str, ...]:
+    """Every parameter ``--param`` may set for ``spec``: its own, then the fleet's for a
+    closed-loop planner."""
+    return spec.params + (FLEET_PARAMS if spec.closed_loop else ())

@@ -17,8 +17,8 @@ from typing import Any
 import numpy as np
 
 from lamp.contract.events import RunObserver, SegmentEvent
-from lamp.contract.plan import PlanStatus
-from lamp.contract.runner import Executor, ObjectOutcome, ObjectRunner
+from lamp.contract.runner import Executor, LoopEnd, ObjectOutcome, ObjectRunner
+from lamp.scene.model import Scene
 
 __all__ = ["run_concurrently", "run_in_order"]
 
@@ -33,17 +33,18 @@ def _segments_to(observers: Sequence[RunObserver]) -> Callable[[SegmentEvent], N
     return observe
 
 
-def run_in_order(n_objects: int, executor: Executor, runner: ObjectRunner,
+def run_in_order(scene: Scene, executor: Executor, runner: ObjectRunner,
                  observers: Sequence[RunObserver] = ()) -> list[ObjectOutcome]:
-    """Move objects ``0 .. n_objects - 1`` in order with ``runner`` on ``executor``;
-    returns their outcomes, in order. Every observer sees ``object_started``, the object's
-    segments and ``object_finished`` for each object, in that order."""
+    """Move ``scene``'s objects in order with ``runner`` on ``executor``; returns their
+    outcomes, in order. Every observer sees ``object_started``, the object's segments and
+    ``object_finished`` for each object, in that order."""
     observe = _segments_to(observers)
+    n_objects = len(scene.objects)
     outcomes = []
     for index in range(n_objects):
         for o in observers:
             o.object_started(index, n_objects)
-        outcome = _blocker_named(getattr(runner, "scene", None), index, executor,
+        outcome = _blocker_named(scene, index, executor,
                                  runner.run_object(index, executor, observe))
         for o in observers:
             o.object_finished(index, n_objects, outcome.result)
@@ -51,13 +52,13 @@ def run_in_order(n_objects: int, executor: Executor, runner: ObjectRunner,
     return outcomes
 
 
-def _blocker_named(scene: Any, index: int, executor: Executor, outcome: ObjectOutcome
+def _blocker_named(scene: Scene, index: int, executor: Executor, outcome: ObjectOutcome
                    ) -> ObjectOutcome:
     """``outcome`` of object ``index``; when it failed for want of a plan and another
     object stands in its way (``fleet.makeway.standing_in_way``: nobody moves aside in
     this schedule), its failure reason says which, and what would move it."""
     r = outcome.result
-    if scene is None or r.success or not r.failure_reason.startswith(PlanStatus.NO_PATH.reason):
+    if r.success or outcome.end is not LoopEnd.NO_PLAN:
         return outcome
     from lamp.fleet.makeway import standing_in_way, way_of
 
@@ -72,24 +73,21 @@ def _blocker_named(scene: Any, index: int, executor: Executor, outcome: ObjectOu
     return replace(outcome, result=replace(r, failure_reason=why))
 
 
-def run_concurrently(scene: Any, executor: Executor, runner: ObjectRunner, recorder: Any,
-                     observers: Sequence[RunObserver] = ()) -> tuple[list[ObjectOutcome],
-                                                                     dict[str, Any]]:
-    """Move ``scene``'s objects several at once by sub-teams (``lamp.fleet.Fleet``) with
-    the closed loops of ``runner`` (a ``ClosedLoopRunner``); the recorder follows the
-    shared clock. Returns the outcomes in object order and the schedule's figures."""
+def run_concurrently(scene: Scene, executor: Executor, runner: ObjectRunner, recorder: Any,
+                     config: Any = None, observers: Sequence[RunObserver] = ()
+                     ) -> tuple[list[ObjectOutcome], dict[str, Any]]:
+    """Move ``scene``'s objects several at once by sub-teams (``lamp.fleet.Fleet``, with
+    ``config``: a ``FleetConfig``, default its defaults) with the closed loops of
+    ``runner`` (a ``ClosedLoopRunner``); the recorder follows the shared clock. Returns
+    the outcomes in object order and the schedule's figures."""
     from lamp.contract.trajectory import MAX_STEP
+    from lamp.fleet.config import FleetConfig
     from lamp.fleet.coordinator import Fleet
     from lamp.fleet.objects import object_main
 
+    config = FleetConfig() if config is None else config
     watchers = [recorder, *observers]
-    fleet = Fleet(scene, executor, object_main(runner, _segments_to(watchers)),
-                  recorder.follow, watchers, row_step=MAX_STEP,
-                  reinforce_reach=runner.config.fleet_reinforce_reach,
-                  cross_near=runner.config.fleet_cross_near,
-                  cross_waiting=runner.config.fleet_cross_waiting,
-                  pass_margin=runner.config.fleet_pass_margin,
-                  rejoin_limit=runner.config.fleet_rejoin_limit,
-                  rejoin_slack=runner.config.fleet_rejoin_slack)
+    fleet = Fleet(scene, executor, object_main(runner, _segments_to(watchers), config),
+                  recorder.follow, watchers, row_step=MAX_STEP, config=config)
     outcomes = fleet.run()
-    return outcomes, fleet.stats()
+    return outcomes, fleet.report()

@@ -28,10 +28,10 @@ from lamp.contract.goals import (
     goal_errors,
     within_goal,
 )
-from lamp.contract.plan import LoopPolicy, ObjectPlanner
+from lamp.contract.plan import LoopPolicy, ObjectPlanner, PlanStatus
 from lamp.contract.result import ObjectResult
 from lamp.contract.robots import robots_match
-from lamp.contract.runner import Execution, Executor
+from lamp.contract.runner import ALONE, Execution, Executor, LoopEnd, LoopHooks
 from lamp.contract.trajectory import concat, straight_moves
 from lamp.contract.transition import Transition
 from lamp.geometry.se2 import pose_distance
@@ -53,6 +53,8 @@ class LoopRecord:
     unexecuted_planning_s: float = 0.0
     #: Pushes the watch stopped early (``lamp.planners.watch``).
     watch_stops: int = 0
+    #: How the loop ended.
+    end: LoopEnd = LoopEnd.FINISHED
 
 
 #: Robot start positions that differ from a transition's by less than this are joined
@@ -82,11 +84,9 @@ def adapt_to_robots(trans: Transition, q_R: np.ndarray, reroute: Reroute) -> Tra
 
 #: A push achieving less than this share of its requested motion has stalled.
 STALL_FRACTION = 0.25
-#: ``failure_reason`` of a loop stopped because a robot failed (the runner plans anew).
+#: ``failure_reason`` of a loop that ended with ``LoopEnd.TEAM_CHANGED``.
 TEAM_CHANGED = "a robot failed"
-#: ``failure_reason`` of a loop stopped because the world changed around its plan: the
-#: executor declined its next segment, or its planner failed while other objects were
-#: moving (the fleet schedule, ``lamp.fleet``; its runner plans anew).
+#: ``failure_reason`` of a loop that ended with ``LoopEnd.WORLD_CHANGED``.
 WORLD_CHANGED = "the world changed around the plan"
 #: Drift and stall tests keep this many standard deviations of the averaged reading above
 #: the sensor's noise (``PlannerConfig.sensing_sigma``).
@@ -150,8 +150,10 @@ class ClosedLoop:
                  observer: Callable[[SegmentEvent], None] | None = None,
                  clearance: Callable[[np.ndarray], float] | None = None,
                  reach: float = 0.0,
-                 route: Callable[[np.ndarray], float] | None = None) -> None:
+                 route: Callable[[np.ndarray], float] | None = None,
+                 hooks: LoopHooks = ALONE) -> None:
         self.planner = planner
+        self.hooks = hooks
         #: how far the object has to go from a pose (``task.route_distance``), which a
         #: scaled segment limit is measured on; None: the straight line
         self.route = route
@@ -198,7 +200,7 @@ class ClosedLoop:
                 continue
             executed = self.execute(st, adapted)
             if executed is None:  # declined by the executor (``Execution.declined``)
-                st.reason = WORLD_CHANGED
+                self._end(st, LoopEnd.WORLD_CHANGED, WORLD_CHANGED)
                 break
             if self.observe(st, *executed) in ("left", "team"):
                 break
@@ -224,14 +226,14 @@ class ClosedLoop:
         st.planned_once = True
         st.replanned = True
         if not st.plan.solved:
-            # an executor shared with other moving objects (``lamp.fleet``) may wait for the
-            # world to change: True, and the loop stops so that its runner plans anew
-            blocked = getattr(self.executor, "plan_failed", None)
-            if blocked is not None and blocked():
-                st.reason = WORLD_CHANGED
+            # a loop sharing its world (``lamp.fleet``) may wait for the world to change:
+            # True, and the loop stops so that its runner plans anew
+            if self.hooks.plan_failed():
+                self._end(st, LoopEnd.WORLD_CHANGED, WORLD_CHANGED)
                 return "stop"
             if self.policy.failure_is_final:
-                st.reason = st.plan.reason
+                end = LoopEnd.NO_PLAN if st.plan.status is PlanStatus.NO_PATH else LoopEnd.FINISHED
+                self._end(st, end, st.plan.reason)
                 return "stop"
             st.iterations += 1
             return "retry"
@@ -245,6 +247,9 @@ class ClosedLoop:
         self._charge(st, time.perf_counter() - t0)
         return adapted
 
+    def _end(self, st: _Progress, end: LoopEnd, reason: str) -> None:
+        st.reason, self.record.end = reason, end
+
     @staticmethod
     def _charge(st: _Progress, dt: float) -> None:
         st.planning_spent += dt
@@ -257,9 +262,9 @@ class ClosedLoop:
         to this segment; None when the executor declined it (nothing ran, nothing is
         counted).
 
-        An executor with an ``announce(segment, rest)`` method is told first the object
-        poses this segment plans to pass ((P, 3)) and those the plan goes on to ((R, 3)):
-        the fleet schedule reserves space with them."""
+        The hooks' ``announce`` is told first the object poses this segment plans to pass
+        ((P, 3)) and those the plan goes on to ((R, 3)): the fleet schedule reserves space
+        with them."""
         cfg = self.config
         chain = [adapted]
         if cfg.long_push_length > 0:  # one approach, then every push that continues it
@@ -267,13 +272,11 @@ class ClosedLoop:
                                    cfg.long_push_length, cfg.long_push_turn)
             adapted = merge(chain)
         paths = adapted.robot_paths
-        announce = getattr(self.executor, "announce", None)
-        if announce is not None:
-            announce(np.array([chain[0].q_from, *[t.q_to for t in chain]], dtype=float),
-                     np.array([t.q_to for t in st.pending], dtype=float).reshape(-1, 3))
+        self.hooks.announce(np.array([chain[0].q_from, *[t.q_to for t in chain]], dtype=float),
+                            np.array([t.q_to for t in st.pending], dtype=float).reshape(-1, 3))
         out = self.executor.execute(paths, record_every=TRACE_EVERY if self.observer else None,
                                     stop=self._watch(chain))
-        if getattr(out, "declined", False):
+        if out.declined:
             return None
         st.iterations += 1
         st.segments += 1
@@ -316,11 +319,11 @@ class ClosedLoop:
         max_pos, max_rot = drift_limits(cfg, tight, self.reach)
         floor = NOISE_SIGMAS * self._reading_sigma()  # drift within the noise is not drift
         max_pos, max_rot = max(max_pos, floor), max(max_rot, floor * HEADING_PER_METRE)
-        stopped = getattr(out, "stopped_at", None) is not None  # by the watch
+        stopped = out.stopped_at is not None  # by the watch
         outcome = "continue"
         if out.left_workspace:
             outcome = "left"
-        elif getattr(self.executor, "team_changed", False):
+        elif self.hooks.team_changed():
             outcome = "team"  # a robot failed: the runner plans anew with the rest
         elif policy.replan_on_stall and _stalled(q_before, st.q_O, adapted,
                                                  NOISE_SIGMAS * np.sqrt(2) * self._reading_sigma()):
@@ -335,7 +338,7 @@ class ClosedLoop:
             st.left = True
             st.reason = "object left the workspace"
         elif outcome == "team":
-            st.reason = TEAM_CHANGED
+            self._end(st, LoopEnd.TEAM_CHANGED, TEAM_CHANGED)
         elif outcome == "stalled":
             # The push executed but barely moved the object: the verified transition does
             # not work in practice, so it is treated like a failed verification.
@@ -419,17 +422,19 @@ def drift_limits(cfg: PlannerConfig, clearance: float | None, reach: float
 
 def run_object(task: ManipulationTask, planner: ObjectPlanner, policy: LoopPolicy, sim: Executor,
                record: LoopRecord,
-               observer: Callable[[SegmentEvent], None] | None = None) -> ObjectResult:
+               observer: Callable[[SegmentEvent], None] | None = None,
+               hooks: LoopHooks = ALONE) -> ObjectResult:
     """Move ``task``'s object to its goal in ``sim`` with ``planner`` (Alg. 2 lines 2-7):
     a :class:`ClosedLoop` with the task's goal, config and ``Verifier.reroute``.
 
     ``observer``, when given, is called with a :class:`SegmentEvent` after every executed
-    segment (in order); it only watches, the run is the same with or without it.
+    segment (in order); it only watches, the run is the same with or without it. ``hooks``:
+    what the world around the loop adds (``lamp.contract.runner.LoopHooks``).
     """
     exact = task.exact_space
     loop = ClosedLoop(planner, policy, sim, index=task.index, goal=task.goal, config=task.config,
                       reroute=task.verifier.reroute, record=record, observer=observer,
                       clearance=exact.clearance, reach=exact.reach,
                       route=lambda q: route_distance(task.scene, task.index, q,
-                                                     task.config.lattice_step))
+                                                     task.config.lattice_step), hooks=hooks)
     return loop.run()

@@ -49,25 +49,6 @@ PAPER_MAX_SEGMENTS = 100
 #: 6.1 m straight line and a 25 m route, stopped 4.7 m short at its 182nd segment.)
 SEGMENTS_PER_METRE = 30.0
 
-#: The near part of a claim in the concurrent schedule (``fleet.regions.claims``): the
-#: footprints along this much (m) of an object's planned travel, which even a plan that
-#: only crosses its claim keeps out of (``fleet_cross_waiting``'s default; 4 m for
-#: ``fleet_cross_near`` undid most of its gains on the ``fleet`` family, 2 m is what was
-#: measured).
-CLAIM_NEAR = 2.0
-#: How far ahead (m of travel) a plan in the concurrent schedule must pass each point of
-#: a higher-ranked object's claim to go through it (``fleet.admission.passes_ahead``;
-#: ``fleet_pass_margin``'s default). 1 m is what was measured (``docs/fleet.md``,
-#: Coordination).
-PASS_MARGIN = 1.0
-#: The rows a segment's rejoins may insert in the concurrent schedule, as a share of its
-#: planned rows; past it the segment ends (``fleet.segments.Segment.rejoin``;
-#: ``fleet_rejoin_slack``'s default). A push jammed on a shelf corner otherwise ran event
-#: after event without ending (305 rejoins in one segment at 96 robots and 32 loads); a
-#: nudged robot's rejoin inserts a few rows. Measured in ``docs/fleet.md`` (Execution).
-REJOIN_SLACK = 1.0
-
-
 def segment_limit(max_segments: int | None, distance: float | Callable[[], float]) -> int:
     """The executed-segment limit for an object whose route to its goal is ``distance`` m
     long (a number, or a function asked only when the limit scales): ``max_segments``
@@ -180,53 +161,10 @@ class PlannerConfig:
     sensing_readings: int = param(4, "Readings of a settled object averaged after each "
                                   "segment when sensing_sigma > 0.", low=1)
     #: Memory, not results: an evicted space is rebuilt the same. The fleet schedule
-    #: shares ``FLEET_SPACE_CACHE_MB`` among the objects moving at once.
+    #: shares ``lamp.fleet.config.SPACE_CACHE_MB`` among the objects moving at once.
     space_cache_mb: float = param(96.0, "Robot configuration spaces (MB) one object's task "
                                   "keeps cached; a speed / memory trade, the results do "
                                   "not depend on it.", low=1.0)
-
-    #: The concurrent schedule only (``lamp.fleet.parking``); off by default: on the fleet
-    #: family at 1 m it lengthened the makespan (median ratio 0.41 -> 0.43).
-    fleet_park_clear: float = param(0.0, "Concurrent schedule: a team whose object is "
-                                    "placed first moves this far (m) from what the other "
-                                    "objects still need; 0: it stays.", low=0.0)
-    #: The concurrent schedule only (``Fleet._reinforce``); off by default: on the fleet
-    #: family at 4 m it lengthened 7 makespans and shortened none (each joining robot
-    #: makes its team's loop plan anew); IROS with 9 robots: 186 -> 175 s.
-    fleet_reinforce_reach: float = param(0.0, "Concurrent schedule: when no object waits "
-                                         "to start, free robots within this distance (m) "
-                                         "of a moving object whose team has room join it; "
-                                         "0: they stay free.", low=0.0)
-    fleet_cross_near: float = param(0.0, "Concurrent schedule: a plan that only crosses a "
-                                    "higher-ranked object's way heeds just the part of its "
-                                    "claim within this much (m) of its planned travel; 0: "
-                                    "the whole claim.", low=0.0)
-    #: The concurrent schedule only (``admission.heeded_claims``): on the ``maze-31-4`` grid
-    #: map a 2 m move waited 265 s on the claim of an object that itself waited on a third
-    #: one's; measured in ``docs/fleet.md`` (Coordination).
-    fleet_cross_waiting: float = param(CLAIM_NEAR, "Concurrent schedule: a plan that only crosses "
-                                       "the way of a higher-ranked object standing waiting "
-                                       "heeds just the part of its claim within this much "
-                                       "(m) of its planned travel; 0: the whole claim.",
-                                       low=0.0)
-
-    #: The concurrent schedule only (``admission.passes_ahead``; ``Segment.rejoin``);
-    #: measured in ``docs/fleet.md`` (Coordination, Execution).
-    fleet_pass_margin: float = param(PASS_MARGIN, "Concurrent schedule: a plan may go "
-                                     "through a higher-ranked object's claim when it "
-                                     "passes each point of it this much (m) of travel "
-                                     "before that object comes near, or leave a claim it "
-                                     "stands in; inf: it waits for that object to pass.",
-                                     low=0.0, unbounded=True)
-    fleet_rejoin_limit: int = param(0, "Concurrent schedule: a segment whose robots had "
-                                    "to move back to their rows this many times (held "
-                                    "back by what they push) ends, stopped; 0: never.",
-                                    low=0)
-    fleet_rejoin_slack: float = param(REJOIN_SLACK, "Concurrent schedule: a segment whose "
-                                      "robots' moves back to their rows (held back by "
-                                      "what they push) would add more than this share "
-                                      "of its planned rows ends, stopped; inf: never.",
-                                      low=0.0, unbounded=True)
 
     def __post_init__(self) -> None:
         check_fields(self)
@@ -256,9 +194,7 @@ class PlannerConfig:
 LOOP_PARAMS = ("planning_time_limit", "max_segments", "drift_position", "drift_orientation",
                "stop_position", "stop_orientation", "long_push_length", "long_push_turn",
                "continuous_push_gap",
-               "sensing_sigma", "sensing_readings", "space_cache_mb", "fleet_park_clear",
-               "fleet_reinforce_reach", "fleet_cross_near", "fleet_cross_waiting",
-               "fleet_pass_margin", "fleet_rejoin_limit", "fleet_rejoin_slack")
+               "sensing_sigma", "sensing_readings", "space_cache_mb")
 VERIFY_PARAMS = ("k", "max_budget", "gspi_attempts_per_budget", "gspi_time_limit",
                  "contact_tolerance")
 LATTICE_PARAMS = ("lattice_step", "n_headings", "robot_match_tolerance")

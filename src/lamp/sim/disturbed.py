@@ -35,6 +35,10 @@ __all__ = ["DisturbedExecutor"]
 class DisturbedExecutor:
     """``sim`` under ``disturbances`` (see the module docstring)."""
 
+    #: Its readings may be noisy and its robots may fail
+    #: (``lamp.contract.runner.WorldExecutor``).
+    disturbed = True
+
     def __init__(self, sim: Simulator, disturbances: Disturbances, seed: int) -> None:
         self.sim = sim
         self.disturbances = disturbances

@@ -42,8 +42,9 @@ on a new simulator or on one reset with ``set_state`` (MuJoCo runs single-thread
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from types import MappingProxyType
 
 import mujoco
 import numpy as np
@@ -73,6 +74,7 @@ _STATE_SPEC = mujoco.mjtState.mjSTATE_INTEGRATION
 _ROLLOUT_SPEC = mujoco.mjtState.mjSTATE_FULLPHYSICS
 _STEP_SLACK = 1e-9  # tolerance on MAX_STEP / MAX_START_GAP comparisons
 _CHUNK = 4096  # physics steps per rollout call (bounds the memory of recorded states)
+_NONE_FAILED: Mapping[int, np.ndarray] = MappingProxyType({})
 #: Physics steps between two ``stop`` checks of a watched ``execute`` (50 ms).
 STOP_CHECK_STEPS = 25
 
@@ -104,6 +106,8 @@ class ExecutionResult:
     #: physics step at which ``stop`` ended the paths early (then the robots held where
     #: they were for the settle time); None when the paths ran to their end
     stopped_at: int | None = None
+    #: Always False: a simulator runs every segment it is given (``Execution.declined``).
+    declined: bool = False
 
 
 @dataclass(frozen=True)
@@ -171,12 +175,8 @@ class Simulator:
     reuse it.
     """
 
-    def __init__(
-        self,
-        scene: Scene,
-        object_poses: ArrayLike | None = None,
-        robot_positions: ArrayLike | None = None,
-    ) -> None:
+    def __init__(self, scene: Scene, object_poses: ArrayLike | None = None,
+                 robot_positions: ArrayLike | None = None) -> None:
         self.scene = scene
         #: The robots' driving speed (m/s): the scene's ``robots.speed``, default
         #: ``ROBOT_SPEED``.
@@ -184,9 +184,8 @@ class Simulator:
         self._built: BuiltModel = build_model(scene)
         self.model: mujoco.MjModel = self._built.model
         self.data = mujoco.MjData(self.model)
-        self._centroids = np.array([b.centroid for b in self._built.objects], dtype=float).reshape(
-            -1, 2
-        )
+        self._centroids = np.array([b.centroid for b in self._built.objects],
+                                   dtype=float).reshape(-1, 2)
         self._nstate = mujoco.mj_stateSize(self.model, _STATE_SPEC)
         self._nroll = mujoco.mj_stateSize(self.model, _ROLLOUT_SPEC)
         # qpos addresses inside a rollout state row (row = [time, qpos, qvel, act, ...])
@@ -194,10 +193,8 @@ class Simulator:
         self._roll_object = 1 + self._built.object_qpos
         self.set_state(
             object_poses=scene.object_starts() if object_poses is None else object_poses,
-            robot_positions=scene.robot_starts_array
-            if robot_positions is None
-            else robot_positions,
-        )
+            robot_positions=scene.robot_starts_array if robot_positions is None
+            else robot_positions)
 
     # ------------------------------------------------------------------ state
     @property
@@ -223,6 +220,18 @@ class Simulator:
         """(N, 2) current robot centres."""
         return self.data.qpos[self._built.robot_qpos].copy()
 
+    disturbed = False  # nothing disturbs a plain simulation (``WorldExecutor``)
+
+    @property
+    def true_object_poses(self) -> np.ndarray:
+        """(K, 3) the objects' poses: ``object_poses`` (no sensor in between)."""
+        return self.object_poses
+
+    @property
+    def failed(self) -> Mapping[int, np.ndarray]:
+        """Robots that stopped for good: none in a plain simulation."""
+        return _NONE_FAILED
+
     def state(self) -> SimState:
         """A snapshot that ``set_state`` restores exactly (velocities and solver warm start
         included)."""
@@ -230,13 +239,8 @@ class Simulator:
         mujoco.mj_getState(self.model, self.data, physics, _STATE_SPEC)
         return SimState(self.object_poses, self.robot_positions, self.time, physics)
 
-    def set_state(
-        self,
-        state: SimState | None = None,
-        *,
-        object_poses: ArrayLike | None = None,
-        robot_positions: ArrayLike | None = None,
-    ) -> None:
+    def set_state(self, state: SimState | None = None, *, object_poses: ArrayLike | None = None,
+                  robot_positions: ArrayLike | None = None) -> None:
         """Restore a snapshot, or place objects and robots at rest at the given poses.
 
         With ``state``: exact restore. Otherwise the simulation is reset (time 0, all
@@ -289,13 +293,9 @@ class Simulator:
         pos, _ = self._schedule(self._validate(robot_paths), settle_time)
         return pos
 
-    def execute(
-        self,
-        robot_paths: ArrayLike,
-        record_every: int | None = None,
-        settle_time: float = SETTLE_TIME,
-        stop: Callable[[np.ndarray], bool] | None = None,
-    ) -> ExecutionResult:
+    def execute(self, robot_paths: ArrayLike, record_every: int | None = None,
+                settle_time: float = SETTLE_TIME,
+                stop: Callable[[np.ndarray], bool] | None = None) -> ExecutionResult:
         """Drive the robots along ``robot_paths`` (N, T, 2) and simulate.
 
         Args:
@@ -477,11 +477,8 @@ class Simulator:
 def _check_execute_args(record_every: int | None, settle_time: float) -> None:
     """ValueError unless ``record_every`` is None or a positive integer and ``settle_time``
     finite and >= 0 (see :meth:`Simulator.execute`)."""
-    if record_every is not None and (
-        isinstance(record_every, bool)
-        or not isinstance(record_every, (int, np.integer))
-        or record_every < 1
-    ):
+    if record_every is not None and (isinstance(record_every, bool) or not isinstance(
+            record_every, (int, np.integer)) or record_every < 1):
         raise ValueError(f"record_every must be a positive integer, got {record_every!r}")
     if not (math.isfinite(settle_time) and settle_time >= 0.0):
         raise ValueError(f"settle_time must be finite and >= 0, got {settle_time!r}")

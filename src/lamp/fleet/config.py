@@ -1,0 +1,104 @@
+"""The fleet schedule's settings: :class:`FleetConfig` and the constants it defaults to.
+
+Every setting of the concurrent schedule is owned here. They are set like a planner's
+parameters, with the ``fleet_`` prefix (``lamp run --param lazy.fleet_pass_margin=2``):
+:func:`split_overrides` takes them out of a planner's overrides, and ``PARAMS`` lists
+their public names (each ``fleet_`` + a field of :class:`FleetConfig`). Validated on
+construction like every parameter set (``lamp.contract.params``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, fields
+from typing import Any
+
+from lamp.contract.params import apply_overrides, check_fields, param
+from lamp.errors import InputError
+
+__all__ = ["CLAIM_NEAR", "MIN_SPACE_CACHE_MB", "PARAMS", "PASS_MARGIN", "PREFIX",
+           "REJOIN_SLACK", "SPACE_CACHE_MB", "FleetConfig", "split_overrides"]
+
+#: The near part of a claim (``regions.claims``): the footprints along this much (m) of an
+#: object's planned travel, which even a plan that only crosses its claim keeps out of
+#: (``cross_waiting``'s default; measured in ``docs/fleet.md``, Coordination).
+CLAIM_NEAR = 2.0
+#: How far ahead (m of travel) a plan must pass each point of a higher-ranked object's
+#: claim to go through it (``admission.passes_ahead``; ``pass_margin``'s default).
+PASS_MARGIN = 1.0
+#: The rows a segment's rejoins may insert, as a share of its planned rows; past it the
+#: segment ends (``segments.Segment.rejoin``; ``rejoin_slack``'s default). A push jammed
+#: on a shelf corner otherwise runs event after event without ending.
+REJOIN_SLACK = 1.0
+#: Robot-space cache (MB) the objects moving at once share (each object's
+#: ``space_cache_mb`` is at most its part, at least ``MIN_SPACE_CACHE_MB``): memory stays
+#: near one sequential run's up to 48 objects moving at once.
+SPACE_CACHE_MB = 192.0
+MIN_SPACE_CACHE_MB = 4.0
+#: The prefix of the fleet's settings among a planner's parameters.
+PREFIX = "fleet_"
+
+
+@dataclass(frozen=True)
+class FleetConfig:
+    """The concurrent schedule's settings (module docstring); the defaults are the
+    schedule's measured defaults."""
+
+    park_clear: float = param(0.0, "Concurrent schedule: a team whose object is placed "
+                              "first moves this far (m) from what the other objects still "
+                              "need; 0: it stays.", low=0.0)
+    reinforce_reach: float = param(0.0, "Concurrent schedule: when no object waits to "
+                                   "start, free robots within this distance (m) of a moving "
+                                   "object whose team has room join it; 0: they stay free.",
+                                   low=0.0)
+    cross_near: float = param(0.0, "Concurrent schedule: a plan that only crosses a "
+                              "higher-ranked object's way heeds just the part of its claim "
+                              "within this much (m) of its planned travel; 0: the whole "
+                              "claim.", low=0.0)
+    cross_waiting: float = param(CLAIM_NEAR, "Concurrent schedule: a plan that only crosses "
+                                 "the way of a higher-ranked object standing waiting heeds "
+                                 "just the part of its claim within this much (m) of its "
+                                 "planned travel; 0: the whole claim.", low=0.0)
+    pass_margin: float = param(PASS_MARGIN, "Concurrent schedule: a plan may go through a "
+                               "higher-ranked object's claim when it passes each point of "
+                               "it this much (m) of travel before that object comes near, "
+                               "or leave a claim it stands in; inf: it waits for that "
+                               "object to pass.", low=0.0, unbounded=True)
+    rejoin_limit: int = param(0, "Concurrent schedule: a segment whose robots had to move "
+                              "back to their rows this many times (held back by what they "
+                              "push) ends, stopped; 0: never.", low=0)
+    rejoin_slack: float = param(REJOIN_SLACK, "Concurrent schedule: a segment whose robots' "
+                                "moves back to their rows (held back by what they push) "
+                                "would add more than this share of its planned rows ends, "
+                                "stopped; inf: never.", low=0.0, unbounded=True)
+
+    def __post_init__(self) -> None:
+        check_fields(self)
+
+    def values(self) -> dict[str, Any]:
+        """Every setting by its public name (``fleet_`` + field)."""
+        return {PREFIX + f.name: getattr(self, f.name) for f in fields(self)}
+
+
+#: The settings' public names, in declaration order.
+PARAMS: tuple[str, ...] = tuple(PREFIX + f.name for f in fields(FleetConfig))
+
+
+def split_overrides(overrides: Mapping[str, Any], owner: str, base: FleetConfig | None = None
+                    ) -> tuple[dict[str, Any], FleetConfig]:
+    """``overrides`` (name -> value or text) split into the planner's own and a
+    :class:`FleetConfig` (``base`` or the defaults) with the ``fleet_`` ones applied
+    (``InputError`` naming ``owner``, the name and the rule for a bad one)."""
+    own = {n: v for n, v in overrides.items() if not n.startswith(PREFIX)}
+    mine = {n[len(PREFIX):]: v for n, v in overrides.items() if n.startswith(PREFIX)}
+    names = [f.name for f in fields(FleetConfig)]
+    unknown = [n for n in mine if n not in names]
+    if unknown:  # refused by the planner's own check, which lists every name
+        own.update({PREFIX + n: mine.pop(n) for n in unknown})
+    config = base or FleetConfig()
+    for n, v in mine.items():
+        try:
+            config = apply_overrides(config, names, {n: v}, owner)
+        except InputError as exc:  # named as the user wrote it
+            raise InputError(str(exc).replace(f"{owner}.{n}", f"{owner}.{PREFIX}{n}")) from None
+    return own, config

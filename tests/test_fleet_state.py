@@ -1,0 +1,82 @@
+"""The fleet's object status machine (``lamp.fleet.state``) against its table of moves, and
+the contracts that replaced run-time probing of executors."""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from lamp.contract.runner import ALONE, LoopEnd, LoopHooks
+from lamp.fleet.state import TRANSITIONS, IllegalTransition, ObjectState, ObjectStatus
+
+SRC = Path(__file__).resolve().parents[1] / "src" / "lamp"
+
+
+@given(st.lists(st.sampled_from(list(ObjectStatus)), max_size=8))
+def test_every_move_follows_the_table_or_raises_and_changes_nothing(moves) -> None:
+    """A reference walk over ``TRANSITIONS``: each move is allowed exactly when the table
+    says so; an illegal one raises ``IllegalTransition`` and leaves the status as it was."""
+    o = ObjectState(0)
+    want = ObjectStatus.WAITING
+    for m in moves:
+        if m in TRANSITIONS[want]:
+            o.move_to(m)
+            want = m
+        else:
+            with pytest.raises(IllegalTransition, match="object 0"):
+                o.move_to(m)
+        assert o.status is want
+
+
+def test_the_table_is_the_schedule_s_life_cycle() -> None:
+    """waiting -> active -> placed | failed; waiting -> failed (given up); nothing leaves
+    placed or failed, and only those two are done."""
+    W, A, P, F = (ObjectStatus.WAITING, ObjectStatus.ACTIVE, ObjectStatus.PLACED,
+                  ObjectStatus.FAILED)
+    assert dict(TRANSITIONS) == {W: {A, F}, A: {P, F}, P: set(), F: set()}
+    assert [s.done for s in (W, A, P, F)] == [False, False, True, True]
+
+
+def test_resume_ends_a_wait_and_sets_the_answer() -> None:
+    o = ObjectState(3, blocked_at=(1, 2))
+    assert o.held_up
+    o.resume(replan=False)
+    assert o.blocked_at is None and o.ready and o.replan is False and not o.held_up
+    o.resume()
+    assert o.replan is True
+
+
+def test_a_loop_alone_is_told_nothing_and_asks_nothing() -> None:
+    """``ALONE``: the team never changes, a failed plan is the planner's to handle, and
+    announcing a segment has no effect."""
+    import numpy as np
+
+    assert ALONE.team_changed() is False and ALONE.plan_failed() is False
+    assert ALONE.announce(np.zeros((2, 3)), np.zeros((0, 3))) is None
+    seen = []
+    hooks = LoopHooks(plan_failed=lambda: seen.append(1) or True)
+    assert hooks.plan_failed() and seen == [1] and not hooks.team_changed()
+    assert {e.value for e in LoopEnd} == {"finished", "no plan", "world changed",
+                                          "team changed"}
+
+
+#: Executor abilities that once were probed by name.
+PROBED = {"announce", "plan_failed", "team_changed", "failed", "true_object_poses",
+          "declined", "stopped_at", "objects_left"}
+
+
+def test_no_module_probes_an_executor_s_abilities_by_name() -> None:
+    """The executor's abilities are contracts (``WorldExecutor``, ``Execution``,
+    ``LoopHooks``), not found at run time: no ``getattr``/``hasattr`` names one."""
+    bad = []
+    for path in sorted(SRC.rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if (isinstance(node, ast.Call) and isinstance(node.func, ast.Name)
+                    and node.func.id in ("getattr", "hasattr") and len(node.args) >= 2
+                    and isinstance(node.args[1], ast.Constant) and node.args[1].value in PROBED):
+                bad.append(f"{path.relative_to(SRC)}:{node.lineno}")
+    assert bad == []
