@@ -22,7 +22,7 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "lamp"
 #: Bottom to top; a package (or top-level module) per name, several per layer where they
 #: are peers that do not import each other.
 LAYERS: tuple[tuple[str, ...], ...] = (
-    ("errors", "_lazy", "io", "progress"),
+    ("errors", "lazy_exports", "io", "progress"),
     ("geometry",),
     ("contract",),
     ("scene",),
@@ -41,7 +41,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("demo",),
     ("cli",),  # the command line: parses, loads, calls, writes; may import any layer
 )
-#: The package root: its top-level names load their modules lazily (``lamp._lazy``).
+#: The package root: its top-level names load their modules lazily (``lamp.lazy_exports``).
 ROOT = "lamp"
 MAX_LINES = 500
 LEVEL = {name: i for i, names in enumerate(LAYERS) for name in names}

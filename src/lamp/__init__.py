@@ -22,9 +22,9 @@ except _metadata.PackageNotFoundError:  # running from a source tree that is not
 
 # Light imports (NumPy at most): the types of ``solve``'s signature, so that
 # ``typing.get_type_hints(lamp.solve)`` resolves.
-from lamp._lazy import lazy_getattr
 from lamp.contract.disturb import Disturbances
 from lamp.contract.result import RunResult
+from lamp.lazy_exports import lazy_getattr
 from lamp.planners.config import PlannerConfig
 from lamp.progress import ProgressCallback
 from lamp.scene.model import Scene

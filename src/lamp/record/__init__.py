@@ -11,7 +11,7 @@ Rendering a recording (GIF, MP4, PNG, HTML) is ``lamp.viz.replay``.
 
 from typing import TYPE_CHECKING
 
-from lamp._lazy import lazy_getattr
+from lamp.lazy_exports import lazy_getattr
 from lamp.record.format import (
     FORMAT,
     JSON_NAME,

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from lamp._lazy import lazy_getattr
+from lamp.lazy_exports import lazy_getattr
 from lamp.scene.model import (
     Circle,
     Obstacle,
