@@ -9,15 +9,13 @@ visited.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from lamp.planners.collide import PushCandidates, prepare_candidates
+from lamp.planners.task_stats import TaskStats
 from lamp.scene.model import Shape
-
-if TYPE_CHECKING:
-    from lamp.planners.verifier import TaskStats
 
 __all__ = ["ProposalCache", "proposal_key", "stable_seed"]
 

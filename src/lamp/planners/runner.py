@@ -7,7 +7,7 @@ closed-loop planner (LAMP-Lazy, LAMP-A*, the GCo baselines): for object ``k`` it
 :func:`~lamp.planners.closed_loop.run_object` under the planner's loop policy; under
 disturbances, one loop per team of the robots still working (``TeamView``), in a
 :class:`~lamp.planners.series.LoopSeries` as the fleet schedule runs its loops. The run's
-``stats`` add up the tasks' counters (:class:`~lamp.planners.verifier.TaskStats`).
+``stats`` add up the tasks' counters (:class:`~lamp.planners.task_stats.TaskStats`).
 """
 
 from __future__ import annotations
@@ -24,8 +24,8 @@ from lamp.planners.closed_loop import LoopRecord, run_object
 from lamp.planners.config import PlannerConfig
 from lamp.planners.series import LoopSeries
 from lamp.planners.task import ManipulationTask
+from lamp.planners.task_stats import TaskStats
 from lamp.planners.team import TeamView, team_scene
-from lamp.planners.verifier import TaskStats
 from lamp.scene.model import Scene
 from lamp.sim.mjcf import TIMESTEP
 

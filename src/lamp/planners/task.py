@@ -28,7 +28,8 @@ from lamp.geometry.object_space import ObjectSpace
 from lamp.geometry.robot_space import RobotSpace
 from lamp.planners.config import PlannerConfig
 from lamp.planners.robot_routing import GspiRouter
-from lamp.planners.verifier import TaskStats, Verifier, VerifierParams
+from lamp.planners.task_stats import TaskStats
+from lamp.planners.verifier import Verifier, VerifierParams
 from lamp.scene.model import Scene, Shape
 from lamp.search.landmark import route_length
 

@@ -11,8 +11,8 @@ A :class:`Verifier` is built from three narrow pieces and a few numbers:
   goals in such a space (Gspi, ``GspiRouter``);
 - :class:`VerifierParams` (from ``PlannerConfig``).
 
-It owns its proposal cache and its counters (:class:`TaskStats`). Planners hold a
-``Verifier`` and never the task that built it (``ManipulationTask.verifier``).
+It owns its proposal cache and its counters (``lamp.planners.task_stats.TaskStats``).
+Planners hold a ``Verifier`` and never the task that built it (``ManipulationTask.verifier``).
 
 ``verify`` follows the algorithm (paper Sec. III-A-1): for each budget B = min(N,
 max_budget) down to 1 (line 19), draw K proposals from the manipulation model (line 20),
@@ -51,9 +51,10 @@ from lamp.planners.bystanders import (
 from lamp.planners.collide import usable_mask
 from lamp.planners.proposal_cache import ProposalCache
 from lamp.planners.robot_routing import MultiRobotPlanner, RobotValidity, Window
+from lamp.planners.task_stats import TaskStats
 from lamp.scene.model import Shape
 
-__all__ = ["TaskStats", "Verifier", "VerifierParams", "assign_to_contacts", "push_paths"]
+__all__ = ["Verifier", "VerifierParams", "assign_to_contacts", "push_paths"]
 
 #: How far (m) the breadth-first search for a robot's waiting spot may go.
 WAIT_SEARCH_RADIUS = 1.0
@@ -87,30 +88,6 @@ class VerifierParams:
         return cls(k=cfg.k, max_budget=cfg.max_budget,
                    gspi_attempts_per_budget=cfg.gspi_attempts_per_budget,
                    contact_tolerance=cfg.contact_tolerance, gspi_time_limit=cfg.gspi_time_limit)
-
-
-@dataclass
-class TaskStats:
-    """Counters reported in result.json's ``stats``."""
-
-    verify_calls: int = 0
-    verify_success: int = 0
-    model_calls: int = 0
-    gspi_calls: int = 0
-    gspi_success: int = 0
-    #: Gspi calls ended by the wall-clock cap ``gspi_time_limit`` (0 on an unloaded
-    #: machine: then no result depended on the clock).
-    gspi_timeouts: int = 0
-    cache_hits: int = 0
-    #: vertices LAMP-Lazy's D* Lite expanded (its budget: ``lazy_max_expansions``)
-    search_expansions: int = 0
-    #: the most of them in one LAMP-Lazy ``plan`` call (a maximum: ``add`` keeps the larger)
-    max_plan_expansions: int = 0
-
-    def add(self, other: TaskStats) -> None:
-        for k, v in vars(other).items():
-            setattr(self, k, max(getattr(self, k), v) if k.startswith("max_")
-                    else getattr(self, k) + v)
 
 
 def assign_to_contacts(q_R: np.ndarray, contacts: np.ndarray) -> tuple[np.ndarray, float]:
