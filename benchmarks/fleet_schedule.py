@@ -10,7 +10,7 @@ scenes with at least three sub-teams' worth of robots, and the collisions.
     lamp bench --suites fleet --planners lazy --schedule sequential --out SEQ
     lamp bench --suites fleet --planners lazy --schedule concurrent --record --out CON
     lamp bench --suites fleet --planners gco-var --schedule concurrent --record --out GCO
-    python benchmarks/fleet_schedule.py SEQ CON [--peer GCO] [--out docs/results/fleet/table.md]
+    python benchmarks/fleet_schedule.py SEQ CON [--peer GCO] [--out results/fleet/table.md]
 
 ``--seeds DIR`` instead summarises a folder run with several seeds (``--num-seeds 3``):
 success per seed and the collisions in all its recordings.

@@ -5,7 +5,7 @@ Each JSON file is one sweep; its x axis is the parameter that varies across its 
 metre of route on top (the median, with the range of the repeated runs as a bar), peak
 resident memory below. Failed points are drawn hollow.
 
-Run: ``python benchmarks/plot_scale.py SIZES.json [ROBOTS.json ...] --out docs/figures/scale.png``
+Run: ``python benchmarks/plot_scale.py SIZES.json [ROBOTS.json ...] --out docs/images/scale.png``
 """
 
 from __future__ import annotations

@@ -3,7 +3,7 @@
     lamp bench --suites random,maze,tilt,warehouse --scenes 5 --planners lazy,gco-var \
         --disturb noise-high --out runs/noise-high      # one folder per preset
     python benchmarks/robustness.py runs/none runs/noise-low runs/noise-high \
-        runs/one-robot-fails --out docs/results/robustness
+        runs/one-robot-fails --out results/robustness
 
 Per preset and planner: how many runs the disturbance happened in, the success rate over
 those runs only (a run it missed, a failure that never fired, counts as not disturbed,

@@ -620,8 +620,8 @@ def test_solve_job_wiring_and_render_failure(monkeypatch, tmp_path):
 
 
 @pytest.mark.parametrize(("changed", "dirty"), [
-    (" M docs/results/full/results.jsonl\n M docs/results/full/config.json", False),
-    (" M docs/results/full/results.jsonl\n M src/lamp/planners/lazy.py", True),
+    (" M results/full/results.jsonl\n M results/full/config.json", False),
+    (" M results/full/results.jsonl\n M src/lamp/planners/lazy.py", True),
     ("", False),
 ])
 def test_session_ignores_changes_inside_the_output_folder(tmp_path, monkeypatch, changed, dirty):
@@ -629,6 +629,6 @@ def test_session_ignores_changes_inside_the_output_folder(tmp_path, monkeypatch,
 
     answers = {"status": changed, "rev-parse": str(tmp_path)}
     monkeypatch.setattr(provenance, "_git", lambda *args: answers[args[0]])
-    session = provenance._session("lamp bench", tmp_path / "docs" / "results" / "full")
+    session = provenance._session("lamp bench", tmp_path / "results" / "full")
     assert session["git_dirty"] is dirty
     assert session["machine"]["cpu_count"] == os.cpu_count()  # each run says where it ran
