@@ -1,6 +1,6 @@
 """What the ``lamp`` command costs before and around planning.
 
-Run: ``python benchmarks/bench_cli.py [--cold]``. Prints medians over repeated runs of:
+Run: ``python benchmarks/investigations/bench_cli.py [--cold]``. Prints medians over repeated runs of:
 - ``lamp --help`` and ``lamp --version`` in a fresh process (start-up of the command);
 - ``lamp validate`` on the 25 maze scenes (per file);
 - the Numba warm-up of ``lamp.solve`` with a warm disk cache, in a fresh process each time,
@@ -20,7 +20,7 @@ import tempfile
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 ENV = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT / "src"),
                                                      os.environ.get("PYTHONPATH", "")])}
 # imports first (every run pays them anyway), then the warm-up alone
