@@ -20,10 +20,10 @@ drop those whose contacts or push paths collide with the obstacles, the border, 
 or each other (line 21, ``Collide``: ``lamp.planners.collide``), pair robots with contacts
 by shortest distance (:func:`assign_to_contacts`) and send unpaired robots to waiting
 spots out of the push's way (line 22, ``Reassign``), and ask the multi-robot planner
-(Gspi) for approach paths T_move (line 23). The first success returns the transition T_R
-= T_move (+) T_manip (line 24, T_manip: :func:`push_paths`); otherwise ``verify`` returns
-None (line 25, failure). The GCo baselines take the unverified path instead: one fresh
-model sample (``proposals.sample``), no ``Collide``, then ``route_push``.
+(Gspi) for approach paths T_move (line 23). The first success returns (line 24) the
+transition T_R = T_move (+) T_manip (T_manip: :func:`push_paths`); otherwise ``verify``
+returns None (line 25, failure). The GCo baselines take the unverified path instead: one
+fresh model sample (``proposals.sample``), no ``Collide``, then ``route_push``.
 """
 
 from __future__ import annotations
