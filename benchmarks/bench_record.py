@@ -92,7 +92,7 @@ def measure(name: str, scene, model: str, reps: int, time_limit: float) -> None:
         rec, success = scripted_run(scene)
     else:
         result = solve(scene, "lazy", seed=0, model=model,
-                       config=PlannerConfig(planning_time_limit=time_limit))
+                       config=PlannerConfig.of(planning_time_limit=time_limit))
         rec, success = result.recording, result.success
     run_s = time.perf_counter() - t0
     W, H = scene.workspace

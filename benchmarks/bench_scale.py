@@ -95,7 +95,7 @@ def run_point(size: float, robots: int, objects: int, density: float,
     scene = scene_from_dict(d)
     route = sum(math.dist(o["start"][:2], o["goal"][:2]) for o in d["objects"])
     t0 = time.perf_counter()
-    res = solve(scene, planner="lazy", seed=seed, config=PlannerConfig(max_segments=max_segments))
+    res = solve(scene, planner="lazy", seed=seed, config=PlannerConfig.of(max_segments=max_segments))
     wall = time.perf_counter() - t0
     out = res.to_dict()
     plan = float(out["total_planning_time_s"])

@@ -599,7 +599,7 @@ def test_solve_job_wiring_and_render_failure(monkeypatch, tmp_path):
 
     def fake_run(request):
         calls.append((request.scene.name, request.planner, request.seed, request.model,
-                      request.params.planning_time_limit, request.params.max_segments))
+                      request.params.loop.planning_time_limit, request.params.loop.max_segments))
         return RunResult(scene=request.scene.name, planner=request.planner, seed=request.seed)
 
     def broken_render(recording, path):

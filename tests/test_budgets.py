@@ -99,7 +99,7 @@ def _task(proposer, config: PlannerConfig) -> ManipulationTask:
 
 
 def test_lazy_verify_budget_names_itself(proposer):
-    task = _task(proposer, PlannerConfig(max_verify_calls=2))
+    task = _task(proposer, PlannerConfig.of(max_verify_calls=2))
     plan = LazyPlanner.from_task(task).plan(task.object_poses[0], task.scene.robot_starts_array)
     assert plan.status is PlanStatus.BUDGET_EXHAUSTED and plan.limit == "max_verify_calls"
     assert plan.reason == "no plan found: max_verify_calls exhausted"
@@ -107,10 +107,10 @@ def test_lazy_verify_budget_names_itself(proposer):
 
 
 def test_astar_expansion_budget_names_itself(proposer):
-    task = _task(proposer, PlannerConfig(astar_max_expansions=3))
+    task = _task(proposer, PlannerConfig.of(astar_max_expansions=3))
     plan = LampAStar.from_task(task).plan(task.object_poses[0], task.scene.robot_starts_array)
     assert plan.status is PlanStatus.BUDGET_EXHAUSTED and plan.limit == "astar_max_expansions"
-    cfg = PlannerConfig(astar_max_expansions=3, planning_time_limit=500.0)
+    cfg = PlannerConfig.of(astar_max_expansions=3, planning_time_limit=500.0)
     res = lamp.solve(scene_from_dict(SCENE), "astar", seed=1, model=proposer, config=cfg)
     assert res.to_dict()["objects"][0]["failure_reason"] == \
         "no plan found: astar_max_expansions exhausted"
@@ -123,22 +123,22 @@ def test_astar_budget_is_per_object_and_follows_the_limit(proposer):
     from lamp.pipeline.registry import get
     from lamp.planners.config import ASTAR_EXPANSION_RATE
 
-    task = _task(proposer, PlannerConfig(astar_max_expansions=1000))
+    task = _task(proposer, PlannerConfig.of(astar_max_expansions=1000))
     astar = LampAStar.from_task(task)
     q_O, q_R = task.object_poses[0], task.scene.robot_starts_array
     assert astar.plan(q_O, q_R).solved
     used = astar.expanded
     assert 0 < used < 1000
-    smaller = _task(proposer, PlannerConfig(astar_max_expansions=used + 1))
+    smaller = _task(proposer, PlannerConfig.of(astar_max_expansions=used + 1))
     astar.config, astar.verifier = smaller.config, smaller.verifier
     assert astar.plan(q_O, q_R).limit == "astar_max_expansions"  # only 1 left
     assert astar.expanded == used + 1
     astar.clear()
     assert astar.plan(q_O, q_R).solved and astar.expanded == used
     assert get("astar").default_config().astar_expansions == round(500 * ASTAR_EXPANSION_RATE)
-    assert PlannerConfig(planning_time_limit=30.0).astar_expansions == round(
+    assert PlannerConfig.of(planning_time_limit=30.0).astar_expansions == round(
         30 * ASTAR_EXPANSION_RATE)
-    assert PlannerConfig(planning_time_limit=float("inf")).astar_expansions > 10**9
+    assert PlannerConfig.of(planning_time_limit=float("inf")).astar_expansions > 10**9
 
 def test_lazy_expansion_budget_is_per_object_and_names_itself(proposer):
     """D* Lite's expansions over all of one object's plan calls add up in
@@ -153,11 +153,11 @@ def test_lazy_expansion_budget_is_per_object_and_names_itself(proposer):
     ref = LazyPlanner.from_task(task).plan(q_O, q_R)
     used = task.stats.search_expansions
     assert ref.solved and used > 0 and task.stats.max_plan_expansions == used
-    exact = _task(proposer, PlannerConfig(lazy_max_expansions=used))
+    exact = _task(proposer, PlannerConfig.of(lazy_max_expansions=used))
     plan = LazyPlanner.from_task(exact).plan(q_O, q_R)
     assert plan.solved and exact.stats.search_expansions == used
     assert [t.q_to.tolist() for t in plan.transitions] == [t.q_to.tolist() for t in ref.transitions]
-    short = _task(proposer, PlannerConfig(lazy_max_expansions=used - 1))
+    short = _task(proposer, PlannerConfig.of(lazy_max_expansions=used - 1))
     planner = LazyPlanner.from_task(short)
     plan = planner.plan(q_O, q_R)
     assert plan.status is PlanStatus.BUDGET_EXHAUSTED and plan.limit == "lazy_max_expansions"
@@ -170,12 +170,12 @@ def test_lazy_expansion_budget_is_per_object_and_names_itself(proposer):
     total.add(short.stats)  # counts add up, maxima stay maxima
     assert total.search_expansions == 2 * used - 1 and total.max_plan_expansions == used
     assert get("lazy").default_config().lazy_expansions == round(
-        get("lazy").default_config().planning_time_limit * LAZY_EXPANSION_RATE)
-    assert PlannerConfig(planning_time_limit=30.0).lazy_expansions == round(
+        get("lazy").default_config().loop.planning_time_limit * LAZY_EXPANSION_RATE)
+    assert PlannerConfig.of(planning_time_limit=30.0).lazy_expansions == round(
         30 * LAZY_EXPANSION_RATE)
-    assert PlannerConfig(planning_time_limit=float("inf")).lazy_expansions > 10**9
+    assert PlannerConfig.of(planning_time_limit=float("inf")).lazy_expansions > 10**9
     res = lamp.solve(scene_from_dict(SCENE), "lazy", seed=1, model=proposer,
-                     config=PlannerConfig(lazy_max_expansions=1)).to_dict()
+                     config=PlannerConfig.of(lazy_max_expansions=1)).to_dict()
     assert res["objects"][0]["failure_reason"] == "no plan found: lazy_max_expansions exhausted"
 
 
@@ -198,7 +198,7 @@ def test_solve_time_limit_sets_the_astar_budget(proposer, monkeypatch):
                                           ("gspi_time_limit", 0.0)])
 def test_config_rejects_bad_budgets(field, value):
     with pytest.raises(ValueError, match=field):
-        PlannerConfig(**{field: value})
+        PlannerConfig.of(**{field: value})
 
 
 @pytest.mark.parametrize("limit", [0.0, -1.0, float("nan")])

@@ -26,7 +26,7 @@ from lamp.planners.config import PlannerConfig
 LAZY = LoopPolicy(replan_on_drift=True, replan_when_done=True, replan_on_stall=True)
 DRIFT_ONLY = LoopPolicy(replan_on_drift=True, replan_when_done=True)
 OPEN = LoopPolicy(replan_on_drift=False, replan_when_done=False)
-CONFIG = PlannerConfig(long_push_length=0.0, planning_time_limit=60.0)
+CONFIG = PlannerConfig.of(long_push_length=0.0, planning_time_limit=60.0)
 START = np.array([1.0, 1.0, 0.0])
 GOAL = np.array([2.0, 1.0, 0.0])
 ROBOTS = np.array([[0.7, 1.0], [0.7, 1.3]])
@@ -159,7 +159,7 @@ def test_already_at_the_goal_plans_nothing() -> None:
 
 
 def test_long_pushes_join_transitions_into_one_segment() -> None:
-    cfg = dataclasses.replace(CONFIG, long_push_length=0.4)
+    cfg = CONFIG.but(long_push_length=0.4)
     ex = FakeExecutor(exact)
     out = run(ex, config=cfg)
     assert out.result.success and out.result.segments == 3  # 0.4 + 0.4 + 0.2 m
@@ -191,7 +191,7 @@ def test_open_loop_keeps_executing_through_drift() -> None:
 
 
 def test_stall_is_reported_to_the_planner_until_the_segment_limit() -> None:
-    cfg = dataclasses.replace(CONFIG, max_segments=4)
+    cfg = CONFIG.but(max_segments=4)
     ex = FakeExecutor(stalled)
     out = run(ex, config=cfg)
     res = out.result
@@ -212,7 +212,7 @@ def test_a_scaled_segment_limit_is_measured_on_the_route(route) -> None:
         asked.append(np.array(q))
         return route
 
-    out = run(FakeExecutor(stalled), config=dataclasses.replace(CONFIG, max_segments=None),
+    out = run(FakeExecutor(stalled), config=CONFIG.but(max_segments=None),
               route=None if route is None else distance)
     limit = 100 if route is None else 150
     assert out.result.segments == limit
@@ -221,7 +221,7 @@ def test_a_scaled_segment_limit_is_measured_on_the_route(route) -> None:
 
 
 def test_stall_without_its_policy_reads_as_drift() -> None:
-    cfg = dataclasses.replace(CONFIG, max_segments=3)
+    cfg = CONFIG.but(max_segments=3)
     out = run(FakeExecutor(stalled), policy=DRIFT_ONLY, config=cfg)
     assert [e.outcome for e in out.events] == ["drift"] * 3
     assert out.planner.failures == [] and out.result.replans == 2
@@ -245,7 +245,7 @@ def test_failed_plans(final: bool) -> None:
             return Plan.failed(PlanStatus.NO_PATH)
 
     policy = dataclasses.replace(LAZY, failure_is_final=final)
-    cfg = dataclasses.replace(CONFIG, max_segments=3)
+    cfg = CONFIG.but(max_segments=3)
     out = run(FakeExecutor(exact), policy=policy, config=cfg, planner=Failing(GOAL))
     assert out.result.segments == 0 and not out.result.success
     assert len(out.planner.calls) == (1 if final else 3)
@@ -283,7 +283,7 @@ def test_drift_then_exact_always_arrives(dx, dy, step, side, n_drift) -> None:
     res = watched.result
     drifts = [e for e in watched.events if e.outcome == "drift"]
     assert res.success
-    if dist <= CONFIG.stop_position:  # already there: nothing planned, nothing executed
+    if dist <= CONFIG.loop.stop_position:  # already there: nothing planned, nothing executed
         assert res.segments == 0 and res.replans == 0
     else:
         assert np.allclose(res.final_pose, goal, atol=1e-9)
@@ -303,8 +303,8 @@ def test_drift_limits_tighten_with_the_clearance() -> None:
     from lamp.planners.closed_loop import TIGHT_DRIFT_FLOOR, drift_limits
 
     cfg = CONFIG
-    assert drift_limits(cfg, None, 0.3) == (cfg.drift_position, cfg.drift_orientation)
-    assert drift_limits(cfg, 1.0, 0.3) == (cfg.drift_position, cfg.drift_orientation)
+    assert drift_limits(cfg, None, 0.3) == (cfg.loop.drift_position, cfg.loop.drift_orientation)
+    assert drift_limits(cfg, 1.0, 0.3) == (cfg.loop.drift_position, cfg.loop.drift_orientation)
     pos, rot = drift_limits(cfg, 0.04, 0.5)
     assert pos == pytest.approx(0.02) and rot == pytest.approx(0.04)
     assert drift_limits(cfg, 0.0, 0.5) == (TIGHT_DRIFT_FLOOR, TIGHT_DRIFT_FLOOR / 0.5)

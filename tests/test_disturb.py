@@ -145,7 +145,7 @@ def test_the_loop_does_not_replan_on_noise_alone(sigma_known, thrash):
     does not call them drift; one that does not, replans on noise."""
     from test_closed_loop import DRIFT_ONLY, GOAL, StraightPlanner
 
-    config = PlannerConfig(long_push_length=0.0, planning_time_limit=60.0, stop_position=0.2,
+    config = PlannerConfig.of(long_push_length=0.0, planning_time_limit=60.0, stop_position=0.2,
                            drift_position=0.01, drift_orientation=0.03,
                            sensing_sigma=sigma_known)
     events = []
@@ -183,9 +183,9 @@ def test_a_noisy_sensor_stops_the_loop_only_when_a_closer_look_agrees(sigma):
 
     from lamp.planners.closed_loop import CONFIRM_FACTOR
 
-    config = PlannerConfig(long_push_length=0.0, planning_time_limit=60.0,
+    config = PlannerConfig.of(long_push_length=0.0, planning_time_limit=60.0,
                            sensing_sigma=sigma, sensing_readings=4)
-    look = CONFIRM_FACTOR * config.sensing_readings
+    look = CONFIRM_FACTOR * config.loop.sensing_readings
     for short, pushes in ((0.0, False), (-0.3, bool(sigma))):
         ex = _ScriptedSensor(GOAL, [[0, 0, 0]] + [[short, 0, 0]] * look)
         loop = ClosedLoop(StraightPlanner(GOAL, step=0.1), DRIFT_ONLY, ex, index=0, goal=GOAL,

@@ -120,6 +120,6 @@ def test_long_pushes_mean_fewer_segments_on_a_suite_scene():
     scene = next(iter(suite_scenes("random")))
     whole = solve(scene, "lazy", 0, model="geometric")
     single = solve(scene, "lazy", 0, model="geometric",
-                   config=PlannerConfig(long_push_length=0.0))
+                   config=PlannerConfig.of(long_push_length=0.0))
     assert whole.success and single.success
     assert whole.segments < single.segments

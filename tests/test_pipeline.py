@@ -41,8 +41,14 @@ def scene():
 
 
 # ----------------------------------------------------------------------------- parameters
-def test_every_planner_config_field_is_a_declared_parameter():
-    assert set(INFOS) == set(PlannerConfig.__dataclass_fields__)
+def test_every_planner_config_field_is_a_group_of_declared_parameters():
+    """``PlannerConfig`` is made of its groups only; every field of every group is a
+    declared parameter, each declared once, and every planner reads declared ones."""
+    import dataclasses
+
+    groups = [f.default_factory for f in dataclasses.fields(PlannerConfig)]
+    fields = [f.name for g in groups for f in dataclasses.fields(g)]
+    assert sorted(fields) == sorted(INFOS) and len(fields) == len(set(fields))
     for spec in registry.specs():
         assert set(spec.params) <= set(INFOS), spec.name
 
@@ -81,14 +87,14 @@ def test_a_parameter_the_planner_does_not_read_is_refused():
                         {"max_plan_iterations": 3}, "gco-var")
     got = apply_overrides(PlannerConfig(), registry.get("lazy").params,
                           {"max_plan_iterations": "7", "max_segments": "none", "k": 4}, "lazy")
-    assert (got.max_plan_iterations, got.max_segments, got.k) == (7, None, 4)
+    assert (got.lazy.max_plan_iterations, got.loop.max_segments, got.verify.k) == (7, None, 4)
 
 
 def test_planner_config_validates_every_field_on_construction():
-    with pytest.raises(InputError, match="PlannerConfig.edge_penalty"):
-        PlannerConfig(edge_penalty=-1.0)
-    assert PlannerConfig(planning_time_limit=math.inf).planning_time_limit == math.inf
-    assert isinstance(PlannerConfig(planning_time_limit=20).planning_time_limit, float)
+    with pytest.raises(InputError, match="LazyConfig.edge_penalty"):
+        PlannerConfig.of(edge_penalty=-1.0)
+    assert PlannerConfig.of(planning_time_limit=math.inf).loop.planning_time_limit == math.inf
+    assert isinstance(PlannerConfig.of(planning_time_limit=20).loop.planning_time_limit, float)
 
 
 @pytest.mark.parametrize("text", ["lazy", "lazy.k", "k=3", ".k=3", "lazy.=3"])
@@ -121,8 +127,8 @@ def test_request_is_validated_before_anything_runs(scene):
     req = RunRequest.build(scene, "astar", 3, model="geometric",
                            params={"astar_heuristic_weight": "2"}, planning_limit=7,
                            max_segments=5)
-    assert req.params.astar_heuristic_weight == 2.0
-    assert (req.params.planning_time_limit, req.params.max_segments) == (7.0, 5)
+    assert req.params.astar.astar_heuristic_weight == 2.0
+    assert (req.params.loop.planning_time_limit, req.params.loop.max_segments) == (7.0, 5)
     assert "astar_heuristic_weight=2" in req.describe()
     with pytest.raises(InputError, match="planning_time_limit"):
         RunRequest.build(scene, "lazy", planning_limit=0)
@@ -170,7 +176,7 @@ def test_observers_watch_in_order_and_change_nothing(scene):
 
 def test_result_agrees_with_its_recording(scene):
     res = run(RunRequest(scene, "lazy", 2, GeometricProposer(),
-                         PlannerConfig(max_plan_iterations=300)))
+                         PlannerConfig.of(max_plan_iterations=300)))
     d = res.to_dict()
     rec = res.recording
     assert d["success"] and d["segments"] == rec.n_segments >= 1

@@ -124,7 +124,7 @@ def test_astar_gives_up_at_once_without_an_object_route(proposer):
 @pytest.mark.parametrize("planner", ["gco-var", "gco-ori"])
 def test_gco_baselines_run(proposer, planner):
     scene = scene_from_dict(small_scene())
-    config = PlannerConfig(max_segments=8)
+    config = PlannerConfig.of(max_segments=8)
     result = solve(scene, planner, seed=0, model=proposer, config=config).to_dict()
     assert result["planner"] == planner
     assert result["segments"] <= 8

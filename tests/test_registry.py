@@ -97,7 +97,7 @@ def test_one_entry_adds_a_planner_everywhere(dummy, tmp_path):
     assert got["planner"] == "dummy" and got["success"]
     assert got["objects"][0]["final_pose"] == want["objects"][0]["final_pose"]
     assert got["segments"] == want["segments"] and got["makespan"] == want["makespan"]
-    assert registry.get("dummy").default_config().planning_time_limit == 42.0
+    assert registry.get("dummy").default_config().loop.planning_time_limit == 42.0
     assert type(registry.get("dummy").factory(_task(scene, model))).__name__ == "LazyPlanner"
 
     # bench: --planning-limit applies, the name is accepted
@@ -168,7 +168,7 @@ def test_an_object_runner_replaces_the_loop(tmp_path):
         row_dt_s = 0.08
 
         def __init__(self, scene, config):
-            calls.append((scene.name, config.planning_time_limit))
+            calls.append((scene.name, config.loop.planning_time_limit))
 
         def run_object(self, index, executor, observe):
             pose = [float(v) for v in executor.object_poses[index]]

@@ -234,7 +234,7 @@ def test_lamp_lazy_on_a_map_larger_than_its_windows() -> None:
 
     robot_space.clear_caches()
     scene = scene_from_dict(pillar_scene(6))
-    res = solve(scene, planner="lazy", seed=0, config=PlannerConfig(max_segments=400)).to_dict()
+    res = solve(scene, planner="lazy", seed=0, config=PlannerConfig.of(max_segments=400)).to_dict()
     assert res["success"], res["objects"][0]["failure_reason"]
     spaces = list(robot_space._SPACE_CACHE.values())
     # the robots planned in windows of the 6 m map, not over all of it

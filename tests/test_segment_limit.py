@@ -71,9 +71,9 @@ def test_a_50_m_route_gets_room():
 @pytest.mark.parametrize("bad", [0, -3, 2.5, True])
 def test_config_refuses_bad_limits(bad):
     with pytest.raises(ValueError, match="max_segments"):
-        PlannerConfig(max_segments=bad)
+        PlannerConfig.of(max_segments=bad)
     with pytest.raises(ValueError, match="long_push_length"):
-        PlannerConfig(long_push_length=-1.0)
+        PlannerConfig.of(long_push_length=-1.0)
 
 
 def test_bench_keeps_the_paper_limit_on_builtin_suites_only(tmp_path):

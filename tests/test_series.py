@@ -36,8 +36,8 @@ def test_each_loop_gets_what_the_others_left_and_the_series_names_its_limit(
     used = spent = 0.0
     for n, (segments, planning) in enumerate(loops, 1):
         cfg = series.config(PlannerConfig())
-        assert cfg.max_segments == max(1, limit - int(used))
-        assert cfg.planning_time_limit == max(1e-3, planning_limit - spent)
+        assert cfg.loop.max_segments == max(1, limit - int(used))
+        assert cfg.loop.planning_time_limit == max(1e-3, planning_limit - spent)
         series.add(_loop(segments, planning))
         used, spent = used + segments, spent + planning
         why = series.ran_out()
@@ -58,8 +58,8 @@ def test_each_loop_gets_what_the_others_left_and_the_series_names_its_limit(
 def test_without_a_planning_limit_only_the_segments_are_shared() -> None:
     series = LoopSeries(5)
     series.add(_loop(3, 1e9, LoopEnd.TEAM_CHANGED))
-    cfg = series.config(PlannerConfig(planning_time_limit=7.0))
-    assert cfg.max_segments == 2 and cfg.planning_time_limit == 7.0
+    cfg = series.config(PlannerConfig.of(planning_time_limit=7.0))
+    assert cfg.loop.max_segments == 2 and cfg.loop.planning_time_limit == 7.0
     assert series.ran_out() == ""
     series.add(_loop(2, 0.0, LoopEnd.FINISHED))
     assert series.ran_out() == "segment limit reached (5)"

@@ -20,7 +20,8 @@ from lamp.contract.trajectory import MAX_STEP, straight_moves
 from lamp.geometry import se2
 from lamp.manip import GeometricProposer
 from lamp.mrmp.gspi import GspiStatus
-from lamp.planners.verifier import Verifier, VerifierParams
+from lamp.planners.config import VerifyConfig
+from lamp.planners.verifier import Verifier
 from lamp.scene.model import Rectangle
 
 SHAPE = Rectangle((0.4, 0.3))
@@ -80,7 +81,7 @@ class StraightRouter:
 
 def make(robots=None, router=None, **params) -> Verifier:
     return Verifier(GeometricProposer(), SHAPE, R, len(ROBOTS), robots or Plane(),
-                    router or StraightRouter(), VerifierParams(**params), seed=3)
+                    router or StraightRouter(), VerifyConfig(**params), seed=3)
 
 
 def test_verify_builds_the_transition_and_counts() -> None:
@@ -190,7 +191,7 @@ def test_params_are_validated() -> None:
     for bad in ({"k": 0}, {"max_budget": 1.5}, {"gspi_time_limit": 0.0},
                 {"contact_tolerance": -1.0}):
         with pytest.raises(ValueError, match=next(iter(bad))):
-            VerifierParams(**bad)
+            VerifyConfig(**bad)
 
 
 def _wedged_box_task():

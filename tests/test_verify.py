@@ -23,7 +23,7 @@ W, H = SCENE.workspace
 def collide(task: ManipulationTask, q_from: np.ndarray, pushes_local: np.ndarray) -> bool:
     """Alg. 1's ``Collide`` for one proposal, checked in the world frame at ``q_from``."""
     r = task.robot_radius
-    if np.any(signed_distance(task.shape, pushes_local[:, 0]) < r - task.config.contact_tolerance):
+    if np.any(signed_distance(task.shape, pushes_local[:, 0]) < r - task.config.verify.contact_tolerance):
         return True
     dense = densify(se2.transform_points(q_from, pushes_local), MAX_STEP / 2)
     if not np.all(task.static_space.is_free(dense.reshape(-1, 2))):

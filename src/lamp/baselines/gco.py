@@ -94,7 +94,7 @@ class GCoPlanner:
                 return Plan.failed(PlanStatus.TIME_LIMIT, limit="deadline")
             return Plan.failed(PlanStatus.NO_PATH)
         motion = se2.relative(q_O, q_to)
-        budget = min(self.verifier.n_robots, self.config.max_budget)
+        budget = min(self.verifier.n_robots, self.config.verify.max_budget)
         seed = (self.seed * 7919 + self.iteration) % (2**31 - 1)
         # one fresh sample, no Collide
         pushes_local = self.verifier.proposals.sample(motion, budget, seed)

@@ -71,18 +71,11 @@ def _package_versions() -> dict[str, str]:
 
 def planner_limits(planners: list[str], planning_limit: float) -> dict[str, float]:
     """The cumulative planning limit per object each planner runs under."""
-    out = {}
-    for p in planners:
-        if planning_limit_applies(p):
-            out[p] = planning_limit
-            continue
-        try:
-            from lamp.planners.run import default_config
+    from lamp.pipeline import registry
 
-            out[p] = float(default_config(p).planning_time_limit)
-        except Exception:  # planners unavailable: leave it out rather than guess
-            continue
-    return out
+    return {p: planning_limit if planning_limit_applies(p)
+            else float(registry.get(p).default_config().loop.planning_time_limit)
+            for p in planners}
 
 
 def code_version(out: Path) -> tuple[str | None, bool | None]:

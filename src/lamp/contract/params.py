@@ -5,7 +5,10 @@ A parameter set is a frozen dataclass whose fields are declared with :func:`para
 default, one line of documentation and the range of valid values. :func:`check_fields`
 validates every field of such an instance (call it from ``__post_init__``); a planner names
 the fields it reads (``PlannerSpec.params``), and :func:`apply_overrides` sets some of them
-from ``NAME=VALUE`` text, refusing a name the planner does not read.
+from ``NAME=VALUE`` text, refusing a name the planner does not read. A set may also be
+made of groups, each a parameter set of its own owner (fields declared with
+:func:`group`): its parameters are its groups', by their names (unique across groups),
+read with :func:`value_of` and set with :func:`replaced`.
 
 Guarantees (tested): every declared field is validated on construction (an
 :class:`~lamp.errors.InputError` naming the class, the field, the rule and the value);
@@ -23,10 +26,11 @@ from typing import Any
 
 from lamp.errors import InputError
 
-__all__ = ["ParamInfo", "apply_overrides", "check_fields", "format_value", "param",
-           "param_table", "parse_assignments", "parse_value"]
+__all__ = ["ParamInfo", "apply_overrides", "check_fields", "format_value", "group", "param",
+           "param_table", "parse_assignments", "parse_value", "replaced", "value_of"]
 
 _KEY = "lamp.param"
+_GROUP = "lamp.param-group"
 
 
 @dataclass(frozen=True)
@@ -79,14 +83,58 @@ def param(default: Any, doc: str, *, kind: type | None = None, low: float | None
     return dataclasses.field(default=default, metadata={_KEY: info})
 
 
+def group(cls: type) -> Any:
+    """A dataclass field holding a group of parameters: an instance of the parameter-set
+    class ``cls`` (default: its defaults)."""
+    return dataclasses.field(default_factory=cls, metadata={_GROUP: cls})
+
+
+def _owners(cls_or_obj: Any) -> dict[str, str | None]:
+    """Each declared parameter's group field (None: declared on the set itself)."""
+    out: dict[str, str | None] = {}
+    for f in dataclasses.fields(cls_or_obj):
+        if _KEY in f.metadata:
+            out[f.name] = None
+        elif _GROUP in f.metadata:
+            for name in infos(f.metadata[_GROUP]):
+                if name in out:
+                    raise TypeError(f"parameter {name!r} declared twice")
+                out[name] = f.name
+    return out
+
+
 def infos(cls_or_obj: Any) -> dict[str, ParamInfo]:
-    """The declared parameters of a parameter-set class (or instance), in field order."""
+    """The declared parameters of a parameter-set class (or instance), in field order,
+    those of its groups included."""
     out = {}
     for f in dataclasses.fields(cls_or_obj):
         meta = f.metadata.get(_KEY)
         if meta is not None:
             out[f.name] = ParamInfo(f.name, default=f.default, **meta)
+        elif _GROUP in f.metadata:
+            out.update(infos(f.metadata[_GROUP]))
     return out
+
+
+def value_of(params: Any, name: str) -> Any:
+    """The value of parameter ``name`` of ``params`` (in its group, if it has one)."""
+    owner = _owners(params)[name]
+    return getattr(params if owner is None else getattr(params, owner), name)
+
+
+def replaced(params: Any, **changes: Any) -> Any:
+    """``params`` with ``changes`` (parameter name -> value) applied, each in the group
+    that declares it; validated like a new set (``InputError``); ``TypeError`` for a
+    name it does not declare."""
+    owners = _owners(params)
+    unknown = [n for n in changes if n not in owners]
+    if unknown:
+        raise TypeError(f"{type(params).__name__}: no parameter {', '.join(unknown)}")
+    own = {n: v for n, v in changes.items() if owners[n] is None}
+    for g in dict.fromkeys(o for n in changes if (o := owners[n]) is not None):
+        own[g] = dataclasses.replace(getattr(params, g), **{
+            n: v for n, v in changes.items() if owners[n] == g})
+    return dataclasses.replace(params, **own) if own else params
 
 
 def check_fields(obj: Any) -> None:
@@ -144,11 +192,11 @@ def apply_overrides(params: Any, declared: Iterable[str], overrides: Mapping[str
         info = table[name]
         changes[name] = (parse_value(info, value, owner) if isinstance(value, str)
                          else info.check(owner, value))
-    return dataclasses.replace(params, **changes) if changes else params
+    return replaced(params, **changes) if changes else params
 
 
 def param_table(params: Any, declared: Iterable[str]) -> list[tuple[str, str, str, str]]:
     """(name, value, rule, doc) of each declared parameter, for ``--help-params``."""
     table = infos(params)
-    return [(n, format_value(getattr(params, n)), table[n].rule(), table[n].doc)
+    return [(n, format_value(value_of(params, n)), table[n].rule(), table[n].doc)
             for n in declared]

@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import replace
 from typing import Protocol
 
 import numpy as np
@@ -106,8 +105,8 @@ def object_main(runner: ClosedLoopRunner, observe: Callable[[SegmentEvent], None
         seed = runner.seed * 1000 + k  # the object's tasks' seed (``ClosedLoopRunner.loop``)
         series = LoopSeries.of(scene, k, fleet.executor.object_poses[k], cfg, planning=True)
         while True:
-            config = replace(series.config(cfg), space_cache_mb=max(MIN_SPACE_CACHE_MB, min(
-                cfg.space_cache_mb, SPACE_CACHE_MB / max(1, fleet.moving()))))
+            config = series.config(cfg).but(space_cache_mb=max(MIN_SPACE_CACHE_MB, min(
+                cfg.loop.space_cache_mb, SPACE_CACHE_MB / max(1, fleet.moving()))))
             while not fleet.team_of(k):  # its robots went to another object
                 fleet.wait_for_team(k)
             view = fleet.view(k)
@@ -124,7 +123,7 @@ def object_main(runner: ClosedLoopRunner, observe: Callable[[SegmentEvent], None
             scene_k = world() if detour is None else with_goal(world(), k, detour)
             fleet.world_taken(k)
             if detour is not None:  # a place to stand aside: any heading will do
-                config = replace(config, stop_orientation=math.pi)
+                config = config.but(stop_orientation=math.pi)
             last = series.add(runner.loop(scene_k, k, view, config, observe, view.hooks))
             ended = last.end not in (LoopEnd.WORLD_CHANGED, LoopEnd.TEAM_CHANGED)
             if ended and detour is not None:  # aside (or no way there): on to its goal

@@ -37,7 +37,7 @@ __all__ = ["OBJECT_MARGIN", "ROBOT_MARGIN", "STATIC_SLACK", "claim", "claims",
 #: Clearance (m) each moving robot keeps from another sub-team's space (half the gap).
 ROBOT_MARGIN = 0.01
 #: Clearance (m) around a moving object's planned footprints: the drift it may execute
-#: with before its loop replans (``PlannerConfig.drift_position`` is 0.05).
+#: with before its loop replans (``LoopConfig.drift_position`` is 0.05).
 OBJECT_MARGIN = 0.05
 #: A standing body is shrunk by this (m) before it is tested against a planned segment.
 STATIC_SLACK = 0.003

@@ -25,6 +25,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Protocol
 
+from lamp.contract.params import infos
 from lamp.contract.plan import LoopPolicy, ObjectPlanner
 from lamp.errors import InputError
 from lamp.planners.config import (
@@ -113,7 +114,7 @@ class PlannerSpec:
                 and limit < float("inf")):
             raise ValueError(f"planner {name!r}: planning_limit: positive seconds, got {limit!r}")
         object.__setattr__(self, "planning_limit", float(limit))
-        known = PlannerConfig.__dataclass_fields__
+        known = infos(PlannerConfig)
         unknown = [p for p in self.params if p not in known]
         if unknown:
             raise ValueError(f"planner {name!r}: params: not PlannerConfig fields: "
@@ -127,7 +128,7 @@ class PlannerSpec:
 
     def default_config(self) -> PlannerConfig:
         """The planner's defaults: ``PlannerConfig`` with its own planning limit."""
-        return PlannerConfig(planning_time_limit=self.planning_limit)
+        return PlannerConfig.of(planning_time_limit=self.planning_limit)
 
 
 _SPECS: dict[str, PlannerSpec] = {}

@@ -20,7 +20,7 @@ from typing import Any
 
 import lamp.pipeline.registry as registry
 from lamp.contract.disturb import NO_DISTURBANCE, Disturbances
-from lamp.contract.params import apply_overrides, format_value, param_table
+from lamp.contract.params import apply_overrides, format_value, param_table, value_of
 from lamp.errors import InputError
 from lamp.fleet.config import PARAMS as FLEET_PARAMS
 from lamp.fleet.config import PREFIX, FleetConfig, split_overrides
@@ -131,18 +131,18 @@ class RunRequest:
                 and "sensing_sigma" not in dict(params or {})):
             shortcuts["sensing_sigma"] = disturbances.sensing_noise
         if shortcuts:
-            config = dataclasses.replace(config, **shortcuts)  # validated: InputError
+            config = config.but(**shortcuts)  # validated: InputError
         return cls(scene, planner, seed, model, config, disturbances, fleet)
 
     def param_values(self) -> dict[str, Any]:
         """The planner's declared parameters and their values (result.json's ``params``),
         the fleet's settings after them for a closed-loop planner."""
-        own = {n: getattr(self.params, n) for n in self.spec.params}
+        own = {n: value_of(self.params, n) for n in self.spec.params}
         return {**own, **self.fleet.values()} if self.spec.closed_loop else own
 
     def describe(self) -> str:
         """One line: planner, seed, model and the parameters that differ from the defaults."""
-        default = {**{n: getattr(self.spec.default_config(), n) for n in self.spec.params},
+        default = {**{n: value_of(self.spec.default_config(), n) for n in self.spec.params},
                    **FleetConfig().values()}
         changed = [f"{n}={format_value(v)}" for n, v in self.param_values().items()
                    if v != default[n]]

@@ -89,7 +89,7 @@ TEAM_CHANGED = "a robot failed"
 #: ``failure_reason`` of a loop that ended with ``LoopEnd.WORLD_CHANGED``.
 WORLD_CHANGED = "the world changed around the plan"
 #: Drift and stall tests keep this many standard deviations of the averaged reading above
-#: the sensor's noise (``PlannerConfig.sensing_sigma``).
+#: the sensor's noise (``LoopConfig.sensing_sigma``).
 NOISE_SIGMAS = 3.0
 #: Before the loop stops at the goal under a noisy sensor it takes a closer look: this
 #: many times ``sensing_readings`` fresh readings, whose mean must be within the stop
@@ -168,7 +168,7 @@ class ClosedLoop:
         self.config = config
         self.reroute = reroute
         self.record = LoopRecord() if record is None else record
-        self.limit = config.planning_time_limit
+        self.limit = config.loop.planning_time_limit
         self.observer = observer
 
     def run(self) -> ObjectResult:
@@ -176,11 +176,11 @@ class ClosedLoop:
         cfg, goal = self.config, self.goal
         st = _Progress(np.asarray(self.executor.object_poses[self.index], float),
                        np.asarray(self.executor.robot_positions, float))
-        max_segments = segment_limit(cfg.max_segments, lambda: float(np.hypot(
+        max_segments = segment_limit(cfg.loop.max_segments, lambda: float(np.hypot(
             *(goal[:2] - st.q_O[:2]))) if self.route is None else self.route(st.q_O))
         while st.iterations < max_segments:
-            if within_goal(st.q_O, goal, cfg.stop_position, cfg.stop_orientation):
-                if not cfg.sensing_sigma or st.confirmed == st.segments:
+            if within_goal(st.q_O, goal, cfg.loop.stop_position, cfg.loop.stop_orientation):
+                if not cfg.loop.sensing_sigma or st.confirmed == st.segments:
                     break
                 st.q_O, st.confirmed = self._closer_look(), st.segments
                 continue
@@ -267,9 +267,9 @@ class ClosedLoop:
         with them."""
         cfg = self.config
         chain = [adapted]
-        if cfg.long_push_length > 0:  # one approach, then every push that continues it
-            chain = take_long_push(adapted, st.pending, cfg.continuous_push_gap,
-                                   cfg.long_push_length, cfg.long_push_turn)
+        if cfg.loop.long_push_length > 0:  # one approach, then every push that continues it
+            chain = take_long_push(adapted, st.pending, cfg.loop.continuous_push_gap,
+                                   cfg.loop.long_push_length, cfg.loop.long_push_turn)
             adapted = merge(chain)
         paths = adapted.robot_paths
         self.hooks.announce(np.array([chain[0].q_from, *[t.q_to for t in chain]], dtype=float),
@@ -356,20 +356,20 @@ class ClosedLoop:
     def _reading_sigma(self) -> float:
         """The position noise of one observation after averaging (0 for an exact sensor)."""
         cfg = self.config
-        return cfg.sensing_sigma / np.sqrt(cfg.sensing_readings) if cfg.sensing_sigma else 0.0
+        return cfg.loop.sensing_sigma / np.sqrt(cfg.loop.sensing_readings) if cfg.loop.sensing_sigma else 0.0
 
     def _read_pose(self, out: Execution) -> np.ndarray:
         """The object's observed pose after a segment: the execution's reading, averaged
         with ``sensing_readings - 1`` more of the settled object when the sensor is noisy."""
         first = np.asarray(out.object_poses[self.index], float)
-        if not self.config.sensing_sigma or self.config.sensing_readings <= 1:
+        if not self.config.loop.sensing_sigma or self.config.loop.sensing_readings <= 1:
             return first
-        return self._mean_reading([first], self.config.sensing_readings - 1)
+        return self._mean_reading([first], self.config.loop.sensing_readings - 1)
 
     def _closer_look(self) -> np.ndarray:
         """The settled object's pose from ``CONFIRM_FACTOR * sensing_readings`` fresh
         readings (the loop is about to stop on a noisy sensor's word)."""
-        return self._mean_reading([], CONFIRM_FACTOR * self.config.sensing_readings)
+        return self._mean_reading([], CONFIRM_FACTOR * self.config.loop.sensing_readings)
 
     def _mean_reading(self, reads: list[np.ndarray], more: int) -> np.ndarray:
         """The mean pose of ``reads`` and ``more`` fresh readings (circular in heading)."""
@@ -415,9 +415,9 @@ def drift_limits(cfg: PlannerConfig, clearance: float | None, reach: float
     least ``TIGHT_DRIFT_FLOOR``). Entering a corridor 2 cm wider than the object a few
     degrees askew jams it; replanning from the askew pose first realigns it."""
     if clearance is None or not reach > 0:
-        return cfg.drift_position, cfg.drift_orientation
+        return cfg.loop.drift_position, cfg.loop.drift_orientation
     allowed = max(TIGHT_DRIFT_FLOOR, TIGHT_DRIFT_FRACTION * float(clearance))
-    return min(cfg.drift_position, allowed), min(cfg.drift_orientation, allowed / reach)
+    return min(cfg.loop.drift_position, allowed), min(cfg.loop.drift_orientation, allowed / reach)
 
 
 def run_object(task: ManipulationTask, planner: ObjectPlanner, policy: LoopPolicy, sim: Executor,
@@ -436,5 +436,5 @@ def run_object(task: ManipulationTask, planner: ObjectPlanner, policy: LoopPolic
                       reroute=task.verifier.reroute, record=record, observer=observer,
                       clearance=exact.clearance, reach=exact.reach,
                       route=lambda q: route_distance(task.scene, task.index, q,
-                                                     task.config.lattice_step), hooks=hooks)
+                                                     task.config.lattice.lattice_step), hooks=hooks)
     return loop.run()

@@ -7,13 +7,10 @@ import math
 import sys
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Literal
+from typing import Any
 
-from lamp.contract.params import check_fields, param
+from lamp.contract.params import check_fields, group, infos, param, replaced
 
-#: The names of the built-in planners (``lamp run --planner``, ``lamp.solve``); the
-#: registry (``lamp.pipeline.registry``) holds what each one is.
-PlannerName = Literal["lazy", "astar", "astar-replan", "gco-ori", "gco-var", "mapush"]
 #: Cumulative planning limit per object (s) of a planner that does not set its own
 #: (``PlannerSpec.planning_limit``; LAMP-A* keeps the paper's 500 s).
 DEFAULT_PLANNING_LIMIT = 300.0
@@ -62,25 +59,18 @@ def segment_limit(max_segments: int | None, distance: float | Callable[[], float
 
 
 @dataclass(frozen=True)
-class PlannerConfig:
-    """The parameters of LAMP-Lazy, LAMP-A*, the GCo baselines and the closed loop, each
-    declared with its documentation and valid range (``lamp.contract.params``; validated on
-    construction). Which planner reads which is declared in the planner registry
-    (``PlannerSpec.params``; the groups below): ``lamp run --planner P --help-params``
-    lists them, ``--param P.NAME=VALUE`` sets them."""
+class LoopConfig:
+    """The closed loop's parameters (Alg. 2): limits, drift, stopping, long pushes, sensing."""
 
-    k: int = param(16, "Candidates drawn per call: "
-                   "K of the manipulation model in Alg. 1 line 20.", low=1)
-    max_budget: int = param(3, "Largest robot budget tried by Verify (budgets run from "
-                            "min(N, this) down to 1).", low=1)
-    gspi_attempts_per_budget: int = param(3, "Candidates per budget handed to Gspi before a "
-                                          "smaller budget is tried.", low=1)
-    #: An outer cap only: Gspi stops on counts first (its step budget and stall count,
-    #: ``lamp.mrmp.plan_paths``), so the result does not depend on the machine's load; the
-    #: cap fires only on a machine some 10x slower than the one this was tuned on
-    #: (``TaskStats.gspi_timeouts`` counts the calls it ended).
-    gspi_time_limit: float = param(10.0, "Wall-clock cap of one Gspi call inside Verify (s), "
-                                   "an outer cap only.", low=0.0, low_open=True, unbounded=True)
+    #: Wall clock, so an outer cap: the counts (plan iterations, Verify calls, expansions)
+    #: end a search first on an unloaded machine.
+    planning_time_limit: float = param(500.0, "Cumulative planning limit per object (s), an "
+                                       "outer cap (the paper's 500 s for LAMP-A*).",
+                                       low=0.0, low_open=True, unbounded=True)
+    max_segments: int | None = param(None, "Executed segments allowed per object; none "
+                                     "scales the limit with the task (segment_limit); the "
+                                     "paper benchmark sets 100.", kind=int, low=1,
+                                     optional=True)
     drift_position: float = param(0.05, "Position drift that triggers replanning (m): "
                                   "Drift in Alg. 2 line 6.", low=0.0, low_open=True)
     drift_orientation: float = param(0.1, "Execution drift that triggers replanning, "
@@ -90,10 +80,6 @@ class PlannerConfig:
                                  low=0.0, low_open=True)
     stop_orientation: float = param(0.07, "The loop stops pushing this close to the goal "
                                     "heading (rad).", low=0.0, low_open=True)
-    max_segments: int | None = param(None, "Executed segments allowed per object; none "
-                                     "scales the limit with the task (segment_limit); the "
-                                     "paper benchmark sets 100.", kind=int, low=1,
-                                     optional=True)
     #: Long pushes (``lamp.planners.long_push``): consecutive transitions whose approach
     #: moves no robot more than ``continuous_push_gap`` (m) execute as one segment, up to
     #: ``long_push_length`` m of planned object motion; 0 executes every transition alone.
@@ -107,11 +93,86 @@ class PlannerConfig:
                                   "most (rad, summed over its parts).", low=0.0)
     continuous_push_gap: float = param(0.02, "Approach moves up to this (m) continue a long "
                                        "push.", low=0.0)
+    #: What the loop knows of its object sensor: a noisy reading moves the observed pose
+    #: without the object moving, so drift and stall tests keep above the noise (a loop
+    #: that replans on noise alone thrashes). The pipeline sets it from the run's
+    #: ``--sensing-noise`` unless given.
+    sensing_sigma: float = param(0.0, "Standard deviation of the object sensor (m; heading "
+                                 "sigma / 0.2 rad); drift below 3 sigma of the averaged "
+                                 "reading is not drift.", low=0.0)
+    sensing_readings: int = param(4, "Readings of a settled object averaged after each "
+                                  "segment when sensing_sigma > 0.", low=1)
+    #: Memory, not results: an evicted space is rebuilt the same. The fleet schedule
+    #: shares ``lamp.fleet.config.SPACE_CACHE_MB`` among the objects moving at once.
+    space_cache_mb: float = param(96.0, "Robot configuration spaces (MB) one object's task "
+                                  "keeps cached; a speed / memory trade, the results do "
+                                  "not depend on it.", low=1.0)
+
+    def __post_init__(self) -> None:
+        check_fields(self)
+
+
+@dataclass(frozen=True)
+class VerifyConfig:
+    """Verify's parameters: candidates drawn, budgets, Gspi, contact tolerance."""
+
+    k: int = param(16, "Candidates drawn per call: "
+                   "K of the manipulation model in Alg. 1 line 20.", low=1)
+    max_budget: int = param(3, "Largest robot budget tried by Verify (budgets run from "
+                            "min(N, this) down to 1).", low=1)
+    gspi_attempts_per_budget: int = param(3, "Candidates per budget handed to Gspi before a "
+                                          "smaller budget is tried.", low=1)
+    #: An outer cap only: Gspi stops on counts first (its step budget and stall count,
+    #: ``lamp.mrmp.plan_paths``), so the result does not depend on the machine's load; the
+    #: cap fires only on a machine some 10x slower than the one this was tuned on
+    #: (``TaskStats.gspi_timeouts`` counts the calls it ended).
+    gspi_time_limit: float = param(10.0, "Wall-clock cap of one Gspi call inside Verify (s), "
+                                   "an outer cap only.", low=0.0, low_open=True, unbounded=True)
+    contact_tolerance: float = param(0.006, "How far inside the nominal contact distance a "
+                                     "contact may lie (m).", low=0.0)
+
+    def __post_init__(self) -> None:
+        check_fields(self)
+
+
+@dataclass(frozen=True)
+class LatticeConfig:
+    """The object lattice's parameters: its steps and how robot configurations match."""
+
     lattice_step: float = param(0.1, "Object lattice translation step (m).", low=0.0,
                                 low_open=True)
     n_headings: int = param(16, "Object lattice heading bins.", low=1)
+    robot_match_tolerance: float = param(0.05, "Robot configurations closer than this (m, "
+                                         "per robot) count as the same (D_T keys).",
+                                         low=0.0, low_open=True)
+
+    def __post_init__(self) -> None:
+        check_fields(self)
+
+
+@dataclass(frozen=True)
+class LazyConfig:
+    """LAMP-Lazy's own parameters (Alg. 2's D* Lite search)."""
+
     edge_penalty: float = param(10.0, "Cost added to an edge whose verification failed: "
                                 "UpdateChange in Alg. 2 lines 18 and 31.", low=0.0)
+    max_plan_iterations: int = param(400, "Most D* Lite replans inside one LAMP-Lazy Plan "
+                                     "call.", low=1)
+    max_verify_calls: int = param(4000, "Most Verify calls in one LAMP-Lazy Plan call.", low=1)
+    lazy_max_expansions: int | None = param(None, "Most D* Lite expansions LAMP-Lazy makes "
+                                            "per object, over all its plan calls; none: "
+                                            "LAZY_EXPANSION_RATE per second of "
+                                            "planning_time_limit.", kind=int, low=1,
+                                            optional=True)
+
+    def __post_init__(self) -> None:
+        check_fields(self)
+
+
+@dataclass(frozen=True)
+class AStarConfig:
+    """LAMP-A*'s own parameters (Alg. 1)."""
+
     astar_reinsert_penalty: float = param(1e4, "Penalty of a LAMP-A* state put back in Open: "
                                           "Open.re-add in Alg. 1 line 16 (the paper's 1e4).",
                                           low=0.0)
@@ -133,71 +194,64 @@ class PlannerConfig:
                                              "ASTAR_EXPANSION_RATE per second of "
                                              "planning_time_limit.", kind=int, low=1,
                                              optional=True)
-    lazy_max_expansions: int | None = param(None, "Most D* Lite expansions LAMP-Lazy makes "
-                                            "per object, over all its plan calls; none: "
-                                            "LAZY_EXPANSION_RATE per second of "
-                                            "planning_time_limit.", kind=int, low=1,
-                                            optional=True)
-    #: Wall clock, so an outer cap: the counts (plan iterations, Verify calls, expansions)
-    #: end a search first on an unloaded machine.
-    planning_time_limit: float = param(500.0, "Cumulative planning limit per object (s), an "
-                                       "outer cap (the paper's 500 s for LAMP-A*).",
-                                       low=0.0, low_open=True, unbounded=True)
-    robot_match_tolerance: float = param(0.05, "Robot configurations closer than this (m, "
-                                         "per robot) count as the same (D_T keys).",
-                                         low=0.0, low_open=True)
-    contact_tolerance: float = param(0.006, "How far inside the nominal contact distance a "
-                                     "contact may lie (m).", low=0.0)
-    max_plan_iterations: int = param(400, "Most D* Lite replans inside one LAMP-Lazy Plan "
-                                     "call.", low=1)
-    max_verify_calls: int = param(4000, "Most Verify calls in one LAMP-Lazy Plan call.", low=1)
-    #: What the loop knows of its object sensor: a noisy reading moves the observed pose
-    #: without the object moving, so drift and stall tests keep above the noise (a loop
-    #: that replans on noise alone thrashes). The pipeline sets it from the run's
-    #: ``--sensing-noise`` unless given.
-    sensing_sigma: float = param(0.0, "Standard deviation of the object sensor (m; heading "
-                                 "sigma / 0.2 rad); drift below 3 sigma of the averaged "
-                                 "reading is not drift.", low=0.0)
-    sensing_readings: int = param(4, "Readings of a settled object averaged after each "
-                                  "segment when sensing_sigma > 0.", low=1)
-    #: Memory, not results: an evicted space is rebuilt the same. The fleet schedule
-    #: shares ``lamp.fleet.config.SPACE_CACHE_MB`` among the objects moving at once.
-    space_cache_mb: float = param(96.0, "Robot configuration spaces (MB) one object's task "
-                                  "keeps cached; a speed / memory trade, the results do "
-                                  "not depend on it.", low=1.0)
 
     def __post_init__(self) -> None:
         check_fields(self)
 
+
+@dataclass(frozen=True)
+class PlannerConfig:
+    """The parameters of LAMP-Lazy, LAMP-A*, the GCo baselines and the closed loop, in the
+    groups their owners read: ``loop`` (the closed loop), ``verify`` (Verify), ``lattice``
+    (the object lattice), ``lazy`` (LAMP-Lazy's search) and ``astar`` (LAMP-A*'s). Each
+    parameter is declared once, with its documentation and valid range
+    (``lamp.contract.params``; validated on construction), and named by itself: which
+    planner reads which is declared in the planner registry (``PlannerSpec.params``);
+    ``lamp run --planner P --help-params`` lists them, ``--param P.NAME=VALUE`` sets them,
+    :meth:`of` and :meth:`but` build sets by name."""
+
+    loop: LoopConfig = group(LoopConfig)
+    verify: VerifyConfig = group(VerifyConfig)
+    lattice: LatticeConfig = group(LatticeConfig)
+    lazy: LazyConfig = group(LazyConfig)
+    astar: AStarConfig = group(AStarConfig)
+
+    @classmethod
+    def of(cls, **values: Any) -> PlannerConfig:
+        """The defaults with ``values`` (parameter name -> value) set, each in its group."""
+        return replaced(cls(), **values)
+
+    def but(self, **values: Any) -> PlannerConfig:
+        """This set with ``values`` (parameter name -> value) set, each in its group."""
+        return replaced(self, **values)
+
     @property
     def astar_expansions(self) -> int:
-        """LAMP-A*'s expansion budget per object (``astar_max_expansions`` or its default)."""
-        if self.astar_max_expansions is not None:
-            return self.astar_max_expansions
-        if not math.isfinite(self.planning_time_limit):
-            return sys.maxsize
-        return max(1, round(ASTAR_EXPANSION_RATE * self.planning_time_limit))
+        """LAMP-A*'s expansion budget per object (``astar_max_expansions`` or its default:
+        ``ASTAR_EXPANSION_RATE`` per second of the loop's planning limit)."""
+        return _budget(self.astar.astar_max_expansions, ASTAR_EXPANSION_RATE,
+                       self.loop.planning_time_limit)
 
     @property
     def lazy_expansions(self) -> int:
         """LAMP-Lazy's D* Lite expansion budget per object (``lazy_max_expansions`` or its
-        default)."""
-        if self.lazy_max_expansions is not None:
-            return self.lazy_max_expansions
-        if not math.isfinite(self.planning_time_limit):
-            return sys.maxsize
-        return max(1, round(LAZY_EXPANSION_RATE * self.planning_time_limit))
+        default: ``LAZY_EXPANSION_RATE`` per second of the loop's planning limit)."""
+        return _budget(self.lazy.lazy_max_expansions, LAZY_EXPANSION_RATE,
+                       self.loop.planning_time_limit)
 
 
-#: Which parameters each consumer reads; a planner declares the union of its groups
-#: (``PlannerSpec.params``).
-LOOP_PARAMS = ("planning_time_limit", "max_segments", "drift_position", "drift_orientation",
-               "stop_position", "stop_orientation", "long_push_length", "long_push_turn",
-               "continuous_push_gap",
-               "sensing_sigma", "sensing_readings", "space_cache_mb")
-VERIFY_PARAMS = ("k", "max_budget", "gspi_attempts_per_budget", "gspi_time_limit",
-                 "contact_tolerance")
-LATTICE_PARAMS = ("lattice_step", "n_headings", "robot_match_tolerance")
-LAZY_PARAMS = ("edge_penalty", "max_plan_iterations", "max_verify_calls", "lazy_max_expansions")
-ASTAR_PARAMS = ("astar_reinsert_penalty", "astar_heuristic_weight", "astar_states_per_node",
-                "astar_max_expansions")
+def _budget(given: int | None, rate: float, seconds: float) -> int:
+    if given is not None:
+        return given
+    if not math.isfinite(seconds):
+        return sys.maxsize
+    return max(1, round(rate * seconds))
+
+
+#: Which parameters each consumer reads (its group's); a planner declares the union of
+#: the groups it reads (``PlannerSpec.params``).
+LOOP_PARAMS = tuple(infos(LoopConfig))
+VERIFY_PARAMS = tuple(infos(VerifyConfig))
+LATTICE_PARAMS = tuple(infos(LatticeConfig))
+LAZY_PARAMS = tuple(infos(LazyConfig))
+ASTAR_PARAMS = tuple(infos(AStarConfig))

@@ -72,7 +72,7 @@ class LampAStar:
     def _robot_key(self, q_R: np.ndarray) -> tuple:
         """Explored-state key for robots: positions on a ``robot_match_tolerance`` grid, sorted
         (robots are anonymous, so permutations of one configuration are the same state)."""
-        return robot_state_key(q_R, self.config.robot_match_tolerance)
+        return robot_state_key(q_R, self.config.lattice.robot_match_tolerance)
 
     def _successors(self, state: SearchState) -> list[tuple[object, np.ndarray]]:
         if not self.lattice.is_node(state.node):  # the continuous start joins the lattice
@@ -83,7 +83,7 @@ class LampAStar:
 
     def _h(self, state: SearchState) -> float:
         """Weighted object-only cost to the goal from the state's node (``inf``: no way)."""
-        w = self.config.astar_heuristic_weight
+        w = self.config.astar.astar_heuristic_weight
         if self.lattice.is_node(state.node):
             return w * self.to_goal.distance(state.node)
         return w * min((c + self.to_goal.distance(v) for v, c in self._start_edges), default=math.inf)
@@ -119,7 +119,7 @@ class LampAStar:
         penalty: dict[int, float] = {}
         explored: dict[tuple, SearchState] = {(start_node, self._robot_key(start.q_R)): start}
         per_node: dict[object, int] = {}
-        cap = cfg.astar_states_per_node
+        cap = cfg.astar.astar_states_per_node
         budget = cfg.astar_expansions
         while open_list:  # line 3: until the time limit is reached
             if deadline is not None and time.perf_counter() > deadline:
@@ -152,7 +152,7 @@ class LampAStar:
                     explored[key] = child
                     heapq.heappush(open_list, (child.cost + h, -child.cost, next(tie), child))
             s.expansions += 1  # line 16: Open.re-add with a penalty
-            penalty[id(s)] = cfg.astar_reinsert_penalty * s.expansions
+            penalty[id(s)] = cfg.astar.astar_reinsert_penalty * s.expansions
             heapq.heappush(open_list, (s.cost + self._h(s) + penalty[id(s)], -s.cost, next(tie), s))
         return Plan.failed(PlanStatus.NO_PATH)
 

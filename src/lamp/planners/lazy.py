@@ -79,7 +79,7 @@ def goal_lattice(task: ManipulationTask) -> ObjectLattice:
     start as the heuristic's landmark."""
     cfg = task.config
     return RefinedLattice(
-        task.object_space, task.goal, step=cfg.lattice_step, n_headings=cfg.n_headings,
+        task.object_space, task.goal, step=cfg.lattice.lattice_step, n_headings=cfg.lattice.n_headings,
         landmark=task.object_poses[task.index][:2], exact=task.exact_space,
     )
 
@@ -162,14 +162,14 @@ class LazyPlanner:
         for (u, v), n in self.failures.items():
             if self.lattice.is_node(u):
                 with contextlib.suppress(ValueError):
-                    self.dstar.penalize(u, v, n * self.config.edge_penalty)
+                    self.dstar.penalize(u, v, n * self.config.lazy.edge_penalty)
         return True
 
     def _penalise(self, u: Node, v: Node) -> None:
         """``UpdateChange`` (lines 18 and 31): raise the cost of an edge whose verification failed."""
         n = self.failures.get((u, v), 0) + 1
         self.failures[(u, v)] = n
-        self.dstar.penalize(u, v, self.config.edge_penalty)
+        self.dstar.penalize(u, v, self.config.lazy.edge_penalty)
         self.penalised.append((self.lattice.pose(u)[:2].copy(), self.lattice.pose(v)[:2].copy()))
 
     def report_failure(self, trans: Transition) -> None:
@@ -202,7 +202,7 @@ class LazyPlanner:
         if self.plane.separated(q_O_now, self.lattice.pose(self.lattice.goal_node)):
             return self._recover(q_O_now, q_R_now, Plan.failed(PlanStatus.SEPARATED,
                                                                self.penalised))
-        verify_cap = stats.verify_calls + self.config.max_verify_calls
+        verify_cap = stats.verify_calls + self.config.lazy.max_verify_calls
         expanded_before = stats.search_expansions
         try:
             return self._plan(q_O_now, q_R_now, deadline, verify_cap)
@@ -216,7 +216,7 @@ class LazyPlanner:
         cfg = self.config
         goal = self.lattice.goal_node
         stats = self.verifier.stats
-        for iteration in range(cfg.max_plan_iterations):
+        for iteration in range(cfg.lazy.max_plan_iterations):
             if iteration == RECOVER_AFTER and self.calls > 1:  # a replan that keeps failing
                 rescue = self._recover(q_O_now, q_R_now, Plan.failed(PlanStatus.NO_PATH))
                 if rescue.solved:
@@ -289,7 +289,7 @@ class LazyPlanner:
         False when the chain is cut (a push forgotten below, or one the robots cannot
         reach from here, then forgotten and penalised): the caller plans again."""
         goal = self.lattice.goal_node
-        tol = self.config.robot_match_tolerance
+        tol = self.config.lattice.robot_match_tolerance
         walked: list[Node] = []
         while curr != goal:
             entry = self.tree_eval.get(curr)

@@ -3,12 +3,12 @@ one continuous push.
 
 A plan is a chain of verified transitions T_R = T_move (+) T_manip, one per lattice edge
 (0.1-0.3 m of object motion each). Where transition k+1 starts exactly where k ends and
-its approach T_move moves no robot more than ``PlannerConfig.continuous_push_gap`` (the
+its approach T_move moves no robot more than ``LoopConfig.continuous_push_gap`` (the
 same robots stay at the same contacts, up to centimetres), executing them one by one only
 adds a stop, a settle and a new "segment" between two pushes that are really one. The
 closed loop therefore executes such a run of transitions as a single segment: one
-approach, then the pushes back to back, up to ``PlannerConfig.long_push_length`` metres of
-planned object motion and ``PlannerConfig.long_push_turn`` radians of planned turn (bounds
+approach, then the pushes back to back, up to ``LoopConfig.long_push_length`` metres of
+planned object motion and ``LoopConfig.long_push_turn`` radians of planned turn (bounds
 on how long the loop goes without observing drift: a pure rotation moves the object's
 origin by nothing, so without the second bound a turn in place of any size ran unobserved;
 corridor-01, seed 2: three 0.39 rad turns in a bay ran as one push, the box slid instead

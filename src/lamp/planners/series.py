@@ -89,9 +89,9 @@ class LoopSeries:
         """The series for object ``index`` of ``scene`` standing at ``start``: the
         segment limit of ``config`` (``config.segment_limit``, scaled on the object's route
         when it sets none) and, with ``planning``, its planning time limit."""
-        limit = segment_limit(config.max_segments, lambda: route_distance(
-            scene, index, np.asarray(start, float), config.lattice_step))
-        return cls(limit, config.planning_time_limit if planning else None)
+        limit = segment_limit(config.loop.max_segments, lambda: route_distance(
+            scene, index, np.asarray(start, float), config.lattice.lattice_step))
+        return cls(limit, config.loop.planning_time_limit if planning else None)
 
     @property
     def segments(self) -> int:
@@ -108,8 +108,8 @@ class LoopSeries:
         limit, the planning time left (at least ``MIN_PLANNING_S``)."""
         left = max(1, self.segment_limit - self.segments)
         if self.planning_limit is None:
-            return replace(base, max_segments=left)
-        return replace(base, max_segments=left, planning_time_limit=max(
+            return base.but(max_segments=left)
+        return base.but(max_segments=left, planning_time_limit=max(
             MIN_PLANNING_S, self.planning_limit - self.planning_s))
 
     def add(self, outcome: ObjectOutcome) -> ObjectOutcome:

@@ -29,7 +29,7 @@ from lamp.geometry.robot_space import RobotSpace
 from lamp.planners.config import PlannerConfig
 from lamp.planners.robot_routing import GspiRouter
 from lamp.planners.task_stats import TaskStats
-from lamp.planners.verifier import Verifier, VerifierParams
+from lamp.planners.verifier import Verifier
 from lamp.scene.model import Scene, Shape
 from lamp.search.landmark import route_length
 
@@ -42,7 +42,7 @@ WINDOW_SNAP = 1.0
 WINDOW_MIN_SIDE = 4.0
 #: Largest window side (m) a failed approach may grow its window to.
 WINDOW_MAX_SIDE = 16.0
-#: Robot spaces kept per task: at most this many (and ``PlannerConfig.space_cache_mb``).
+#: Robot spaces kept per task: at most this many (and ``LoopConfig.space_cache_mb``).
 _SPACES_KEPT = 64
 
 
@@ -84,8 +84,8 @@ class ManipulationTask:
         self.verifier = Verifier(
             self.model, self.shape, self.scene.robot_radius, self.scene.n_robots, self,
             GspiRouter(self.scene, self.index, self.object_poses.copy(), seed=self.seed,
-                       goal_tolerance=self.config.contact_tolerance),
-            VerifierParams.from_config(self.config), seed=self.seed)
+                       goal_tolerance=self.config.verify.contact_tolerance),
+            self.config.verify, seed=self.seed)
 
     def close(self) -> None:
         """Let go of what this task holds once its loop has ended: its robot-space cache,
@@ -185,7 +185,7 @@ class ManipulationTask:
                                           window=window)
             self._spaces[key] = space
             total = sum(sp.nbytes for sp in self._spaces.values())
-            budget = self.config.space_cache_mb * 2**20
+            budget = self.config.loop.space_cache_mb * 2**20
             while len(self._spaces) > 1 and (len(self._spaces) > _SPACES_KEPT
                                              or total > budget):
                 _, old = self._spaces.popitem(last=False)

@@ -9,7 +9,7 @@ A :class:`Verifier` is built from three narrow pieces and a few numbers:
   a window of the map, and without the object around it;
 - a :class:`~lamp.planners.robot_routing.MultiRobotPlanner`: paths for all robots to
   goals in such a space (Gspi, ``GspiRouter``);
-- :class:`VerifierParams` (from ``PlannerConfig``).
+- its numbers: ``planners.config.VerifyConfig`` (``PlannerConfig.verify``).
 
 It owns its proposal cache and its counters (``lamp.planners.task_stats.TaskStats``).
 Planners hold a ``Verifier`` and never the task that built it (``ManipulationTask.verifier``).
@@ -31,7 +31,6 @@ from __future__ import annotations
 import time
 from collections import Counter
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -49,45 +48,18 @@ from lamp.planners.bystanders import (
     standing_on_goal,
 )
 from lamp.planners.collide import usable_mask
+from lamp.planners.config import VerifyConfig
 from lamp.planners.proposal_cache import ProposalCache
 from lamp.planners.robot_routing import MultiRobotPlanner, RobotValidity, Window
 from lamp.planners.task_stats import TaskStats
 from lamp.scene.model import Shape
 
-__all__ = ["Verifier", "VerifierParams", "assign_to_contacts", "push_paths"]
+__all__ = ["Verifier", "assign_to_contacts", "push_paths"]
 
 #: How far (m) the breadth-first search for a robot's waiting spot may go.
 WAIT_SEARCH_RADIUS = 1.0
 #: Multi-robot planner failures that a larger robot-space window may fix.
 _WINDOW_BOUND = frozenset({GspiStatus.UNREACHABLE, GspiStatus.STALLED, GspiStatus.STEP_BUDGET})
-
-
-@dataclass(frozen=True)
-class VerifierParams:
-    """The ``PlannerConfig`` numbers ``Verify`` reads. Validated: positive counts and times,
-    a non-negative tolerance (``ValueError`` naming the field)."""
-
-    k: int = 16
-    max_budget: int = 3
-    gspi_attempts_per_budget: int = 3
-    contact_tolerance: float = 0.006
-    gspi_time_limit: float = 10.0
-
-    def __post_init__(self) -> None:
-        for name in ("k", "max_budget", "gspi_attempts_per_budget"):
-            v = getattr(self, name)
-            if not (isinstance(v, int) and not isinstance(v, bool) and v >= 1):
-                raise ValueError(f"{name}: a positive integer, got {v!r}")
-        if not self.gspi_time_limit > 0:
-            raise ValueError(f"gspi_time_limit: positive seconds, got {self.gspi_time_limit!r}")
-        if not self.contact_tolerance >= 0:
-            raise ValueError(f"contact_tolerance: >= 0, got {self.contact_tolerance!r}")
-
-    @classmethod
-    def from_config(cls, cfg: Any) -> VerifierParams:
-        return cls(k=cfg.k, max_budget=cfg.max_budget,
-                   gspi_attempts_per_budget=cfg.gspi_attempts_per_budget,
-                   contact_tolerance=cfg.contact_tolerance, gspi_time_limit=cfg.gspi_time_limit)
 
 
 def assign_to_contacts(q_R: np.ndarray, contacts: np.ndarray) -> tuple[np.ndarray, float]:
@@ -115,7 +87,7 @@ class Verifier:
     proposal cache and counters (``stats``)."""
 
     def __init__(self, model: Any, shape: Shape, robot_radius: float, n_robots: int,
-                 robots: RobotValidity, route: MultiRobotPlanner, params: VerifierParams,
+                 robots: RobotValidity, route: MultiRobotPlanner, params: VerifyConfig,
                  seed: int = 0) -> None:
         self.shape = shape
         self.robot_radius = float(robot_radius)
