@@ -27,9 +27,19 @@ column our makespan is divided by, then in the modes of ``--tswap-modes`` after 
 makespan and sum of path lengths are converted to metres at one cell (``--cell``) per time
 step; its time is its own ``comp_time``; the adapter checks each TSWAP plan on the grid.
 
+With ``--parts``, a second line per instance says where the makespan goes: the last
+robot to arrive, its arrival split into its path length, its waits (rows in which it does
+not move before its last move) and its slow moves (rows in which it moves less than the
+row's longest move: a row lasts as long as its longest move), its exact lattice shortest
+distance and its straight line; the waits and slow moves of all robots as shares of their
+summed arrival times; each path against its lattice shortest path and its straight line
+(median and max ratio, robots starting within two lattice steps of their goal left out);
+and the longest lattice distance of the goals the robots end on beside ``B*``, the
+assignment's at the start (goal swaps change it).
+
 Run: ``python benchmarks/bench_fleet.py [--maps random-64-64-20] [--robots 100,200,400,800]
-[--seeds 3] [--tswap benchmarks/tswap/adapter.py --tswap-bin BUILD/app]``; ``--quick``:
-random-32-32-20 and random-64-64-20 at 100 and 400 robots, one seed.
+[--seeds 3] [--parts] [--tswap benchmarks/tswap/adapter.py --tswap-bin BUILD/app]``;
+``--quick``: random-32-32-20 and random-64-64-20 at 100 and 400 robots, one seed.
 """
 
 from __future__ import annotations
@@ -74,6 +84,45 @@ def plan_figures(paths: np.ndarray) -> tuple[float, float, float]:
     return float(step.max(axis=0).sum()), float(length.max()), float(length.sum())
 
 
+def makespan_parts(paths: np.ndarray) -> dict[str, np.ndarray]:
+    """Where each robot's time goes, from the synchronised rows: a row lasts as long as its
+    longest move (unit speed). Per robot, up to its last move (its arrival): ``length``
+    (its own moves), ``wait`` (rows it does not move in), ``slow`` (rows it moves in
+    less than the row's longest move: the difference). ``arrival = length + wait + slow``;
+    the makespan is the largest arrival."""
+    step = np.hypot(*np.diff(paths, axis=1).transpose(2, 0, 1))  # (N, T-1)
+    N = len(paths)
+    if step.size == 0:
+        z = np.zeros(N)
+        return {"length": z, "wait": z, "slow": z, "arrival": z}
+    dur = step.max(axis=0)
+    moving = step > 0
+    last = np.where(moving.any(axis=1), step.shape[1] - np.argmax(moving[:, ::-1], axis=1), 0)
+    before = np.arange(step.shape[1])[None, :] < last[:, None]
+    wait = np.where(before & ~moving, dur[None, :], 0.0).sum(axis=1)
+    slow = np.where(before & moving, dur[None, :] - step, 0.0).sum(axis=1)
+    length = step.sum(axis=1)
+    return {"length": length, "wait": wait, "slow": slow, "arrival": length + wait + slow}
+
+
+def lattice_distances(space: RobotSpace, plan, S: np.ndarray, G: np.ndarray) -> np.ndarray:
+    """Each robot's exact lattice distance from its start to the goal it ends on, on the
+    lattice the plan was found on (the planner's own links and lazy searches; nan for a
+    robot without a goal)."""
+    from lamp.mrmp.goal_distances import GoalDistances, hval
+    from lamp.mrmp.gspi import _link_special_vertices
+
+    L = plan.stats["attempts"][-1]["lattice_step"]
+    lat = get_lattice(space, L)
+    c_s = space.clearance(S, exact=True)
+    c_g = space.clearance(G, exact=True)
+    links = _link_special_vertices(space, lat, S, G, c_s, c_g, 1.5 * L, {})
+    N, M = len(S), len(G)
+    hs = GoalDistances.build(links.goal_links, G, lat, N + M)
+    return np.array([hval(int(g), lat.V + i, links.graph, lat.V, lat.V + N, hs) if g >= 0
+                     else np.nan for i, g in enumerate(plan.goal_of.tolist())])
+
+
 def cells_of(gm, pts: np.ndarray) -> np.ndarray:
     """(row, col) of cell centres, row 0 at the top of the map file."""
     H = gm.blocked.shape[0]
@@ -102,6 +151,32 @@ def run_tswap(adapter: str, map_path: Path, gm, S: np.ndarray, G: np.ndarray,
         return {"solved": False, "error": (out.stderr or out.stdout)[-200:]}
 
 
+def parts_line(plan, space: RobotSpace, S: np.ndarray, G: np.ndarray) -> str:
+    """Where the makespan goes (``--parts``): the last robot to arrive (its path length,
+    waits, slow moves and lattice shortest distance), all robots' summed waits and slow
+    moves as shares of their summed arrival times, and each path against its lattice
+    shortest path and its straight line (median and max of the ratios)."""
+    p = makespan_parts(plan.paths)
+    short = lattice_distances(space, plan, S, G)
+    held = plan.goal_of >= 0
+    line = np.hypot(*(S[held] - G[plan.goal_of[held]]).T)
+    L = plan.stats["attempts"][-1]["lattice_step"]
+    moved = held & (short > 2 * L)  # robots starting on or next to their goal left out
+    det = p["length"][moved] / short[moved]
+    straight = p["length"][held][line > 2 * L] / line[line > 2 * L]
+    c = int(np.argmax(p["arrival"]))
+    tot = p["arrival"].sum()
+    return (f"last robot: arrival {p['arrival'][c]:.2f} = path {p['length'][c]:.2f} + wait "
+            f"{p['wait'][c]:.2f} + slow {p['slow'][c]:.2f}, lattice shortest "
+            f"{short[c]:.2f}, straight {np.hypot(*(S[c] - G[plan.goal_of[c]])):.2f} | "
+            f"all: wait {p['wait'].sum() / tot:.0%}, slow {p['slow'].sum() / tot:.0%} of "
+            f"summed arrivals; path / lattice shortest median {np.median(det):.2f} max "
+            f"{det.max():.2f}; path / straight median {np.median(straight):.2f} max "
+            f"{straight.max():.2f}; robots arriving after 0.9 x makespan "
+            f"{int((p['arrival'] > 0.9 * p['arrival'].max()).sum())}; final goals' longest "
+            f"lattice distance {np.nanmax(short):.2f} (B* {plan.stats['assignment_bound']:.2f})")
+
+
 def _med(values: list[float]) -> str:
     """Median to two decimals, ``-`` for none."""
     return f"{np.median(values):.2f}" if values else "-"
@@ -123,6 +198,8 @@ def main() -> None:
                     help="TSWAP modes run after its default, as extra columns")
     ap.add_argument("--no-check", action="store_true", help="skip the independent checker")
     ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--parts", action="store_true",
+                    help="print where the makespan goes (waits, slow moves, detours)")
     a = ap.parse_args()
     maps = a.maps.split(",")
     robots = [int(v) for v in a.robots.split(",")]
@@ -189,6 +266,8 @@ def main() -> None:
                     line += (f" | {d['makespan_m'] / lb:.2f} | {mk / d['makespan_m']:.2f}"
                              if d.get("solved") and d["makespan"] > 0 else " | - | -")
                 print(line, flush=True)
+                if a.parts and plan.success:
+                    print("  " + parts_line(plan, space, S, G), flush=True)
                 rows.append({"dt": dt, "mk": mk, "tot": tot, "good": good, "lb": lb,
                              "ts": ts})
             summary.append((name, n, rows))
