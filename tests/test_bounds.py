@@ -79,3 +79,29 @@ def test_no_run_is_shorter_than_the_bound(schedule):
     assert 0 < d["makespan_lower_bound_s"] <= d["makespan_s"]
     assert d["makespan_over_bound"] == pytest.approx(d["makespan_s"] / d["makespan_lower_bound_s"],
                                                      rel=1e-3)
+
+
+def test_with_a_wall_the_travel_goes_round_it():
+    """A wall between start and goal: each object's own bound is the nearest robot's
+    straight drive plus the geodesic of a disk of its inscribed radius round the wall
+    (``scene.geodesic``), less the tolerance; longer than the straight-line bound, which
+    ``straight_line=True`` still gives."""
+    from lamp.scene.bounds import inscribed_radius
+    from lamp.scene.geodesic import GrownObstacles
+
+    d = {"format": "lamp-scene/1", "name": "wall", "workspace": [4.0, 3.0],
+         "obstacles": [{"type": "rectangle", "center": [2.0, 1.15], "size": [0.2, 2.3]}],
+         "robots": {"radius": 0.05, "starts": [[0.5, 0.5], [0.5, 0.8]]},
+         "objects": [{"type": "rectangle", "size": [0.3, 0.2], "start": [1.0, 1.0, 0.0],
+                      "goal": [3.0, 1.0, 0.0]}]}
+    scene = scene_from_dict(d)
+    o = scene.objects[0]
+    assert inscribed_radius(o.shape) == pytest.approx(0.1)
+    wall = shapely.box(1.9, 0.0, 2.1, 2.3)
+    geo = GrownObstacles([wall], 0.1, (4.0, 3.0)).distance((1.0, 1.0), (3.0, 1.0))
+    reach = min(shapely.Point(p).distance(shapely.box(0.85, 0.9, 1.15, 1.1)) - 0.05
+                for p in d["robots"]["starts"])
+    want = (reach + geo - SUCCESS_POSITION_TOL) / 0.25
+    assert makespan_lower_bound(scene).seconds == pytest.approx(want, rel=1e-9)
+    straight = makespan_lower_bound(scene, straight_line=True).seconds
+    assert straight == pytest.approx(_brute(d), rel=1e-6) and straight < want - 5.0

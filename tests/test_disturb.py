@@ -274,7 +274,7 @@ def test_bench_disturb_presets(tmp_path):
     assert a == disturbances_for("one-robot-fails", scene, 0)  # deterministic
     assert a != disturbances_for("one-robot-fails", scene, 1)
     (robot, when), = a.robot_failures
-    earliest = min(makespan_lower_bound(scene).per_object)
+    earliest = min(makespan_lower_bound(scene, straight_line=True).per_object)
     assert 0 <= robot < scene.n_robots
     assert FAILURE_FRACTION[0] * earliest <= when <= FAILURE_FRACTION[1] * earliest
     assert disturbances_for("noise-high", scene, 0).sensing_noise == 0.01

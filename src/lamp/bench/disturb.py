@@ -35,7 +35,8 @@ def disturbances_for(preset: str, scene: Scene, seed: int) -> Disturbances:
         raise ValueError(f"unknown disturbance preset {preset!r}; expected one of: "
                          f"{', '.join(DISTURB_PRESETS)}")
     rng = np.random.default_rng([zlib.crc32(scene.name.encode()), int(seed)])
-    earliest = min(makespan_lower_bound(scene).per_object)
+    # the straight-line bound: the preset's failure times stay those of its published runs
+    earliest = min(makespan_lower_bound(scene, straight_line=True).per_object)
     robot = int(rng.integers(scene.n_robots))
     when = float(rng.uniform(*FAILURE_FRACTION)) * earliest
     return Disturbances(robot_failures=((robot, when),))
