@@ -4,6 +4,7 @@ series runs out at its limits and names them, and the outcome merges every loop.
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
@@ -64,3 +65,15 @@ def test_without_a_planning_limit_only_the_segments_are_shared() -> None:
     series.add(_loop(2, 0.0, LoopEnd.FINISHED))
     assert series.ran_out() == "segment limit reached (5)"
     assert series.outcome(np.array([3.0, 0.0, 0.0]), np.zeros(3)).end is LoopEnd.FINISHED
+
+
+def test_the_count_budgets_do_not_shrink_with_the_clock() -> None:
+    """Planning time spent (wall clock) shrinks the next loop's time limit, never its
+    count budgets, which stay those the base derives from its own limit."""
+    base = PlannerConfig.of(planning_time_limit=300.0)
+    series = LoopSeries(50, 300.0)
+    series.add(_loop(3, 123.4))
+    cfg = series.config(base)
+    assert cfg.loop.planning_time_limit == pytest.approx(300.0 - 123.4)
+    assert cfg.lazy_expansions == base.lazy_expansions == 300_000
+    assert cfg.astar_expansions == base.astar_expansions

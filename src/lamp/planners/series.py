@@ -105,12 +105,17 @@ class LoopSeries:
 
     def config(self, base: PlannerConfig) -> PlannerConfig:
         """``base`` for the next loop: the segments left (at least 1) and, with a planning
-        limit, the planning time left (at least ``MIN_PLANNING_S``)."""
+        limit, the planning time left (at least ``MIN_PLANNING_S``). The searches' count
+        budgets stay ``base``'s (``lazy_expansions``, ``astar_expansions``): they are
+        derived from the planning limit when not set, and the time left depends on the
+        machine, the counts must not (a run stays the same on a loaded machine)."""
         left = max(1, self.segment_limit - self.segments)
         if self.planning_limit is None:
             return base.but(max_segments=left)
         return base.but(max_segments=left, planning_time_limit=max(
-            MIN_PLANNING_S, self.planning_limit - self.planning_s))
+            MIN_PLANNING_S, self.planning_limit - self.planning_s),
+            lazy_max_expansions=base.lazy_expansions,
+            astar_max_expansions=base.astar_expansions)
 
     def add(self, outcome: ObjectOutcome) -> ObjectOutcome:
         """Record a loop's outcome; returns it."""
