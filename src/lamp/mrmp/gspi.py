@@ -44,9 +44,18 @@ O(N^2). Lattices: 5 cm first; when that fails in a way a finer lattice can fix (
 start that cannot be linked, a passage narrower than the lattice, a stall) 3 cm and then
 2 cm are tried while time is left. Lattices are built once per space and reused.
 
-Output: the vertex sequence, all-wait steps dropped, each step cut into the fewest equal
-sub-steps that keep every robot's consecutive rows <= ``max_spacing`` apart (linear
-motion within a step is exactly what was checked, so the rows are a faithful sampling).
+Fleets (teams of 32 or more, :data:`~lamp.mrmp.gspi_kernels.ALL_PAIRS_BELOW`) follow
+TSWAP more closely, for shorter makespans: goals are swapped only with a robot resting on
+its goal (or without one) and only when the longer of the two ways left gets shorter (or
+stays and the sum drops), so swaps never lengthen the longest way left; a robot on its way
+is never pushed back more than one lattice step. After the steps, the robots that
+arrive last are planned again (:mod:`lamp.mrmp.repair`) and every robot then moves at
+its own speed along its path (:mod:`lamp.mrmp.retime`).
+
+Output: the vertex sequence, all-wait steps dropped; below 32 robots each step cut into
+the fewest equal sub-steps that keep every robot's consecutive rows <= ``max_spacing``
+apart (linear motion within a step is exactly what was checked, so the rows are a
+faithful sampling); for fleets, the retimed rows (as exact, and as far apart at most).
 
 Obstacle safety: lattice edges are checked conservatively over the whole motion
 (:mod:`lamp.mrmp.distance_field`); links are checked with the exact segment clearance.
@@ -72,8 +81,16 @@ from lamp.mrmp.assignment import assign
 from lamp.mrmp.distance_field import Lattice, get_lattice
 from lamp.mrmp.goal_distances import GoalDistances
 from lamp.mrmp.gspi_inputs import PlanInputs, check_inputs
-from lamp.mrmp.gspi_kernels import Graph, run_steps
+from lamp.mrmp.gspi_kernels import ALL_PAIRS_BELOW, Graph, run_steps
+from lamp.mrmp.repair import (
+    REPAIR_BUDGET,
+    REPAIR_EXCHANGES,
+    REPAIR_GROUP,
+    REPAIR_WAIT,
+    repair_last,
+)
 from lamp.mrmp.result import GspiStatus, MRMPPlan
+from lamp.mrmp.retime import RETIME_QUANTA, densify, drop_waits, retime
 from lamp.scene.model import Scene
 
 __all__ = ["GspiStatus", "MRMPPlan", "plan_paths", "warmup"]
@@ -380,7 +397,8 @@ def _run(graph: Graph, V: int, gv0: int, hs: GoalDistances, goal: np.ndarray,
             hsum = np.concatenate([hsum, np.zeros(cap - len(hsum))])
         t_new, out.done = run_steps(graph, V, gv0, hs, cur, goal, prio, two_r, seed_i,
                                     opts.goal_swapping, out.hist, hsum, out.t, t1,
-                                    links.max_candidates, near, swap_r, stuck, besth)
+                                    links.max_candidates, near, swap_r, stuck, besth,
+                                    N >= ALL_PAIRS_BELOW)
         for k in range(out.t + 1, t_new + 1):
             if hsum[k] < best_h - 1e-9:
                 best_h = hsum[k]
@@ -405,24 +423,6 @@ def _run(graph: Graph, V: int, gv0: int, hs: GoalDistances, goal: np.ndarray,
         per_step = (now - t_chunk) / max(1, out.t - t_prev)
         chunk = int(max(1, min(256, 2 * chunk, 0.02 / max(per_step, 1e-7),
                                (opts.deadline - now) / max(per_step, 1e-7) + 1)))
-
-
-def _densify(P: np.ndarray, max_spacing: float) -> np.ndarray:
-    """(N, T, 2) paths from the vertex positions ``P`` (t+1, N, 2): each step cut into the
-    fewest equal sub-steps that keep every robot's consecutive rows <= ``max_spacing``
-    apart, the step's end points kept exactly."""
-    if len(P) > 1:
-        seg = np.hypot(*(P[1:] - P[:-1]).transpose(2, 0, 1)).max(axis=1)  # (S,)
-        K = np.maximum(1, np.ceil(seg / (max_spacing * (1 - 1e-9)))).astype(np.int64)
-        step_of = np.repeat(np.arange(len(K)), K)
-        offs = np.concatenate([[0], np.cumsum(K)[:-1]])
-        frac = (np.arange(K.sum()) - np.repeat(offs, K) + 1) / np.repeat(K, K)
-        A = P[step_of]
-        B = P[step_of + 1]
-        dense = A + frac[:, None, None] * (B - A)
-        dense[np.cumsum(K) - 1] = P[1:]  # exact end points of every step
-        P = np.concatenate([P[:1], dense])
-    return np.ascontiguousarray(P.transpose(1, 0, 2))
 
 
 def _attempt(space: RobotSpace, S: np.ndarray, G: np.ndarray, c_start: np.ndarray,
@@ -468,11 +468,21 @@ def _attempt(space: RobotSpace, S: np.ndarray, G: np.ndarray, c_start: np.ndarra
     run = _run(links.graph, V, gv0, hs, goal, prio, 2.0 * space.radius, links,
                max_steps, stall, opts)
 
-    # Output: drop all-wait steps, densify.
-    P = links.graph.coords[run.hist[: run.t + 1]]  # (t+1, N, 2)
-    moved = np.any(np.any(P[1:] != P[:-1], axis=2), axis=1)
-    stats["steps_removed"] = int((~moved).sum())
-    paths = _densify(P[np.concatenate([[True], moved])], opts.max_spacing)
+    # Output: drop all-wait steps; for a fleet, the last robots planned again and every
+    # robot at its own speed; else each step densified.
+    VX = drop_waits(run.hist[: run.t + 1], links.graph.coords)
+    stats["steps_removed"] = run.t + 1 - len(VX)
+    if run.done and N >= ALL_PAIRS_BELOW:
+        VX, rep, work = repair_last(links.graph, V, gv0, hs, VX, goal, 2.0 * space.radius,
+                                    links.max_move, REPAIR_WAIT * L, REPAIR_BUDGET,
+                                    REPAIR_GROUP, REPAIR_EXCHANGES)
+        stats["repaired_paths"] = rep
+        stats["repair_states"] = work
+        VX = drop_waits(VX, links.graph.coords)
+        paths, _ = retime(links.graph.coords[VX], 2.0 * space.radius, L / RETIME_QUANTA,
+                          opts.max_spacing)
+    else:
+        paths = densify(links.graph.coords[VX], opts.max_spacing)
     reason = run.reason
     if run.done:
         # independent of the search's bookkeeping: every goal held by exactly one robot

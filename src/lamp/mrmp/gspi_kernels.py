@@ -30,7 +30,7 @@ import numpy as np
 from lamp.geometry.kernels import point_segment_distance
 from lamp.mrmp.goal_distances import hval
 
-__all__ = ["ALL_PAIRS_BELOW", "Graph", "neighbour_lists", "run_steps"]
+__all__ = ["ALL_PAIRS_BELOW", "Graph", "conflict", "neighbour_lists", "run_steps"]
 
 #: Teams smaller than this swap goals over all pairs and check all pairs (no hashing).
 ALL_PAIRS_BELOW = 32
@@ -66,7 +66,7 @@ def _hash01(seed: int, t: int, i: int, c: int) -> float:
 
 
 @nb.njit(cache=True)
-def _conflict(
+def conflict(
     ax: float, ay: float, bx: float, by: float,
     cx: float, cy: float, dx: float, dy: float,
     two_r: float, both_goal_end: bool,
@@ -101,10 +101,12 @@ def _h(goal: np.ndarray, i: int, v: int, gr: tuple, V: int, gv0: int, hs: tuple)
 @nb.njit(cache=True)
 def _build_cands(
     i: int, v: int, gr: tuple, V: int, gv0: int, hs: tuple, goal: np.ndarray, seed: int,
-    t: int, cand: np.ndarray, ncand: np.ndarray,
+    t: int, cand: np.ndarray, ncand: np.ndarray, fleet: bool,
 ) -> None:
     """Candidates of robot i at vertex v sorted by heuristic (wait included); ties are
-    broken by a seeded hash; a robot without a goal tries waiting first."""
+    broken by a seeded hash; a robot without a goal tries waiting first. In a fleet, a
+    robot on its way has no candidate more than one lattice step farther from its goal:
+    pushed, it steps back one step at most, else its parent moves otherwise or waits."""
     _, nbr, _, xptr, xidx = gr
     keys = np.empty(cand.shape[1])
     cand[i, 0] = v
@@ -142,6 +144,10 @@ def _build_cands(
     m = n
     while m > 1 and keys[m - 1] == np.inf and cand[i, m - 1] != v:
         m -= 1
+    if fleet and goal[i] >= 0 and v != gv0 + goal[i]:
+        lim = _h(goal, i, v, gr, V, gv0, hs) + hs[17] + 1e-9
+        while m > 1 and keys[m - 1] > lim and cand[i, m - 1] != v:
+            m -= 1
     ncand[i] = m
 
 
@@ -151,6 +157,7 @@ def _pibt_step(
     prio: np.ndarray, two_r: float, seed: int, t: int, nxt: np.ndarray,
     cand: np.ndarray, ncand: np.ndarray, ci: np.ndarray, status: np.ndarray,
     stack: np.ndarray, mode: np.ndarray, nptr: np.ndarray, nidx: np.ndarray,
+    fleet: bool,
 ) -> None:
     """One PIBT step (priority inheritance with backtracking), iterative.
 
@@ -173,7 +180,7 @@ def _pibt_step(
         if status[r0] != _UNDECIDED:
             continue
         status[r0] = _TENTATIVE
-        _build_cands(r0, cur[r0], gr, V, gv0, hs, goal, seed, t, cand, ncand)
+        _build_cands(r0, cur[r0], gr, V, gv0, hs, goal, seed, t, cand, ncand, fleet)
         ci[r0] = 0
         stack[0] = r0
         sp = 1
@@ -207,22 +214,22 @@ def _pibt_step(
                 py = coords[cur[k], 1]
                 stay_goal = c_goal and cur[k] >= gv0
                 if sk == _UNDECIDED:
-                    if blocker < 0 and _conflict(ax, ay, bx, by, px, py, px, py, two_r,
+                    if blocker < 0 and conflict(ax, ay, bx, by, px, py, px, py, two_r,
                                                  stay_goal):
                         blocker = k
                 elif sk == _DECIDED:
                     qx = coords[nxt[k], 0]
                     qy = coords[nxt[k], 1]
-                    if _conflict(ax, ay, bx, by, px, py, qx, qy, two_r,
+                    if conflict(ax, ay, bx, by, px, py, qx, qy, two_r,
                                  c_goal and nxt[k] >= gv0):
                         bad = True
                         break
                 else:  # tentative ancestor: its position now and its intended motion
                     qx = coords[nxt[k], 0]
                     qy = coords[nxt[k], 1]
-                    if _conflict(ax, ay, bx, by, px, py, px, py, two_r, stay_goal) or (
+                    if conflict(ax, ay, bx, by, px, py, px, py, two_r, stay_goal) or (
                         mode[i] == 0
-                        and _conflict(ax, ay, bx, by, px, py, qx, qy, two_r,
+                        and conflict(ax, ay, bx, by, px, py, qx, qy, two_r,
                                       c_goal and nxt[k] >= gv0)
                     ):
                         bad = True
@@ -233,7 +240,8 @@ def _pibt_step(
             if blocker >= 0:
                 # priority inheritance: the blocker decides first, then i re-checks c
                 status[blocker] = _TENTATIVE
-                _build_cands(blocker, cur[blocker], gr, V, gv0, hs, goal, seed, t, cand, ncand)
+                _build_cands(blocker, cur[blocker], gr, V, gv0, hs, goal, seed, t, cand,
+                             ncand, fleet)
                 ci[blocker] = 0
                 mode[blocker] = 0
                 stack[sp] = blocker
@@ -245,10 +253,15 @@ def _pibt_step(
 
 @nb.njit(cache=True)
 def _swap_goals(gr: tuple, V: int, gv0: int, hs: tuple, cur: np.ndarray, goal: np.ndarray,
-                prio: np.ndarray, sptr: np.ndarray, sidx: np.ndarray, cool: np.ndarray) -> int:
+                prio: np.ndarray, sptr: np.ndarray, sidx: np.ndarray, cool: np.ndarray,
+                fleet: bool) -> int:
     """Pairwise goal swaps that lower the summed heuristic (priorities travel along), over
     the pairs (i, j > i) of the neighbour lists, in index order; robots with ``cool > 0``
-    (just traded goals to break a deadlock) take no part."""
+    (just traded goals to break a deadlock) take no part.
+
+    In a fleet, TSWAP's rule: a pair swaps only when one of them rests on its goal (or has
+    none), and only when the swap lowers the longer of their two distances, or keeps it
+    and lowers the sum: swaps never lengthen the longest way left."""
     coords = gr[0]
     N = cur.shape[0]
     nswap = 0
@@ -261,28 +274,36 @@ def _swap_goals(gr: tuple, V: int, gv0: int, hs: tuple, cur: np.ndarray, goal: n
             gj = goal[j]
             if gi < 0 and gj < 0:
                 continue
-            now = 0.0
-            if gi >= 0:
-                now += hval(gi, cur[i], gr, V, gv0, hs)
-            if gj >= 0:
-                now += hval(gj, cur[j], gr, V, gv0, hs)
+            if fleet and gi >= 0 and gj >= 0 and cur[i] != gv0 + gi and cur[j] != gv0 + gj:
+                continue
+            hi = hval(gi, cur[i], gr, V, gv0, hs) if gi >= 0 else 0.0
+            hj = hval(gj, cur[j], gr, V, gv0, hs) if gj >= 0 else 0.0
+            now = hi + hj
+            now_max = max(hi, hj)
             # straight-line lower bound of the swapped sum: far pairs are skipped without
             # expanding either goal's search to the other robot (the same decisions)
+            la = 0.0
             lb = 0.0
             if gi >= 0:
-                lb += math.hypot(coords[cur[j], 0] - coords[gv0 + gi, 0],
-                                 coords[cur[j], 1] - coords[gv0 + gi, 1])
+                la = math.hypot(coords[cur[j], 0] - coords[gv0 + gi, 0],
+                                coords[cur[j], 1] - coords[gv0 + gi, 1])
             if gj >= 0:
-                lb += math.hypot(coords[cur[i], 0] - coords[gv0 + gj, 0],
-                                 coords[cur[i], 1] - coords[gv0 + gj, 1])
-            if lb >= now - 1e-9:
+                lb = math.hypot(coords[cur[i], 0] - coords[gv0 + gj, 0],
+                                coords[cur[i], 1] - coords[gv0 + gj, 1])
+            if la + lb >= now - 1e-9 and (not fleet or max(la, lb) >= now_max - 1e-9):
                 continue
-            sw = 0.0
-            if gi >= 0:
-                sw += hval(gi, cur[j], gr, V, gv0, hs)
-            if gj >= 0:
-                sw += hval(gj, cur[i], gr, V, gv0, hs)
-            if sw < now - 1e-9:
+            if fleet and max(la, lb) > now_max + 1e-9:
+                continue
+            sa = hval(gi, cur[j], gr, V, gv0, hs) if gi >= 0 else 0.0
+            sb = hval(gj, cur[i], gr, V, gv0, hs) if gj >= 0 else 0.0
+            sw = sa + sb
+            if fleet:
+                sw_max = max(sa, sb)
+                better = sw_max < now_max - 1e-9 or (sw_max <= now_max + 1e-9
+                                                     and sw < now - 1e-9)
+            else:
+                better = sw < now - 1e-9
+            if better:
                 goal[i] = gj
                 goal[j] = gi
                 p = prio[i]
@@ -344,7 +365,7 @@ def run_steps(
     gr: tuple, V: int, gv0: int, hs: tuple, cur: np.ndarray, goal: np.ndarray,
     prio: np.ndarray, two_r: float, seed: int, swap: bool, hist: np.ndarray,
     hsum: np.ndarray, t0: int, t1: int, maxc: int, near: float, swap_radius: float,
-    stuck: np.ndarray, besth: np.ndarray,
+    stuck: np.ndarray, besth: np.ndarray, fleet: bool,
 ) -> tuple[int, bool]:
     """Run Gspi steps t0..t1-1; hist[t+1] receives the vertices after step t and
     hsum[t+1] the summed heuristic. Returns (rows filled - 1, all goals reached).
@@ -352,7 +373,8 @@ def run_steps(
     (``2r + 2 * maxmove``); ``swap_radius``: the goal-swapping neighbourhood; ``stuck[0]``:
     per robot, the steps since its heuristic last reached a new least value ``besth``,
     ``stuck[1]`` the steps it still sits out of goal swapping after a deadlock trade
-    (all kept across calls)."""
+    (all kept across calls); ``fleet``: the fleet rules of ``_swap_goals`` and
+    ``_build_cands`` (teams of :data:`ALL_PAIRS_BELOW` or more)."""
     N = cur.shape[0]
     nxt = np.empty(N, dtype=np.int64)
     cand = np.empty((N, maxc), dtype=np.int64)
@@ -379,10 +401,10 @@ def run_steps(
             nptr, nidx = neighbour_lists(px, py, near)
             sptr, sidx = neighbour_lists(px, py, swap_radius) if swap else (nptr, nidx)
         if swap:
-            _swap_goals(gr, V, gv0, hs, cur, goal, prio, sptr, sidx, stuck[1])
+            _swap_goals(gr, V, gv0, hs, cur, goal, prio, sptr, sidx, stuck[1], fleet)
             _break_deadlocks(gr, V, gv0, hs, cur, goal, prio, nptr, nidx, stuck, besth, near)
         _pibt_step(gr, V, gv0, hs, cur, goal, prio, two_r, seed, t, nxt, cand, ncand, ci,
-                   status, stack, mode, nptr, nidx)
+                   status, stack, mode, nptr, nidx, fleet)
         s = 0.0
         for i in range(N):
             cur[i] = nxt[i]
