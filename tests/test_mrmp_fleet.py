@@ -176,3 +176,24 @@ def test_repair_makes_the_last_arrival_no_later_and_keeps_the_plan_valid() -> No
     _check_both(gm, S, G, out)
     ends = rows[seen["goal"] >= 0, -1]
     assert np.allclose(ends, G[seen["goal"][seen["goal"] >= 0]], atol=1e-9)
+
+
+@settings(max_examples=20, deadline=None)
+@given(pts=st.lists(st.tuples(st.floats(-0.3, 5.1), st.floats(-0.3, 5.1)), min_size=1,
+                    max_size=30),
+       radius=st.floats(0.0, 0.2), step=st.sampled_from([0.02, 0.03, 0.05]),
+       window=st.booleans())
+def test_nodes_near_all_matches_nodes_near(pts, radius, step, window) -> None:
+    """The vectorised lookup of the links' candidate nodes: the same ids in the same
+    order as one point at a time, in a whole map and in a window of it."""
+    from lamp.geometry.robot_space import RobotSpace
+    from lamp.mrmp.distance_field import get_lattice
+
+    gm = _map()
+    box = (1.0, 0.7, 3.9, 4.1) if window else None
+    space = RobotSpace.from_scene(gm.scene, window=box)
+    lat = get_lattice(space, step)
+    P = np.array(pts, dtype=float)
+    got = lat.nodes_near_all(P, radius)
+    for p, g in zip(P, got, strict=True):
+        assert g.tolist() == lat.nodes_near(p, radius).tolist()

@@ -37,6 +37,9 @@ DIRS = np.array(
 _FIELD_CACHE_SIZE = 16
 #: Lattice rows whose edges are decided together, against the obstacles near them.
 EDGE_BAND = 32
+#: Side (m) of the square tiles whose links are checked together, against the obstacles
+#: near the tile.
+LINK_TILE = 1.0
 
 
 @nb.njit(cache=True)
@@ -209,6 +212,31 @@ class Lattice:
         blk = blk[keep]
         return blk[np.argsort(d[keep], kind="stable")]
 
+    def nodes_near_all(self, points: np.ndarray, radius: float) -> list[np.ndarray]:
+        """:meth:`nodes_near` for each of ``points`` (K, 2), at once: the same ids in the
+        same order (row-major over the lattice, then by distance, stable)."""
+        L = self.step
+        nb_, na = self.ids.shape
+        if nb_ == 0 or na == 0 or self.V == 0:
+            return [np.zeros(0, dtype=np.int64) for _ in range(len(points))]
+        oa, ob = self.offset
+        span = int(math.ceil(2 * radius / L)) + 2
+        a0 = np.floor((points[:, 0] - radius) / L).astype(np.int64) - oa
+        b0 = np.floor((points[:, 1] - radius) / L).astype(np.int64) - ob
+        db, da = np.divmod(np.arange(span * span), span)  # row-major: b, then a
+        A = a0[:, None] + da[None, :]
+        B = b0[:, None] + db[None, :]
+        inside = (A >= 0) & (na > A) & (B >= 0) & (nb_ > B)
+        ids = np.where(inside, self.ids[np.clip(B, 0, nb_ - 1), np.clip(A, 0, na - 1)], -1)
+        c = self.coords[np.maximum(ids, 0)]
+        d = np.hypot(c[..., 0] - points[:, None, 0], c[..., 1] - points[:, None, 1])
+        keep = (ids >= 0) & (d <= radius + 1e-12)
+        d = np.where(keep, d, np.inf)
+        order = np.argsort(d, axis=1, kind="stable")
+        n = keep.sum(axis=1)
+        srt = np.take_along_axis(ids, order, axis=1)
+        return [srt[k, : n[k]] for k in range(len(points))]
+
     def links(
         self, points: np.ndarray, radius: float, thresholds: np.ndarray,
         point_clearance: np.ndarray | None = None,
@@ -221,7 +249,7 @@ class Lattice:
         within half its length of an end), which gives the same links."""
         W, H = self.workspace
         g = self.geometry
-        cand = [self.nodes_near(p, radius) for p in points]
+        cand = self.nodes_near_all(np.asarray(points, dtype=float).reshape(-1, 2), radius)
         counts = [len(c) for c in cand]
         out: list[tuple[np.ndarray, np.ndarray]] = []
         if sum(counts) == 0:
@@ -238,11 +266,22 @@ class Lattice:
                               self.node_clearance[allc])
             ok = ends - 0.5 * lens >= thr
         todo = np.flatnonzero(~ok)
-        if len(todo):
-            clr = segments_clearance(np.ascontiguousarray(src[todo]),
-                                     np.ascontiguousarray(dst[todo]), g.circles, g.verts,
-                                     g.ptr, W, H)
-            ok[todo] = clr >= thr[todo] - 1e-12
+        # exact checks tile by tile, against the obstacles near each tile only
+        # (``GeometrySet.near``: the same decisions as against all of them)
+        tile = np.floor(src[todo] / LINK_TILE).astype(np.int64)
+        key = tile[:, 0] * (1 << 20) + tile[:, 1]
+        order = np.argsort(key, kind="stable")
+        bounds = np.flatnonzero(np.diff(key[order])) + 1
+        for grp in np.split(todo[order], bounds):
+            if not len(grp):
+                continue
+            x0, y0 = np.floor(src[grp[0]] / LINK_TILE) * LINK_TILE
+            near = g.near((x0 - radius, y0 - radius, x0 + LINK_TILE + radius,
+                           y0 + LINK_TILE + radius), float(thr[grp].max()))
+            clr = segments_clearance(np.ascontiguousarray(src[grp]),
+                                     np.ascontiguousarray(dst[grp]), near.circles,
+                                     near.verts, near.ptr, W, H)
+            ok[grp] = clr >= thr[grp] - 1e-12
         start = 0
         for c in counts:
             sl = slice(start, start + c)

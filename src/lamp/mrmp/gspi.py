@@ -77,7 +77,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from lamp.geometry.robot_space import RobotSpace
-from lamp.mrmp.assignment import assign
+from lamp.mrmp.assignment import assign, unreached_reason
 from lamp.mrmp.distance_field import Lattice, get_lattice
 from lamp.mrmp.goal_distances import GoalDistances
 from lamp.mrmp.gspi_inputs import PlanInputs, check_inputs
@@ -296,28 +296,38 @@ class _Links:
 
 def _link_special_vertices(space: RobotSpace, lat: Lattice, S: np.ndarray, G: np.ndarray,
                            c_start: np.ndarray, c_goal: np.ndarray, R: float,
-                           stats: dict[str, Any]) -> _Links:
+                           stats: dict[str, Any]) -> _Links | np.ndarray:
     """Vertices V+i (start i) and V+N+m (goal m), linked by checked straight moves to the
-    lattice nodes within ``R`` (goals both ways), and start -> goal directly when close."""
+    lattice nodes within ``R`` (goals both ways), and start -> goal directly when close;
+    or, when some goal has no link at all (the starts then left unlinked), the (M,) mask
+    of such goals."""
     N, M = len(S), len(G)
     V = lat.V
     gv0 = V + N
     thr = space.threshold
     coords = np.concatenate([lat.coords, S, G]).astype(np.float64)
-    s_links = lat.links(S, R, np.minimum(thr, c_start), c_start)
     g_links = lat.links(G, R, np.minimum(thr, c_goal), c_goal)
-    stats["start_links"] = [len(x[0]) for x in s_links]
     stats["goal_links"] = [len(x[0]) for x in g_links]
-    src: list[np.ndarray] = []
-    dst: list[np.ndarray] = []
-    for i, (nodes, _) in enumerate(s_links):
-        src.append(np.full(len(nodes), V + i))
-        dst.append(nodes)
-    for m, (nodes, _) in enumerate(g_links):
-        src.append(np.full(len(nodes), gv0 + m))
-        dst.append(nodes)
-        src.append(nodes)
-        dst.append(np.full(len(nodes), gv0 + m))
+    lone = np.array([len(x[0]) == 0 for x in g_links], dtype=bool)
+    if lone.any():  # a goal without lattice links needs a direct link from a start
+        for m in np.flatnonzero(lone):
+            near = np.flatnonzero(np.hypot(*(S - G[m]).T) <= R)
+            clr = space.segment_clearance(S[near], np.repeat(G[m:m + 1], len(near), 0))
+            lone[m] = not np.any(
+                clr >= np.minimum(thr, np.minimum(c_start[near], c_goal[m])) - 1e-12)
+        if lone.any():
+            return lone  # no need to link the starts: this lattice cannot be used
+    s_links = lat.links(S, R, np.minimum(thr, c_start), c_start)
+    stats["start_links"] = [len(x[0]) for x in s_links]
+    ns = np.array([len(x[0]) for x in s_links], dtype=np.int64)
+    ng = np.array([len(x[0]) for x in g_links], dtype=np.int64)
+    s_nodes = np.concatenate([np.zeros(0, np.int64)] + [x[0] for x in s_links])
+    g_nodes = np.concatenate([np.zeros(0, np.int64)] + [x[0] for x in g_links])
+    g_ids = np.repeat(gv0 + np.arange(M), ng)
+    # (the order among the edges of one vertex is that of its links; a stable sort by
+    # source below keeps it)
+    src: list[np.ndarray] = [np.repeat(V + np.arange(N), ns), g_ids, g_nodes]
+    dst: list[np.ndarray] = [s_nodes, g_nodes, g_ids]
     # direct start -> goal moves for robots already close to a goal
     dSG = np.hypot(S[:, None, 0] - G[None, :, 0], S[:, None, 1] - G[None, :, 1])
     si, gi = np.nonzero(dSG <= R)
@@ -333,9 +343,7 @@ def _link_special_vertices(space: RobotSpace, lat: Lattice, S: np.ndarray, G: np
     dst_a = np.concatenate(dst).astype(np.int64)
     order = np.argsort(src_a, kind="stable")
     src_a, dst_a = src_a[order], dst_a[order]
-    xptr = np.zeros(V + N + M + 1, dtype=np.int64)
-    np.add.at(xptr, src_a + 1, 1)
-    xptr = np.cumsum(xptr)
+    xptr = np.concatenate([[0], np.cumsum(np.bincount(src_a, minlength=V + N + M))])
     graph = Graph(coords, lat.nbr, lat.dlen, xptr, np.ascontiguousarray(dst_a))
     longest = float(np.hypot(*(coords[src_a] - coords[dst_a]).T).max()) if len(src_a) else 0.0
     return _Links(graph, direct, g_links, 9 + int(np.max(np.diff(xptr))),
@@ -445,14 +453,21 @@ def _attempt(space: RobotSpace, S: np.ndarray, G: np.ndarray, c_start: np.ndarra
     R = 1.5 * L if opts.link_radius is None else float(opts.link_radius)
     V = lat.V
     gv0 = V + N  # first goal vertex
+    clock = time.perf_counter()
     links = _link_special_vertices(space, lat, S, G, c_start, c_goal, R, stats)
+    stats["time_links"] = time.perf_counter() - clock
+    if not isinstance(links, _Links):  # goals without any link: the reason, at once
+        return failure(unreached_reason(G, links, np.zeros(M, bool)),
+                       GspiStatus.UNREACHABLE, retry=True)
 
     # Heuristic: a lazy windowed Dijkstra per goal, seeded with the goal's links; + EPS
     # on every vertex but the goal itself (see goal_distances.EPS).
     hs = GoalDistances.build(links.goal_links, G, lat, N + M)
     no_link = np.array([len(n) == 0 for n, _ in links.goal_links], dtype=bool)
     no_link &= ~links.direct.any(axis=0)
+    clock = time.perf_counter()
     asg = assign(links.graph, V, hs, S, G, no_link, opts.assignment, goal0, opts.deadline)
+    stats["time_assignment"] = time.perf_counter() - clock
     if asg.timed_out:
         return failure(f"time limit of {opts.time_limit:g} s reached while computing "
                        "heuristic distances", GspiStatus.TIME_LIMIT)
@@ -465,22 +480,28 @@ def _attempt(space: RobotSpace, S: np.ndarray, G: np.ndarray, c_start: np.ndarra
     n_side = lat.ids.shape[0] + lat.ids.shape[1]
     max_steps = int(20 * n_side + 50 * N) if opts.max_steps is None else opts.max_steps
     stall = int(2 * n_side + 10 * N) if opts.stall_steps is None else opts.stall_steps
+    clock = time.perf_counter()
     run = _run(links.graph, V, gv0, hs, goal, prio, 2.0 * space.radius, links,
                max_steps, stall, opts)
+    stats["time_steps"] = time.perf_counter() - clock
 
     # Output: drop all-wait steps; for a fleet, the last robots planned again and every
     # robot at its own speed; else each step densified.
     VX = drop_waits(run.hist[: run.t + 1], links.graph.coords)
     stats["steps_removed"] = run.t + 1 - len(VX)
     if run.done and N >= ALL_PAIRS_BELOW:
+        clock = time.perf_counter()
         VX, rep, work = repair_last(links.graph, V, gv0, hs, VX, goal, 2.0 * space.radius,
                                     links.max_move, REPAIR_WAIT * L, REPAIR_BUDGET,
                                     REPAIR_GROUP, REPAIR_EXCHANGES)
         stats["repaired_paths"] = rep
         stats["repair_states"] = work
+        stats["time_repair"] = time.perf_counter() - clock
+        clock = time.perf_counter()
         VX = drop_waits(VX, links.graph.coords)
         paths, _ = retime(links.graph.coords[VX], 2.0 * space.radius, L / RETIME_QUANTA,
                           opts.max_spacing)
+        stats["time_retime"] = time.perf_counter() - clock
     else:
         paths = densify(links.graph.coords[VX], opts.max_spacing)
     reason = run.reason
