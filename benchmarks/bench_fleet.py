@@ -110,13 +110,13 @@ def lattice_distances(space: RobotSpace, plan, S: np.ndarray, G: np.ndarray) -> 
     lattice the plan was found on (the planner's own links and lazy searches; nan for a
     robot without a goal)."""
     from lamp.mrmp.goal_distances import GoalDistances, hval
-    from lamp.mrmp.gspi import _link_special_vertices
+    from lamp.mrmp.links import link_special_vertices
 
     L = plan.stats["attempts"][-1]["lattice_step"]
     lat = get_lattice(space, L)
     c_s = space.clearance(S, exact=True)
     c_g = space.clearance(G, exact=True)
-    links = _link_special_vertices(space, lat, S, G, c_s, c_g, 1.5 * L, {})
+    links = link_special_vertices(space, lat, S, G, c_s, c_g, 1.5 * L, {})
     N, M = len(S), len(G)
     hs = GoalDistances.build(links.goal_links, G, lat, N + M)
     return np.array([hval(int(g), lat.V + i, links.graph, lat.V, lat.V + N, hs) if g >= 0

@@ -19,8 +19,8 @@ from lamp.mrmp import plan_paths
 from lamp.mrmp.assignment import assign
 from lamp.mrmp.distance_field import get_lattice
 from lamp.mrmp.goal_distances import GoalDistances
-from lamp.mrmp.gspi import _link_special_vertices
 from lamp.mrmp.gspi_kernels import neighbour_lists
+from lamp.mrmp.links import link_special_vertices
 from lamp.scene.mapf import load_grid_map, random_instance
 
 MAPF = Path(__file__).resolve().parent / "data" / "mapf"
@@ -105,7 +105,7 @@ def test_bottleneck_assignment_against_brute_force(seed: int, n: int, extra: int
     N, M = len(S), len(G)
     c_s = space.clearance(S, exact=True)
     c_g = space.clearance(G, exact=True)
-    links = _link_special_vertices(space, lat, S, G, c_s, c_g, 0.045, {})
+    links = link_special_vertices(space, lat, S, G, c_s, c_g, 0.045, {})
     hs = GoalDistances.build(links.goal_links, G, lat, N + M)
     no_link = np.zeros(M, bool)
     got = assign(links.graph, lat.V, hs, S, G, no_link, "bottleneck", None, np.inf)

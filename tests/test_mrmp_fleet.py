@@ -197,3 +197,27 @@ def test_nodes_near_all_matches_nodes_near(pts, radius, step, window) -> None:
     got = lat.nodes_near_all(P, radius)
     for p, g in zip(P, got, strict=True):
         assert g.tolist() == lat.nodes_near(p, radius).tolist()
+
+
+@settings(max_examples=15, deadline=None)
+@given(seed=st.integers(0, 10_000), n=st.integers(65, 400), spread=st.floats(0.05, 1.0))
+def test_endpoint_checks_at_fleet_size_match_the_dense_ones(seed, n, spread) -> None:
+    """Starts and goals of fleets are checked by tiles and a k-d tree: the same exact
+    clearances (bit for bit, points inside obstacles and far from all included) and the
+    same first overlapping pair as the all-pairs, all-obstacles checks."""
+    from lamp.geometry.robot_space import RobotSpace
+    from lamp.mrmp import endpoints
+
+    gm = _map()
+    space = RobotSpace.from_scene(gm.scene)
+    rng = np.random.default_rng(seed)
+    P = rng.uniform(0, 4.8, (n, 2))
+    P[: n // 4] = P[0] + rng.normal(0, spread * 0.1, (n // 4, 2))  # a cluster
+    assert np.array_equal(endpoints.exact_clearance(space, P),
+                          space.clearance(P, exact=True))
+    limit = 2 * R * spread
+    d = np.hypot(*(P[:, None, :] - P[None, :, :]).transpose(2, 0, 1))
+    np.fill_diagonal(d, np.inf)
+    close = np.argwhere(d < limit)
+    want = (int(close[0, 0]), int(close[0, 1])) if len(close) else None
+    assert endpoints._first_overlap(P, limit) == want

@@ -8,8 +8,9 @@ Hungarian method on the whole cost matrix; the objective Gspi used before).
 Distances are exact lattice distances (:mod:`lamp.mrmp.goal_distances`) and are computed
 lazily: the straight-line distance is a lower bound, so only pairs closer than a growing
 bound ``B`` are evaluated, each goal's search expanding to ``B`` and no further. ``B``
-starts at the largest nearest-start straight-line distance over the goals and grows by
-half until the pairs below it admit a perfect matching (Kuhn's augmenting paths,
+starts just above the straight-line bottleneck (found to within 1/256 by matching the
+straight-line pairs; no lattice bound below it can do) and grows by a tenth until the
+pairs below it admit a perfect matching (Kuhn's augmenting paths,
 compiled, each round growing the last round's matching); ``B*`` is then found by
 bisection over the distances below ``B``, each trial growing the matching of the pairs
 below the previous bound, and the sum is minimised over the pairs within ``B*``
@@ -42,9 +43,9 @@ _BIG = 1e9
 #: Up to this many robot-goal pairs every distance is computed at once (as the
 #: ``sum`` objective does): fewer calls into compiled code than the growing bound needs.
 DENSE_PAIRS = 64
-#: Growth factor of the bound ``B`` between rounds (few rounds: each evaluates every pair
-#: below the bound again; the overshoot is searched once).
-_GROWTH = 1.5
+#: Growth factor of the bound ``B`` between rounds (from the straight-line floor; each
+#: round evaluates the pairs not yet known to be below the bound).
+_GROWTH = 1.1
 
 
 @dataclass(frozen=True)
@@ -237,19 +238,48 @@ def _chosen(C: np.ndarray, rows: np.ndarray, cols: np.ndarray) -> Assignment:
     return Assignment(goal, cost, bound=float(C[rows, cols].max()))
 
 
+def _straight_floor(E: np.ndarray) -> float:
+    """A lower bound on the straight-line bottleneck of the (M, N) distances ``E``: the
+    largest threshold found (by doubling, then bisection) at which the pairs no longer
+    than it match no more than ``M - 1`` goals; 0 when even the least one matches all."""
+    M = E.shape[0]
+    t = float(E.min(axis=1).max())  # every goal needs a robot
+    empty = np.full(E.shape[1], -1, np.int64)
+    cap = 2.0 * t
+    while True:
+        pm, pi = np.nonzero(cap >= E)
+        ptr = np.searchsorted(pm, np.arange(M + 1))
+        val = E[pm, pi]
+        if _grow_matching(ptr, pi, val, cap, np.full(M, -1, np.int64), empty.copy()) == M:
+            break
+        t, cap = cap, 2.0 * cap
+    if _grow_matching(ptr, pi, val, t, np.full(M, -1, np.int64), empty.copy()) == M:
+        return 0.0
+    lo, hi = t, cap
+    for _ in range(8):
+        mid = 0.5 * (lo + hi)
+        if _grow_matching(ptr, pi, val, mid, np.full(M, -1, np.int64), empty.copy()) == M:
+            hi = mid
+        else:
+            lo = mid
+    return lo
+
+
 def _bottleneck(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray, G: np.ndarray,
                 deadline: float) -> Assignment:
     N, M = len(S), len(G)
     E = np.hypot(G[:, None, 0] - S[None, :, 0], G[:, None, 1] - S[None, :, 1])  # (M, N)
-    bound = max(float(E.min(axis=1).max()) * 1.05, 4.0 * hs.step)
+    # lattice distances are at least the straight lines: no bound below theirs can do
+    bound = max(_straight_floor(E) * 1.02, 4.0 * hs.step)
     lo = 0.0  # no perfect matching among the pairs with distance < lo
     mg = np.full(M, -1, dtype=np.int64)  # a maximum matching of the pairs below the bound
     mr = np.full(N, -1, dtype=np.int64)
+    known = np.full((M, N), np.inf)  # exact where below the last bound
     while True:
-        pm, pi = np.nonzero(bound > E)  # grouped by goal
-        c = hval_below(pm, V + pi, bound, gr, V, V + N, hs)
-        ok = np.isfinite(c)
-        pm, pi, c = pm[ok], pi[ok], c[ok]
+        pm, pi = np.nonzero((bound > E) & np.isinf(known))  # grouped by goal
+        known[pm, pi] = hval_below(pm, V + pi, bound, gr, V, V + N, hs)
+        pm, pi = np.nonzero(bound > known)
+        c = known[pm, pi]
         ptr = np.searchsorted(pm, np.arange(M + 1))
         # pairs are only added as the bound grows: the last matching is still one
         if _grow_matching(ptr, pi, c, np.inf, mg, mr) == M:

@@ -28,7 +28,7 @@ import numpy as np
 from lamp.geometry.clearance_kernels import segment_clearance, segments_clearance
 from lamp.geometry.robot_space import RobotSpace
 
-__all__ = ["Lattice", "get_lattice", "DIRS"]
+__all__ = ["Lattice", "clear_segments", "get_lattice", "DIRS"]
 
 # 8 lattice directions (da, db); index d and 7 - d are opposite.
 DIRS = np.array(
@@ -266,22 +266,7 @@ class Lattice:
                               self.node_clearance[allc])
             ok = ends - 0.5 * lens >= thr
         todo = np.flatnonzero(~ok)
-        # exact checks tile by tile, against the obstacles near each tile only
-        # (``GeometrySet.near``: the same decisions as against all of them)
-        tile = np.floor(src[todo] / LINK_TILE).astype(np.int64)
-        key = tile[:, 0] * (1 << 20) + tile[:, 1]
-        order = np.argsort(key, kind="stable")
-        bounds = np.flatnonzero(np.diff(key[order])) + 1
-        for grp in np.split(todo[order], bounds):
-            if not len(grp):
-                continue
-            x0, y0 = np.floor(src[grp[0]] / LINK_TILE) * LINK_TILE
-            near = g.near((x0 - radius, y0 - radius, x0 + LINK_TILE + radius,
-                           y0 + LINK_TILE + radius), float(thr[grp].max()))
-            clr = segments_clearance(np.ascontiguousarray(src[grp]),
-                                     np.ascontiguousarray(dst[grp]), near.circles,
-                                     near.verts, near.ptr, W, H)
-            ok[grp] = clr >= thr[grp] - 1e-12
+        ok[todo] = clear_segments(g, (W, H), src[todo], dst[todo], thr[todo])
         start = 0
         for c in counts:
             sl = slice(start, start + c)
@@ -305,6 +290,31 @@ class Lattice:
             while len(self._fields) > _FIELD_CACHE_SIZE:
                 self._fields.popitem(last=False)
         return d
+
+
+def clear_segments(geometry: Any, workspace: tuple[float, float], a: np.ndarray,
+                   b: np.ndarray, need: np.ndarray) -> np.ndarray:
+    """Whether each straight segment ``a[k] -> b[k]`` keeps an exact clearance of at least
+    ``need[k] - 1e-12`` (``need > 0``) from the obstacles of ``geometry`` (a
+    ``GeometrySet``) and the workspace border: the segments tile by tile (by their start)
+    against the obstacles near the tile only (``GeometrySet.near``: the same decisions
+    as against all of them)."""
+    W, H = workspace
+    ok = np.zeros(len(a), dtype=bool)
+    if len(a) == 0:
+        return ok
+    tile = np.floor(a / LINK_TILE).astype(np.int64)
+    key = tile[:, 0] * (1 << 20) + tile[:, 1]
+    order = np.argsort(key, kind="stable")
+    for grp in np.split(order, np.flatnonzero(np.diff(key[order])) + 1):
+        ext = float(np.hypot(*(b[grp] - a[grp]).T).max())
+        x0, y0 = tile[grp[0]] * LINK_TILE
+        near = geometry.near((x0 - ext, y0 - ext, x0 + LINK_TILE + ext,
+                              y0 + LINK_TILE + ext), float(need[grp].max()))
+        clr = segments_clearance(np.ascontiguousarray(a[grp]), np.ascontiguousarray(b[grp]),
+                                 near.circles, near.verts, near.ptr, W, H)
+        ok[grp] = clr >= need[grp] - 1e-12
+    return ok
 
 
 def get_lattice(space: RobotSpace, step: float = 0.05) -> Lattice:

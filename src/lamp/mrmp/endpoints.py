@@ -5,11 +5,21 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import ArrayLike
+from scipy.spatial import cKDTree
 
 from lamp.errors import InputError
+from lamp.geometry.clearance_kernels import points_clearance
 from lamp.geometry.robot_space import RobotSpace
 
-__all__ = ["as_points", "check_points"]
+__all__ = ["as_points", "check_points", "exact_clearance"]
+
+#: Up to this many points, all pairs and all obstacles are measured at once.
+DENSE_POINTS = 64
+#: Tiles (m) whose points are measured together, against the obstacles near the tile.
+CLEARANCE_TILE = 1.0
+#: Obstacles within this distance (m) of a tile are measured; a point at least this far
+#: from all of them is measured against every obstacle.
+CLEARANCE_REACH = 0.5
 
 
 def as_points(x: ArrayLike, name: str) -> np.ndarray:
@@ -39,19 +49,62 @@ def check_points(
         k = int(np.nonzero(outside)[0][0])
         return np.zeros(len(pts)), (f"{name}[{k}] = {pts[k].tolist()} lies outside the "
                                     f"workspace {W}x{H}")
-    clr = space.clearance(pts, exact=True)
+    clr = exact_clearance(space, pts)
     bad = clr < space.threshold - tol
     if bad.any():
         k = int(np.nonzero(bad)[0][0])
         where = "inside an obstacle" if clr[k] < 0 else "overlapping an obstacle or the border"
         return clr, (f"{name}[{k}] = {pts[k].tolist()} is {where}: clearance {clr[k]:.4f} m "
                      f"< required {space.threshold:.4f} m - tolerance {tol:g} m")
-    if len(pts) > 1:
+    pair = _first_overlap(pts, 2 * space.radius - tol)
+    if pair is not None:
+        a, b = pair
+        d = float(np.hypot(*(pts[a] - pts[b])))
+        return clr, (f"{name}[{a}] and {name}[{b}] overlap: distance {d:.4f} m < "
+                     f"2r = {2 * space.radius:.4f} m - tolerance {tol:g} m")
+    return clr, ""
+
+
+def _first_overlap(pts: np.ndarray, limit: float) -> tuple[int, int] | None:
+    """The first pair (a, b), a < b, in row-major order of points closer than ``limit``."""
+    if len(pts) < 2:
+        return None
+    if len(pts) <= DENSE_POINTS:
         d = np.hypot(*(pts[:, None, :] - pts[None, :, :]).transpose(2, 0, 1))
         np.fill_diagonal(d, np.inf)
-        close = d < 2 * space.radius - tol
-        if close.any():
-            a, b = (int(v) for v in np.argwhere(close)[0])
-            return clr, (f"{name}[{a}] and {name}[{b}] overlap: distance {d[a, b]:.4f} m < "
-                         f"2r = {2 * space.radius:.4f} m - tolerance {tol:g} m")
-    return clr, ""
+        close = np.argwhere(d < limit)
+        return (int(close[0, 0]), int(close[0, 1])) if len(close) else None
+    pairs = cKDTree(pts).query_pairs(max(limit, 0.0), output_type="ndarray")
+    if len(pairs) == 0:
+        return None
+    d = np.hypot(*(pts[pairs[:, 0]] - pts[pairs[:, 1]]).T)
+    pairs = pairs[d < limit]
+    if len(pairs) == 0:
+        return None
+    pairs = np.sort(pairs, axis=1)
+    k = np.lexsort((pairs[:, 1], pairs[:, 0]))[0]
+    return int(pairs[k, 0]), int(pairs[k, 1])
+
+
+def exact_clearance(space: RobotSpace, pts: np.ndarray) -> np.ndarray:
+    """``space.clearance(pts, exact=True)``, the same values: the points tile by tile
+    against the obstacles within :data:`CLEARANCE_REACH` of their tile
+    (``GeometrySet.near``); a point found farther than that from all of them is measured
+    against every obstacle."""
+    if len(pts) <= DENSE_POINTS:
+        return space.clearance(pts, exact=True)
+    W, H = space.workspace
+    g = space.geometry
+    out = np.empty(len(pts))
+    tile = np.floor(pts / CLEARANCE_TILE).astype(np.int64)
+    key = tile[:, 0] * (1 << 20) + tile[:, 1]
+    order = np.argsort(key, kind="stable")
+    for grp in np.split(order, np.flatnonzero(np.diff(key[order])) + 1):
+        x0, y0 = tile[grp[0]] * CLEARANCE_TILE
+        near = g.near((x0, y0, x0 + CLEARANCE_TILE, y0 + CLEARANCE_TILE), CLEARANCE_REACH)
+        out[grp] = points_clearance(np.ascontiguousarray(pts[grp]), near.circles,
+                                    near.verts, near.ptr, W, H)
+    far = out >= CLEARANCE_REACH
+    if far.any():
+        out[far] = space.clearance(pts[far], exact=True)
+    return out

@@ -9,8 +9,9 @@ final, and a settle costs O(1) instead of a heap operation.
 Each search lives in a square *window* of lattice indices centred on its goal, of radius
 ``R``: the window holds every node within Euclidean distance ``R + 1.5 L`` of the goal
 point, and only buckets below ``R`` are processed. When a query needs more, the window
-grows (at least doubling), keeping what was settled and queued, and the settled nodes on
-its old border relax their edges into the new part.
+grows (at least doubling for a query, by a quarter at least when the search is expanded
+to a bound, :func:`expand_to`), keeping what was settled and queued, and the settled nodes
+on its old border relax their edges into the new part.
 
 Guarantee (tested against a full Dijkstra on the whole lattice): every value returned by
 :func:`lattice_h`/:func:`hval` is the exact shortest lattice distance to the goal (inf when
@@ -351,7 +352,7 @@ def expand_to(m: int, bound: float, nbr: np.ndarray, dlen: np.ndarray, hs: tuple
     if rad[m] == 0.0:
         _open_window(m, max(bound, _FIRST_RADIUS_STEPS * step), nbr, dlen, hs)
     elif rad[m] < bound:
-        _open_window(m, max(bound, 2.0 * rad[m]), nbr, dlen, hs)
+        _open_window(m, max(bound, 1.25 * rad[m]), nbr, dlen, hs)
     _run_until(m, -1, bound, nbr, dlen, hs)
 
 

@@ -82,6 +82,7 @@ from lamp.mrmp.distance_field import Lattice, get_lattice
 from lamp.mrmp.goal_distances import GoalDistances
 from lamp.mrmp.gspi_inputs import PlanInputs, check_inputs
 from lamp.mrmp.gspi_kernels import ALL_PAIRS_BELOW, Graph, run_steps
+from lamp.mrmp.links import Links, link_special_vertices
 from lamp.mrmp.repair import (
     REPAIR_BUDGET,
     REPAIR_EXCHANGES,
@@ -279,77 +280,6 @@ class _Attempt:
     status: GspiStatus
 
 
-@dataclass(frozen=True)
-class _Links:
-    """The special vertices of one attempt, linked to the lattice and to each other."""
-
-    graph: Graph
-    #: (N, M): start i reaches goal m by a direct checked straight move.
-    direct: np.ndarray
-    #: Per goal m: (lattice nodes linked to it, link lengths).
-    goal_links: list[tuple[np.ndarray, np.ndarray]]
-    #: Candidate slots per robot and step: 8 neighbours, wait and the extra edges.
-    max_candidates: int
-    #: The longest edge of the graph (a lattice diagonal or a link).
-    max_move: float
-
-
-def _link_special_vertices(space: RobotSpace, lat: Lattice, S: np.ndarray, G: np.ndarray,
-                           c_start: np.ndarray, c_goal: np.ndarray, R: float,
-                           stats: dict[str, Any]) -> _Links | np.ndarray:
-    """Vertices V+i (start i) and V+N+m (goal m), linked by checked straight moves to the
-    lattice nodes within ``R`` (goals both ways), and start -> goal directly when close;
-    or, when some goal has no link at all (the starts then left unlinked), the (M,) mask
-    of such goals."""
-    N, M = len(S), len(G)
-    V = lat.V
-    gv0 = V + N
-    thr = space.threshold
-    coords = np.concatenate([lat.coords, S, G]).astype(np.float64)
-    g_links = lat.links(G, R, np.minimum(thr, c_goal), c_goal)
-    stats["goal_links"] = [len(x[0]) for x in g_links]
-    lone = np.array([len(x[0]) == 0 for x in g_links], dtype=bool)
-    if lone.any():  # a goal without lattice links needs a direct link from a start
-        for m in np.flatnonzero(lone):
-            near = np.flatnonzero(np.hypot(*(S - G[m]).T) <= R)
-            clr = space.segment_clearance(S[near], np.repeat(G[m:m + 1], len(near), 0))
-            lone[m] = not np.any(
-                clr >= np.minimum(thr, np.minimum(c_start[near], c_goal[m])) - 1e-12)
-        if lone.any():
-            return lone  # no need to link the starts: this lattice cannot be used
-    s_links = lat.links(S, R, np.minimum(thr, c_start), c_start)
-    stats["start_links"] = [len(x[0]) for x in s_links]
-    ns = np.array([len(x[0]) for x in s_links], dtype=np.int64)
-    ng = np.array([len(x[0]) for x in g_links], dtype=np.int64)
-    s_nodes = np.concatenate([np.zeros(0, np.int64)] + [x[0] for x in s_links])
-    g_nodes = np.concatenate([np.zeros(0, np.int64)] + [x[0] for x in g_links])
-    g_ids = np.repeat(gv0 + np.arange(M), ng)
-    # (the order among the edges of one vertex is that of its links; a stable sort by
-    # source below keeps it)
-    src: list[np.ndarray] = [np.repeat(V + np.arange(N), ns), g_ids, g_nodes]
-    dst: list[np.ndarray] = [s_nodes, g_nodes, g_ids]
-    # direct start -> goal moves for robots already close to a goal
-    dSG = np.hypot(S[:, None, 0] - G[None, :, 0], S[:, None, 1] - G[None, :, 1])
-    si, gi = np.nonzero(dSG <= R)
-    direct = np.zeros((N, M), dtype=bool)
-    if len(si):
-        clr = space.segment_clearance(S[si], G[gi])
-        ok = clr >= np.minimum(thr, np.minimum(c_start[si], c_goal[gi])) - 1e-12
-        si, gi = si[ok], gi[ok]
-        direct[si, gi] = True
-        src.append(V + si)
-        dst.append(gv0 + gi)
-    src_a = np.concatenate(src).astype(np.int64)
-    dst_a = np.concatenate(dst).astype(np.int64)
-    order = np.argsort(src_a, kind="stable")
-    src_a, dst_a = src_a[order], dst_a[order]
-    xptr = np.concatenate([[0], np.cumsum(np.bincount(src_a, minlength=V + N + M))])
-    graph = Graph(coords, lat.nbr, lat.dlen, xptr, np.ascontiguousarray(dst_a))
-    longest = float(np.hypot(*(coords[src_a] - coords[dst_a]).T).max()) if len(src_a) else 0.0
-    return _Links(graph, direct, g_links, 9 + int(np.max(np.diff(xptr))),
-                  max(longest, float(lat.dlen.max())))
-
-
 def _priorities(cost: np.ndarray, goal: np.ndarray, seed: int) -> np.ndarray:
     """Initial priorities: farther robots first (PIBT's eps_i), ties by seeded noise;
     robots without a goal last."""
@@ -375,7 +305,7 @@ class _Search:
 
 
 def _run(graph: Graph, V: int, gv0: int, hs: GoalDistances, goal: np.ndarray,
-         prio: np.ndarray, two_r: float, links: _Links, max_steps: int,
+         prio: np.ndarray, two_r: float, links: Links, max_steps: int,
          stall_steps: int, opts: _Options) -> _Search:
     """Gspi steps in compiled chunks until every goal is held, the step budget is spent,
     the summed heuristic stalls for ``stall_steps`` or the deadline passes."""
@@ -454,9 +384,9 @@ def _attempt(space: RobotSpace, S: np.ndarray, G: np.ndarray, c_start: np.ndarra
     V = lat.V
     gv0 = V + N  # first goal vertex
     clock = time.perf_counter()
-    links = _link_special_vertices(space, lat, S, G, c_start, c_goal, R, stats)
+    links = link_special_vertices(space, lat, S, G, c_start, c_goal, R, stats)
     stats["time_links"] = time.perf_counter() - clock
-    if not isinstance(links, _Links):  # goals without any link: the reason, at once
+    if not isinstance(links, Links):  # goals without any link: the reason, at once
         return failure(unreached_reason(G, links, np.zeros(M, bool)),
                        GspiStatus.UNREACHABLE, retry=True)
 

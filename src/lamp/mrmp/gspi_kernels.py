@@ -29,11 +29,10 @@ import numpy as np
 
 from lamp.geometry.kernels import point_segment_distance
 from lamp.mrmp.goal_distances import hval
+from lamp.mrmp.neighbours import ALL_PAIRS_BELOW, neighbour_lists
 
 __all__ = ["ALL_PAIRS_BELOW", "Graph", "conflict", "neighbour_lists", "run_steps"]
 
-#: Teams smaller than this swap goals over all pairs and check all pairs (no hashing).
-ALL_PAIRS_BELOW = 32
 #: Steps a robot may go without progress towards its goal before it trades goals with a
 #: neighbour that blocks it (``_break_deadlocks``).
 STUCK_STEPS = 10
@@ -101,14 +100,13 @@ def _h(goal: np.ndarray, i: int, v: int, gr: tuple, V: int, gv0: int, hs: tuple)
 @nb.njit(cache=True)
 def _build_cands(
     i: int, v: int, gr: tuple, V: int, gv0: int, hs: tuple, goal: np.ndarray, seed: int,
-    t: int, cand: np.ndarray, ncand: np.ndarray, fleet: bool,
+    t: int, cand: np.ndarray, ncand: np.ndarray, fleet: bool, keys: np.ndarray,
 ) -> None:
     """Candidates of robot i at vertex v sorted by heuristic (wait included); ties are
     broken by a seeded hash; a robot without a goal tries waiting first. In a fleet, a
     robot on its way has no candidate more than one lattice step farther from its goal:
     pushed, it steps back one step at most, else its parent moves otherwise or waits."""
     _, nbr, _, xptr, xidx = gr
-    keys = np.empty(cand.shape[1])
     cand[i, 0] = v
     keys[0] = -1.0 if goal[i] < 0 else _h(goal, i, v, gr, V, gv0, hs)
     n = 1
@@ -170,6 +168,7 @@ def _pibt_step(
     """
     coords = gr[0]
     N = cur.shape[0]
+    keys = np.empty(cand.shape[1])
     for k in range(N):
         status[k] = _UNDECIDED
         nxt[k] = cur[k]
@@ -180,7 +179,7 @@ def _pibt_step(
         if status[r0] != _UNDECIDED:
             continue
         status[r0] = _TENTATIVE
-        _build_cands(r0, cur[r0], gr, V, gv0, hs, goal, seed, t, cand, ncand, fleet)
+        _build_cands(r0, cur[r0], gr, V, gv0, hs, goal, seed, t, cand, ncand, fleet, keys)
         ci[r0] = 0
         stack[0] = r0
         sp = 1
@@ -241,7 +240,7 @@ def _pibt_step(
                 # priority inheritance: the blocker decides first, then i re-checks c
                 status[blocker] = _TENTATIVE
                 _build_cands(blocker, cur[blocker], gr, V, gv0, hs, goal, seed, t, cand,
-                             ncand, fleet)
+                             ncand, fleet, keys)
                 ci[blocker] = 0
                 mode[blocker] = 0
                 stack[sp] = blocker
@@ -432,69 +431,3 @@ def run_steps(
             done = False
             break
     return t1, done
-
-
-@nb.njit(cache=True)
-def neighbour_lists(px: np.ndarray, py: np.ndarray, radius: float
-                    ) -> tuple[np.ndarray, np.ndarray]:
-    """CSR lists (ptr, idx): for each point i, the other points within ``radius`` (all of
-    them when ``radius`` is inf or there are fewer than :data:`ALL_PAIRS_BELOW`), in
-    increasing index order. A spatial hash (cells of side ``radius``, points sorted by
-    cell, each of the 9 cells around a point found by binary search) keeps it
-    O(N log N + pairs)."""
-    N = px.shape[0]
-    ptr = np.zeros(N + 1, dtype=np.int64)
-    if N < ALL_PAIRS_BELOW or not radius < np.inf:
-        idx = np.empty(N * (N - 1), dtype=np.int64)
-        q = 0
-        for i in range(N):
-            for j in range(N):
-                if j != i:
-                    idx[q] = j
-                    q += 1
-            ptr[i + 1] = q
-        return ptr, idx
-    cs = max(radius, 1e-9)
-    x0 = px.min()
-    y0 = py.min()
-    ny = int((py.max() - y0) / cs) + 3
-    key = np.empty(N, dtype=np.int64)
-    for i in range(N):
-        key[i] = (int((px[i] - x0) / cs) + 1) * ny + int((py[i] - y0) / cs) + 1
-    order = np.argsort(key, kind="mergesort")
-    skey = key[order]
-    r2 = radius * radius
-    buf = np.empty(64, dtype=np.int64)
-    cnt = np.zeros(N, dtype=np.int64)
-    out = np.empty(max(16, 8 * N), dtype=np.int64)
-    q = 0
-    for i in range(N):
-        n = 0
-        for dx in range(-1, 2):
-            for dy in range(-1, 2):
-                kk = key[i] + dx * ny + dy
-                lo = np.searchsorted(skey, kk)
-                while lo < N and skey[lo] == kk:
-                    j = order[lo]
-                    lo += 1
-                    if j == i:
-                        continue
-                    ex = px[j] - px[i]
-                    ey = py[j] - py[i]
-                    if ex * ex + ey * ey <= r2:
-                        if n == buf.shape[0]:
-                            nb_ = np.empty(2 * n, dtype=np.int64)
-                            nb_[:n] = buf
-                            buf = nb_
-                        buf[n] = j
-                        n += 1
-        srt = np.sort(buf[:n])
-        if q + n > out.shape[0]:
-            grown = np.empty(2 * (q + n), dtype=np.int64)
-            grown[:q] = out[:q]
-            out = grown
-        out[q:q + n] = srt
-        q += n
-        cnt[i] = n
-        ptr[i + 1] = q
-    return ptr, out[:q]

@@ -80,22 +80,21 @@ def _move_ok(i: int, t: int, a: int, b: int, VX: np.ndarray, coords: np.ndarray,
     kc = _cell(ax, ay, x0, y0, cs, ny)
     N = VX.shape[1]
     b_goal = b >= gv0
-    for dx in range(-1, 2):
-        for dy in range(-1, 2):
-            kk = kc + dx * ny + dy
-            p = np.searchsorted(sk[t], kk)
-            while p < N and sk[t, p] == kk:
-                k = so[t, p]
-                p += 1
-                if k == i or skip[k]:
-                    continue
-                u = VX[t, k]
-                w = VX[t + 1, k]
-                if conflict(ax, ay, bx, by, coords[u, 0], coords[u, 1], coords[w, 0],
-                            coords[w, 1], two_r, b_goal and w >= gv0):
-                    if found.shape[0] == 0:
-                        return False
-                    found[k] = True
+    for dx in range(-1, 2):  # the three cells of a column have consecutive keys
+        k0 = kc + dx * ny - 1
+        p = np.searchsorted(sk[t], k0)
+        while p < N and sk[t, p] <= k0 + 2:
+            k = so[t, p]
+            p += 1
+            if k == i or skip[k]:
+                continue
+            u = VX[t, k]
+            w = VX[t + 1, k]
+            if conflict(ax, ay, bx, by, coords[u, 0], coords[u, 1], coords[w, 0],
+                        coords[w, 1], two_r, b_goal and w >= gv0):
+                if found.shape[0] == 0:
+                    return False
+                found[k] = True
     return True
 
 

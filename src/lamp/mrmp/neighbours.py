@@ -1,0 +1,82 @@
+"""Neighbour lists of points from a spatial hash (Gspi's robot-robot checks and swaps)."""
+
+from __future__ import annotations
+
+import numba as nb
+import numpy as np
+
+__all__ = ["ALL_PAIRS_BELOW", "neighbour_lists"]
+
+#: Teams smaller than this swap goals over all pairs and check all pairs (no hashing).
+ALL_PAIRS_BELOW = 32
+
+
+@nb.njit(cache=True)
+def neighbour_lists(px: np.ndarray, py: np.ndarray, radius: float
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """CSR lists (ptr, idx): for each point i, the other points within ``radius`` (all of
+    them when ``radius`` is inf or there are fewer than :data:`ALL_PAIRS_BELOW`), in
+    increasing index order. A spatial hash (cells of side ``radius``, points sorted by
+    cell, each of the 9 cells around a point found by binary search) keeps it
+    O(N log N + pairs)."""
+    N = px.shape[0]
+    ptr = np.zeros(N + 1, dtype=np.int64)
+    if N < ALL_PAIRS_BELOW or not radius < np.inf:
+        idx = np.empty(N * (N - 1), dtype=np.int64)
+        q = 0
+        for i in range(N):
+            for j in range(N):
+                if j != i:
+                    idx[q] = j
+                    q += 1
+            ptr[i + 1] = q
+        return ptr, idx
+    cs = max(radius, 1e-9)
+    x0 = px.min()
+    y0 = py.min()
+    ny = int((py.max() - y0) / cs) + 3
+    key = np.empty(N, dtype=np.int64)
+    for i in range(N):
+        key[i] = (int((px[i] - x0) / cs) + 1) * ny + int((py[i] - y0) / cs) + 1
+    order = np.argsort(key, kind="mergesort")
+    skey = key[order]
+    r2 = radius * radius
+    buf = np.empty(64, dtype=np.int64)
+    cnt = np.zeros(N, dtype=np.int64)
+    out = np.empty(max(16, 8 * N), dtype=np.int64)
+    q = 0
+    for i in range(N):
+        n = 0
+        for dx in range(-1, 2):
+            for dy in range(-1, 2):
+                kk = key[i] + dx * ny + dy
+                lo = np.searchsorted(skey, kk)
+                while lo < N and skey[lo] == kk:
+                    j = order[lo]
+                    lo += 1
+                    if j == i:
+                        continue
+                    ex = px[j] - px[i]
+                    ey = py[j] - py[i]
+                    if ex * ex + ey * ey <= r2:
+                        if n == buf.shape[0]:
+                            nb_ = np.empty(2 * n, dtype=np.int64)
+                            nb_[:n] = buf
+                            buf = nb_
+                        buf[n] = j
+                        n += 1
+        if q + n > out.shape[0]:
+            grown = np.empty(2 * (q + n), dtype=np.int64)
+            grown[:q] = out[:q]
+            out = grown
+        for a in range(n):  # insertion sort into place (a few dozen at most)
+            v = buf[a]
+            b = q + a
+            while b > q and out[b - 1] > v:
+                out[b] = out[b - 1]
+                b -= 1
+            out[b] = v
+        q += n
+        cnt[i] = n
+        ptr[i + 1] = q
+    return ptr, out[:q]
