@@ -40,6 +40,9 @@ EDGE_BAND = 32
 #: Side (m) of the square tiles whose links are checked together, against the obstacles
 #: near the tile.
 LINK_TILE = 1.0
+#: Up to this many points or segments, links are looked up point by point and checked
+#: against all obstacles at once (cheaper than tiles for LAMP's teams of a few robots).
+FEW = 64
 
 
 @nb.njit(cache=True)
@@ -249,7 +252,9 @@ class Lattice:
         within half its length of an end), which gives the same links."""
         W, H = self.workspace
         g = self.geometry
-        cand = self.nodes_near_all(np.asarray(points, dtype=float).reshape(-1, 2), radius)
+        pts = np.asarray(points, dtype=float).reshape(-1, 2)
+        cand = (self.nodes_near_all(pts, radius) if len(pts) > FEW
+                else [self.nodes_near(p, radius) for p in pts])
         counts = [len(c) for c in cand]
         out: list[tuple[np.ndarray, np.ndarray]] = []
         if sum(counts) == 0:
@@ -303,6 +308,10 @@ def clear_segments(geometry: Any, workspace: tuple[float, float], a: np.ndarray,
     ok = np.zeros(len(a), dtype=bool)
     if len(a) == 0:
         return ok
+    if len(a) <= FEW:  # a few: against all obstacles at once
+        g = geometry
+        return segments_clearance(np.ascontiguousarray(a), np.ascontiguousarray(b), g.circles,
+                                  g.verts, g.ptr, W, H) >= need - 1e-12
     tile = np.floor(a / LINK_TILE).astype(np.int64)
     key = tile[:, 0] * (1 << 20) + tile[:, 1]
     order = np.argsort(key, kind="stable")
