@@ -5,10 +5,37 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-__all__ = ["ALL_PAIRS_BELOW", "neighbour_lists"]
+__all__ = ["ALL_PAIRS_BELOW", "cell_hash", "doubled", "neighbour_lists"]
 
 #: Teams smaller than this swap goals over all pairs and check all pairs (no hashing).
 ALL_PAIRS_BELOW = 32
+
+
+@nb.njit(cache=True)
+def cell_hash(px: np.ndarray, py: np.ndarray, cs: float
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """The spatial hash of points (``px``, ``py``) on cells of side ``cs``: each point's
+    cell key, the points in key order (stable), the sorted keys, and the keys' row
+    stride ``ny`` (the cell at ``dx, dy`` from key ``k`` is ``k + dx * ny + dy``; a
+    margin of one cell round the points keeps every neighbour key valid)."""
+    n = px.shape[0]
+    x0 = px.min()
+    y0 = py.min()
+    ny = int((py.max() - y0) / cs) + 3
+    key = np.empty(n, dtype=np.int64)
+    for i in range(n):
+        key[i] = (int((px[i] - x0) / cs) + 1) * ny + int((py[i] - y0) / cs) + 1
+    order = np.argsort(key, kind="mergesort")
+    return key, order, key[order], ny
+
+
+@nb.njit(cache=True)
+def doubled(x: np.ndarray, n: int) -> np.ndarray:
+    """A buffer of twice ``x``'s length holding its first ``n`` entries (growing an array
+    filled up to ``n`` inside a compiled loop)."""
+    y = np.empty(2 * x.shape[0], x.dtype)
+    y[:n] = x[:n]
+    return y
 
 
 @nb.njit(cache=True)
@@ -31,15 +58,7 @@ def neighbour_lists(px: np.ndarray, py: np.ndarray, radius: float
                     q += 1
             ptr[i + 1] = q
         return ptr, idx
-    cs = max(radius, 1e-9)
-    x0 = px.min()
-    y0 = py.min()
-    ny = int((py.max() - y0) / cs) + 3
-    key = np.empty(N, dtype=np.int64)
-    for i in range(N):
-        key[i] = (int((px[i] - x0) / cs) + 1) * ny + int((py[i] - y0) / cs) + 1
-    order = np.argsort(key, kind="mergesort")
-    skey = key[order]
+    key, order, skey, ny = cell_hash(px, py, max(radius, 1e-9))
     r2 = radius * radius
     buf = np.empty(64, dtype=np.int64)
     cnt = np.zeros(N, dtype=np.int64)

@@ -39,6 +39,7 @@ import numpy as np
 
 from lamp.mrmp.goal_distances import hval
 from lamp.mrmp.gspi_kernels import conflict
+from lamp.mrmp.neighbours import doubled
 
 __all__ = ["REPAIR_BUDGET", "REPAIR_EXCHANGES", "REPAIR_GROUP", "REPAIR_WAIT", "repair_last"]
 
@@ -133,13 +134,6 @@ def _successor(v: int, e: int, V: int, gv0: int, nbr: np.ndarray, xptr: np.ndarr
 
 
 @nb.njit(cache=True)
-def _grown(x: np.ndarray, n: int) -> np.ndarray:
-    y = np.empty(2 * x.shape[0], x.dtype)
-    y[:n] = x[:n]
-    return y
-
-
-@nb.njit(cache=True)
 def _cost(VX: np.ndarray, i: int, coords: np.ndarray, wait_cost: float) -> float:
     """Robot i's arrival under the proxy: its moves' lengths and ``wait_cost`` per step
     it waits before its last move."""
@@ -228,9 +222,9 @@ def _search(i: int, target: float, gr: tuple, V: int, gv0: int, hs: tuple, goal:
                 else:
                     mark[u] = stamp + t + 1
                     if n == lv.shape[0]:
-                        lv = _grown(lv, n)
-                        lp = _grown(lp, n)
-                        lc = _grown(lc, n)
+                        lv = doubled(lv, n)
+                        lp = doubled(lp, n)
+                        lc = doubled(lc, n)
                     lv[n] = u
                     lp[n] = q
                     lc[n] = nc

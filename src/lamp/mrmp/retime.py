@@ -64,6 +64,7 @@ import math
 import numba as nb
 import numpy as np
 
+from lamp.mrmp.neighbours import cell_hash, doubled
 from lamp.mrmp.retime_pairs import find, lock_violations, segment_distance, union
 
 __all__ = ["RETIME_QUANTA", "densify", "drop_waits", "retime"]
@@ -148,14 +149,7 @@ def _close_pairs(rob: np.ndarray, lo: np.ndarray, hi: np.ndarray, seg: np.ndarra
         my[a] = 0.5 * (seg[a, 1] + seg[a, 3])
         half = max(half, 0.5 * math.hypot(seg[a, 2] - seg[a, 0], seg[a, 3] - seg[a, 1]))
     cs = two_r + 2.0 * half + 1e-9
-    x0 = mx.min()
-    y0 = my.min()
-    ny = int((my.max() - y0) / cs) + 3
-    key = np.empty(S, np.int64)
-    for a in range(S):
-        key[a] = (int((mx[a] - x0) / cs) + 1) * ny + int((my[a] - y0) / cs) + 1
-    order = np.argsort(key, kind="mergesort")
-    skey = key[order]
+    key, order, skey, ny = cell_hash(mx, my, cs)
     A = np.empty(4 * S + 16, np.int64)
     B = np.empty(4 * S + 16, np.int64)
     n = 0
@@ -176,19 +170,12 @@ def _close_pairs(rob: np.ndarray, lo: np.ndarray, hi: np.ndarray, seg: np.ndarra
                                         seg[b, 0], seg[b, 1], seg[b, 2], seg[b, 3]) >= two_r:
                         continue
                     if n == A.shape[0]:
-                        A = _grown(A, n)
-                        B = _grown(B, n)
+                        A = doubled(A, n)
+                        B = doubled(B, n)
                     A[n] = a
                     B[n] = b
                     n += 1
     return A[:n], B[:n]
-
-
-@nb.njit(cache=True)
-def _grown(x: np.ndarray, n: int) -> np.ndarray:
-    y = np.empty(2 * x.shape[0], x.dtype)
-    y[:n] = x[:n]
-    return y
 
 
 @nb.njit(cache=True)
