@@ -33,11 +33,11 @@ def test_every_move_follows_the_table_or_raises_and_changes_nothing(moves) -> No
 
 
 def test_the_table_is_the_schedule_s_life_cycle() -> None:
-    """waiting -> active -> placed | failed; waiting -> failed (given up); nothing leaves
-    placed or failed, and only those two are done."""
+    """waiting -> active -> placed | failed; waiting -> failed (given up); placed or
+    failed -> waiting only (its next task), and only those two are done."""
     W, A, P, F = (ObjectStatus.WAITING, ObjectStatus.ACTIVE, ObjectStatus.PLACED,
                   ObjectStatus.FAILED)
-    assert dict(TRANSITIONS) == {W: {A, F}, A: {P, F}, P: set(), F: set()}
+    assert dict(TRANSITIONS) == {W: {A, F}, A: {P, F}, P: {W}, F: {W}}
     assert [s.done for s in (W, A, P, F)] == [False, False, True, True]
 
 

@@ -67,12 +67,18 @@ class RunResult:
     #: A lower bound on any run's makespan of this scene [s]
     #: (``lamp.scene.bounds.makespan_lower_bound``); None where not computed.
     makespan_lower_bound_s: float | None = None
+    #: A lifelong run's tasks (``fleet.tasks.TaskRecord.to_dict``) and figures
+    #: (``fleet.tasks.lifelong_figures``); None for a run without tasks.
+    tasks: list[dict[str, Any]] | None = None
+    lifelong: dict[str, Any] | None = None
     #: The run's ``lamp.record.Recording`` (set by ``lamp.solve``); not part of result.json.
     recording: Any = field(default=None, repr=False, compare=False)
 
     @property
     def success(self) -> bool:
-        return bool(self.objects) and all(o.success for o in self.objects)
+        """Every object placed and, in a lifelong run, every task done."""
+        return (bool(self.objects) and all(o.success for o in self.objects)
+                and all(t["status"] == "done" for t in self.tasks or ()))
 
     @property
     def segments(self) -> int:
@@ -132,4 +138,6 @@ class RunResult:
             "stats": self.stats,
             "params": dict(self.params),
             "disturbances": dict(self.disturbances),
+            **({} if self.tasks is None else {"tasks": list(self.tasks),
+                                              "lifelong": dict(self.lifelong or {})}),
         }

@@ -2,10 +2,10 @@
 
 :class:`Board` holds the schedule's state: the objects (``state.ObjectState``), which
 sub-team each robot is in (``owner``), the shared clock, the robots that failed, and the
-counters (``stats.FleetStats``). Its methods only read; ``coordinator.Fleet``, built on
-it, is the one writer. The rules of the schedule (``admission``, ``blocked``,
-``makeway``, ``teams``, ``handover``) take what they need from here and return
-decisions.
+counters (``stats.FleetStats``), and the tasks (``desk.TaskDesk``). Its methods only
+read; ``coordinator.Fleet``, built on it (through ``reteam.TeamChanges``, its team
+changes), is the one writer. The rules of the schedule (``admission``, ``blocked``,
+``makeway``, ``teams``, ``handover``) take what they need from here and return decisions.
 """
 
 from __future__ import annotations
@@ -20,10 +20,12 @@ import shapely
 from lamp.contract.runner import WorldExecutor
 from lamp.fleet.admission import standing_in
 from lamp.fleet.config import FleetConfig
+from lamp.fleet.desk import TaskDesk
 from lamp.fleet.parking import needed_by_others
 from lamp.fleet.precedence import goal_cuts
 from lamp.fleet.state import FREE, ObjectState, ObjectStatus
 from lamp.fleet.stats import FleetStats
+from lamp.fleet.tasks import TaskFeed
 from lamp.fleet.view import FleetExecution
 from lamp.scene.model import Scene
 from lamp.sim.simulator import SETTLE_TIME
@@ -33,11 +35,18 @@ __all__ = ["Board"]
 
 class Board:
     """The fleet schedule's state for ``scene`` moved on ``executor`` (module docstring):
-    ``row_step`` is the common row grid (m), ``config`` the schedule's settings."""
+    ``row_step`` is the common row grid (m), ``config`` the schedule's settings, ``feed``
+    where the tasks come from; ``serial``: one object at a time, by the whole team, in
+    the order the tasks were released (the first-come-first-served baseline).
+
+    ``scene`` is the scene in force: each object's goal is its current task's.
+    """
 
     def __init__(self, scene: Scene, executor: WorldExecutor, row_step: float,
-                 config: FleetConfig) -> None:
+                 config: FleetConfig, feed: TaskFeed, serial: bool = False) -> None:
         self.scene, self.executor, self.config = scene, executor, config
+        self.desk = TaskDesk(feed, len(scene.objects))
+        self.serial = serial
         self.grid = float(row_step)
         self.reach = [o.shape.bounding_radius + scene.robot_radius for o in scene.objects]
         #: rows a segment's robots hold at its end while others move: the settle time
@@ -62,11 +71,22 @@ class Board:
         return all(o.status.done for o in self.objects)
 
     def may_start(self, k: int) -> bool:
-        """Whether object ``k`` may start: its ``after`` objects are placed and those its
-        goal would cut are done (``fleet.precedence``)."""
-        return (all(self.objects[a].status == ObjectStatus.PLACED
-                    for a in self.scene.objects[k].after)
-                and all(self.objects[j].status.done for j in self.cuts[k]))
+        """Whether object ``k`` may start: it has a task; for its first, its ``after``
+        objects are placed and those its goal would cut are done (``fleet.precedence``);
+        serially, no other object is active."""
+        if self.desk.current[k] is None:
+            return False
+        if self.serial and any(o.status == ObjectStatus.ACTIVE for o in self.objects
+                               if o.index != k):
+            return False
+        return not self.desk.first(k) or (
+            all(self.objects[a].status == ObjectStatus.PLACED for a in self.after(k))
+            and all(self.objects[j].status.done for j in self.cuts[k]))
+
+    def after(self, k: int) -> tuple[int, ...]:
+        """The objects whose placing object ``k``'s current task waits for: the scene's
+        ``after`` for its first task, none for later ones."""
+        return self.scene.objects[k].after if self.desk.first(k) else ()
 
     def any_waits(self, but: int | None = None) -> bool:
         """Whether an object (other than ``but``) waits to start or waits for robots."""

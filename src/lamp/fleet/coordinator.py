@@ -49,19 +49,19 @@ from typing import Any
 
 import numpy as np
 
-from lamp.contract.events import RunObserver
+from lamp.contract.events import TRACE_EVERY, RunObserver
 from lamp.contract.runner import ObjectOutcome, WorldExecutor
 from lamp.fleet.admission import heeded_claims, meets_moving, meets_standing
 from lamp.fleet.blocked import blocked_space, looks_now, wait_over
-from lamp.fleet.board import Board
 from lamp.fleet.config import FleetConfig
-from lamp.fleet.handover import better_team
-from lamp.fleet.makeway import make_way
+from lamp.fleet.makeway import make_way, with_goal
 from lamp.fleet.objects import given_up
 from lamp.fleet.regions import claims
+from lamp.fleet.reteam import TeamChanges
 from lamp.fleet.segments import Segment, on_grid, run_together
-from lamp.fleet.state import FAILED_ROBOT, FREE, ObjectState, ObjectStatus
-from lamp.fleet.teams import allocate, near_way, nearest, reinforce, start_order
+from lamp.fleet.state import FREE, ObjectState, ObjectStatus
+from lamp.fleet.tasks import IDLE_STRETCH_S, ScheduledFeed, TaskFeed, merged_tasks
+from lamp.fleet.teams import allocate, near_way, start_order
 from lamp.fleet.turns import Turns
 from lamp.fleet.view import FleetExecution, FleetView
 from lamp.scene.model import Scene
@@ -69,7 +69,7 @@ from lamp.scene.model import Scene
 __all__ = ["Fleet"]
 
 
-class Fleet(Board):
+class Fleet(TeamChanges):
     """Moves a scene's objects concurrently on ``executor`` (see the module docstring): a
     ``Simulator`` or an executor wrapping one. The one writer of the schedule's state
     (``board.Board``): the rules return decisions, and it applies them.
@@ -85,21 +85,31 @@ class Fleet(Board):
                  object_main: Callable[[Fleet, int], ObjectOutcome],
                  timeline: Callable[[Any, float, np.ndarray], None],
                  observers: Sequence[RunObserver] = (), row_step: float = 0.02,
-                 config: FleetConfig | None = None) -> None:
-        super().__init__(scene, executor, row_step, config or FleetConfig())
+                 config: FleetConfig | None = None, feed: TaskFeed | None = None,
+                 serial: bool = False) -> None:
+        super().__init__(scene, executor, row_step, config or FleetConfig(),
+                         ScheduledFeed(scene) if feed is None else feed, serial)
         self.observers = list(observers)
         self.object_main, self.timeline = object_main, timeline
         self.turns = Turns()
-        self._handover_checked: set[tuple[int, tuple[int, ...], tuple[int, ...]]] = set()
+        self.outcomes: list[list[ObjectOutcome]] = [[] for _ in scene.objects]  # by task
 
     # ------------------------------------------------------------------ the schedule
     def run(self) -> list[ObjectOutcome]:
-        """Move every object; their outcomes in object order."""
+        """Serve every task the feed releases; the objects' outcomes in object order
+        (each merges its tasks', ``tasks.merged_tasks``)."""
         try:
-            while not self.all_done():
+            while not self.desk.feed.stopped:
+                self._take_tasks()
+                if self.all_done():  # every released task ended: idle until the next
+                    until = self.desk.feed.wait(self.clock)
+                    if until is None:
+                        break
+                    self._idle(until)
+                    continue
                 self._release()
                 if self.all_done():  # the last waiting ones given up
-                    break
+                    continue
                 self._wake_blocked()
                 if self._resume_ready():
                     continue
@@ -113,7 +123,32 @@ class Fleet(Board):
                     raise RuntimeError("fleet schedule: no object can move and none waits")
         finally:
             self.turns.close()
-        return [o.outcome for o in self.objects]  # type: ignore[misc]
+        self.desk.stop(self.clock, "stopped: the run ended before it")
+        return [merged_tasks(self.outcomes[o.index]) or given_up(
+            self.scene, o.index, self.executor.object_poses[o.index], "stopped: no task done")
+            for o in self.objects]
+
+    def _take_tasks(self) -> None:
+        """The released tasks queue at their objects (``desk.TaskDesk``); an object with
+        none takes its next: it waits to start again, its goal the task's."""
+        self.desk.take(self.clock)
+        for o in self.objects:
+            task = self.desk.next_for(o.index)
+            if task is None:
+                continue
+            if o.status.done:
+                o.renew()
+            if tuple(task.goal) != tuple(self.scene.objects[o.index].goal):
+                self.scene = with_goal(self.scene, o.index, np.asarray(task.goal))
+
+    def _idle(self, until: float) -> None:
+        """Nothing to do before simulated time ``until``: the robots hold still till then
+        (at least one physics step), in stretches of at most ``IDLE_STRETCH_S``."""
+        hold = min(max(until - self.clock, 0.0), IDLE_STRETCH_S)
+        now = np.asarray(self.executor.robot_positions, float)
+        out = self.executor.execute(now[:, None], record_every=TRACE_EVERY,
+                                    settle_time=max(hold, 1e-9))
+        self._clocked(out, [], now[:, None])
 
     def _release(self) -> None:
         """Start objects whose ``after`` objects are placed (and those their goals would cut
@@ -124,8 +159,8 @@ class Fleet(Board):
         for o in self.objects:
             if o.status == ObjectStatus.ACTIVE and o.needs_team and self.may_start(o.index):
                 ready.append(o.index)
-            elif o.status == ObjectStatus.WAITING:
-                after = self.scene.objects[o.index].after
+            elif o.status == ObjectStatus.WAITING and self.desk.current[o.index] is not None:
+                after = self.after(o.index)
                 failed = [k for k in after if self.objects[k].status == ObjectStatus.FAILED]
                 if failed:
                     self._give_up(o, f"not started: object {failed[0]}, which it waits for "
@@ -142,6 +177,11 @@ class Fleet(Board):
         """Sub-teams for the ``ready`` objects: those waiting for robots first, then the
         rest in ``teams.start_order`` (the moving objects' ways busy); the robots shared
         among them (``teams.allocate``)."""
+        if self.serial:  # first come, first served: the earliest task, every robot
+            k = min(ready, key=lambda j: (self.desk.current[j].release_s,  # type: ignore[union-attr]
+                                          self.desk.current[j].id))  # type: ignore[union-attr]
+            self._give_team(k, self.free())
+            return
         first = [k for k in ready if self.objects[k].status == ObjectStatus.ACTIVE]
         moving = [o.index for o in self.objects if o.status == ObjectStatus.ACTIVE and o.team]
         order = start_order(self.scene, self.executor.object_poses,
@@ -160,51 +200,17 @@ class Fleet(Board):
             o.needs_team = False
             return
         o.move_to(ObjectStatus.ACTIVE)
+        self.desk.begin(k, self.clock)
         o.rank = self.started
         self.started += 1
         for obs in self.observers:
             obs.object_started(k, len(self.objects))
         self.turns.start(k, lambda: self._main(k))
 
-    def _reinforce(self) -> None:
-        """Free robots join the moving teams with room within ``reinforce_reach``
-        (``teams.reinforce``; not a blocked planner's: it takes them when it plans again),
-        whose loops plan anew with them after their segment."""
-        teams = {o.index: o.team for o in self.ranked() if o.status == ObjectStatus.ACTIVE
-                 and o.team and o.blocked_at is None}
-        for k, team in reinforce(self.free(), self.executor.robot_positions,
-                                 self.executor.object_poses, teams,
-                                 self.config.reinforce_reach).items():
-            if team != self.objects[k].team:
-                self._reteam(self.objects[k], team, "reinforced")
-
-    def _hand_over(self) -> None:
-        """Between its segments (a reply waits), a team's far robots give their places to
-        free robots nearer by route (``handover.better_team``; checked once per team)."""
-        for o in self.ranked():
-            key = (o.index, tuple(o.team), tuple(self.free()))
-            if (o.status != ObjectStatus.ACTIVE or o.reply is None
-                    or key in self._handover_checked):
-                continue
-            self._handover_checked.add(key)
-            team = better_team(self.scene, o.index, o.team, key[2], self.executor.robot_positions,
-                               o.reply.object_poses[o.index], lambda: self.executor.object_poses)
-            if team is not None:
-                self._reteam(o, team, "handed_over")
-
-    def _reteam(self, o: ObjectState, team: Sequence[int], what: str) -> None:
-        """``o``'s sub-team becomes ``team`` (robots it loses go free); logged as ``what``,
-        and counted when ``what`` is one of the schedule's counts."""
-        self.stats.note(self.clock, what, o.index, f"{o.team} -> {sorted(team)}")
-        self.owner[[i for i in o.team if self.owner[i] == o.index]] = FREE
-        o.team = sorted(team)
-        self.owner[o.team] = o.index
-        if what in self.stats.counts:
-            self.stats.count(what)
-
     def _main(self, k: int) -> None:
         o = self.objects[k]
         o.outcome = self.object_main(self, k)
+        self._task_ended(o)
         o.move_to(ObjectStatus.PLACED if o.outcome.result.success else ObjectStatus.FAILED)
         if o.status == ObjectStatus.PLACED and o.placed_at_s is None:
             o.placed_at_s = self.clock
@@ -217,9 +223,17 @@ class Fleet(Board):
     def _give_up(self, o: ObjectState, why: str) -> None:
         o.move_to(ObjectStatus.FAILED)
         o.outcome = given_up(self.scene, o.index, self.executor.object_poses[o.index], why)
+        self._task_ended(o)
         for obs in self.observers:
             obs.object_started(o.index, len(self.objects))
             obs.object_finished(o.index, len(self.objects), o.outcome.result)
+
+    def _task_ended(self, o: ObjectState) -> None:
+        """``o``'s task ended with ``o.outcome``."""
+        r = o.outcome.result  # type: ignore[union-attr]
+        self.outcomes[o.index].append(o.outcome)  # type: ignore[arg-type]
+        self.desk.end(o.index, self.clock, r.success, r.failure_reason,
+                      segments=r.segments, replans=r.replans)
 
     def _resume_ready(self) -> bool:
         """Resume the highest-priority thread that has something to go on with."""
@@ -379,10 +393,7 @@ class Fleet(Board):
             self._ended(running)
             return
         out, paths, done, fired = run_together(self.executor, running)
-        self.stats.robot_time.charge([s.team for s in running], self.owner, paths,
-                                     float(out.sim_time))
-        self.timeline(out.trace, float(out.sim_time), np.maximum(self.owner, FREE))
-        self.clock += float(out.sim_time)
+        self._clocked(out, running, paths)
         self._note_failures()
         self.stats.count("events")
         left = np.asarray(out.objects_left)
@@ -394,6 +405,15 @@ class Fleet(Board):
                 s.stopped_at = int(out.stopped_at)
         self._ended(running)
 
+    def _clocked(self, out: Any, running: list[Segment], paths: np.ndarray) -> None:
+        """The shared clock ran ``out`` (``paths`` of every robot, ``running``'s teams
+        working): charged, recorded, shown to the feed, and the clock moves on."""
+        self.stats.robot_time.charge([s.team for s in running], self.owner, paths,
+                                     float(out.sim_time))
+        self.timeline(out.trace, float(out.sim_time), np.maximum(self.owner, FREE))
+        self.desk.feed.moved(self.clock, out.trace)
+        self.clock += float(out.sim_time)
+
     def _ended(self, running: list[Segment]) -> None:
         """The loops of the ``running`` segments that are done go on, with their replies."""
         for s in running:
@@ -404,25 +424,6 @@ class Fleet(Board):
                                      sim_time=s.sim_time)
                 o.ready = True
         self._wake_blocked()
-
-    def _note_failures(self) -> None:
-        """Robots that failed in the last stretch (``executor.failed``) leave their teams
-        for good, each replaced by the free robot nearest its object if any (the loop
-        plans anew after its segment); every later plan has them as obstacles."""
-        for i in sorted(self.executor.failed):
-            if i in self.failed_at:
-                continue
-            self.failed_at[i] = self.clock
-            k = int(self.owner[i])
-            self.owner[i] = FAILED_ROBOT
-            self.stats.note(self.clock, "failed", k, f"robot {i}")
-            if k >= 0:
-                o = self.objects[k]
-                o.team = [j for j in o.team if j != i]
-                if free := self.free():  # the nearest robot nobody needs takes its place
-                    self._reteam(o, [*o.team, *nearest(free, self.executor.robot_positions,
-                                                        self.executor.object_poses[k], 1)],
-                                 "replaced")
 
     # ------------------------------------------------------------------ a loop's side
     def view(self, k: int) -> FleetView:

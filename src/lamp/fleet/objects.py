@@ -49,6 +49,11 @@ class LoopHost(SharedWorld, Protocol):
     are read, and its decisions asked for, through these only."""
 
     @property
+    def scene(self) -> Scene:
+        """The scene in force: every object's goal is its current task's."""
+        ...
+
+    @property
     def stats(self) -> FleetStats:
         """The schedule's counters (transit hops and parking moves are counted here)."""
         ...
@@ -101,7 +106,7 @@ def object_main(runner: ClosedLoopRunner, observe: Callable[[SegmentEvent], None
     fleet's ``settings``."""
 
     def main(fleet: LoopHost, k: int) -> ObjectOutcome:
-        scene, cfg = runner.scene, runner.config
+        scene, cfg = fleet.scene, runner.config  # the object's goal: its task's
         seed = runner.seed * 1000 + k  # the object's tasks' seed (``ClosedLoopRunner.loop``)
         series = LoopSeries.of(scene, k, fleet.executor.object_poses[k], cfg, planning=True)
         while True:

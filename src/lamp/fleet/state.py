@@ -4,7 +4,8 @@ claim, the segment it submitted or runs, and its thread's state.
 An object's status is a small state machine (:class:`ObjectStatus`, the allowed moves in
 ``TRANSITIONS``): ``waiting`` (not started) -> ``active`` (a sub-team moves it) ->
 ``placed`` or ``failed``; a waiting object may also fail without starting (an object it
-waits for failed). :meth:`ObjectState.move_to` is the only way a status changes, and an
+waits for failed); a placed or failed object waits again when its next task is released
+(``fleet.tasks``: lifelong scenes). :meth:`ObjectState.move_to` is the only way a status changes, and an
 illegal move raises :class:`IllegalTransition`. Guarantee (``tests/test_fleet_state.py``):
 every sequence of moves either follows ``TRANSITIONS`` or raises, leaving the state as it
 was.
@@ -41,7 +42,7 @@ class ObjectStatus(StrEnum):
 
     @property
     def done(self) -> bool:
-        """Placed or failed: it never moves again."""
+        """Placed or failed: it moves no more unless a new task is released for it."""
         return self in (ObjectStatus.PLACED, ObjectStatus.FAILED)
 
 
@@ -49,8 +50,8 @@ class ObjectStatus(StrEnum):
 TRANSITIONS: Mapping[ObjectStatus, frozenset[ObjectStatus]] = {
     ObjectStatus.WAITING: frozenset({ObjectStatus.ACTIVE, ObjectStatus.FAILED}),
     ObjectStatus.ACTIVE: frozenset({ObjectStatus.PLACED, ObjectStatus.FAILED}),
-    ObjectStatus.PLACED: frozenset(),
-    ObjectStatus.FAILED: frozenset(),
+    ObjectStatus.PLACED: frozenset({ObjectStatus.WAITING}),
+    ObjectStatus.FAILED: frozenset({ObjectStatus.WAITING}),
 }
 
 
@@ -102,6 +103,13 @@ class ObjectState:
             raise IllegalTransition(f"object {self.index}: {self.status} -> {status} is not "
                                     f"a move of the fleet schedule")
         self.status = status
+
+    def renew(self) -> None:
+        """Its next task (lifelong scenes): it waits to start again (``move_to``), all of
+        its last task forgotten but when it was placed."""
+        self.move_to(ObjectStatus.WAITING)
+        fresh = ObjectState(self.index, self.status, placed_at_s=self.placed_at_s)
+        self.__dict__.update(vars(fresh))
 
     def resume(self, replan: bool = True) -> None:
         """Its thread goes on at its next turn, no longer waiting for a change; ``replan``

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Sequence
+from typing import Any
 
 from lamp.contract.events import RunObserver
 from lamp.contract.result import RunResult
@@ -17,6 +18,7 @@ from lamp.contract.runner import ObjectRunner
 from lamp.pipeline.request import RunRequest
 from lamp.pipeline.schedule import run_concurrently, run_in_order
 from lamp.scene.bounds import makespan_lower_bound
+from lamp.scene.model import Scene
 
 __all__ = ["execute", "object_runner"]
 
@@ -35,12 +37,17 @@ def object_runner(request: RunRequest) -> ObjectRunner:
 
 
 def execute(request: RunRequest, observers: Sequence[RunObserver] = (),
-            runner: ObjectRunner | None = None) -> RunResult:
+            runner: ObjectRunner | None = None, feed: Any = None) -> RunResult:
     """Run ``request`` (see the module docstring); ``result.recording`` is the recording.
 
     ``runner``: an object runner built by the caller (MAPush with another policy, say)
-    instead of :func:`object_runner`'s. ``wall_time_s`` runs from the simulator's
-    construction to the last object (model loading excluded); observers only watch.
+    instead of :func:`object_runner`'s. ``feed``: where a lifelong run's tasks come from
+    (a ``fleet.tasks.TaskFeed``, a live service's; default: the scene's ``tasks``). A
+    scene with tasks, or a run with a feed, is lifelong: served by the fleet (its
+    sequential schedule: one task at a time by the whole team, first come first served),
+    and its result has ``tasks`` and ``lifelong``. ``wall_time_s`` runs from the
+    simulator's construction to the last object (model loading excluded); observers only
+    watch.
     """
     from lamp.record import Recorder
     from lamp.sim import Simulator
@@ -55,10 +62,12 @@ def execute(request: RunRequest, observers: Sequence[RunObserver] = (),
 
         executor = DisturbedExecutor(sim, request.disturbances, request.seed)
     recorder = Recorder(scene, runner.row_dt_s)
-    fleet_stats = None
-    if scene.schedule == "concurrent":
-        outcomes, fleet_stats = run_concurrently(scene, executor, runner, recorder,
-                                                   request.fleet, observers)
+    fleet_stats, records = None, None
+    lifelong = bool(scene.tasks) or feed is not None
+    if scene.schedule == "concurrent" or lifelong:
+        outcomes, fleet_stats, records = run_concurrently(
+            scene, executor, runner, recorder, request.fleet, observers, feed=feed,
+            serial=scene.schedule == "sequential")
     else:
         outcomes = run_in_order(scene, executor, runner, [recorder, *observers])
     result = RunResult(scene=scene.name, planner=request.planner, seed=int(request.seed))
@@ -72,7 +81,10 @@ def execute(request: RunRequest, observers: Sequence[RunObserver] = (),
     if fleet_stats is not None:
         result.stats["fleet"] = fleet_stats
     result.makespan_s = recorder.sim_time_s
-    result.makespan_lower_bound_s = makespan_lower_bound(scene).seconds
+    bound = makespan_lower_bound(scene)
+    result.makespan_lower_bound_s = bound.seconds
+    if lifelong:
+        _lifelong(result, scene, bound.per_object, records or [], fleet_stats or {})
     result.params = request.param_values()
     result.disturbances = request.disturbances.to_dict()
     if request.disturbances.robot_failures:
@@ -82,3 +94,23 @@ def execute(request: RunRequest, observers: Sequence[RunObserver] = (),
             [k, round(t, 4)] for k, t in sorted(executor.fired.items())]
     result.recording = recorder.finish(request.planner, int(request.seed), result.to_dict())
     return result
+
+
+def _lifelong(result: RunResult, scene: Scene, first: Sequence[float], records: list[Any],
+              fleet_stats: dict[str, Any]) -> None:
+    """A lifelong run's tasks, figures and lower bound (``scene.tasks.chain_lower_bound``
+    over the tasks after each object's first) in ``result``."""
+    from lamp.fleet.tasks import lifelong_figures
+    from lamp.scene.model import Task
+    from lamp.scene.tasks import chain_lower_bound
+
+    seen: set[int] = set()
+    later = []
+    for t in records:  # in release order: each object's first is its own goal
+        if t.object in seen:
+            later.append(Task(t.object, t.goal, t.release_s))
+        seen.add(t.object)
+    result.makespan_lower_bound_s = chain_lower_bound(scene, first, later)
+    result.tasks = [t.to_dict() for t in records]
+    result.lifelong = lifelong_figures(records, result.makespan_s,
+                                       fleet_stats.get("utilisation"))

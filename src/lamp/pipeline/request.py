@@ -75,6 +75,9 @@ class RunRequest:
         if self.scene.schedule == "concurrent" and spec.factory is None:
             raise InputError(f"planner {spec.name}: the concurrent schedule runs the "
                              "closed-loop planners only (use --schedule sequential)")
+        if self.scene.tasks and spec.factory is None:
+            raise InputError(f"planner {spec.name}: a scene with tasks (lifelong) runs the "
+                             "closed-loop planners only")
         if spec.check_scene is not None:
             try:
                 spec.check_scene(self.scene)

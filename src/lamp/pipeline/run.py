@@ -9,6 +9,7 @@ their disk cache) once per process before the first run (``lamp.pipeline.warmup`
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 from lamp.contract.events import RunObserver
 from lamp.contract.result import RunResult
@@ -22,16 +23,17 @@ __all__ = ["run"]
 
 
 def run(request: RunRequest, observers: Sequence[RunObserver] = (), *,
-        progress: ProgressCallback | None = None) -> RunResult:
+        progress: ProgressCallback | None = None, feed: Any = None) -> RunResult:
     """Plan and execute ``request``; ``result.to_dict()`` is result.json and
     ``result.recording`` the run's :class:`lamp.record.Recording`.
 
     ``observers`` watch every object and segment (``lamp.contract.events.RunObserver``);
     ``progress`` receives :class:`~lamp.progress.ProgressEvent`\\ s, the compilation notice
-    included. Neither changes the run.
+    included. Neither changes the run. ``feed``: where a lifelong run's tasks come from
+    (``pipeline.execute.execute``).
     """
     ensure_warm(progress)
     watchers = list(observers)
     if progress is not None:
         watchers.append(ProgressObserver(progress))
-    return execute(request, watchers)
+    return execute(request, watchers, feed=feed)

@@ -74,12 +74,17 @@ def _blocker_named(scene: Scene, index: int, executor: Executor, outcome: Object
 
 
 def run_concurrently(scene: Scene, executor: Executor, runner: ObjectRunner, recorder: Any,
-                     config: Any = None, observers: Sequence[RunObserver] = ()
-                     ) -> tuple[list[ObjectOutcome], dict[str, Any]]:
+                     config: Any = None, observers: Sequence[RunObserver] = (),
+                     feed: Any = None, serial: bool = False
+                     ) -> tuple[list[ObjectOutcome], dict[str, Any], list[Any]]:
     """Move ``scene``'s objects several at once by sub-teams (``lamp.fleet.Fleet``, with
     ``config``: a ``FleetConfig``, default its defaults) with the closed loops of
-    ``runner`` (a ``ClosedLoopRunner``); the recorder follows the shared clock. Returns
-    the outcomes in object order and the schedule's figures."""
+    ``runner`` (a ``ClosedLoopRunner``); the recorder follows the shared clock. The tasks
+    come from ``feed`` (a ``fleet.tasks.TaskFeed``; default: the scene's own,
+    ``ScheduledFeed``); ``serial``: one at a time by the whole team, first come first
+    served (a lifelong scene's sequential schedule). Returns the outcomes in object
+    order, the schedule's figures and the task records (``fleet.tasks.TaskRecord``) in
+    the order they were released."""
     from lamp.contract.trajectory import MAX_STEP
     from lamp.fleet.config import FleetConfig
     from lamp.fleet.coordinator import Fleet
@@ -88,6 +93,7 @@ def run_concurrently(scene: Scene, executor: Executor, runner: ObjectRunner, rec
     config = FleetConfig() if config is None else config
     watchers = [recorder, *observers]
     fleet = Fleet(scene, executor, object_main(runner, _segments_to(watchers), config),
-                  recorder.follow, watchers, row_step=MAX_STEP, config=config)
+                  recorder.follow, watchers, row_step=MAX_STEP, config=config, feed=feed,
+                  serial=serial)
     outcomes = fleet.run()
-    return outcomes, fleet.report()
+    return outcomes, fleet.report(), fleet.desk.records

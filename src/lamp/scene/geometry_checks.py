@@ -1,6 +1,6 @@
 """The geometric rules of the scene format: everything inside the workspace (within the
 format's 1e-6 m rounding), nothing overlapping at the start, objects clear of obstacles at
-their starts and goals. Exact footprints (disks and world polygons, Shapely)."""
+their starts, their goals and their tasks' goals. Exact footprints (disks and world polygons, Shapely)."""
 
 from __future__ import annotations
 
@@ -117,7 +117,12 @@ def check_geometry(ctx: Ctx, scene: Scene) -> None:
         )
         for k, o in enumerate(scene.objects)
     ]
-    for fp in (*obstacles, *robots, *starts, *goals):
+    tasks = [
+        Footprint(f"tasks[{i}].goal", f"object {t.object} at the goal of tasks[{i}] "
+                  f"{fmt_xy(t.goal)}", scene.objects[t.object].shape, t.goal)
+        for i, t in enumerate(scene.tasks)
+    ]
+    for fp in (*obstacles, *robots, *starts, *goals, *tasks):
         _check_inside(ctx, fp, W, H)
 
     def pairwise(group_a: list[Footprint], group_b: list[Footprint], same: bool) -> None:
@@ -137,5 +142,6 @@ def check_geometry(ctx: Ctx, scene: Scene) -> None:
     pairwise(robots, starts, same=False)
     pairwise(starts, obstacles, same=False)
     pairwise(goals, obstacles, same=False)
+    pairwise(tasks, obstacles, same=False)
     pairwise(starts, starts, same=True)
     pairwise(goals, goals, same=True)

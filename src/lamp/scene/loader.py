@@ -36,10 +36,8 @@ mapping is an error (it would otherwise silently win). ``.json`` files are read 
 
 from __future__ import annotations
 
-import difflib
 import graphlib
 import json
-import math
 import re
 from collections.abc import Callable, Mapping
 from pathlib import Path
@@ -50,7 +48,17 @@ import shapely
 import yaml
 
 from lamp.geometry.team import DEFAULT_TEAM
-from lamp.scene.errors import Ctx, SceneError, fmt_xy, is_number, show, value_kind
+from lamp.scene.errors import Ctx, SceneError, fmt_xy, show, value_kind
+from lamp.scene.fields import (
+    MAX_ANGLE,
+    field_angle,
+    field_items,
+    field_mapping,
+    field_number,
+    field_pose,
+    field_string,
+    field_vector,
+)
 from lamp.scene.geometry_checks import check_geometry
 from lamp.scene.model import (
     SCHEDULES,
@@ -71,6 +79,7 @@ from lamp.scene.physics import (
     Physics,
     check_range,
 )
+from lamp.scene.tasks import parse_tasks
 
 __all__ = ["DEFAULT_ROBOT_RADIUS", "FORMAT", "MAX_ANGLE", "MAX_WORKSPACE_SIDE", "SceneError", "load_scene", "scene_from_dict"]
 
@@ -80,15 +89,11 @@ DEFAULT_ROBOT_RADIUS = DEFAULT_TEAM.radius
 #: headings) keeps one validity byte per pose, 64 M poses at 200 m x 200 m, filled only
 #: where a search goes; beyond that a scene is refused rather than run out of memory.
 MAX_WORKSPACE_SIDE = 200.0
-#: Largest |angle| (rad) of a pose or an obstacle: float64 holds such an angle to 1e-10 rad;
-#: far beyond it a heading is rounding noise (at 1e308 every digit is) and the simulator's
-#: hinge joints go unstable (MuJoCo's limit on a joint's value is 1e10).
-MAX_ANGLE = 1e6
 SHAPE_TYPES = ("circle", "rectangle", "polygon")
 
 # Allowed keys per mapping: (required, optional).
 _TOP_KEYS = (("format", "name", "workspace", "robots", "objects"),
-             ("obstacles", "physics", "schedule"))
+             ("obstacles", "physics", "schedule", "tasks"))
 _ROBOT_KEYS = (("starts",), ("radius", "speed", "force_limit"))
 _PHYSICS_KEYS = ((), ("contact_friction", "ground_damping"))
 _OBSTACLE_KEYS = {
@@ -170,87 +175,10 @@ def _parse(data: bytes, ctx: Ctx, as_json: bool) -> Any:
 
 
 
-def _number(ctx: Ctx, v: Any, field: str, *, positive: bool = False) -> float:
-    """A finite real number (not a bool, not a string); ``positive`` demands > 0."""
-    if not is_number(v):
-        ctx.fail(field, f"must be a number, got {show(v)} ({value_kind(v)})")
-    try:
-        x = float(v)
-    except (OverflowError, ValueError, TypeError):
-        ctx.fail(field, f"must be a finite number, got {show(v)}")
-    if not math.isfinite(x):
-        ctx.fail(field, f"must be a finite number, got {show(v)}")
-    if positive and x <= 0.0:
-        ctx.fail(field, f"must be > 0, got {show(v)}")
-    return x
-
-
-def _list(ctx: Ctx, v: Any, field: str, *, min_len: int = 0, what: str = "items") -> list:
-    if not isinstance(v, (list, tuple)):
-        ctx.fail(field, f"must be a list, got {show(v)} ({value_kind(v)})")
-    if len(v) < min_len:
-        ctx.fail(field, f"must have at least {min_len} {what}, got {len(v)}")
-    return list(v)
-
-
-def _vector(ctx: Ctx, v: Any, field: str, n: int, names: str, **kw: Any) -> tuple[float, ...]:
-    """A list of exactly ``n`` finite numbers, e.g. ``[x, y]`` (``names`` says which)."""
-    if not isinstance(v, (list, tuple)) or len(v) != n:
-        ctx.fail(field, f"must be a list of {n} numbers [{names}], got {show(v)}")
-    return tuple(_number(ctx, c, f"{field}[{i}]", **kw) for i, c in enumerate(v))
-
-
-def _angle(ctx: Ctx, v: Any, field: str) -> float:
-    """A finite angle of at most ``MAX_ANGLE`` in magnitude."""
-    a = _number(ctx, v, field)
-    if abs(a) > MAX_ANGLE:
-        ctx.fail(field, f"an angle of at most {MAX_ANGLE:g} rad in magnitude (radians, "
-                 f"counter-clockwise), got {show(v)}")
-    return a
-
-
-def _pose(ctx: Ctx, v: Any, field: str) -> tuple[float, float, float]:
-    """``[x, y, theta]`` with ``theta`` an angle (``_angle``)."""
-    x, y, _ = _vector(ctx, v, field, 3, "x, y, theta")
-    return x, y, _angle(ctx, v[2], f"{field}[2]")
-
-
-def _string(ctx: Ctx, v: Any, field: str) -> str:
-    if not isinstance(v, str):
-        ctx.fail(field, f"must be a string (quote it in YAML), got {show(v)} ({value_kind(v)})")
-    return v
-
-
-def _mapping(
-    ctx: Ctx, v: Any, field: str, keys: tuple[tuple[str, ...], tuple[str, ...]]
-) -> dict[str, Any]:
-    """Check that ``v`` is a mapping with all required keys and no unknown ones.
-
-    Optional keys whose value is ``None`` are dropped (null means "use the default").
-    """
-    if not isinstance(v, Mapping):
-        ctx.fail(field or "(top level)", f"must be a mapping, got {show(v)} ({value_kind(v)})")
-    required, optional = keys
-    allowed = required + optional
-    prefix = f"{field}." if field else ""
-    for k in v:
-        if k not in allowed:
-            hint = difflib.get_close_matches(str(k), allowed, n=1)
-            did = f"; did you mean {hint[0]!r}?" if hint else ""
-            ctx.fail(
-                f"{prefix}{show(k) if not isinstance(k, str) else k}",
-                f"unknown key (allowed here: {', '.join(allowed)}){did}",
-            )
-    for k in required:
-        if k not in v:
-            ctx.fail(f"{prefix}{k}", "missing required field")
-    return {k: val for k, val in v.items() if not (k in optional and val is None)}
-
-
 def _polygon_points(ctx: Ctx, v: Any, field: str) -> tuple[tuple[float, float], ...]:
     """>= 3 finite [x, y] vertices forming a simple polygon of positive area."""
-    raw = _list(ctx, v, field, min_len=3, what="points")
-    pts = tuple(_vector(ctx, p, f"{field}[{i}]", 2, "x, y") for i, p in enumerate(raw))
+    raw = field_items(ctx, v, field, min_len=3, what="points")
+    pts = tuple(field_vector(ctx, p, f"{field}[{i}]", 2, "x, y") for i, p in enumerate(raw))
     arr = np.asarray(pts, dtype=float)
     repeated = np.flatnonzero(np.all(arr == np.roll(arr, -1, axis=0), axis=1))
     if repeated.size:
@@ -272,9 +200,9 @@ def _polygon_points(ctx: Ctx, v: Any, field: str) -> tuple[tuple[float, float], 
 def _shape(ctx: Ctx, d: Mapping[str, Any], field: str, kind: str) -> Shape:
     """The size part of an object entry (obstacle circles/rectangles are built separately)."""
     if kind == "circle":
-        return Circle(_number(ctx, d["radius"], f"{field}.radius", positive=True))
+        return Circle(field_number(ctx, d["radius"], f"{field}.radius", positive=True))
     if kind == "rectangle":
-        return Rectangle(_vector(ctx, d["size"], f"{field}.size", 2, "sx, sy", positive=True))
+        return Rectangle(field_vector(ctx, d["size"], f"{field}.size", 2, "sx, sy", positive=True))
     return Polygon(_polygon_points(ctx, d["points"], f"{field}.points"))
 
 
@@ -294,24 +222,24 @@ def _shape_type(ctx: Ctx, v: Any, field: str) -> str:
 
 def _obstacle(ctx: Ctx, v: Any, field: str) -> Obstacle:
     kind = _shape_type(ctx, v, field)
-    d = _mapping(ctx, v, field, _OBSTACLE_KEYS[kind])
+    d = field_mapping(ctx, v, field, _OBSTACLE_KEYS[kind])
     if kind == "polygon":  # world-frame vertices, identity pose
         return Obstacle(Polygon(_polygon_points(ctx, d["points"], f"{field}.points")))
-    cx, cy = _vector(ctx, d["center"], f"{field}.center", 2, "x, y")
+    cx, cy = field_vector(ctx, d["center"], f"{field}.center", 2, "x, y")
     if kind == "circle":
-        r = _number(ctx, d["radius"], f"{field}.radius", positive=True)
+        r = field_number(ctx, d["radius"], f"{field}.radius", positive=True)
         return Obstacle(Circle(r), (cx, cy, 0.0))
-    size = _vector(ctx, d["size"], f"{field}.size", 2, "sx, sy", positive=True)
-    angle = _angle(ctx, d["angle"], f"{field}.angle") if "angle" in d else 0.0
+    size = field_vector(ctx, d["size"], f"{field}.size", 2, "sx, sy", positive=True)
+    angle = field_angle(ctx, d["angle"], f"{field}.angle") if "angle" in d else 0.0
     return Obstacle(Rectangle(size), (cx, cy, angle))
 
 
 def _object(ctx: Ctx, v: Any, field: str) -> SceneObject:
     kind = _shape_type(ctx, v, field)
-    d = _mapping(ctx, v, field, _OBJECT_KEYS[kind])
+    d = field_mapping(ctx, v, field, _OBJECT_KEYS[kind])
     shape = _shape(ctx, d, field, kind)
-    start = _pose(ctx, d["start"], f"{field}.start")
-    goal = _pose(ctx, d["goal"], f"{field}.goal")
+    start = field_pose(ctx, d["start"], f"{field}.start")
+    goal = field_pose(ctx, d["goal"], f"{field}.goal")
     phys = {k: _ranged(ctx, d[k], f"{field}.{k}", OBJECT_RANGES[k]) for k in OBJECT_RANGES
             if k in d}
     after = _after(ctx, d.get("after") or [], f"{field}.after")
@@ -322,7 +250,7 @@ def _after(ctx: Ctx, v: Any, field: str) -> tuple[int, ...]:
     """An object's ``after`` list: distinct non-negative integers (checked against the
     objects by :func:`_check_order`)."""
     out = []
-    for i, k in enumerate(_list(ctx, v, field, what="object indices")):
+    for i, k in enumerate(field_items(ctx, v, field, what="object indices")):
         if isinstance(k, bool) or not isinstance(k, int) or k < 0:
             ctx.fail(f"{field}[{i}]", f"must be an object index (an integer >= 0), got {show(k)}")
         if k in out:
@@ -355,7 +283,7 @@ def _check_order(ctx: Ctx, objects: tuple[SceneObject, ...]) -> None:
 
 def _ranged(ctx: Ctx, v: Any, field: str, bound: Bound) -> float:
     """A number within a physical parameter's range (``lamp.scene.physics``)."""
-    x = _number(ctx, v, field)
+    x = field_number(ctx, v, field)
     why = check_range(field, x, bound)
     if why is not None:
         ctx.fail(field, why)
@@ -364,7 +292,7 @@ def _ranged(ctx: Ctx, v: Any, field: str, bound: Bound) -> float:
 
 def _physics(ctx: Ctx, d: Mapping[str, Any], robots: Mapping[str, Any]) -> Physics:
     """The ``physics`` section and ``robots.speed`` / ``robots.force_limit``."""
-    section = _mapping(ctx, d.get("physics") or {}, "physics", _PHYSICS_KEYS)
+    section = field_mapping(ctx, d.get("physics") or {}, "physics", _PHYSICS_KEYS)
     values = {k: _ranged(ctx, section[k], f"physics.{k}", PHYSICS_RANGES[k])
               for k in _PHYSICS_KEYS[1] if k in section}
     for key, attr in (("speed", "robot_speed"), ("force_limit", "robot_force_limit")):
@@ -374,34 +302,37 @@ def _physics(ctx: Ctx, d: Mapping[str, Any], robots: Mapping[str, Any]) -> Physi
 
 
 def _structure(ctx: Ctx, raw: Any, source: str | None) -> Scene:
-    d = _mapping(ctx, raw, "", _TOP_KEYS)
+    d = field_mapping(ctx, raw, "", _TOP_KEYS)
     if not (isinstance(d["format"], str) and d["format"] == FORMAT):
         ctx.fail("format", f"must be exactly {FORMAT!r}, got {show(d['format'])}")
-    name = _string(ctx, d["name"], "name")
-    workspace = _vector(ctx, d["workspace"], "workspace", 2, "W, H", positive=True)
+    name = field_string(ctx, d["name"], "name")
+    workspace = field_vector(ctx, d["workspace"], "workspace", 2, "W, H", positive=True)
     if max(workspace) > MAX_WORKSPACE_SIDE:
         ctx.fail("workspace", f"sides up to {MAX_WORKSPACE_SIDE:g} m are supported (the "
                  f"planners' 1 cm and 0.1 m grids), got {list(workspace)}")
-    robots = _mapping(ctx, d["robots"], "robots", _ROBOT_KEYS)
+    robots = field_mapping(ctx, d["robots"], "robots", _ROBOT_KEYS)
     radius = (
-        _number(ctx, robots["radius"], "robots.radius", positive=True)
+        field_number(ctx, robots["radius"], "robots.radius", positive=True)
         if "radius" in robots
         else DEFAULT_ROBOT_RADIUS
     )
-    starts = _list(ctx, robots["starts"], "robots.starts", min_len=1, what="robot starts")
+    starts = field_items(ctx, robots["starts"], "robots.starts", min_len=1, what="robot starts")
     robot_starts = tuple(
-        _vector(ctx, p, f"robots.starts[{i}]", 2, "x, y") for i, p in enumerate(starts)
+        field_vector(ctx, p, f"robots.starts[{i}]", 2, "x, y") for i, p in enumerate(starts)
     )
     obstacles = tuple(
         _obstacle(ctx, o, f"obstacles[{i}]")
-        for i, o in enumerate(_list(ctx, d.get("obstacles", []), "obstacles"))
+        for i, o in enumerate(field_items(ctx, d.get("obstacles", []), "obstacles"))
     )
     objects = tuple(
         _object(ctx, o, f"objects[{i}]")
-        for i, o in enumerate(_list(ctx, d["objects"], "objects", min_len=1, what="objects"))
+        for i, o in enumerate(field_items(ctx, d["objects"], "objects", min_len=1, what="objects"))
     )
     _check_order(ctx, objects)
-    schedule = d.get("schedule") or "sequential"
+    tasks = parse_tasks(ctx, d.get("tasks") or [], objects)
+    # a lifelong scene is served by the fleet unless it says otherwise (sequential: the
+    # first-come-first-served baseline, ``lamp.pipeline.schedule``)
+    schedule = d.get("schedule") or ("concurrent" if tasks else "sequential")
     if not (isinstance(schedule, str) and schedule in SCHEDULES):
         ctx.fail("schedule", f"must be one of {', '.join(SCHEDULES)}, got {show(schedule)}")
     return Scene(
@@ -414,6 +345,7 @@ def _structure(ctx: Ctx, raw: Any, source: str | None) -> Scene:
         robot_radius=radius,
         source=source,
         physics=_physics(ctx, d, robots),
+        tasks=tasks,
     )
 
 

@@ -26,7 +26,7 @@ from lamp.geometry.team import DEFAULT_TEAM
 from lamp.scene.physics import DEFAULT_PHYSICS, ObjectPhysics, Physics
 
 __all__ = ["SCHEDULES", "Circle", "ObjectPhysics", "Obstacle", "Physics", "Point", "Polygon",
-           "Pose", "Rectangle", "Scene", "SceneObject", "Shape", "shape_from_dict"]
+           "Pose", "Rectangle", "Scene", "SceneObject", "Shape", "Task", "shape_from_dict"]
 
 #: How a scene's objects are moved: ``sequential`` (the paper's: one after another, in the
 #: file's order, each by the whole team) or ``concurrent`` (several at once by sub-teams,
@@ -58,6 +58,21 @@ class SceneObject:
 
 
 @dataclass(frozen=True)
+class Task:
+    """A task of a lifelong scene: from simulated time ``release_s`` on, object ``object``
+    must go to ``goal``, after every earlier task of that object (release order, then the
+    file's). An object's own ``goal`` is its first task, released at 0."""
+
+    object: int
+    goal: Pose
+    release_s: float = 0.0
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"object": int(self.object), "goal": [float(v) for v in self.goal],
+                "release_s": float(self.release_s)}
+
+
+@dataclass(frozen=True)
 class Scene:
     """One manipulation problem: workspace, robots, static obstacles, objects in order."""
 
@@ -73,6 +88,9 @@ class Scene:
     physics: Physics = DEFAULT_PHYSICS
     #: One of :data:`SCHEDULES`.
     schedule: str = "sequential"
+    #: Tasks released while the robots work (:class:`Task`), beyond each object's own
+    #: goal; a scene with tasks is a lifelong one (``lamp.fleet.tasks``).
+    tasks: tuple[Task, ...] = ()
 
     @property
     def n_robots(self) -> int:
@@ -112,6 +130,8 @@ class Scene:
         }
         if self.physics.to_dict():
             d["physics"] = self.physics.to_dict()
-        if self.schedule != "sequential":
+        if self.schedule != "sequential" or self.tasks:  # tasks default to concurrent
             d["schedule"] = self.schedule
+        if self.tasks:
+            d["tasks"] = [t.to_dict() for t in self.tasks]
         return d

@@ -51,6 +51,27 @@ def _closed(kind: str, properties: dict[str, Any], required: list[str]) -> dict[
             "required": ["type", *required], "additionalProperties": False}
 
 
+#: A lifelong scene's ``tasks`` (``lamp.scene.tasks``).
+_TASKS: dict[str, Any] = {
+    "type": ["array", "null"],
+    "items": {
+        "type": "object",
+        "properties": {
+            "object": {"type": "integer", "minimum": 0,
+                       "description": "index into objects"},
+            "goal": _numbers(3, "[x, y, theta]"),
+            "release_s": {"type": ["number", "null"], "minimum": 0, "default": 0,
+                          "description": "simulated time (s) from which it "
+                                         "may be served"},
+        },
+        "required": ["object", "goal"], "additionalProperties": False,
+    },
+    "description": "lifelong tasks beyond each object's own goal (its first "
+                   "task): the object goes to goal once released, after its "
+                   "earlier tasks",
+}
+
+
 def scene_schema() -> dict[str, Any]:
     """The JSON Schema of a scene file (a fresh dict each call)."""
     pose = _numbers(3, "pose [x, y, theta] (metres, radians)")
@@ -133,8 +154,10 @@ def scene_schema() -> dict[str, Any]:
                                        "sequential), or several at once (concurrent)"},
             "schedule": {"enum": [*SCHEDULES, None], "default": "sequential",
                          "description": "sequential: one object after another by the whole "
-                                        "team (the paper's); concurrent: several at once by "
-                                        "sub-teams"},
+                                        "team (the paper's; with tasks: first come, first "
+                                        "served); concurrent: several at once by sub-teams "
+                                        "(the default of a scene with tasks)"},
+            "tasks": _TASKS,
         },
         "required": ["format", "name", "workspace", "robots", "objects"],
         "additionalProperties": False,
