@@ -192,6 +192,11 @@ class Lattice:
             _build_edges(F, ids, s, h, thr, g.circles, g.verts, g.ptr, W, H, a0, b0, lo, hi,
                          nbr)
         self.nbr = nbr
+        #: (nb, na) uint8: bit e set where the node at that lattice index has edge e
+        self.edge_mask = np.zeros((nb_, na), dtype=np.uint8)
+        for e in range(8):
+            has = nbr[:, e] >= 0
+            self.edge_mask[bb[has], aa[has]] |= np.uint8(1 << e)
         self.V = V
         self._fields: OrderedDict[Any, np.ndarray] = OrderedDict()
 

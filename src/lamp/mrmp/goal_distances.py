@@ -57,12 +57,15 @@ class GoalDistances(NamedTuple):
 
     ``win[m] = (a0, b0, na, nb, k)``: window origin and size in lattice indices and the
     bucket being processed; ``rad[m]`` the window's radius ``R`` (inf once the window is
-    the whole lattice, 0 before the first query); ``dist``/``done`` per goal, indexed by
-    the window-local index ``(b - b0) * na + (a - a0)``; ``bucket[m]`` (slots, cap) and
+    the whole lattice, 0 before the first query); ``dist``/``done``/``em`` per goal
+    (distance, settled, edge bits), indexed by the window-local index
+    ``(b - b0 + 1) * (na + 2) + (a - a0 + 1)`` (the window and a ring of one entry around
+    it, settled and without edges); ``bucket[m]`` (slots, cap: window-local indices) and
     ``bcnt[m]`` the circular bucket queue. ``sptr``/``snode``/``scost``: goal m's seed
     nodes and costs (CSR). ``va``/``vb``: lattice index of each node; ``ids``: node id per
     lattice index (-1 none); ``da``/``db``: the lattice directions; ``centre[m]``: goal m
-    in lattice index units; ``step``: lattice step (m).
+    in lattice index units; ``step``: lattice step (m); ``emask``: the lattice's edge bits
+    per lattice index (``Lattice.edge_mask``).
     """
 
     win: np.ndarray  # (M, 5) int64
@@ -83,6 +86,8 @@ class GoalDistances(NamedTuple):
     db: np.ndarray  # (8,) int64
     centre: np.ndarray  # (M, 2)
     step: float
+    em: Any  # typed List of uint8 arrays
+    emask: np.ndarray  # (nb, na) uint8
 
     @staticmethod
     def build(goal_links: list[tuple[np.ndarray, np.ndarray]], goals: np.ndarray,
@@ -105,45 +110,62 @@ class GoalDistances(NamedTuple):
         oa, ob = lat.offset
         va, vb = lat.va, lat.vb
         centre = np.asarray(goals, dtype=np.float64).reshape(-1, 2) / lat.step - [oa, ob]
-        dist, done, bucket = _new_lists(max(M, 1), slots)
+        dist, done, bucket, em = _new_lists(max(M, 1), slots)
         return GoalDistances(
             np.zeros((M, 5), dtype=np.int64), np.zeros(M), dist, done, bucket,
             np.zeros((M, slots), dtype=np.int64), sptr, snode, scost,
             np.zeros((M, n_special), dtype=np.bool_), np.zeros((M, n_special)), va, vb,
             lat.ids, DIRS[:, 0].copy(), DIRS[:, 1].copy(), np.ascontiguousarray(centre),
-            float(lat.step))
+            float(lat.step), em, lat.edge_mask)
 
 # The typed lists are made and read in compiled code only: Numba compiles its list
 # helpers anew in every process (about 1 s) when Python code builds or reads them.
 
 
 @nb.njit(cache=True)
-def _new_lists(M: int, slots: int) -> tuple[Any, Any, Any]:
+def _new_lists(M: int, slots: int) -> tuple[Any, Any, Any, Any]:
     dist = List()
     done = List()
     bucket = List()
+    em = List()
     for _ in range(M):
         dist.append(np.zeros(0))
         done.append(np.zeros(0, np.uint8))
         bucket.append(np.zeros((slots, 0), np.int32))
-    return dist, done, bucket
+        em.append(np.zeros(0, np.uint8))
+    return dist, done, bucket, em
 
 
 # ---- one goal's bucket queue and window ----------------------------------------------
+# A window of na x nb lattice indices is stored with a ring of one entry around it
+# (row stride na + 2): ring entries count as settled and have no edges, so the search
+# needs no bounds checks; window entries hold their node's edge bits (``em``).
 
 
 @nb.njit(cache=True)
-def _push(m: int, v: int, d: float, hs: tuple) -> None:
-    """Queue lattice node v at distance d (in bucket floor(d / L), never below the bucket
+def _local(m: int, v: int, hs: tuple) -> int:
+    """Index of lattice node v in goal m's window arrays (-1 outside the window)."""
+    win, va, vb = hs[0], hs[11], hs[12]
+    a = va[v] - win[m, 0]
+    b = vb[v] - win[m, 1]
+    na = win[m, 2]
+    if 0 <= a < na and 0 <= b < win[m, 3]:
+        return (b + 1) * (na + 2) + a + 1
+    return -1
+
+
+@nb.njit(cache=True)
+def _push(m: int, j: int, d: float, hs: tuple) -> None:
+    """Queue window entry j at distance d (in bucket floor(d / L), never below the bucket
     being processed)."""
-    win, _, _, _, bucket_l, bcnt, _, _, _, _, _, _, _, _, _, _, _, step = hs
+    win, bucket_l, bcnt, step = hs[0], hs[4], hs[5], hs[17]
     slots = bcnt.shape[1]
     k = max(int(d / step), win[m, 4])
     s = k & (slots - 1)
     c = bcnt[m, s]
     if c == bucket_l[m].shape[1]:
         _grow_buckets(m, bucket_l)
-    bucket_l[m][s, c] = v
+    bucket_l[m][s, c] = j
     bcnt[m, s] = c + 1
 
 
@@ -157,12 +179,29 @@ def _grow_buckets(m: int, bucket_l: Any) -> None:
 
 
 @nb.njit(cache=True)
+def _window_arrays(a0: int, b0: int, na: int, nb_: int,
+                   emask: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Fresh (dist, done, edge bits) of a window with its ring."""
+    P = na + 2
+    n = P * (nb_ + 2)
+    d = np.full(n, np.inf)
+    dn = np.ones(n, dtype=np.uint8)
+    em = np.zeros(n, dtype=np.uint8)
+    for b in range(nb_):
+        r = (b + 1) * P + 1
+        for a in range(na):
+            dn[r + a] = 0
+            em[r + a] = emask[b + b0, a + a0]
+    return d, dn, em
+
+
+@nb.njit(cache=True)
 def _open_window(m: int, radius: float, nbr: np.ndarray, dlen: np.ndarray,
                  hs: tuple) -> None:
     """Give goal m the window of radius ``radius`` (metres), keeping what its search has
     settled and queued; the first window is seeded with the goal's links."""
     (win, rad, dist_l, done_l, bucket_l, bcnt, sptr, snode, scost, _, _, va, vb, ids, da, db,
-     centre, step) = hs
+     centre, step, em_l, emask) = hs
     nbt, nat = ids.shape
     k = int(math.ceil(radius / step)) + 2
     ca = int(math.floor(centre[m, 0] + 0.5))
@@ -176,10 +215,11 @@ def _open_window(m: int, radius: float, nbr: np.ndarray, dlen: np.ndarray,
         a0, b0, a1, b1 = 0, 0, -1, -1
     na = a1 - a0 + 1
     nb_ = b1 - b0 + 1
-    d = np.full(na * nb_, np.inf)
-    dn = np.zeros(na * nb_, dtype=np.uint8)
+    P = na + 2
+    d, dn, em = _window_arrays(a0, b0, na, nb_, emask)
     first = rad[m] == 0.0
     oa0, ob0, ona, onb = win[m, 0], win[m, 1], win[m, 2], win[m, 3]
+    oP = ona + 2
     old_d = dist_l[m]
     old_dn = done_l[m]
     old_bk = bucket_l[m]
@@ -190,6 +230,7 @@ def _open_window(m: int, radius: float, nbr: np.ndarray, dlen: np.ndarray,
     bucket_l[m] = np.empty((slots, max(_BUCKET_CAP, old_bk.shape[1])), dtype=np.int32)
     dist_l[m] = d
     done_l[m] = dn
+    em_l[m] = em
     win[m, 0] = a0
     win[m, 1] = b0
     win[m, 2] = na
@@ -201,105 +242,104 @@ def _open_window(m: int, radius: float, nbr: np.ndarray, dlen: np.ndarray,
             a = va[v] - a0
             b = vb[v] - b0
             if 0 <= a < na and 0 <= b < nb_:
-                j = b * na + a
+                j = (b + 1) * P + a + 1
                 if scost[s] < d[j]:
                     d[j] = scost[s]
-                    _push(m, v, scost[s], hs)
+                    _push(m, j, scost[s], hs)
         return
     # carry the old window over (it lies inside the new one)
     for ob in range(onb):
         for oa in range(ona):
-            oj = ob * ona + oa
-            j = (ob + ob0 - b0) * na + (oa + oa0 - a0)
+            oj = (ob + 1) * oP + oa + 1
+            j = (ob + ob0 - b0 + 1) * P + (oa + oa0 - a0 + 1)
             d[j] = old_d[oj]
             dn[j] = old_dn[oj]
     for s in range(slots):
         for c in range(old_cnt[s]):
-            v = old_bk[s, c]
-            j = (vb[v] - b0) * na + (va[v] - a0)
+            oj = old_bk[s, c]
+            j = (oj // oP + ob0 - b0) * P + (oj % oP + oa0 - a0)
             if dn[j] == 0:
-                _push(m, v, d[j], hs)
+                _push(m, j, d[j], hs)
     # settled nodes on the old border: relax their edges that leave the old window
     for ob in range(onb):
         for oa in range(ona):
             if not (oa == 0 or ob == 0 or oa == ona - 1 or ob == onb - 1):
                 continue
-            oj = ob * ona + oa
+            oj = (ob + 1) * oP + oa + 1
             if old_dn[oj] == 0:
                 continue
-            v = ids[ob + ob0, oa + oa0]
             du = old_d[oj]
+            msk = emask[ob + ob0, oa + oa0]
             for e in range(8):
-                w = nbr[v, e]
-                if w < 0:
+                if not (msk >> e) & 1:
                     continue
                 wa = oa + da[e]
                 wb = ob + db[e]
                 if 0 <= wa < ona and 0 <= wb < onb:
                     continue
-                j = (wb + ob0 - b0) * na + (wa + oa0 - a0)
+                j = (wb + ob0 - b0 + 1) * P + (wa + oa0 - a0 + 1)
                 nd = du + dlen[e]
                 if nd < d[j]:
                     d[j] = nd
-                    _push(m, w, nd, hs)
+                    _push(m, j, nd, hs)
 
 
 @nb.njit(cache=True)
-def _settle(target: int, lim: float, k: int, nbr: np.ndarray, dlen: np.ndarray,
-            dist: np.ndarray, done: np.ndarray, bk: np.ndarray, cnt: np.ndarray,
-            a0: int, b0: int, na: int, nb_: int, va: np.ndarray, vb: np.ndarray,
+def _settle(target: int, lim: float, k: int, dlen: np.ndarray, dist: np.ndarray,
+            done: np.ndarray, em: np.ndarray, bk: np.ndarray, cnt: np.ndarray, P: int,
             da: np.ndarray, db: np.ndarray, step: float) -> tuple[int, int]:
     """The search loop of one goal (Dial's buckets of width L: an edge is at least L
     long, so every node in the lowest non-empty bucket is final). Returns (bucket,
-    status): 0 target settled or ``lim`` reached, 1 queue empty, 2 a bucket is full.
-    (Kept apart from the growth of the buckets: an array variable reassigned inside a
-    Numba loop costs a reference count on every access, three times the loop's time.)"""
+    status): 0 window entry ``target`` settled or ``lim`` reached, 1 queue empty, 2 a
+    bucket may be full. (Kept apart from the growth of the buckets: an array variable
+    reassigned inside a Numba loop costs a reference count on every access.)"""
     slots = cnt.shape[0]
     mask = slots - 1
     cap = bk.shape[1] - 8
     inv = 1.0 / step
+    off = np.empty(8, dtype=np.int64)
+    for e in range(8):
+        off[e] = da[e] + db[e] * P
+    left = 0
+    high = 0
+    for q in range(slots):
+        left += cnt[q]
+        high = max(high, cnt[q])
     while target < 0 or done[target] == 0:
         s = k & mask
         if cnt[s] == 0:
-            left = 0
-            for q in range(slots):
-                left += cnt[q]
             if left == 0:
                 return k, 1
             k += 1
             continue
         if k * step >= lim:
             return k, 0
-        for q in range(slots):
-            if cnt[q] > cap:
-                return k, 2
+        if high > cap:
+            return k, 2
         c = cnt[s] - 1
         cnt[s] = c
-        v = bk[s, c]
-        a = va[v] - a0
-        b = vb[v] - b0
-        j = b * na + a
+        left -= 1
+        j = bk[s, c]
         if done[j]:
             continue
         done[j] = 1
         du = dist[j]
+        msk = em[j]
         for e in range(8):
-            w = nbr[v, e]
-            if w < 0:
-                continue
-            wa = a + da[e]
-            wb = b + db[e]
-            if wa < 0 or wa >= na or wb < 0 or wb >= nb_:
-                continue
-            jw = j + da[e] + db[e] * na
-            if done[jw]:
-                continue
-            nd = du + dlen[e]
-            if nd < dist[jw]:
-                dist[jw] = nd
-                q = max(int(nd * inv), k) & mask
-                bk[q, cnt[q]] = w
-                cnt[q] += 1
+            if (msk >> e) & 1:
+                jw = j + off[e]
+                if done[jw]:
+                    continue
+                nd = du + dlen[e]
+                if nd < dist[jw]:
+                    dist[jw] = nd
+                    q = max(int(nd * inv), k) & mask
+                    cq = cnt[q] + 1
+                    bk[q, cq - 1] = jw
+                    cnt[q] = cq
+                    left += 1
+                    if cq > high:
+                        high = cq
     return k, 0
 
 
@@ -308,13 +348,12 @@ def _run_until(m: int, target: int, bound: float, nbr: np.ndarray, dlen: np.ndar
                hs: tuple) -> bool:
     """Resume goal m's search until window entry ``target`` is settled (-1: none), or
     every bucket below ``min(bound, R)`` is processed; False when the queue ran empty."""
-    (win, rad, dist_l, done_l, bucket_l, bcnt, _, _, _, _, _, va, vb, _, da, db, _,
-     step) = hs
+    (win, rad, dist_l, done_l, bucket_l, bcnt, _, _, _, _, _, _, _, _, da, db, _,
+     step, em_l, _) = hs
     lim = min(bound, rad[m])
     while True:
-        k, status = _settle(target, lim, win[m, 4], nbr, dlen, dist_l[m], done_l[m],
-                            bucket_l[m], bcnt[m], win[m, 0], win[m, 1], win[m, 2],
-                            win[m, 3], va, vb, da, db, step)
+        k, status = _settle(target, lim, win[m, 4], dlen, dist_l[m], done_l[m], em_l[m],
+                            bucket_l[m], bcnt[m], win[m, 2] + 2, da, db, step)
         win[m, 4] = k
         if status != 2:
             return status == 0
@@ -324,16 +363,13 @@ def _run_until(m: int, target: int, bound: float, nbr: np.ndarray, dlen: np.ndar
 @nb.njit(cache=True)
 def lattice_h(m: int, v: int, nbr: np.ndarray, dlen: np.ndarray, hs: tuple) -> float:
     """Exact lattice distance from node v to goal m (inf when there is no path)."""
-    win, rad, dist_l, done_l = hs[0], hs[1], hs[2], hs[3]
+    rad, dist_l, done_l = hs[1], hs[2], hs[3]
     va, vb, centre, step = hs[11], hs[12], hs[16], hs[17]
     if rad[m] == 0.0:
         _open_window(m, _FIRST_RADIUS_STEPS * step, nbr, dlen, hs)
     while True:
-        a = va[v] - win[m, 0]
-        b = vb[v] - win[m, 1]
-        na = win[m, 2]
-        if 0 <= a < na and 0 <= b < win[m, 3]:
-            j = b * na + a
+        j = _local(m, v, hs)
+        if j >= 0:
             if done_l[m][j]:
                 return dist_l[m][j]
             _run_until(m, j, np.inf, nbr, dlen, hs)
@@ -383,14 +419,9 @@ def _special(m: int, v: int, gr: tuple, V: int, gv0: int, hs: tuple, below: floa
 
 @nb.njit(cache=True)
 def _settled_value(m: int, v: int, hs: tuple) -> float:
-    win, va, vb = hs[0], hs[11], hs[12]
-    a = va[v] - win[m, 0]
-    b = vb[v] - win[m, 1]
-    na = win[m, 2]
-    if 0 <= a < na and 0 <= b < win[m, 3]:
-        j = b * na + a
-        if hs[3][m][j]:
-            return hs[2][m][j]
+    j = _local(m, v, hs)
+    if j >= 0 and hs[3][m][j]:
+        return hs[2][m][j]
     return np.inf
 
 
