@@ -140,9 +140,11 @@ def test_fleet_threads_share_malloc_arenas() -> None:
 
 # ------------------------------------------------------------------ the grid
 
+#: steps of up to 5 cm; no subnormal coordinates (GEOS, the reference, projects a point
+#: onto a segment 5e-324 m off the axis without the precision the check needs)
+_step = st.floats(-0.05, 0.05, allow_subnormal=False)
 paths_st = st.integers(1, 3).flatmap(lambda n: st.lists(
-    st.lists(st.tuples(st.floats(-0.05, 0.05), st.floats(-0.05, 0.05)), min_size=n, max_size=n),
-    min_size=1, max_size=25))
+    st.lists(st.tuples(_step, _step), min_size=n, max_size=n), min_size=1, max_size=25))
 
 
 @settings(max_examples=80)

@@ -242,3 +242,18 @@ def print_summary(d: dict[str, Any]) -> None:
     console = Console(highlight=False)
     console.print(table)
     console.print(summary_line(d), markup=False, soft_wrap=True)
+    if (life := d.get("lifelong")) is not None:
+        console.print(lifelong_line(life), markup=False, soft_wrap=True)
+
+
+def lifelong_line(f: dict[str, Any]) -> str:
+    """A lifelong run's figures (``fleet.tasks.lifelong_figures``) on one line."""
+
+    def s(v: float | None) -> str:
+        return "-" if v is None else f"{v:.1f} s"
+
+    use = f.get("utilisation") or {}
+    return (f"tasks: {f['done']}/{f['tasks']} done ({f['failed']} failed)  throughput: "
+            f"{f['throughput_per_hour']:.1f} per hour  service time: median "
+            f"{s(f['service_median_s'])}, p95 {s(f['service_p95_s'])}"
+            + (f"  robots working: {use['working']:.0%}" if "working" in use else ""))

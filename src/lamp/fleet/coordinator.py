@@ -93,6 +93,7 @@ class Fleet(TeamChanges):
         self.object_main, self.timeline = object_main, timeline
         self.turns = Turns()
         self.outcomes: list[list[ObjectOutcome]] = [[] for _ in scene.objects]  # by task
+        self._take_tasks()  # those released at 0: the objects' own goals, first of all
 
     # ------------------------------------------------------------------ the schedule
     def run(self) -> list[ObjectOutcome]:
