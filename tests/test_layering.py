@@ -37,7 +37,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("baselines",),
     ("fleet",),
     ("pipeline",),
-    ("bench",),
+    ("bench", "serve"),
     ("demo",),
     ("cli",),  # the command line: parses, loads, calls, writes; may import any layer
 )

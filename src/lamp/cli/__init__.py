@@ -7,6 +7,7 @@ runs it too) and wires them together:
 - :mod:`lamp.cli.run`: ``lamp run``, ``lamp demo``, ``lamp warmup``;
 - :mod:`lamp.cli.draw`: ``lamp show``, ``lamp render``, ``lamp timeline``;
 - :mod:`lamp.cli.scene`: ``lamp validate``, ``lamp schema``;
+- :mod:`lamp.cli.serve`: ``lamp serve``;
 - :mod:`lamp.cli.bench`: ``lamp bench``, ``lamp report`` (options: :mod:`lamp.cli.bench_options`);
 - :mod:`lamp.cli.suite`, :mod:`lamp.cli.model`, :mod:`lamp.cli.rl`: the ``lamp suite``,
   ``lamp model`` and ``lamp rl`` groups;
@@ -21,7 +22,7 @@ from __future__ import annotations
 
 import typer
 
-from lamp.cli import bench, draw, model, rl, run, scene, suite
+from lamp.cli import bench, draw, model, rl, run, scene, serve, suite
 from lamp.cli.support import lamp_typer, version_callback
 
 __all__ = ["app", "main"]
@@ -52,6 +53,7 @@ app.command("validate")(scene.validate_command)
 app.command("schema")(scene.schema_command)
 app.command("bench")(bench.bench_command)
 app.command("report")(bench.report_command)
+app.command("serve")(serve.serve)
 app.add_typer(suite.suite_app, name="suite")
 app.add_typer(model.model_app, name="model")
 app.add_typer(rl.rl_app, name="rl")

@@ -36,10 +36,7 @@ def _run_and_write(request, out: Path, progress: RunProgress, render: bool = Fal
     """Run ``request`` (``lamp.pipeline.run``) and write its outputs into ``out``:
     result.json last (it marks the folder complete), the recording, and the pictures asked
     for, each drawn from the recording."""
-    from lamp.io import write_json_atomic
     from lamp.pipeline import run
-    from lamp.record import save_recording
-    from lamp.record.run_dir import GIF_NAME, HTML_NAME, RESULT_NAME, clear_stale
 
     if out.exists() and not out.is_dir():
         fail_input(f"--out: {out} exists and is not a folder")
@@ -51,6 +48,19 @@ def _run_and_write(request, out: Path, progress: RunProgress, render: bool = Fal
     except Exception as exc:  # an internal error: exit status 1 with a short message
         typer.echo(f"internal error: {type(exc).__name__}: {exc}", err=True)
         raise typer.Exit(code=1) from exc
+    return write_run(run_result, out, progress, render, html)
+
+
+def write_run(run_result, out: Path, progress: RunProgress, render: bool = False,
+              html: bool = False) -> dict:
+    """Write a finished run's folder ``out`` as ``lamp run`` does (``lamp serve`` too): the
+    summary (unless quiet), the recording, the pictures asked for, result.json last (it
+    marks the folder complete); returns result.json's content. Exit 2 when ``out`` cannot
+    be written, 1 for an internal error."""
+    from lamp.io import write_json_atomic
+    from lamp.record import save_recording
+    from lamp.record.run_dir import GIF_NAME, HTML_NAME, RESULT_NAME, clear_stale
+
     result = run_result.to_dict()
 
     def say(message: str) -> None:
