@@ -83,7 +83,8 @@ def _densify(poses: np.ndarray, step: float) -> np.ndarray:
 # --------------------------------------------------------------------------- committed files
 def test_suite_names_and_counts():
     assert list_suites() == [
-        "random", "maze", "tilt", "warehouse", "iros", "warehouse-xl", "corridor", "fleet"
+        "random", "maze", "tilt", "warehouse", "iros", "warehouse-xl", "corridor", "fleet",
+        "lifelong",
     ]
     for fam in FAMILIES:
         names = [p.name for p in suite_files(fam)]

@@ -19,6 +19,7 @@ from lamp.suites import corridor as CO
 from lamp.suites import fleet as FLEET
 from lamp.suites import generators as G
 from lamp.suites import iros
+from lamp.suites import lifelong as LIFE
 from lamp.suites import warehouse_xl as XL
 from lamp.suites.registry import SUITES, scene_yaml
 
@@ -222,6 +223,33 @@ def _build_family(name: str, progress: Callable[[str], None] | None) -> _Built:
     return files, entries, generator, _check_settings()
 
 
+def _build_lifelong(progress: Callable[[str], None] | None) -> _Built:
+    """The lifelong suite's scene files, entries, generator record and checks (the
+    fleet scenes' own: its maps are theirs)."""
+    files: dict[str, str] = {}
+    entries = []
+    for k in range(LIFE.N_SCENES):
+        d = LIFE.generate_scene(k)
+        text = scene_yaml(d)
+        files[f"{d['name']}.yaml"] = text
+        entries.append({"name": d["name"], "file": f"{d['name']}.yaml",
+                        "sha256": hashlib.sha256(text.encode()).hexdigest(),
+                        "base": LIFE.BASES[k], "n_objects": len(d["objects"]),
+                        "n_robots": len(d["robots"]["starts"]), "n_tasks": len(d["tasks"]),
+                        "last_release_s": d["tasks"][-1]["release_s"]})
+        if progress is not None:
+            progress(f"{d['name']}: {LIFE.BASES[k]}, {len(d['tasks'])} tasks until "
+                     f"{d['tasks'][-1]['release_s']:.0f} s")
+    generator = {
+        "module": "lamp.suites.lifelong",
+        "seed": G.SUITE_SEED,
+        "rng": f"numpy.random.default_rng([{G.SUITE_SEED}, {LIFE.STREAM}, index])",
+        "tasks": LIFE.N_TASKS, "mean_gap_s": LIFE.MEAN_GAP_S,
+        "station_clearance": LIFE.STATION_CLEARANCE,
+    }
+    return files, entries, generator, FLEET.check_settings()
+
+
 def build_suite(name: str, progress: Callable[[str], None] | None = None) -> dict[str, str]:
     """File name -> file text for every file of suite ``name``."""
     if name not in SUITES:
@@ -234,6 +262,8 @@ def build_suite(name: str, progress: Callable[[str], None] | None = None) -> dic
         files, entries, generator, checks = _build_fleet(progress)
     elif name == "iros":
         files, entries, generator, checks = _build_iros()
+    elif name == LIFE.NAME:
+        files, entries, generator, checks = _build_lifelong(progress)
     else:
         files, entries, generator, checks = _build_family(name, progress)
     manifest = {

@@ -6,7 +6,8 @@ settings and the check results of every scene: routes, clearances, robot reachab
 
 >>> from lamp.suites import list_suites, suite_scenes
 >>> list_suites()
-['random', 'maze', 'tilt', 'warehouse', 'iros', 'warehouse-xl', 'corridor', 'fleet']
+['random', 'maze', 'tilt', 'warehouse', 'iros', 'warehouse-xl', 'corridor', 'fleet',
+ 'lifelong']
 >>> len(suite_scenes("maze"))
 25
 """
@@ -85,6 +86,13 @@ SUITES: dict[str, SuiteInfo] = {
             "6-50 m maps, 2-12 objects, 6-24 robots, concurrent schedule: rooms, aisles, "
             "yards, door swaps, blockers cleared first",
             25,
+            paper=False,
+        ),
+        SuiteInfo(
+            "lifelong",
+            "fleet maps of 6-17 m with a stream of 20 tasks released while the robots "
+            "work (Poisson arrivals): rooms, aisles, yards, swaps, blockers",
+            12,
             paper=False,
         ),
     )
@@ -193,6 +201,10 @@ def scene_yaml(d: dict[str, Any]) -> str:
             text = "[" + ", ".join(str(int(i)) for i in v) + "]" if k == "after" else _flow(v)
             lines.append(f"{prefix}{k}: {text}")
             first = False
+    if d.get("tasks"):
+        lines.append("tasks:")
+        lines += [f"  - {{object: {int(t['object'])}, goal: {_flow(t['goal'])}, "
+                  f"release_s: {_num(t['release_s'])}}}" for t in d["tasks"]]
     return "\n".join(lines) + "\n"
 
 

@@ -51,7 +51,7 @@ def family_stats(manifest: dict[str, Any]) -> dict[str, Any]:
 
 
 #: suites with a table of their own (not the route-search tables)
-_OWN_TABLES = ("iros", "corridor", "fleet")
+_OWN_TABLES = ("iros", "corridor", "fleet", "lifelong")
 
 
 def corridor_lines(manifest: dict[str, Any]) -> list[str]:
@@ -88,6 +88,27 @@ def corridor_lines(manifest: dict[str, Any]) -> list[str]:
         f" | {_mmm([w['min_clearance'] for w in wit], '{:.4f}')}"
         f" | {_mmm([sc['objects'][0]['robots']['ring_reachable_fraction'] for sc in scenes])} |",
     ]
+
+
+def lifelong_lines(manifest: dict[str, Any]) -> list[str]:
+    """The ``lifelong`` suite's table: the stream of each scene."""
+    g = manifest["generator"]
+    lines = [
+        "",
+        f"## lifelong ({len(manifest['scenes'])} scenes, tasks released while the robots "
+        "work)",
+        "",
+        f"{g['tasks']} tasks per scene beyond the objects' own goals, released by a Poisson "
+        f"process (mean gap {g['mean_gap_s']:g} s), each to a station (a base scene's start "
+        "or goal) clear of the others' last destinations by "
+        f"{g['station_clearance']:g} m.",
+        "",
+        "| scene | base | objects | robots | tasks | last release (s) |",
+        "|---|---|---|---|---|---|",
+    ]
+    lines += [f"| {sc['name']} | {sc['base']} | {sc['n_objects']} | {sc['n_robots']} | "
+              f"{sc['n_tasks']} | {sc['last_release_s']:.0f} |" for sc in manifest["scenes"]]
+    return lines
 
 
 def fleet_lines(manifest: dict[str, Any]) -> list[str]:
@@ -194,6 +215,8 @@ def stats_markdown(manifests: dict[str, dict[str, Any]] | None = None) -> str:
         lines += corridor_lines(manifests["corridor"])
     if "fleet" in manifests:
         lines += fleet_lines(manifests["fleet"])
+    if "lifelong" in manifests:
+        lines += lifelong_lines(manifests["lifelong"])
     if "iros" in manifests:
         lines += _iros_lines(manifests["iros"]["scenes"][0])
     return "\n".join(lines) + "\n"
