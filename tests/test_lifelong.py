@@ -364,3 +364,38 @@ def test_a_lifelong_run_does_every_task_safely_and_reports_it(hall_runs) -> None
     # the fleet did the two first tasks at once, the baseline one after the other
     first = [t for t in fleet.to_dict()["tasks"] if t["id"] < 2]
     assert max(t["start_s"] for t in first) < min(t["done_s"] for t in first)
+
+
+def test_the_viewer_shows_each_task_s_status_and_the_goal_in_force(hall_runs, tmp_path):
+    """At a time, each task is future / queued / active / done as its record says, and
+    an object's goal drawn is that of the task it serves."""
+    import json
+    import os
+
+    from browser import INSTALL_HINT, Browser, find_chromium
+
+    from lamp.viz.replay_html import write_html
+
+    chromium = find_chromium()
+    if chromium is None:
+        if os.environ.get("LAMP_REQUIRE_BROWSER"):
+            pytest.fail(INSTALL_HINT)
+        pytest.skip(INSTALL_HINT)
+    run = hall_runs[0]
+    tasks = run.to_dict()["tasks"]
+    page = write_html(run.recording, tmp_path / "replay.html")
+    times = run.recording.arrays["times"]
+
+    def expected(t: float) -> list[str]:
+        return ["done" if k["done_s"] <= t else "active" if k["start_s"] <= t else
+                "queued" if k["release_s"] <= t else "future" for k in tasks]
+
+    with Browser(chromium, width=1000, height=700) as b:
+        b.open(page.as_uri())
+        for row in (0, len(times) // 3, len(times) // 2, len(times) - 1):
+            b.evaluate(f"window.lampViewer.seekRow({row})")
+            shown = json.loads(b.evaluate(
+                "document.getElementById('state').dataset.tasks"))
+            assert shown == expected(float(times[row])), row
+        text = b.evaluate("document.getElementById('tasks').textContent")
+        assert text.startswith("tasks: 0 queued, 0 active, 4 done")

@@ -107,6 +107,9 @@ def payload(recording: Recording, options: RenderOptions | None = None) -> dict[
         "robot_team": _b64(a["robot_team"], "int16") if "robot_team" in a else None,
         "segments": segments,
         "plans": plans,
+        "tasks": [{k: t[k] for k in ("id", "object", "goal", "release_s", "start_s", "done_s",
+                                     "status")} for t in result["tasks"]]
+        if result.get("tasks") else None,
     }
 
 

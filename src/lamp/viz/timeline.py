@@ -12,7 +12,8 @@ Each robot's recorded samples split into spans (:func:`robot_spans`):
 
 The interval between samples ``j`` and ``j + 1`` takes sample ``j + 1``'s sub-team.
 Objects' placement times (``stats.fleet.placed_at_s`` of the recorded result; else the
-end of each placed object's last segment) are marked with their index.
+end of each placed object's last segment) are marked with their index; in a lifelong run,
+every task's completion is, and its release is a triangle at the top.
 
 Guarantee (``tests/test_timeline.py``): a robot's spans tile ``[times[0], times[-1]]``
 without gap or overlap, and every sample interval of positive length lies in the span of
@@ -147,14 +148,21 @@ def timeline_figure(recording: Recording, width_in: float = 10.0, dpi: float = 1
             ax.broken_barh(ranges, (i - 0.4, 0.8), linewidth=0,
                            facecolors=IDLE_COLOR if k == IDLE else object_color(k),
                            alpha=1.0 if moving or k == IDLE else HOLD_ALPHA)
-    for k, t in sorted(placement_times(recording).items()):
+    tasks = recording.result.get("tasks")
+    done = ([(int(t["object"]), float(t["done_s"])) for t in tasks if t["status"] == "done"]
+            if tasks else sorted(placement_times(recording).items()))
+    for k, t in done:
         ax.axvline(t, color=object_color(k), lw=1.0, ls="--")
         ax.annotate(f"{k}", (t, 1.0), xycoords=("data", "axes fraction"), ha="center",
                     va="bottom", fontsize=7, color=object_color(k))
+    for t in tasks or ():  # releases: a triangle under the top edge, the object's colour
+        ax.plot([float(t["release_s"])], [0.985], marker="v", ms=5, ls="none",
+                color=object_color(int(t["object"])), transform=ax.get_xaxis_transform())
     ax.set_ylim(-0.6, n - 0.4)
     ax.invert_yaxis()
     ax.set_xlim(float(a["times"][0]), float(a["times"][-1]))
-    ax.set_xlabel("simulated time (s); dashed: object k placed")
+    ax.set_xlabel("simulated time (s); dashed: object k placed"
+                  + ("; triangles: tasks released" if tasks else ""))
     ax.set_ylabel("robot")
     if n <= 40:
         ax.set_yticks(range(n))

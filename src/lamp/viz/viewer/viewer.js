@@ -129,6 +129,20 @@
   const robotAt = (row, i) => [robots[(row * N + i) * 2], robots[(row * N + i) * 2 + 1]];
   const poseAt = (row, k) => [0, 1, 2].map((j) => poses[(row * K + k) * 3 + j]);
 
+  // A lifelong run's tasks (result.tasks): each one's status at time t, and the goal an
+  // object serves then (its task started last; before any, its own goal).
+  function tasksAt(t) {
+    return (D.tasks || []).map((k) => ({ ...k, now:
+      k.done_s !== null && k.done_s <= t ? k.status :
+      k.start_s !== null && k.start_s <= t ? "active" :
+      k.release_s <= t ? "queued" : "future" }));
+  }
+  function goalAt(k, tasks) {
+    let goal = D.objects[k].goal;
+    for (const task of tasks) if (task.object === k && task.now !== "queued" && task.now !== "future") goal = task.goal;
+    return goal;
+  }
+
   // ------------------------------------------------------------------- draw
   function draw() {
     const C = D.colors, row = st.row, g = segmentOfRow(row);
@@ -147,12 +161,13 @@
     for (const o of D.obstacles) { shapeAt(o, o.at || [0, 0, 0]); ctx.fill(); }
     ctx.strokeStyle = "#000"; ctx.lineWidth = 1.5;
     ctx.strokeRect(sx(0), sy(H), W * st.scale, H * st.scale);
+    const t = times[row], tasks = tasksAt(t), out = $("state");
     D.objects.forEach((o, k) => {
       const active = seg && seg.object === k;
       ctx.setLineDash([5, 4]); ctx.strokeStyle = o.color; ctx.lineWidth = active ? 2 : 1;
       shapeAt(o, o.start); ctx.stroke(); ctx.setLineDash([]);
       ctx.strokeStyle = C.goal; ctx.lineWidth = active ? 2.4 : 1.4;
-      shapeAt(o, o.goal); ctx.stroke();
+      shapeAt(o, goalAt(k, tasks)); ctx.stroke();
     });
     if (plan && on("path")) polyline(plan.path, C.path, 5);
     if (plan && on("verified")) edges(plan.verified, C.verified);
@@ -197,9 +212,15 @@
     const event = seg && seg.outcome !== "continue" ? "  [" + seg.outcome + "]" : "";
     $("clock").textContent = "t = " + times[row].toFixed(2) + " s   " +
       (seg ? "segment " + (g + 1) + "/" + G + "   object " + (seg.object + 1) + "/" + K : "no segment executed") + event;
+    if (D.tasks) {
+      const n = (what) => tasks.filter((k) => k.now === what).length;
+      $("tasks").textContent = "tasks: " + n("queued") + " queued, " + n("active") + " active, " +
+        n("done") + " done" + (n("failed") ? ", " + n("failed") + " failed" : "") +
+        " of " + tasks.length + " (" + n("future") + " not yet released)";
+      out.dataset.tasks = JSON.stringify(tasks.map((k) => k.now));
+    }
     $("scrub").value = String(row);
     document.querySelectorAll("#segments tbody tr").forEach((tr, i) => tr.classList.toggle("current", i === g));
-    const out = $("state");
     out.dataset.row = String(row);
     out.dataset.segment = String(g);
     out.dataset.time = String(times[row]);
