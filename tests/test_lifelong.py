@@ -278,12 +278,12 @@ def test_the_fleet_serves_every_released_task_in_order(tasks, rows, serial) -> N
         mine = sorted((t for t in records if t.object == k), key=lambda t: t.start_s)
         assert [t.id for t in mine] == [t.id for t in sorted(
             mine, key=lambda t: (t.release_s, t.id))]
-        assert all(b.start_s >= a.done_s - 1e-9 for a, b in zip(mine, mine[1:]))
+        assert all(b.start_s >= a.done_s - 1e-9 for a, b in zip(mine, mine[1:], strict=False))
         assert outcomes[k].result.segments == len(mine)
         assert np.allclose(world.object_poses[k], mine[-1].goal)
     if serial:
         spans = sorted((t.start_s, t.done_s) for t in records)
-        assert all(b[0] >= a[1] - 1e-9 for a, b in zip(spans, spans[1:]))
+        assert all(b[0] >= a[1] - 1e-9 for a, b in zip(spans, spans[1:], strict=False))
     last = max(t.release_s for t in records)
     assert fleet.clock >= last
 
@@ -360,7 +360,7 @@ def test_a_lifelong_run_does_every_task_safely_and_reports_it(hall_runs) -> None
         assert d["makespan_lower_bound_s"] > 40.0
     served = {t["id"]: t for t in fcfs.to_dict()["tasks"]}
     spans = sorted((t["start_s"], t["done_s"]) for t in served.values())
-    assert all(b[0] >= a[1] - 1e-6 for a, b in zip(spans, spans[1:]))  # one at a time
+    assert all(b[0] >= a[1] - 1e-6 for a, b in zip(spans, spans[1:], strict=False))  # one at a time
     # the fleet did the two first tasks at once, the baseline one after the other
     first = [t for t in fleet.to_dict()["tasks"] if t["id"] < 2]
     assert max(t["start_s"] for t in first) < min(t["done_s"] for t in first)
