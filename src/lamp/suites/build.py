@@ -245,7 +245,6 @@ def _build_lifelong(progress: Callable[[str], None] | None) -> _Built:
         "seed": G.SUITE_SEED,
         "rng": f"numpy.random.default_rng([{G.SUITE_SEED}, {LIFE.STREAM}, index])",
         "tasks": LIFE.N_TASKS, "mean_gap_s": LIFE.MEAN_GAP_S,
-        "station_clearance": LIFE.STATION_CLEARANCE,
     }
     return files, entries, generator, FLEET.check_settings()
 

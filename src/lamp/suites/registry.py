@@ -90,9 +90,9 @@ SUITES: dict[str, SuiteInfo] = {
         ),
         SuiteInfo(
             "lifelong",
-            "fleet maps of 6-17 m with a stream of 20 tasks released while the robots "
-            "work (Poisson arrivals): rooms, aisles, yards, swaps, blockers",
-            12,
+            "fleet maps of 6-17 m, 20 tasks released while the robots work (Poisson "
+            "arrivals), loads shuttled between their stations",
+            10,
             paper=False,
         ),
     )

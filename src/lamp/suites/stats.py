@@ -99,9 +99,8 @@ def lifelong_lines(manifest: dict[str, Any]) -> list[str]:
         "work)",
         "",
         f"{g['tasks']} tasks per scene beyond the objects' own goals, released by a Poisson "
-        f"process (mean gap {g['mean_gap_s']:g} s), each to a station (a base scene's start "
-        "or goal) clear of the others' last destinations by "
-        f"{g['station_clearance']:g} m.",
+        f"process (mean gap {g['mean_gap_s']:g} s), each sending an object drawn uniformly "
+        "back or forth between its start and its goal.",
         "",
         "| scene | base | objects | robots | tasks | last release (s) |",
         "|---|---|---|---|---|---|",
