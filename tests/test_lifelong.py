@@ -179,6 +179,21 @@ def test_merged_tasks_sum_work_and_keep_the_last_verdict() -> None:
     assert m.planning_time_s == [0.1, 0.2, 0.3] and m.makespan == 42
 
 
+def test_a_world_at_rest_is_skipped_without_physics() -> None:
+    from lamp.fleet.tasks import REST_M, at_rest, rest_until
+
+    robots, objects = np.array([[1.0, 2.0], [3.0, 1.0]]), np.array([[2.0, 2.0, 0.5]])
+    out = rest_until(robots, objects, 12.5)
+    assert out.sim_time == 12.5 and out.steps == 0
+    assert np.array_equal(out.trace.times, [0.0, 12.5])
+    assert np.array_equal(out.trace.robot_positions[-1], robots)
+    assert np.array_equal(out.object_poses, objects) and at_rest(out.trace)
+    moved = copy.deepcopy(out.trace.robot_positions)
+    moved[-1, 0, 1] += 2 * REST_M
+    assert not at_rest(SimpleNamespace(robot_positions=moved,
+                                       object_poses=out.trace.object_poses))
+
+
 # ----------------------------------------------------------------------------- the fleet
 
 #: Simulated seconds a fake segment takes per row.
@@ -286,6 +301,9 @@ def test_the_fleet_serves_every_released_task_in_order(tasks, rows, serial) -> N
         assert all(b[0] >= a[1] - 1e-9 for a, b in zip(spans, spans[1:], strict=False))
     last = max(t.release_s for t in records)
     assert fleet.clock >= last
+    # idling is simulated until the world rests, then skipped: never a stretch of over 5 s
+    # simulated, and at most one simulated stretch per idle wait
+    assert world.time <= fleet.clock
 
 
 def test_a_stopped_feed_fails_what_is_left() -> None:

@@ -51,6 +51,7 @@ import numpy as np
 
 from lamp.contract.events import TRACE_EVERY, RunObserver
 from lamp.contract.runner import ObjectOutcome, WorldExecutor
+from lamp.fleet import tasks as T
 from lamp.fleet.admission import heeded_claims, meets_moving, meets_standing
 from lamp.fleet.blocked import blocked_space, looks_now, wait_over
 from lamp.fleet.config import FleetConfig
@@ -60,7 +61,6 @@ from lamp.fleet.regions import claims
 from lamp.fleet.reteam import TeamChanges
 from lamp.fleet.segments import Segment, on_grid, run_together
 from lamp.fleet.state import FREE, ObjectState, ObjectStatus
-from lamp.fleet.tasks import IDLE_STRETCH_S, ScheduledFeed, TaskFeed, merged_tasks
 from lamp.fleet.teams import allocate, near_way, start_order
 from lamp.fleet.turns import Turns
 from lamp.fleet.view import FleetExecution, FleetView
@@ -85,14 +85,15 @@ class Fleet(TeamChanges):
                  object_main: Callable[[Fleet, int], ObjectOutcome],
                  timeline: Callable[[Any, float, np.ndarray], None],
                  observers: Sequence[RunObserver] = (), row_step: float = 0.02,
-                 config: FleetConfig | None = None, feed: TaskFeed | None = None,
+                 config: FleetConfig | None = None, feed: T.TaskFeed | None = None,
                  serial: bool = False) -> None:
         super().__init__(scene, executor, row_step, config or FleetConfig(),
-                         ScheduledFeed(scene) if feed is None else feed, serial)
+                         T.ScheduledFeed(scene) if feed is None else feed, serial)
         self.observers = list(observers)
         self.object_main, self.timeline = object_main, timeline
         self.turns = Turns()
         self.outcomes: list[list[ObjectOutcome]] = [[] for _ in scene.objects]  # by task
+        self._at_rest = False  # whether the world stood still through the last idle stretch
         self._take_tasks()  # those released at 0: the objects' own goals, first of all
 
     # ------------------------------------------------------------------ the schedule
@@ -125,7 +126,7 @@ class Fleet(TeamChanges):
         finally:
             self.turns.close()
         self.desk.stop(self.clock, "stopped: the run ended before it")
-        return [merged_tasks(self.outcomes[o.index]) or given_up(
+        return [T.merged_tasks(self.outcomes[o.index]) or given_up(
             self.scene, o.index, self.executor.object_poses[o.index], "stopped: no task done")
             for o in self.objects]
 
@@ -135,20 +136,21 @@ class Fleet(TeamChanges):
         self.desk.take(self.clock)
         for o in self.objects:
             task = self.desk.next_for(o.index)
-            if task is None:
-                continue
-            if o.status.done:
+            if task is not None and o.status.done:
                 o.renew()
-            if tuple(task.goal) != tuple(self.scene.objects[o.index].goal):
+            if task is not None and tuple(task.goal) != tuple(self.scene.objects[o.index].goal):
                 self.scene = with_goal(self.scene, o.index, np.asarray(task.goal))
 
     def _idle(self, until: float) -> None:
-        """Nothing to do before simulated time ``until``: the robots hold still till then
-        (at least one physics step), in stretches of at most ``IDLE_STRETCH_S``."""
-        hold = min(max(until - self.clock, 0.0), IDLE_STRETCH_S)
-        now = np.asarray(self.executor.robot_positions, float)
-        out = self.executor.execute(now[:, None], record_every=TRACE_EVERY,
-                                    settle_time=max(hold, 1e-9))
+        """Nothing to do before simulated time ``until``: the robots hold still (module
+        docstring of ``fleet.tasks``: simulated till the world rests, then skipped)."""
+        now, hold = np.asarray(self.executor.robot_positions, float), until - self.clock
+        if self._at_rest and not self.executor.disturbed:
+            out = T.rest_until(now, self.executor.true_object_poses, max(hold, 0.0))
+        else:
+            out = self.executor.execute(now[:, None], record_every=TRACE_EVERY,
+                                        settle_time=min(max(hold, 1e-9), T.IDLE_STRETCH_S))
+            self._at_rest = T.at_rest(out.trace)
         self._clocked(out, [], now[:, None])
 
     def _release(self) -> None:
@@ -395,6 +397,7 @@ class Fleet(TeamChanges):
             return
         out, paths, done, fired = run_together(self.executor, running)
         self._clocked(out, running, paths)
+        self._at_rest = False
         self._note_failures()
         self.stats.count("events")
         left = np.asarray(out.objects_left)

@@ -11,7 +11,10 @@ the fleet tells the feed of every move (:meth:`TaskFeed.changed`).
 
 Time is the simulation's: a task released at ``release_s`` is taken up at the first
 event of the fleet's clock at or after it (the end of a running segment; when nothing
-runs, the fleet idles exactly until the release, :meth:`TaskFeed.wait`).
+runs, the fleet idles exactly until the release, :meth:`TaskFeed.wait`). Idle time is
+simulated until the world is at rest (nothing moved more than ``REST_M`` in a stretch),
+then skipped: the clock moves on with nothing run (``rest_until``), unless the executor
+is disturbed (its failures are timed by its own clock).
 """
 
 from __future__ import annotations
@@ -27,12 +30,36 @@ from lamp.contract.runner import ObjectOutcome
 from lamp.scene.model import Scene
 from lamp.scene.tasks import numbered, served_order
 
-__all__ = ["IDLE_STRETCH_S", "TASK_MOVES", "ScheduledFeed", "TaskFeed", "TaskRecord",
-           "TaskStatus", "lifelong_figures", "merged_tasks"]
+__all__ = ["IDLE_STRETCH_S", "REST_M", "TASK_MOVES", "ScheduledFeed", "TaskFeed",
+           "TaskRecord", "TaskStatus", "at_rest", "lifelong_figures", "merged_tasks",
+           "rest_until"]
 
-#: The longest stretch (simulated s) the fleet idles at once waiting for a release; the
-#: feed is asked again after each (a live one may have a task by then).
+#: The longest stretch (simulated s) the fleet idles at once, simulated, waiting for a
+#: release; the feed is asked again after each (a live one may have a task by then).
 IDLE_STRETCH_S = 5.0
+#: How far (m) anything may move in a simulated idle stretch for the world to count as
+#: at rest, after which idling needs no physics (``rest_until``).
+REST_M = 1e-4
+
+
+def at_rest(trace: Any) -> bool:
+    """Whether no robot and no object moved more than ``REST_M`` during ``trace``."""
+    robots = np.abs(trace.robot_positions - trace.robot_positions[:1]).max(initial=0.0)
+    objects = np.abs(trace.object_poses[..., :2] - trace.object_poses[:1, :, :2])
+    return max(float(robots), float(objects.max(initial=0.0))) <= REST_M
+
+
+def rest_until(robots: np.ndarray, objects: np.ndarray, seconds: float) -> Any:
+    """The result of holding a world at rest for ``seconds`` (robots at ``robots``, the
+    objects' true poses ``objects``): nothing moves, so no physics is run; its trace is
+    the world at the start and at the end (``sim.simulator.ExecutionResult``)."""
+    from lamp.sim.simulator import ExecutionResult, Trace
+
+    robots, objects = np.asarray(robots, float), np.asarray(objects, float)
+    trace = Trace(np.array([0.0, float(seconds)]), np.stack([robots, robots]),
+                  np.stack([objects, objects]))
+    return ExecutionResult(objects, robots, False, np.zeros(len(objects), bool),
+                           float(seconds), 0, np.zeros(len(robots)), trace)
 
 
 class TaskStatus(StrEnum):
