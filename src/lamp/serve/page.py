@@ -3,10 +3,10 @@ the scene inlined; what moves comes from the service's server-sent events.
 
 It draws as the replay viewer (``lamp.viz.replay_html``) does, with the same colours:
 the workspace, obstacles, objects at their live poses with a heading tick, robots as
-disks, and the goals of the tasks not yet ended (solid: active, dashed: queued). The panel
-lists the tasks (newest first) and has a form to post one; a click on the map fills in
-its x and y. The page references nothing outside itself but the service's own
-``events`` and ``tasks``.
+disks, and each object's next goals (solid: its active task's, dashed: its next queued
+one's). The panel lists the tasks (newest first) and has a form to post one; a click on
+the map fills in its x and y. The page references nothing outside itself but the
+service's own ``events`` and ``tasks``.
 """
 
 from __future__ import annotations

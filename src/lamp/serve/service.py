@@ -41,7 +41,9 @@ def listen(host: str, port: int) -> socket.socket:
     """A listening TCP socket on ``host``:``port`` (0: a free port); ``OSError`` if it
     cannot be had."""
     family = socket.AF_INET6 if ":" in host else socket.AF_INET
-    sock = socket.socket(family, socket.SOCK_STREAM)
+    # IPPROTO_TCP named: asyncio sets TCP_NODELAY on the accepted connections only then
+    # (a proto of 0 costs every kept-alive answer a 40 ms delayed ACK)
+    sock = socket.socket(family, socket.SOCK_STREAM, socket.IPPROTO_TCP)
     try:
         sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         sock.bind((host.strip("[]"), port))

@@ -66,8 +66,14 @@
     ctx.strokeStyle = "#000"; ctx.lineWidth = 1.5;
     ctx.strokeRect(sx(0), sy(H), W * st.scale, H * st.scale);
     ctx.font = "11px system-ui, sans-serif";
-    for (const t of live.tasks) { // the goals still to reach
+    const shownGoals = new Map(); // per object: its active task and its next queued one
+    for (const t of live.tasks) {
       if (t.status !== "queued" && t.status !== "active") continue;
+      const mine = shownGoals.get(t.object) || [];
+      if (mine.length < 2 && !mine.some((m) => m.status === t.status)) mine.push(t);
+      shownGoals.set(t.object, mine);
+    }
+    for (const t of [...shownGoals.values()].flat()) { // the goals still to reach
       const o = D.objects[t.object];
       ctx.setLineDash(t.status === "active" ? [] : [5, 4]);
       ctx.strokeStyle = C.goal; ctx.lineWidth = t.status === "active" ? 2.2 : 1.2;
