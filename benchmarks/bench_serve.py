@@ -42,7 +42,7 @@ ROOT = Path(__file__).resolve().parents[1]
 def start(scene: str, realtime: float, model: str, out: Path) -> tuple[subprocess.Popen, str]:
     proc = subprocess.Popen(
         [sys.executable, "-m", "lamp.cli", "serve", scene, "--port", "0", "--realtime",
-         str(realtime), "-m", model, "-o", str(out), "-q"],
+         str(realtime), "-m", model, "-o", str(out)],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     line = proc.stdout.readline()
     found = re.search(r"http://127\.0\.0\.1:(\d+)", line)
@@ -150,7 +150,7 @@ def main() -> None:
         finally:
             proc.send_signal(signal.SIGTERM)
             try:
-                proc.wait(timeout=600)
+                proc.communicate(timeout=600)  # drains the summary it prints
             except subprocess.TimeoutExpired:
                 proc.kill()
         result = json.loads((out / "result.json").read_text()) if (out / "result.json").is_file() else {}

@@ -158,6 +158,25 @@ def test_idle_at_realtime_runs_the_clock_and_a_post_ends_it():
     assert feed.wait(got[0]) is None
 
 
+def test_an_idle_stretch_paced_by_wait_is_not_paced_again_by_moved():
+    """The fleet idles until ``wait``'s answer and shows the feed that stretch
+    (``moved``): the feed lived through it already and reads the wall clock at most
+    once more (a fake clock, 0.05 s per read)."""
+    reads = [0]
+
+    def wall() -> float:
+        reads[0] += 1
+        return 0.05 * reads[0]
+
+    feed = LiveFeed(SCENE, realtime=2.0, wall=wall)
+    feed.released(5.0)
+    until = feed.wait(5.0)
+    assert until > 5.0
+    reads[0] = 0
+    feed.moved(5.0, trace(until - 5.0, start=5.0))
+    assert reads[0] <= 1 and feed.world()["time_s"] == round(until, 4)
+
+
 def test_the_pace_reanchors_when_the_simulation_lags():
     wall = [100.0]
     pace = Pace(2.0, lambda: wall[0])

@@ -62,8 +62,6 @@ def serve(
                                    "non-loopback --host. Also read from LAMP_SERVE_TOKEN."),
     out: Path = typer.Option(Path("lamp-serve"), "--out", "-o", help="Output folder, written "
                              "on stop: result.json (with the tasks) and the recording."),
-    quiet: bool = typer.Option(False, "--quiet", "-q", help="Print only the address and "
-                               "errors."),
 ) -> None:
     from lamp.pipeline import RunRequest
     from lamp.serve.feed import LiveFeed
@@ -95,7 +93,7 @@ def serve(
     sys.stdout.flush()
     while service.running and not stop.wait(0.2):
         pass
-    _finish(service, out, quiet)
+    _finish(service, out)
 
 
 def _on_signal(stop: threading.Event, previous: dict) -> None:
@@ -106,10 +104,9 @@ def _on_signal(stop: threading.Event, previous: dict) -> None:
     stop.set()
 
 
-def _finish(service, out: Path, quiet: bool) -> None:
+def _finish(service, out: Path) -> None:
     """Stop the fleet, write the run folder, stop the server."""
-    if not quiet:
-        typer.echo("lamp serve: stopping")
+    typer.echo("lamp serve: stopping")
     try:
         result = service.finish()
     except Exception as exc:
@@ -117,7 +114,7 @@ def _finish(service, out: Path, quiet: bool) -> None:
         typer.echo(f"internal error: {type(exc).__name__}: {exc}", err=True)
         raise typer.Exit(code=1) from exc
     try:
-        write_run(result, out, RunProgress(quiet=quiet))
+        write_run(result, out, RunProgress())
     finally:
         service.close()
 

@@ -211,13 +211,16 @@ class LiveFeed:
 
     def _paced(self, start: float, times: np.ndarray, trace: Any) -> None:
         """Show ``trace`` row by row at the pace (lock held; returns at its end's wall
-        time, or at once on a stop)."""
+        time, or at once on a stop). Time the feed already lived through (an idle
+        stretch ``wait`` paced) is not paced again."""
         pace = self._pace
         assert pace is not None
-        pace.anchor(start)
-        end = start + float(times[-1])
+        begin, end = max(start, self._now), start + float(times[-1])
+        if end <= begin:
+            return
+        pace.anchor(begin)
         while not self._stopped:
-            t = min(max(pace.now(), start), end)
+            t = min(max(pace.now(), begin), end)
             row = int(np.searchsorted(times, t - start, side="right")) - 1
             self._show(trace, max(row, 0), t)
             if t >= end:
