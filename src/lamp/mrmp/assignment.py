@@ -25,13 +25,21 @@ its sum is the least among assignments with that longest distance.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numba as nb
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from lamp.mrmp.goal_distances import GoalDistances, hval, hval_below, start_costs
+from lamp.mrmp.coarse import CoarseGraph, coarse_below
+from lamp.mrmp.goal_distances import (
+    GoalDistances,
+    hval,
+    hval_below,
+    hval_pairs,
+    start_costs,
+)
 from lamp.mrmp.gspi_kernels import Graph
 
 __all__ = ["ASSIGNMENTS", "Assignment", "assign", "straight_line_bottleneck", "unreached_reason"]
@@ -43,6 +51,9 @@ _BIG = 1e9
 #: Up to this many robot-goal pairs every distance is computed at once (as the
 #: ``sum`` objective does): fewer calls into compiled code than the growing bound needs.
 DENSE_PAIRS = 64
+#: Fleets whose exact searches would settle more nodes than this (the goals times the
+#: lattice nodes within the straight-line bottleneck) are assigned over the coarse graph.
+COARSE_NODES = 1e7
 #: Growth factor of the bound ``B`` between rounds (from the straight-line floor; each
 #: round evaluates the pairs not yet known to be below the bound).
 _GROWTH = 1.1
@@ -165,10 +176,11 @@ def unreached_reason(G: np.ndarray, no_link: np.ndarray, unreachable: np.ndarray
 
 def assign(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray, G: np.ndarray,
            no_link: np.ndarray, objective: str, goal0: np.ndarray | None,
-           deadline: float) -> Assignment:
+           deadline: float, coarse: CoarseGraph | None = None) -> Assignment:
     """The initial goal of each robot (see the module docstring); ``no_link[m]``: goal m
     has no link to the lattice or to a start; ``goal0``: a given assignment (checked for
-    reachability only)."""
+    reachability only); ``coarse``: the lattice's block graph, for the bottleneck objective
+    over the coarse distances (fleets)."""
     N, M = len(S), len(G)
     gv0 = V + N
     none = np.zeros(N)
@@ -184,7 +196,13 @@ def assign(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray, G: np.ndarray,
         return Assignment(goal0.copy(), cost)
     if objective == "sum" or N * M <= DENSE_PAIRS:
         return _dense(gr, V, hs, S, G, deadline, objective == "bottleneck")
-    return _bottleneck(gr, V, hs, S, G, deadline)
+    E = np.hypot(G[:, None, 0] - S[None, :, 0], G[:, None, 1] - S[None, :, 1])  # (M, N)
+    floor = _straight_floor(E)
+    if coarse is not None and M * np.pi * floor**2 / hs.step**2 > COARSE_NODES:
+        got = _coarse_bottleneck(gr, V, hs, S, G, E, floor, coarse, deadline)
+        if got is not None:
+            return got
+    return _bottleneck(gr, V, hs, S, G, E, floor, deadline)
 
 
 def _costs(gr: Graph, V: int, hs: GoalDistances, N: int, M: int,
@@ -266,18 +284,82 @@ def _straight_floor(E: np.ndarray) -> float:
 
 
 def _bottleneck(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray, G: np.ndarray,
-                deadline: float) -> Assignment:
+                E: np.ndarray, floor: float, deadline: float) -> Assignment:
+    """Bottleneck, then sum, over the exact lattice distances."""
     N, M = len(S), len(G)
-    E = np.hypot(G[:, None, 0] - S[None, :, 0], G[:, None, 1] - S[None, :, 1])  # (M, N)
-    # lattice distances are at least the straight lines: no bound below theirs can do
-    bound = max(_straight_floor(E) * 1.02, 4.0 * hs.step)
+
+    def below(pm: np.ndarray, pi: np.ndarray, bound: float) -> np.ndarray:
+        return hval_below(pm, V + pi, bound, gr, V, V + N, hs)
+
+    def exhausted(has_pair: np.ndarray, bound: float) -> Assignment | None:
+        # searches that are complete (whole lattice, queue empty) know all they can reach
+        complete = np.isinf(hs.rad) & (hs.bcnt.sum(axis=1) == 0)
+        if (complete & ~has_pair).any():
+            return Assignment(None, np.zeros(N), unreached_reason(G, np.zeros(M, bool),
+                                                            complete & ~has_pair))
+        if complete.all():
+            return Assignment(None, np.zeros(N), "no assignment of robots to goals reaches "
+                              "every goal (some goals are reachable only by the same robots)")
+        return None
+
+    return _least_bottleneck(E, floor, below, exhausted, deadline, 4.0 * hs.step)
+
+
+def _coarse_bottleneck(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray,
+                       G: np.ndarray, E: np.ndarray, floor: float, cg: CoarseGraph,
+                       deadline: float) -> Assignment | None:
+    """Bottleneck, then sum, over the coarse distances (:mod:`lamp.mrmp.coarse`); each
+    chosen pair's cost then its exact lattice distance. None when the coarse graph finds
+    no assignment or a chosen pair has no lattice path (the caller then solves exactly)."""
+    N, M = len(S), len(G)
+    xptr, xidx = gr[3], gr[4]
+
+    def block_of(v: int) -> int:
+        for n in xidx[xptr[v]:xptr[v + 1]].tolist():
+            if n < V:
+                return int(cg.block[n])
+        return -1
+
+    sblk = np.array([block_of(V + i) for i in range(N)], dtype=np.int64)
+    gblk = np.array([block_of(V + N + m) for m in range(M)], dtype=np.int64)
+    far = 3.0 * float(np.hypot(*(np.vstack([S, G]).max(axis=0)
+                                 - np.vstack([S, G]).min(axis=0)))) + 1.0
+
+    def below(pm: np.ndarray, pi: np.ndarray, bound: float) -> np.ndarray:
+        return coarse_below(pm, pi, bound, sblk, gblk, S, G, cg.rep, cg.nbr, cg.wlen)
+
+    def exhausted(has_pair: np.ndarray, bound: float) -> Assignment | None:
+        return Assignment(None, np.zeros(N)) if bound > far else None
+
+    got = _least_bottleneck(E, floor, below, exhausted, deadline, 4.0 * hs.step)
+    if got.goal is None:
+        return None
+    held = np.nonzero(got.goal >= 0)[0]
+    held = held[np.argsort(got.goal[held], kind="stable")]
+    cost = np.zeros(N)
+    cost[held] = hval_pairs(got.goal[held], V + held, gr, V, V + N, hs)
+    if not np.isfinite(cost).all():
+        return None
+    return Assignment(got.goal, cost, bound=float(cost.max()))
+
+
+def _least_bottleneck(E: np.ndarray, floor: float, below: Callable, exhausted: Callable,
+                      deadline: float, least: float) -> Assignment:
+    """Bottleneck, then sum, over the distances ``below(pm, pi, bound)`` gives for pairs
+    (goal ``pm[k]``, robot ``pi[k]``) (inf at or above ``bound``; never below the straight
+    line); ``exhausted(has_pair, bound)``: an Assignment that ends the search when no
+    larger bound can give a perfect matching, else None; ``E (M, N)``: the straight lines,
+    ``floor``: :func:`_straight_floor` of them."""
+    M, N = E.shape
+    # distances are at least the straight lines: no bound below theirs can do
+    bound = max(floor * 1.02, least)
     lo = 0.0  # no perfect matching among the pairs with distance < lo
     mg = np.full(M, -1, dtype=np.int64)  # a maximum matching of the pairs below the bound
     mr = np.full(N, -1, dtype=np.int64)
     known = np.full((M, N), np.inf)  # exact where below the last bound
     while True:
         pm, pi = np.nonzero((bound > E) & np.isinf(known))  # grouped by goal
-        known[pm, pi] = hval_below(pm, V + pi, bound, gr, V, V + N, hs)
+        known[pm, pi] = below(pm, pi, bound)
         pm, pi = np.nonzero(bound > known)
         c = known[pm, pi]
         ptr = np.searchsorted(pm, np.arange(M + 1))
@@ -286,33 +368,32 @@ def _bottleneck(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray, G: np.ndarr
             break
         if time.perf_counter() > deadline:
             return Assignment(None, np.zeros(N), timed_out=True)
-        # searches that are complete (whole lattice, queue empty) know all they can reach
-        complete = np.isinf(hs.rad) & (hs.bcnt.sum(axis=1) == 0)
         has_pair = np.zeros(M, bool)
         has_pair[pm] = True
-        if (complete & ~has_pair).any():
-            return Assignment(None, np.zeros(N), unreached_reason(G, np.zeros(M, bool),
-                                                            complete & ~has_pair))
-        if complete.all():
-            return Assignment(None, np.zeros(N), "no assignment of robots to goals reaches "
-                              "every goal (some goals are reachable only by the same robots)")
+        end = exhausted(has_pair, bound)
+        if end is not None:
+            return end
         lo = bound
         base_g, base_r = mg.copy(), mr.copy()
         bound *= _GROWTH
-    # B*: the least distance d such that the pairs with distance <= d match every goal;
-    # each trial grows the matching of the pairs below ``lo`` (maximum there)
+    return _least_sum_within(M, N, ptr, pm, pi, c, lo, base_g if lo > 0.0 else None,
+                             base_r if lo > 0.0 else None)
+
+
+def _least_sum_within(M: int, N: int, ptr: np.ndarray, pm: np.ndarray, pi: np.ndarray,
+                      c: np.ndarray, lo: float, base_g: np.ndarray | None,
+                      base_r: np.ndarray | None) -> Assignment:
+    """B* (the least distance d such that the pairs with distance <= d match every goal;
+    each trial grows the matching ``base`` of the pairs below ``lo``, maximum there), then
+    the least sum over the pairs within B*."""
     vals = np.unique(c[c >= lo])
     a, b = 0, len(vals) - 1
-    while a < b and lo > 0.0:
+    while a < b:
         mid = (a + b) // 2
-        tg, tr = base_g.copy(), base_r.copy()
-        if _grow_matching(ptr, pi, c, vals[mid], tg, tr) == M:
-            b = mid
-        else:
-            a = mid + 1
-    while a < b:  # first round: no base matching
-        mid = (a + b) // 2
-        tg, tr = np.full(M, -1, np.int64), np.full(N, -1, np.int64)
+        if base_g is not None:
+            tg, tr = base_g.copy(), base_r.copy()
+        else:  # first round: no base matching
+            tg, tr = np.full(M, -1, np.int64), np.full(N, -1, np.int64)
         if _grow_matching(ptr, pi, c, vals[mid], tg, tr) == M:
             b = mid
         else:

@@ -40,8 +40,8 @@ import numba as nb
 import numpy as np
 from numba.typed import List
 
-__all__ = ["EPS", "GoalDistances", "expand_to", "hval", "hval_below", "lattice_h",
-           "start_costs"]
+__all__ = ["EPS", "GoalDistances", "expand_to", "hval", "hval_below", "hval_pairs",
+           "lattice_h", "start_costs"]
 
 #: Added to every heuristic value but the goal vertex's own, so that a lattice node (or a
 #: start) that coincides with a goal never ties with the goal vertex.
@@ -460,18 +460,32 @@ def hval_below(pm: np.ndarray, pv: np.ndarray, bound: float, gr: tuple, V: int, 
 
 
 @nb.njit(cache=True)
+def hval_pairs(pm: np.ndarray, pv: np.ndarray, gr: tuple, V: int, gv0: int,
+               hs: tuple) -> np.ndarray:
+    """Exact distances of the pairs (goal ``pm[k]``, vertex ``pv[k]``), best grouped by
+    goal: a goal's first window reaches 1.25 times the farthest straight line of its
+    group (no regrowth where the lattice distances are near the straight lines)."""
+    coords = gr[0]
+    out = np.empty(pm.shape[0])
+    k = 0
+    while k < pm.shape[0]:
+        m = pm[k]
+        e = k
+        far = 0.0
+        while e < pm.shape[0] and pm[e] == m:
+            far = max(far, math.hypot(coords[pv[e], 0] - coords[gv0 + m, 0],
+                                      coords[pv[e], 1] - coords[gv0 + m, 1]))
+            e += 1
+        if hs[1][m] == 0.0:
+            _open_window(m, max(1.25 * far, _FIRST_RADIUS_STEPS * hs[17]), gr[1], gr[2], hs)
+        for q in range(k, e):
+            out[q] = hval(m, pv[q], gr, V, gv0, hs)
+        k = e
+    return out
+
+
 def start_costs(m0: int, m1: int, N: int, gr: tuple, V: int, hs: tuple) -> np.ndarray:
     """(N, m1 - m0) exact distances of the start vertices to goals m0..m1-1."""
-    out = np.empty((N, m1 - m0))
-    coords = gr[0]
-    rad = hs[1]
-    for m in range(m0, m1):
-        if rad[m] == 0.0:  # first window: wide enough for the farthest start (no regrowth)
-            far = 0.0
-            for i in range(N):
-                far = max(far, math.hypot(coords[V + i, 0] - coords[V + N + m, 0],
-                                          coords[V + i, 1] - coords[V + N + m, 1]))
-            _open_window(m, max(1.25 * far, _FIRST_RADIUS_STEPS * hs[17]), gr[1], gr[2], hs)
-        for i in range(N):
-            out[i, m - m0] = hval(m, V + i, gr, V, V + N, hs)
-    return out
+    pm = np.repeat(np.arange(m0, m1, dtype=np.int64), N)
+    pv = np.tile(np.arange(V, V + N, dtype=np.int64), m1 - m0)
+    return hval_pairs(pm, pv, gr, V, V + N, hs).reshape(m1 - m0, N).T.copy()

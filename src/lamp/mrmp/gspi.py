@@ -78,6 +78,7 @@ from numpy.typing import ArrayLike
 
 from lamp.geometry.robot_space import RobotSpace
 from lamp.mrmp.assignment import assign, unreached_reason
+from lamp.mrmp.coarse import get_coarse
 from lamp.mrmp.distance_field import Lattice, get_lattice
 from lamp.mrmp.goal_distances import GoalDistances
 from lamp.mrmp.gspi_inputs import PlanInputs, check_inputs
@@ -396,7 +397,9 @@ def _attempt(space: RobotSpace, S: np.ndarray, G: np.ndarray, c_start: np.ndarra
     no_link = np.array([len(n) == 0 for n, _ in links.goal_links], dtype=bool)
     no_link &= ~links.direct.any(axis=0)
     clock = time.perf_counter()
-    asg = assign(links.graph, V, hs, S, G, no_link, opts.assignment, goal0, opts.deadline)
+    coarse = get_coarse(lat) if N >= ALL_PAIRS_BELOW else None
+    asg = assign(links.graph, V, hs, S, G, no_link, opts.assignment, goal0, opts.deadline,
+                 coarse)
     stats["time_assignment"] = time.perf_counter() - clock
     if asg.timed_out:
         return failure(f"time limit of {opts.time_limit:g} s reached while computing "

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-__all__ = ["ALL_PAIRS_BELOW", "cell_hash", "doubled", "neighbour_lists"]
+__all__ = ["ALL_PAIRS_BELOW", "cell_hash", "doubled", "neighbour_lists", "within"]
 
 #: Teams smaller than this swap goals over all pairs and check all pairs (no hashing).
 ALL_PAIRS_BELOW = 32
@@ -44,8 +44,8 @@ def neighbour_lists(px: np.ndarray, py: np.ndarray, radius: float
     """CSR lists (ptr, idx): for each point i, the other points within ``radius`` (all of
     them when ``radius`` is inf or there are fewer than :data:`ALL_PAIRS_BELOW`), in
     increasing index order. A spatial hash (cells of side ``radius``, points sorted by
-    cell, each of the 9 cells around a point found by binary search) keeps it
-    O(N log N + pairs)."""
+    cell, each of the 9 cells around a point found in a table of the cells, or by binary
+    search when the cells are many) keeps it O(N log N + pairs)."""
     N = px.shape[0]
     ptr = np.zeros(N + 1, dtype=np.int64)
     if N < ALL_PAIRS_BELOW or not radius < np.inf:
@@ -59,6 +59,17 @@ def neighbour_lists(px: np.ndarray, py: np.ndarray, radius: float
             ptr[i + 1] = q
         return ptr, idx
     key, order, skey, ny = cell_hash(px, py, max(radius, 1e-9))
+    # each key's first entry in ``skey``: a table when the cells are few, else found by
+    # binary search
+    ncell = skey[N - 1] + ny + 2
+    table = ncell <= 64 * N + 65536
+    first = np.zeros(ncell + 1 if table else 1, dtype=np.int64)
+    if table:
+        lo = 0
+        for kk in range(ncell + 1):
+            while lo < N and skey[lo] < kk:
+                lo += 1
+            first[kk] = lo
     r2 = radius * radius
     buf = np.empty(64, dtype=np.int64)
     cnt = np.zeros(N, dtype=np.int64)
@@ -69,7 +80,7 @@ def neighbour_lists(px: np.ndarray, py: np.ndarray, radius: float
         for dx in range(-1, 2):
             for dy in range(-1, 2):
                 kk = key[i] + dx * ny + dy
-                lo = np.searchsorted(skey, kk)
+                lo = first[kk] if table else np.searchsorted(skey, kk)
                 while lo < N and skey[lo] == kk:
                     j = order[lo]
                     lo += 1
@@ -99,3 +110,25 @@ def neighbour_lists(px: np.ndarray, py: np.ndarray, radius: float
         cnt[i] = n
         ptr[i + 1] = q
     return ptr, out[:q]
+
+
+@nb.njit(cache=True)
+def within(ptr: np.ndarray, idx: np.ndarray, px: np.ndarray, py: np.ndarray,
+           radius: float) -> tuple[np.ndarray, np.ndarray]:
+    """The lists (ptr, idx) cut to the points within ``radius`` (order kept): the lists of
+    a smaller radius from those of a larger one, as :func:`neighbour_lists` gives them."""
+    N = ptr.shape[0] - 1
+    r2 = radius * radius
+    optr = np.zeros(N + 1, dtype=np.int64)
+    oidx = np.empty(idx.shape[0], dtype=np.int64)
+    q = 0
+    for i in range(N):
+        for k in range(ptr[i], ptr[i + 1]):
+            j = idx[k]
+            ex = px[j] - px[i]
+            ey = py[j] - py[i]
+            if ex * ex + ey * ey <= r2:
+                oidx[q] = j
+                q += 1
+        optr[i + 1] = q
+    return optr, oidx[:q]
