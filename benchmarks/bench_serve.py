@@ -16,7 +16,8 @@ and the pace: simulated seconds per wall second over the phase, from ``time_s``
 (``--realtime`` caps it; below it, the planners were the bottleneck). ``--still`` also
 saves a screenshot of the live page (headless Chromium, ``tests/browser.py``) at the start
 of phase 2 (the README's). The service is stopped with SIGTERM at the end and its
-result.json read back (tasks done by then).
+result.json read back (tasks done by then). Last, in this process, the service's own
+cost per fleet event with no task and with ``--tasks`` tasks queued (``event_cost``).
 """
 
 from __future__ import annotations
@@ -103,6 +104,40 @@ def post_tasks(port: str, scene_name: str, first: int, n: int) -> list[float]:
     return lat
 
 
+def event_cost(scene_name: str, queued: int, events: int = 2000) -> float:
+    """Microseconds the service adds to one fleet event with ``queued`` tasks waiting:
+    the feed's ``released`` through the fleet's ``TaskDesk``, an object's next task, a
+    motion shown (one 0.2 s trace of every robot and object) and a ``GET /state``
+    snapshot made, in this process at ``--realtime 0``."""
+    from types import SimpleNamespace
+
+    from lamp.fleet.desk import TaskDesk
+    from lamp.serve.feed import LiveFeed
+
+    scene = resolve_scene(scene_name)
+    feed = LiveFeed(scene, realtime=0)
+    desk = TaskDesk(feed, len(scene.objects))
+    for i in range(queued):
+        k = i % len(scene.objects)
+        feed.post(k, scene.objects[k].start if (i // len(scene.objects)) % 2 == 0
+                  else scene.objects[k].goal)
+    rows = np.linspace(0.0, 0.2, 5)
+    robots = np.repeat(scene.robot_starts_array[None], len(rows), axis=0)
+    poses = np.repeat(scene.object_starts()[None], len(rows), axis=0)
+    trace = SimpleNamespace(times=rows, robot_positions=robots, object_poses=poses)
+    desk.take(0.0)
+    for k in range(len(scene.objects)):  # every object busy with its first task
+        desk.next_for(k)
+    t0, clock = time.perf_counter(), 0.0
+    for _ in range(events):
+        desk.take(clock)
+        desk.next_for(0)
+        feed.moved(clock, trace)
+        clock += 0.2
+        feed.state_json()
+    return (time.perf_counter() - t0) / events * 1e6
+
+
 def still(port: str, path: Path) -> None:
     sys.path.insert(0, str(ROOT / "tests"))
     from browser import Browser, find_chromium
@@ -161,6 +196,9 @@ def main() -> None:
     for name, r in rows:
         print(f"{name:<20} {r['requests']:>5} {r['median_ms']:>10.2f} {r['p95_ms']:>8.2f} "
               f"{r['max_ms']:>8.1f} {r['pace']:>20.3f} {r['tasks']:>6} {r['queued']:>7}")
+    costs = {q: min(event_cost(args.scene, q) for _ in range(3)) for q in (0, args.tasks)}
+    print("the service's own cost per fleet event (feed, desk, snapshot; best of 3): "
+          + ", ".join(f"{costs[q]:.0f} us with {q} queued" for q in costs))
     life = result.get("lifelong", {})
     print(f"on stop: exit {proc.returncode}, tasks {life.get('tasks')}, done {life.get('done')}, "
           f"failed {life.get('failed')} (stopped)")

@@ -7,6 +7,7 @@ generous joins."""
 
 from __future__ import annotations
 
+import json
 import threading
 import time
 from types import SimpleNamespace
@@ -85,6 +86,7 @@ def test_any_order_of_posts_motions_and_moves_keeps_the_feed_rules(steps):
         assert len(handed) == len(set(handed))
         for t in desk.records:
             assert feed.task(t.id) == t.to_dict()
+        assert json.loads(feed.state_json()) == feed.state()  # its cached parts are current
     desk.take(clock)
     ids = {t.id for t in desk.records}
     # what is released by now: everything posted, the objects' goals, the file's at 3 s

@@ -84,7 +84,8 @@ class LiveFeed:
             r.id: r.to_dict() for r in self._scheduled.records}
         self.world_version = 0  #: bumped whenever time, robots or objects change
         self.tasks_version = 0  #: bumped whenever a task is posted or changes
-        self._cache: tuple[tuple[int, int], bytes] | None = None
+        self._world_json: tuple[int, bytes] | None = None
+        self._tasks_json: tuple[int, bytes] | None = None
 
     # ------------------------------------------------------------------ HTTP side
     def post(self, obj: int, goal: Sequence[float]) -> dict[str, Any]:
@@ -126,13 +127,15 @@ class LiveFeed:
             return {**self._world(), "tasks": [dict(self._tasks[i]) for i in sorted(self._tasks)]}
 
     def state_json(self) -> bytes:
-        """:meth:`state` as JSON bytes, made once per change."""
+        """:meth:`state` as JSON bytes; the world's part made once per motion, the tasks'
+        once per task change (a long queue costs nothing while only the world moves)."""
         with self._cv:
-            key = (self.world_version, self.tasks_version)
-            if self._cache is None or self._cache[0] != key:
-                state = {**self._world(), "tasks": [self._tasks[i] for i in sorted(self._tasks)]}
-                self._cache = (key, json.dumps(state, separators=(",", ":")).encode())
-            return self._cache[1]
+            if self._world_json is None or self._world_json[0] != self.world_version:
+                self._world_json = (self.world_version, _dumps(self._world()))
+            if self._tasks_json is None or self._tasks_json[0] != self.tasks_version:
+                self._tasks_json = (self.tasks_version, _dumps(
+                    [self._tasks[i] for i in sorted(self._tasks)]))
+            return self._world_json[1][:-1] + b',"tasks":' + self._tasks_json[1] + b"}"
 
     def stop(self) -> None:
         """The run must end: ``stopped`` becomes True, nothing waits any more, and no task
@@ -239,3 +242,7 @@ class LiveFeed:
         if t > self._now:
             self._now = float(t)
             self.world_version += 1
+
+
+def _dumps(value: Any) -> bytes:
+    return json.dumps(value, separators=(",", ":")).encode()
