@@ -207,6 +207,38 @@ def test_a_non_loopback_host_without_a_token_is_refused_with_exit_2(tmp_path):
     assert not is_loopback("0.0.0.0") and not is_loopback("example.org")
 
 
+def test_a_fleet_that_fails_stops_the_service_and_finish_raises_its_error(monkeypatch):
+    """The fleet's thread ends with an error: the feed stops (posts get 503), the server
+    still answers, and ``finish`` re-raises the error for the command to report."""
+    import lamp.pipeline
+    from lamp.manip import GeometricProposer
+    from lamp.pipeline import RunRequest
+    from lamp.serve.service import Service
+
+    def broken(request, feed=None, **kw):
+        raise RuntimeError("the fleet broke")
+
+    monkeypatch.setattr(lamp.pipeline, "run", broken)
+    request = RunRequest.build(scene_from_dict(TINY), "lazy", 0, model=GeometricProposer(),
+                               schedule="concurrent")
+    service = Service(request, LiveFeed(request.scene), listen("127.0.0.1", 0))
+    service.start()
+    try:
+        end = time.monotonic() + 60
+        while service.running:
+            assert time.monotonic() < end
+            time.sleep(0.01)
+        assert service.feed.stopped
+        base = service.url.rstrip("/")
+        got, answer = post(base, {"object": 0, "goal": [1.5, 1.5, 0.0]})
+        assert got == 503 and answer["field"] == "service"
+        assert call(base, "GET", "/state")[1]["stopped"] is True
+        with pytest.raises(RuntimeError, match="the fleet broke"):
+            service.finish()
+    finally:
+        service.close()
+
+
 def test_lamp_serve_end_to_end_a_posted_task_is_done_and_sigterm_writes_result(tmp_path):
     scene = tmp_path / "tiny.json"
     scene.write_text(json.dumps(TINY))
