@@ -44,6 +44,7 @@ def test_block_graph_is_symmetric_and_its_blocks_hold_their_nodes() -> None:
     _, _, _, lat, _, _ = _setup(0, 40)
     cg = get_coarse(lat)
     assert get_coarse(lat) is cg  # built once per lattice
+    assert cg.unit == pytest.approx(BLOCK * lat.step)
     B = len(cg.rep)
     assert cg.block.min() == 0 and cg.block.max() == B - 1
     # every node's block is the square of BLOCK x BLOCK lattice indices it lies in
@@ -55,7 +56,8 @@ def test_block_graph_is_symmetric_and_its_blocks_hold_their_nodes() -> None:
             q = cg.nbr[p, s]
             if q >= 0:
                 assert p in cg.nbr[q].tolist()
-                assert cg.wlen[p, s] == pytest.approx(np.hypot(*(cg.rep[p] - cg.rep[q])))
+                assert cg.wlen[p, s] == pytest.approx(cg.unit * (np.sqrt(2) if s in (0, 2, 5, 7)
+                                                                 else 1.0))
 
 
 @settings(max_examples=8, deadline=None)

@@ -326,7 +326,8 @@ def _coarse_bottleneck(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray,
                                  - np.vstack([S, G]).min(axis=0)))) + 1.0
 
     def below(pm: np.ndarray, pi: np.ndarray, bound: float) -> np.ndarray:
-        return coarse_below(pm, pi, bound, sblk, gblk, S, G, cg.rep, cg.nbr, cg.wlen)
+        return coarse_below(pm, pi, bound, sblk, gblk, S, G, cg.rep, cg.nbr, cg.wlen,
+                            cg.unit)
 
     def exhausted(has_pair: np.ndarray, bound: float) -> Assignment | None:
         return Assignment(None, np.zeros(N)) if bound > far else None

@@ -31,7 +31,8 @@ from lamp.geometry.kernels import point_segment_distance
 from lamp.mrmp.goal_distances import hval
 from lamp.mrmp.neighbours import ALL_PAIRS_BELOW, neighbour_lists, within
 
-__all__ = ["ALL_PAIRS_BELOW", "Graph", "conflict", "hval_fast", "neighbour_lists", "run_steps"]
+__all__ = ["ALL_PAIRS_BELOW", "Graph", "conflict", "hval_fast", "neighbour_lists", "read_settled",
+           "run_steps"]
 
 #: Steps a robot may go without progress towards its goal before it trades goals with a
 #: neighbour that blocks it (``_break_deadlocks``).
@@ -90,21 +91,30 @@ def conflict(
 
 
 @nb.njit(cache=True, inline="always")
-def hval_fast(m: int, v: int, gr: tuple, V: int, gv0: int, hs: tuple) -> float:
-    """:func:`hval`, compiled into its caller: a value already settled or memoised is read
-    without a call (a call with these arguments costs about 0.3 us)."""
+def read_settled(m: int, v: int, V: int, hs: tuple, dd: np.ndarray, dn: np.ndarray,
+                 a0: int, b0: int, na: int, nbw: int) -> float:
+    """Goal m's value at vertex v when already settled (memoised for a special vertex),
+    else -1; ``dd``/``dn``/``a0, b0, na, nbw``: goal m's window arrays and extent, read
+    once by the caller (a :func:`hval` call per value costs about 0.3 us, forty times
+    this; after one, the window may have grown: read them again)."""
     if v < V:
-        win = hs[0]
-        a = hs[11][v] - win[m, 0]
-        b = hs[12][v] - win[m, 1]
-        na = win[m, 2]
-        if 0 <= a < na and 0 <= b < win[m, 3]:
+        a = hs[11][v] - a0
+        b = hs[12][v] - b0
+        if 0 <= a < na and 0 <= b < nbw:
             j = (b + 1) * (na + 2) + a + 1
-            if hs[3][m][j]:
-                return hs[2][m][j]
+            if dn[j]:
+                return dd[j]
     elif hs[9][m, v - V]:
         return hs[10][m, v - V]
-    return hval(m, v, gr, V, gv0, hs)
+    return -1.0
+
+
+@nb.njit(cache=True, inline="always")
+def hval_fast(m: int, v: int, gr: tuple, V: int, gv0: int, hs: tuple) -> float:
+    """:func:`hval`, compiled into its caller: a settled or memoised value read in place."""
+    w = hs[0]
+    h = read_settled(m, v, V, hs, hs[2][m], hs[3][m], w[m, 0], w[m, 1], w[m, 2], w[m, 3])
+    return h if h >= 0.0 else hval(m, v, gr, V, gv0, hs)
 
 
 @nb.njit(cache=True)
@@ -137,22 +147,13 @@ def _build_cands(
     else:
         # goal g's settled values read straight from its window (a call per value costs
         # forty times as much); the others, and the window after a growth, from hval
-        win, va, vb, sdone, sval = hs[0], hs[11], hs[12], hs[9], hs[10]
+        win = hs[0]
         dd = hs[2][g]
         dn = hs[3][g]
         a0, b0, na, nbw = win[g, 0], win[g, 1], win[g, 2], win[g, 3]
         for k in range(n):
             u = cand[i, k]
-            hv = -1.0
-            if u < V:
-                a = va[u] - a0
-                b = vb[u] - b0
-                if 0 <= a < na and 0 <= b < nbw:
-                    j = (b + 1) * (na + 2) + a + 1
-                    if dn[j]:
-                        hv = dd[j]
-            elif sdone[g, u - V]:
-                hv = sval[g, u - V]
+            hv = read_settled(g, u, V, hs, dd, dn, a0, b0, na, nbw)
             if hv < 0.0:
                 hv = hval(g, u, gr, V, gv0, hs)
                 dd = hs[2][g]

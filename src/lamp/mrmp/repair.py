@@ -38,7 +38,7 @@ import numba as nb
 import numpy as np
 
 from lamp.mrmp.goal_distances import hval
-from lamp.mrmp.gspi_kernels import conflict
+from lamp.mrmp.gspi_kernels import conflict, read_settled
 from lamp.mrmp.neighbours import doubled
 
 __all__ = ["REPAIR_BUDGET", "REPAIR_EXCHANGES", "REPAIR_GROUP", "REPAIR_WAIT", "repair_last"]
@@ -171,6 +171,8 @@ def _search(i: int, target: float, gr: tuple, V: int, gv0: int, hs: tuple, goal:
                         none):
             free = s + 1
             break
+    dd, dn = hs[2][m], hs[3][m]  # goal m's window (gspi_kernels.read_settled)
+    wa0, wb0, wna, wnb = hs[0][m, 0], hs[0][m, 1], hs[0][m, 2], hs[0][m, 3]
     cap = 1 << 14
     lv = np.empty(cap, np.int64)
     lp = np.empty(cap, np.int64)
@@ -209,7 +211,11 @@ def _search(i: int, target: float, gr: tuple, V: int, gv0: int, hs: tuple, goal:
                                          coords[u, 1] - coords[v, 1])
                 if mark[u] == stamp + t + 1 and lc[pos[u]] <= nc:
                     continue
-                hu = hval(m, u, gr, V, gv0, hs)
+                hu = read_settled(m, u, V, hs, dd, dn, wa0, wb0, wna, wnb)
+                if hu < 0.0:
+                    hu = hval(m, u, gr, V, gv0, hs)
+                    dd, dn = hs[2][m], hs[3][m]
+                    wa0, wb0, wna, wnb = hs[0][m, 0], hs[0][m, 1], hs[0][m, 2], hs[0][m, 3]
                 if not nc + hu < best - 1e-9:
                     continue
                 if not _move_ok(i, t, v, u, VX, coords, gv0, sk, so, x0, y0, cs, ny,
