@@ -112,7 +112,17 @@ def test_the_live_page_draws_the_robots_moving_and_posts_a_task(browser):
         while "goal:" not in browser.evaluate("document.getElementById('message').textContent"):
             assert time.monotonic() < end
             time.sleep(0.05)
+        # a third task, then the stop: the page shows the service stopped and the task
+        # the stop ended (failed, or done if the fleet was quick), as result.json has it
+        browser.evaluate("document.getElementById('f-x').value = '0.8'")
+        browser.evaluate("document.getElementById('f-send').click()")
+        until(browser, lambda s: any(t[0] == 2 for t in s["tasks"]))
+        result = service.finish()
+        last = result.to_dict()["tasks"][2]["status"]
+        final = until(browser, lambda s: s if [2, last] in s["tasks"] else None)
+        assert "stopped" in browser.evaluate("document.getElementById('clock').textContent")
     finally:
         result = service.finish()
         service.close()
-    assert [t["status"] for t in result.to_dict()["tasks"]] == ["done", "done"]
+    assert [t["status"] for t in result.to_dict()["tasks"]][:2] == ["done", "done"]
+    assert final["tasks"] == [[0, "done"], [1, "done"], [2, last]]

@@ -11,7 +11,7 @@ Routes (``docs/serve.md``):
   ``GET /state`` ``{"time_s", "robots", "objects", "stopped", "tasks"}``.
 - ``GET /events``: server-sent events, ``world`` (time, robots, objects, stopped) at most
   every ``EVENT_S`` seconds when it changed and ``tasks`` (the list) when they changed;
-  the stream ends after the service stops.
+  the stream ends ``STOP_GRACE_S`` after the service stops.
 - ``GET /``: the live page (``serve.page``).
 
 With a ``token`` every request must carry it (``Authorization: Bearer T``, or
@@ -36,12 +36,14 @@ from lamp.serve.feed import FeedStopped, LiveFeed
 from lamp.serve.intake import BadTask, TaskIntake
 from lamp.serve.page import live_page
 
-__all__ = ["EVENT_S", "MAX_BODY", "create_app", "error"]
+__all__ = ["EVENT_S", "MAX_BODY", "STOP_GRACE_S", "create_app", "error"]
 
 #: The largest request body accepted, bytes.
 MAX_BODY = 16 * 1024
 #: Seconds between two looks at the world for the event stream.
 EVENT_S = 0.05
+#: Seconds an event stream goes on after a stop (the last task moves), then ends.
+STOP_GRACE_S = 1.0
 
 Scope = dict[str, Any]
 ASGIApp = Callable[[Scope, Callable[[], Awaitable[dict]], Callable[[dict], Awaitable[None]]],
@@ -152,18 +154,17 @@ def create_app(feed: LiveFeed, token: str | None = None, max_body: int = MAX_BOD
 
 
 async def _stream(feed: LiveFeed, request: Request) -> AsyncIterator[bytes]:
-    """The event stream (module docstring)."""
-    seen = (-1, -1)
-    while True:
+    """The event stream (module docstring); after a stop it goes on for ``STOP_GRACE_S``
+    (the fleet fails the tasks not done meanwhile), then ends."""
+    seen, left = (-1, -1), round(STOP_GRACE_S / EVENT_S)
+    while left > 0:
         world, tasks = feed.world_version, feed.tasks_version
         if tasks != seen[1]:
             yield _event("tasks", feed.tasks())
         if world != seen[0]:
-            now = feed.world()
-            yield _event("world", now)
-            if now["stopped"]:
-                return
+            yield _event("world", feed.world())
         seen = (world, tasks)
+        left -= feed.stopped
         if await request.is_disconnected():
             return
         await asyncio.sleep(EVENT_S)

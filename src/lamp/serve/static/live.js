@@ -136,15 +136,15 @@
   function connect() {
     const es = new EventSource(withToken("events"));
     es.addEventListener("open", () => { $("link").textContent = "live"; $("link").className = "up"; });
-    es.addEventListener("error", () => {
+    es.addEventListener("error", () => { // the stream ended: after a stop, for good
       $("link").textContent = live.stopped ? "stopped" : "reconnecting";
       $("link").className = "down";
+      if (live.stopped) es.close();
     });
     es.addEventListener("world", (e) => {
       const w = JSON.parse(e.data);
       live.time = w.time_s; live.robots = w.robots; live.objects = w.objects;
       live.stopped = w.stopped; live.version += 1;
-      if (w.stopped) es.close();
       draw();
     });
     es.addEventListener("tasks", (e) => { live.tasks = JSON.parse(e.data); showTasks(); draw(); });
