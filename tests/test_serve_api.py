@@ -193,7 +193,7 @@ def test_with_a_token_every_request_must_carry_it(guarded):
     assert got == 200 and "lamp serve" in page
 
 
-def test_a_non_loopback_host_without_a_token_is_refused_with_exit_2(tmp_path):
+def test_bad_options_exit_2_naming_them_before_anything_listens(tmp_path):
     scene = tmp_path / "tiny.json"
     scene.write_text(json.dumps(TINY))
     result = CliRunner().invoke(cli_app, ["serve", str(scene), "--host", "0.0.0.0",
@@ -203,6 +203,15 @@ def test_a_non_loopback_host_without_a_token_is_refused_with_exit_2(tmp_path):
     assert "--host 0.0.0.0" in result.output and "--token" in result.output
     result = CliRunner().invoke(cli_app, ["serve", str(scene), "--realtime", "-1"])
     assert result.exit_code == 2 and "--realtime" in result.output
+    taken = listen("127.0.0.1", 0)
+    try:
+        result = CliRunner().invoke(cli_app, ["serve", str(scene), "-m", "geometric", "--port",
+                                              str(taken.getsockname()[1]),
+                                              "-o", str(tmp_path / "out")])
+    finally:
+        taken.close()
+    assert result.exit_code == 2 and "--port: cannot listen" in result.output
+    assert not (tmp_path / "out").exists()
     assert is_loopback("127.0.0.1") and is_loopback("localhost") and is_loopback("::1")
     assert not is_loopback("0.0.0.0") and not is_loopback("example.org")
 
