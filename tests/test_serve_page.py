@@ -84,6 +84,12 @@ def test_the_live_page_draws_the_robots_moving_and_posts_a_task(browser):
         # the robots move: the page shows several distinct placements over time
         seen = set()
         until(browser, lambda s: seen.add(json.dumps(s["robots"])) or len(seen) >= 4)
+        # the wheel zooms about the cursor, "fit" shows the whole workspace again
+        before = shown(browser)["view"]
+        browser.mouse("mouseWheel", 300, 300, deltaX=0, deltaY=-300)
+        assert until(browser, lambda s: s["view"]["scale"] > 1.2 * before["scale"])
+        browser.evaluate("document.getElementById('fit').click()")
+        assert until(browser, lambda s: s["view"] == before)
         # a click on the map picks the goal, the form posts it
         view = shown(browser)["view"]
         x, y = 1.6, 1.5

@@ -29,8 +29,8 @@
     st.ox = (view.w - st.scale * W) / 2;
     st.oy = (view.h + st.scale * H) / 2;
   }
-  function zoom(f) {
-    const cx = view.w / 2, cy = view.h / 2;
+  function zoom(f, cx, cy) {
+    if (cx === undefined) { cx = view.w / 2; cy = view.h / 2; }
     st.ox = cx - (cx - st.ox) * f; st.oy = cy - (cy - st.oy) * f; st.scale *= f;
     draw();
   }
@@ -177,6 +177,11 @@
       $("f-x").value = live.pick[0].toFixed(3); $("f-y").value = live.pick[1].toFixed(3);
       draw();
     });
+    canvas.addEventListener("wheel", (e) => { // zoom about the cursor, as the viewer does
+      e.preventDefault();
+      const r = canvas.getBoundingClientRect();
+      zoom(Math.exp(-e.deltaY * 0.0015), e.clientX - r.left, e.clientY - r.top);
+    }, { passive: false });
     $("zoom-in").addEventListener("click", () => zoom(1.5));
     $("zoom-out").addEventListener("click", () => zoom(1 / 1.5));
     $("fit").addEventListener("click", () => { fit(); draw(); });
