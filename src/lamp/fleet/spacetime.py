@@ -14,6 +14,10 @@ Guarantee (``tests/test_fleet_parts.py``, against a row-by-row brute force): whe
 least ``2 * ROBOT_MARGIN`` farther than a robot diameter from each robot of the other, each
 robot at least ``ROBOT_MARGIN`` clear of the other's object space at that row (its phase),
 and the two objects' spaces do not meet while both hold them.
+
+Segments whose reach (:func:`reach_box`: every row left and every object phase) lie
+farther apart than the largest of those clearances are compatible without a row being
+compared: the same answer, found from two boxes (tested against the full test).
 """
 
 from __future__ import annotations
@@ -26,12 +30,13 @@ import shapely
 from lamp.fleet.regions import OBJECT_MARGIN, ROBOT_MARGIN, footprints
 from lamp.fleet.segments import Segment
 
-__all__ = ["compatible", "object_phases", "object_space"]
+__all__ = ["compatible", "object_phases", "object_space", "reach_box"]
 
 
-def object_space(seg: Segment, final: bool = False) -> shapely.Geometry:
-    """Where ``seg``'s object may be while it runs (``final``: once it has ended)."""
-    return _space(seg, "final" if final else "motion")
+def object_space(seg: Segment, final: bool = False, first: bool = False) -> shapely.Geometry:
+    """Where ``seg``'s object may be while it runs (``final``: once it has ended;
+    ``first``: before a robot may touch it), grown by ``OBJECT_MARGIN``."""
+    return _space(seg, "final" if final else "first" if first else "motion")
 
 
 def _space(seg: Segment, which: str) -> shapely.Geometry:
@@ -101,9 +106,30 @@ def _objects_clear(pa: list[tuple[float, shapely.Geometry]],
     return True
 
 
+def reach_box(seg: Segment) -> np.ndarray:
+    """(x0, y0, x1, y1): a box holding the centres of ``seg``'s robots at every row from
+    its cursor on (its last row held) and each of its object's spaces (first, along its
+    motion, final)."""
+    rows = seg.rows[:, min(seg.cursor, seg.rows.shape[1] - 1):].reshape(-1, 2)
+    boxes = [np.concatenate([rows.min(axis=0), rows.max(axis=0)])]
+    boxes += [np.asarray(_space(seg, w).bounds, float) for w in ("first", "motion", "final")]
+    stack = np.stack(boxes)
+    return np.concatenate([stack[:, :2].min(axis=0), stack[:, 2:].max(axis=0)])
+
+
+def apart(a: np.ndarray, b: np.ndarray, gap: float) -> bool:
+    """Whether boxes ``a`` and ``b`` (x0, y0, x1, y1) are more than ``gap`` apart along x
+    or along y (then every point of one is more than ``gap`` from every point of the
+    other)."""
+    return bool(a[0] - b[2] > gap or b[0] - a[2] > gap or a[1] - b[3] > gap
+                or b[1] - a[3] > gap)
+
+
 def compatible(a: Segment, b: Segment) -> bool:
     """Whether ``a`` and ``b`` may run together from now (see the module docstring)."""
     r = a.robot_radius
+    if apart(reach_box(a), reach_box(b), 2.0 * r + 2.0 * ROBOT_MARGIN):
+        return True  # every test below holds: robots and spaces all farther apart
     n = max(a.remaining, b.remaining)
     ra, rb = _rows(a, n), _rows(b, n)
     gap = np.hypot(*np.moveaxis(ra[:, None] - rb[None], -1, 0))  # (na, nb, n)

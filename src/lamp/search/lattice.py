@@ -50,7 +50,6 @@ goal pose for free.
 
 from __future__ import annotations
 
-import array
 import math
 from collections.abc import Sequence
 
@@ -162,7 +161,7 @@ class ObjectLattice:
                 raise ValueError(f"landmark must be a finite (x, y), got {landmark!r}")
         self.landmark = None if landmark is None else (float(landmark[0]), float(landmark[1]))
         self._potential: LandmarkPotential | None = None
-        self._pot_values: array.array | None = None
+        self._pot_values: memoryview | None = None
 
     @classmethod
     def from_scene(
@@ -326,8 +325,10 @@ class ObjectLattice:
                 self.step, (self.n_i, self.n_j), self.landmark,
                 radius=self.max_translation * math.sqrt(2.0),
             )
-            # indexed per heuristic call: plain floats, 8 bytes each
-            self._pot_values = array.array("d", self._potential.values)
+            # indexed per heuristic call: plain floats, read in place (no copy of the
+            # whole map's values)
+            self._pot_values = memoryview(np.ascontiguousarray(self._potential.values,
+                                                               dtype=np.float64))
         return self._potential
 
     def _pot(self, u: Node | VirtualNode, x: float, y: float) -> float:
