@@ -129,7 +129,9 @@ class TaskRecord:
 
 
 class TaskFeed(Protocol):
-    """Where the fleet's tasks come from. Called from the thread that runs the fleet."""
+    """Where the fleet's tasks come from. Called from the fleet's threads (its event loop
+    and its objects' loops, ``turns.Turns``), one at a time, never concurrently; a feed
+    that other threads also touch (a live service's) guards its own state."""
 
     def released(self, now: float) -> list[TaskRecord]:
         """The tasks released at or before simulated time ``now`` that were not handed
