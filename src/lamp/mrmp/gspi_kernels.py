@@ -204,10 +204,15 @@ def _pibt_step(
     for the next step while the ancestor, which re-checks against it, waits or detours.
     Without it two robots 10 cm apart whose simultaneous moves would graze each other
     could block each other forever (the parent's wait always beating its detours).
+
+    A robot at rest (on its goal, or without one) has waiting as its first candidate (its
+    heuristic 0, every other at least EPS); its other candidates are built only when
+    waiting fails: the same decisions, without the cost for the many robots at rest.
     """
     coords = gr[0]
     N = cur.shape[0]
     keys = np.empty(cand.shape[1])
+    lazy = np.zeros(N, dtype=np.uint8)  # candidates beyond waiting not built yet
     for k in range(N):
         status[k] = _UNDECIDED
         nxt[k] = cur[k]
@@ -218,13 +223,23 @@ def _pibt_step(
         if status[r0] != _UNDECIDED:
             continue
         status[r0] = _TENTATIVE
-        _build_cands(r0, cur[r0], gr, V, gv0, hs, goal, seed, t, cand, ncand, fleet, keys)
+        if goal[r0] < 0 or cur[r0] == gv0 + goal[r0]:
+            cand[r0, 0] = cur[r0]  # at rest: waiting comes first; the rest when it fails
+            ncand[r0] = 1
+            lazy[r0] = 1
+        else:
+            _build_cands(r0, cur[r0], gr, V, gv0, hs, goal, seed, t, cand, ncand, fleet, keys)
         ci[r0] = 0
         stack[0] = r0
         sp = 1
         while sp > 0:
             i = stack[sp - 1]
             if ci[i] >= ncand[i]:
+                if lazy[i]:
+                    lazy[i] = 0
+                    _build_cands(i, cur[i], gr, V, gv0, hs, goal, seed, t, cand, ncand, fleet,
+                                 keys)
+                    continue
                 if mode[i] == 0 and sp > 1:
                     mode[i] = 1  # yield pass (see docstring)
                     ci[i] = 0
@@ -278,8 +293,13 @@ def _pibt_step(
             if blocker >= 0:
                 # priority inheritance: the blocker decides first, then i re-checks c
                 status[blocker] = _TENTATIVE
-                _build_cands(blocker, cur[blocker], gr, V, gv0, hs, goal, seed, t, cand,
-                             ncand, fleet, keys)
+                if goal[blocker] < 0 or cur[blocker] == gv0 + goal[blocker]:
+                    cand[blocker, 0] = cur[blocker]
+                    ncand[blocker] = 1
+                    lazy[blocker] = 1
+                else:
+                    _build_cands(blocker, cur[blocker], gr, V, gv0, hs, goal, seed, t, cand,
+                                 ncand, fleet, keys)
                 ci[blocker] = 0
                 mode[blocker] = 0
                 stack[sp] = blocker
