@@ -19,7 +19,7 @@ from lamp.mrmp import plan_paths
 from lamp.mrmp.coarse import BLOCK, get_coarse
 from lamp.mrmp.distance_field import get_lattice
 from lamp.mrmp.goal_distances import GoalDistances, expand_to, hval
-from lamp.mrmp.gspi_kernels import hval_fast
+from lamp.mrmp.heuristic_reads import hval_fast
 from lamp.mrmp.links import link_special_vertices
 from lamp.mrmp.neighbours import neighbour_lists, within
 from lamp.scene.mapf import load_grid_map, random_instance

@@ -29,10 +29,10 @@ import numpy as np
 
 from lamp.geometry.kernels import point_segment_distance
 from lamp.mrmp.goal_distances import hval
+from lamp.mrmp.heuristic_reads import hval_fast, read_settled
 from lamp.mrmp.neighbours import ALL_PAIRS_BELOW, neighbour_lists, within
 
-__all__ = ["ALL_PAIRS_BELOW", "Graph", "conflict", "hval_fast", "neighbour_lists", "read_settled",
-           "run_steps"]
+__all__ = ["ALL_PAIRS_BELOW", "Graph", "conflict", "neighbour_lists", "run_steps"]
 
 #: Steps a robot may go without progress towards its goal before it trades goals with a
 #: neighbour that blocks it (``_break_deadlocks``).
@@ -88,33 +88,6 @@ def conflict(
             thr = d1
     # closest approach: distance of the origin to the relative-offset segment d0 -> d1
     return point_segment_distance(0.0, 0.0, d0x, d0y, d1x, d1y) < thr - 1e-9
-
-
-@nb.njit(cache=True, inline="always")
-def read_settled(m: int, v: int, V: int, hs: tuple, dd: np.ndarray, dn: np.ndarray,
-                 a0: int, b0: int, na: int, nbw: int) -> float:
-    """Goal m's value at vertex v when already settled (memoised for a special vertex),
-    else -1; ``dd``/``dn``/``a0, b0, na, nbw``: goal m's window arrays and extent, read
-    once by the caller (a :func:`hval` call per value costs about 0.3 us, forty times
-    this; after one, the window may have grown: read them again)."""
-    if v < V:
-        a = hs[11][v] - a0
-        b = hs[12][v] - b0
-        if 0 <= a < na and 0 <= b < nbw:
-            j = (b + 1) * (na + 2) + a + 1
-            if dn[j]:
-                return dd[j]
-    elif hs[9][m, v - V]:
-        return hs[10][m, v - V]
-    return -1.0
-
-
-@nb.njit(cache=True, inline="always")
-def hval_fast(m: int, v: int, gr: tuple, V: int, gv0: int, hs: tuple) -> float:
-    """:func:`hval`, compiled into its caller: a settled or memoised value read in place."""
-    w = hs[0]
-    h = read_settled(m, v, V, hs, hs[2][m], hs[3][m], w[m, 0], w[m, 1], w[m, 2], w[m, 3])
-    return h if h >= 0.0 else hval(m, v, gr, V, gv0, hs)
 
 
 @nb.njit(cache=True)
@@ -188,6 +161,62 @@ def _build_cands(
     ncand[i] = m
 
 
+@nb.njit(cache=True, inline="always")
+def _check_move(i: int, c: int, coords: np.ndarray, cur: np.ndarray, nxt: np.ndarray,
+                status: np.ndarray, mode: np.ndarray, nptr: np.ndarray, nidx: np.ndarray,
+                gv0: int, two_r: float) -> tuple[bool, int]:
+    """Robot i's move to c against its neighbours: (conflicts with a decided robot's
+    motion or a tentative ancestor's, the first undecided robot it would hit or -1)."""
+    ax = coords[cur[i], 0]
+    ay = coords[cur[i], 1]
+    bx = coords[c, 0]
+    by = coords[c, 1]
+    c_goal = c >= gv0
+    blocker = -1
+    for q in range(nptr[i], nptr[i + 1]):
+        k = nidx[q]
+        sk = status[k]
+        px = coords[cur[k], 0]
+        py = coords[cur[k], 1]
+        stay_goal = c_goal and cur[k] >= gv0
+        if sk == _UNDECIDED:
+            if blocker < 0 and conflict(ax, ay, bx, by, px, py, px, py, two_r,
+                                         stay_goal):
+                blocker = k
+        elif sk == _DECIDED:
+            qx = coords[nxt[k], 0]
+            qy = coords[nxt[k], 1]
+            if conflict(ax, ay, bx, by, px, py, qx, qy, two_r,
+                         c_goal and nxt[k] >= gv0):
+                return True, -1
+        else:  # tentative ancestor: its position now and its intended motion
+            qx = coords[nxt[k], 0]
+            qy = coords[nxt[k], 1]
+            if conflict(ax, ay, bx, by, px, py, px, py, two_r, stay_goal) or (
+                mode[i] == 0
+                and conflict(ax, ay, bx, by, px, py, qx, qy, two_r,
+                              c_goal and nxt[k] >= gv0)
+            ):
+                return True, -1
+    return False, blocker
+
+
+@nb.njit(cache=True, inline="always")
+def _first_cands(i: int, cur: np.ndarray, gr: tuple, V: int, gv0: int, hs: tuple,
+                 goal: np.ndarray, seed: int, t: int, cand: np.ndarray, ncand: np.ndarray,
+                 fleet: bool, keys: np.ndarray, lazy: np.ndarray) -> None:
+    """Robot i's candidates; for a robot at rest (on its goal, or without one) only
+    waiting, its first (heuristic 0, every other at least EPS), with ``lazy[i]`` set: the
+    others are built when waiting fails (the same decisions, without building them for
+    every robot at rest)."""
+    if goal[i] < 0 or cur[i] == gv0 + goal[i]:
+        cand[i, 0] = cur[i]
+        ncand[i] = 1
+        lazy[i] = 1
+    else:
+        _build_cands(i, cur[i], gr, V, gv0, hs, goal, seed, t, cand, ncand, fleet, keys)
+
+
 @nb.njit(cache=True)
 def _pibt_step(
     gr: tuple, V: int, gv0: int, hs: tuple, cur: np.ndarray, goal: np.ndarray,
@@ -205,9 +234,6 @@ def _pibt_step(
     Without it two robots 10 cm apart whose simultaneous moves would graze each other
     could block each other forever (the parent's wait always beating its detours).
 
-    A robot at rest (on its goal, or without one) has waiting as its first candidate (its
-    heuristic 0, every other at least EPS); its other candidates are built only when
-    waiting fails: the same decisions, without the cost for the many robots at rest.
     """
     coords = gr[0]
     N = cur.shape[0]
@@ -223,12 +249,7 @@ def _pibt_step(
         if status[r0] != _UNDECIDED:
             continue
         status[r0] = _TENTATIVE
-        if goal[r0] < 0 or cur[r0] == gv0 + goal[r0]:
-            cand[r0, 0] = cur[r0]  # at rest: waiting comes first; the rest when it fails
-            ncand[r0] = 1
-            lazy[r0] = 1
-        else:
-            _build_cands(r0, cur[r0], gr, V, gv0, hs, goal, seed, t, cand, ncand, fleet, keys)
+        _first_cands(r0, cur, gr, V, gv0, hs, goal, seed, t, cand, ncand, fleet, keys, lazy)
         ci[r0] = 0
         stack[0] = r0
         sp = 1
@@ -253,53 +274,16 @@ def _pibt_step(
                 ci[i] += 1
                 continue
             nxt[i] = c
-            ax = coords[cur[i], 0]
-            ay = coords[cur[i], 1]
-            bx = coords[c, 0]
-            by = coords[c, 1]
-            c_goal = c >= gv0
-            bad = False
-            blocker = -1
-            for q in range(nptr[i], nptr[i + 1]):
-                k = nidx[q]
-                sk = status[k]
-                px = coords[cur[k], 0]
-                py = coords[cur[k], 1]
-                stay_goal = c_goal and cur[k] >= gv0
-                if sk == _UNDECIDED:
-                    if blocker < 0 and conflict(ax, ay, bx, by, px, py, px, py, two_r,
-                                                 stay_goal):
-                        blocker = k
-                elif sk == _DECIDED:
-                    qx = coords[nxt[k], 0]
-                    qy = coords[nxt[k], 1]
-                    if conflict(ax, ay, bx, by, px, py, qx, qy, two_r,
-                                 c_goal and nxt[k] >= gv0):
-                        bad = True
-                        break
-                else:  # tentative ancestor: its position now and its intended motion
-                    qx = coords[nxt[k], 0]
-                    qy = coords[nxt[k], 1]
-                    if conflict(ax, ay, bx, by, px, py, px, py, two_r, stay_goal) or (
-                        mode[i] == 0
-                        and conflict(ax, ay, bx, by, px, py, qx, qy, two_r,
-                                      c_goal and nxt[k] >= gv0)
-                    ):
-                        bad = True
-                        break
+            bad, blocker = _check_move(i, c, coords, cur, nxt, status, mode, nptr, nidx, gv0,
+                                       two_r)
             if bad:
                 ci[i] += 1
                 continue
             if blocker >= 0:
                 # priority inheritance: the blocker decides first, then i re-checks c
                 status[blocker] = _TENTATIVE
-                if goal[blocker] < 0 or cur[blocker] == gv0 + goal[blocker]:
-                    cand[blocker, 0] = cur[blocker]
-                    ncand[blocker] = 1
-                    lazy[blocker] = 1
-                else:
-                    _build_cands(blocker, cur[blocker], gr, V, gv0, hs, goal, seed, t, cand,
-                                 ncand, fleet, keys)
+                _first_cands(blocker, cur, gr, V, gv0, hs, goal, seed, t, cand, ncand, fleet,
+                             keys, lazy)
                 ci[blocker] = 0
                 mode[blocker] = 0
                 stack[sp] = blocker

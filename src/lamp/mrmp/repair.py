@@ -38,7 +38,8 @@ import numba as nb
 import numpy as np
 
 from lamp.mrmp.goal_distances import hval
-from lamp.mrmp.gspi_kernels import conflict, read_settled
+from lamp.mrmp.gspi_kernels import conflict
+from lamp.mrmp.heuristic_reads import read_settled
 from lamp.mrmp.neighbours import doubled
 
 __all__ = ["REPAIR_BUDGET", "REPAIR_EXCHANGES", "REPAIR_GROUP", "REPAIR_WAIT", "repair_last"]
@@ -171,7 +172,7 @@ def _search(i: int, target: float, gr: tuple, V: int, gv0: int, hs: tuple, goal:
                         none):
             free = s + 1
             break
-    dd, dn = hs[2][m], hs[3][m]  # goal m's window (gspi_kernels.read_settled)
+    dd, dn = hs[2][m], hs[3][m]  # goal m's window (heuristic_reads.read_settled)
     wa0, wb0, wna, wnb = hs[0][m, 0], hs[0][m, 1], hs[0][m, 2], hs[0][m, 3]
     cap = 1 << 14
     lv = np.empty(cap, np.int64)

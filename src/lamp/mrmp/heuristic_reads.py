@@ -1,0 +1,44 @@
+"""Reads of Gspi's heuristic values compiled into the hot loops (steps, repair).
+
+A compiled call of :func:`lamp.mrmp.goal_distances.hval` passes the whole
+:class:`~lamp.mrmp.goal_distances.GoalDistances` tuple and costs about 0.3 us; a value
+already settled in the goal's window, or memoised for a special vertex, is read here
+in a few nanoseconds when the caller reads the window's arrays once. The values are
+``hval``'s, bit for bit (``tests/test_mrmp_coarse.py``).
+"""
+
+from __future__ import annotations
+
+import numba as nb
+import numpy as np
+
+from lamp.mrmp.goal_distances import hval
+
+__all__ = ["hval_fast", "read_settled"]
+
+
+@nb.njit(cache=True, inline="always")
+def read_settled(m: int, v: int, V: int, hs: tuple, dd: np.ndarray, dn: np.ndarray,
+                 a0: int, b0: int, na: int, nbw: int) -> float:
+    """Goal m's value at vertex v when already settled (memoised for a special vertex),
+    else -1; ``dd``/``dn``/``a0, b0, na, nbw``: goal m's window arrays and extent, read
+    once by the caller (a :func:`hval` call per value costs about 0.3 us, forty times
+    this; after one, the window may have grown: read them again)."""
+    if v < V:
+        a = hs[11][v] - a0
+        b = hs[12][v] - b0
+        if 0 <= a < na and 0 <= b < nbw:
+            j = (b + 1) * (na + 2) + a + 1
+            if dn[j]:
+                return dd[j]
+    elif hs[9][m, v - V]:
+        return hs[10][m, v - V]
+    return -1.0
+
+
+@nb.njit(cache=True, inline="always")
+def hval_fast(m: int, v: int, gr: tuple, V: int, gv0: int, hs: tuple) -> float:
+    """:func:`hval`, compiled into its caller: a settled or memoised value read in place."""
+    w = hs[0]
+    h = read_settled(m, v, V, hs, hs[2][m], hs[3][m], w[m, 0], w[m, 1], w[m, 2], w[m, 3])
+    return h if h >= 0.0 else hval(m, v, gr, V, gv0, hs)
