@@ -60,8 +60,9 @@ def _extent(shape) -> float:
 def test_registered_beyond_the_paper_and_not_a_default_suite():
     info = suite_info(F.NAME)
     assert info.n_scenes == F.N_SCENES == 25 and not info.paper
-    assert list_suites()[-1] == "fleet"
+    assert list_suites()[-2:] == ["fleet", "lifelong"]
     assert "fleet" not in DEFAULT_SUITES.split(",")
+    assert "lifelong" not in DEFAULT_SUITES.split(",") and not suite_info("lifelong").paper
     jobs = load_suite("fleet")  # what ``lamp bench --suites fleet`` loads
     assert len(jobs) == 25 and not any(j.builtin for j in jobs)
     assert [j.scene.name for j in jobs] == [f"fleet-{k:02d}" for k in range(25)]
