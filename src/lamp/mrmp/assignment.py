@@ -33,14 +33,9 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from lamp.mrmp.coarse import CoarseGraph, coarse_below
-from lamp.mrmp.goal_distances import (
-    GoalDistances,
-    hval,
-    hval_below,
-    hval_pairs,
-    start_costs,
-)
+from lamp.mrmp.goal_distances import GoalDistances, hval, hval_pairs, start_costs
 from lamp.mrmp.gspi_kernels import Graph
+from lamp.mrmp.heuristic_reads import hval_below
 
 __all__ = ["ASSIGNMENTS", "Assignment", "assign", "straight_line_bottleneck", "unreached_reason"]
 

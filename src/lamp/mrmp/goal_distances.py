@@ -15,7 +15,7 @@ on its old border relax their edges into the new part.
 
 Guarantee (tested against a full Dijkstra on the whole lattice): every value returned by
 :func:`lattice_h`/:func:`hval` is the exact shortest lattice distance to the goal (inf when
-there is none), and :func:`hval_below` is exact below its bound. Why the window does not
+there is none), and :func:`lamp.mrmp.heuristic_reads.hval_below` is exact below its bound. Why the window does not
 change it: a node at distance ``d < R + 1.5 L`` has a shortest path of length ``d`` from
 the goal point, every point of which is within ``d`` of it, hence inside the window; the
 buckets processed (below ``R``) hold only nodes at distance ``< R + L``; a node outside
@@ -40,8 +40,8 @@ import numba as nb
 import numpy as np
 from numba.typed import List
 
-__all__ = ["EPS", "GoalDistances", "expand_to", "hval", "hval_below", "hval_pairs",
-           "lattice_h", "start_costs"]
+__all__ = ["EPS", "GoalDistances", "expand_to", "hval", "hval_pairs", "lattice_h",
+           "start_costs"]
 
 #: Added to every heuristic value but the goal vertex's own, so that a lattice node (or a
 #: start) that coincides with a goal never ties with the goal vertex.
@@ -393,9 +393,9 @@ def expand_to(m: int, bound: float, nbr: np.ndarray, dlen: np.ndarray, hs: tuple
 
 
 @nb.njit(cache=True)
-def _special(m: int, v: int, gr: tuple, V: int, gv0: int, hs: tuple, below: float) -> float:
+def _special(m: int, v: int, gr: tuple, V: int, gv0: int, hs: tuple) -> float:
     """Best link of special vertex v to goal m: each link's length plus its lattice node's
-    distance (only settled nodes when ``below`` is finite), or the direct link."""
+    distance, or the direct link."""
     coords, nbr, dlen, xptr, xidx = gr
     if v == gv0 + m:
         return 0.0
@@ -406,8 +406,7 @@ def _special(m: int, v: int, gr: tuple, V: int, gv0: int, hs: tuple, below: floa
         dy = coords[v, 1] - coords[n, 1]
         ln = math.sqrt(dx * dx + dy * dy)
         if n < V:
-            c = ln + (_settled_value(m, n, hs) if below < np.inf
-                      else lattice_h(m, n, nbr, dlen, hs))
+            c = ln + lattice_h(m, n, nbr, dlen, hs)
         elif n == gv0 + m:
             c = ln + EPS
         else:
@@ -415,14 +414,6 @@ def _special(m: int, v: int, gr: tuple, V: int, gv0: int, hs: tuple, below: floa
         if c < best:
             best = c
     return best
-
-
-@nb.njit(cache=True)
-def _settled_value(m: int, v: int, hs: tuple) -> float:
-    j = _local(m, v, hs)
-    if j >= 0 and hs[3][m][j]:
-        return hs[2][m][j]
-    return np.inf
 
 
 @nb.njit(cache=True)
@@ -435,28 +426,10 @@ def hval(m: int, v: int, gr: tuple, V: int, gv0: int, hs: tuple) -> float:
     k = v - V
     if sdone[m, k]:
         return sval[m, k]
-    best = _special(m, v, gr, V, gv0, hs, np.inf)
+    best = _special(m, v, gr, V, gv0, hs)
     sdone[m, k] = True
     sval[m, k] = best
     return best
-
-
-@nb.njit(cache=True)
-def hval_below(pm: np.ndarray, pv: np.ndarray, bound: float, gr: tuple, V: int, gv0: int,
-               hs: tuple) -> np.ndarray:
-    """For pairs (goal ``pm[k]``, special vertex ``pv[k]``): the exact distance when it is
-    below ``bound``, else inf (each goal's search is expanded to ``bound`` once; pairs are
-    best grouped by goal)."""
-    out = np.empty(pm.shape[0])
-    last = -1
-    for k in range(pm.shape[0]):
-        m = pm[k]
-        if m != last:
-            expand_to(m, bound, gr[1], gr[2], hs)
-            last = m
-        c = _special(m, pv[k], gr, V, gv0, hs, bound)
-        out[k] = c if c < bound else np.inf
-    return out
 
 
 @nb.njit(cache=True)

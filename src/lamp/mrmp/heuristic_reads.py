@@ -9,12 +9,14 @@ in a few nanoseconds when the caller reads the window's arrays once. The values 
 
 from __future__ import annotations
 
+import math
+
 import numba as nb
 import numpy as np
 
-from lamp.mrmp.goal_distances import hval
+from lamp.mrmp.goal_distances import EPS, expand_to, hval
 
-__all__ = ["hval_fast", "read_settled"]
+__all__ = ["hval_below", "hval_fast", "read_settled"]
 
 
 @nb.njit(cache=True, inline="always")
@@ -42,3 +44,46 @@ def hval_fast(m: int, v: int, gr: tuple, V: int, gv0: int, hs: tuple) -> float:
     w = hs[0]
     h = read_settled(m, v, V, hs, hs[2][m], hs[3][m], w[m, 0], w[m, 1], w[m, 2], w[m, 3])
     return h if h >= 0.0 else hval(m, v, gr, V, gv0, hs)
+
+
+@nb.njit(cache=True)
+def hval_below(pm: np.ndarray, pv: np.ndarray, bound: float, gr: tuple, V: int, gv0: int,
+               hs: tuple) -> np.ndarray:
+    """For pairs (goal ``pm[k]``, special vertex ``pv[k]``): the exact distance when it is
+    below ``bound``, else inf (each goal's search is expanded to ``bound`` once; pairs are
+    best grouped by goal). A pair's value is its best link: the link's length plus its
+    lattice node's settled value (``+ EPS`` for a direct link to the goal)."""
+    coords, _, _, xptr, xidx = gr
+    win = hs[0]
+    out = np.empty(pm.shape[0])
+    last = -1
+    dd, dn = hs[2][0], hs[3][0]
+    a0 = b0 = na = nbw = 0
+    for k in range(pm.shape[0]):
+        m = pm[k]
+        if m != last:
+            expand_to(m, bound, gr[1], gr[2], hs)
+            last = m
+            dd, dn = hs[2][m], hs[3][m]
+            a0, b0, na, nbw = win[m, 0], win[m, 1], win[m, 2], win[m, 3]
+        v = pv[k]
+        best = np.inf
+        if v == gv0 + m:
+            best = 0.0
+        else:
+            for e in range(xptr[v], xptr[v + 1]):
+                n = xidx[e]
+                dx = coords[v, 0] - coords[n, 0]
+                dy = coords[v, 1] - coords[n, 1]
+                ln = math.sqrt(dx * dx + dy * dy)
+                if n < V:
+                    h = read_settled(m, n, V, hs, dd, dn, a0, b0, na, nbw)
+                    c = ln + (h if h >= 0.0 else np.inf)
+                elif n == gv0 + m:
+                    c = ln + EPS
+                else:
+                    continue
+                if c < best:
+                    best = c
+        out[k] = best if best < bound else np.inf
+    return out
