@@ -409,3 +409,23 @@ def test_the_viewer_shows_each_task_s_status_and_the_goal_in_force(hall_runs, tm
             assert shown == expected(float(times[row])), row
         text = b.evaluate("document.getElementById('tasks').textContent")
         assert text.startswith("tasks: 0 queued, 0 active, 4 done")
+
+
+def test_lamp_show_draws_every_task_goal() -> None:
+    """One dotted outline per task of the file, beside the objects' own goals."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    from lamp.viz.scene_plot import ScenePainter
+
+    scene = scene_from_dict(hall())
+    fig = Figure()
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    ScenePainter(ax, scene)
+    dotted = [p for p in ax.patches if p.get_linestyle() == ":"]
+    assert len(dotted) == len(scene.tasks)
+    plain = scene_from_dict(hall(tasks=None))
+    ax2 = fig.add_subplot()
+    ScenePainter(ax2, plain)
+    assert not [p for p in ax2.patches if p.get_linestyle() == ":"]

@@ -1,4 +1,5 @@
-"""Drawing scenes with matplotlib: workspace, obstacles, robots, objects with start and goal.
+"""Drawing scenes with matplotlib: workspace, obstacles, robots, objects with start and goal
+(a lifelong scene's task goals dotted, each labelled with its object).
 
 ``draw_scene`` draws onto any Axes and returns a :class:`ScenePainter` whose ``update``
 moves the robots and objects in place; ``lamp.viz.animation`` reuses it to render many
@@ -120,6 +121,11 @@ class ScenePainter:
                 )
             )
         self._ticks_len = [half_extents(o.shape)[0] for o in scene.objects]
+        for t in scene.tasks:  # a lifelong scene's later goals: dotted, with their object
+            ax.add_patch(_patch(scene.objects[t.object].shape, t.goal, fill=False,
+                                ec=GOAL_COLOR, ls=":", lw=1.0, zorder=2))
+            ax.text(t.goal[0], t.goal[1], str(t.object), color=object_color(t.object),
+                    fontsize=6, ha="left", va="bottom", zorder=3)
         self.start_outlines = []
         self.goal_outlines = []
         self.objects = []
