@@ -429,3 +429,19 @@ def test_lamp_show_draws_every_task_goal() -> None:
     ax2 = fig.add_subplot()
     ScenePainter(ax2, plain)
     assert not [p for p in ax2.patches if p.get_linestyle() == ":"]
+
+
+def test_the_bench_report_has_the_lifelong_figures() -> None:
+    from lamp.bench.tables import lifelong_tables
+
+    def rec(scene: str, ok: bool, per_hour: float | None) -> dict:
+        life = None if per_hour is None else {"throughput_per_hour": per_hour,
+                                              "service_median_s": 2 * per_hour}
+        return {"scene": scene, "suite": "lifelong", "planner": "lazy", "success": ok,
+                "lifelong": life}
+
+    assert lifelong_tables([rec("a", True, None)]) == {}
+    tables = lifelong_tables([rec("a", True, 10.0), rec("b", True, 30.0),
+                              rec("c", False, 99.0)])
+    assert tables["tasks done per hour"]["lazy"]["lifelong"] == (20.0, 2)
+    assert tables["median service time (s)"]["lazy"]["all"] == (40.0, 2)

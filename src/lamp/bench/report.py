@@ -52,6 +52,7 @@ from lamp.bench.tables import (  # noqa: F401 - re-exported: the report's number
     family_records,
     full_horizon_table,
     iros_summary,
+    lifelong_tables,
     load_config,
     load_results,
     makespan_bound_table,
@@ -294,6 +295,10 @@ def build_report(run_dir: str | Path) -> Path:
                    "speed, maximised over objects: no run can be shorter; "
                    "`lamp.scene.bounds`).", "",
                    median_markdown(bounds, fams, ".2f"), ""]
+        for name, table in lifelong_tables(records).items():
+            md += [f"## Lifelong: {name}", "",
+                   "Median over the solved runs with tasks (`result.json`'s `lifelong`; "
+                   "`docs/lifelong.md`).", "", median_markdown(table, fams, ".1f"), ""]
         figs = []
         if plot_planning_time(records, fail_value, run_dir / "planning_time.png"):
             figs.append("![planning time per segment](planning_time.png)")

@@ -199,6 +199,18 @@ def makespan_bound_table(records: Sequence[dict[str, Any]]
     return _median_table(records, lambda r: r.get("makespan_over_bound"))
 
 
+def lifelong_tables(records: Sequence[dict[str, Any]]
+                    ) -> dict[str, dict[str, dict[str, tuple[float | None, int]]]]:
+    """A lifelong run's figures (``result.json``'s ``lifelong``): figure -> planner ->
+    family -> (median over the solved runs, their number), for the throughput per hour
+    and the median service time; empty when no run has tasks."""
+    if not any(r.get("lifelong") for r in records):
+        return {}
+    return {name: _median_table(records, lambda r, k=key: (r.get("lifelong") or {}).get(k))
+            for name, key in (("tasks done per hour", "throughput_per_hour"),
+                              ("median service time (s)", "service_median_s"))}
+
+
 def _median_table(records: Sequence[dict[str, Any]], value: Callable[[dict[str, Any]], Any]
                   ) -> dict[str, dict[str, tuple[float | None, int]]]:
     """planner -> family (and ``"all"``) -> (median of ``value`` over the solved runs where
