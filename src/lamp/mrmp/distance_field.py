@@ -77,6 +77,20 @@ def _dijkstra(
 
 
 @nb.njit(cache=True)
+def _edge_bits(nbr: np.ndarray, va: np.ndarray, vb: np.ndarray, nb_: int,
+               na: int) -> np.ndarray:
+    """Each node's edges as bits (bit e: edge e), on the grid of lattice indices."""
+    out = np.zeros((nb_, na), dtype=np.uint8)
+    for v in range(nbr.shape[0]):
+        m = 0
+        for e in range(8):
+            if nbr[v, e] >= 0:
+                m |= 1 << e
+        out[vb[v], va[v]] = m
+    return out
+
+
+@nb.njit(cache=True)
 def _build_edges(
     F: np.ndarray, ids: np.ndarray, s: int, h: float, thr: float,
     circles: np.ndarray, verts: np.ndarray, ptr: np.ndarray, W: float, H: float,
@@ -192,13 +206,17 @@ class Lattice:
             _build_edges(F, ids, s, h, thr, g.circles, g.verts, g.ptr, W, H, a0, b0, lo, hi,
                          nbr)
         self.nbr = nbr
-        #: (nb, na) uint8: bit e set where the node at that lattice index has edge e
-        self.edge_mask = np.zeros((nb_, na), dtype=np.uint8)
-        for e in range(8):
-            has = nbr[:, e] >= 0
-            self.edge_mask[bb[has], aa[has]] |= np.uint8(1 << e)
+        self._edge_mask: np.ndarray | None = None
         self.V = V
         self._fields: OrderedDict[Any, np.ndarray] = OrderedDict()
+
+    @property
+    def edge_mask(self) -> np.ndarray:
+        """(nb, na) uint8: bit e set where the node at that lattice index has edge e
+        (0 where there is no node); made on first use."""
+        if self._edge_mask is None:
+            self._edge_mask = _edge_bits(self.nbr, self.va, self.vb, *self.ids.shape)
+        return self._edge_mask
 
     # ---------------------------------------------------------------------------
 
