@@ -35,7 +35,9 @@ Heuristic: one Dijkstra per goal over the lattice (8-connected, diagonal moves c
 only as far as the queries need (:mod:`lamp.mrmp.goal_distances`: exact distances, Dial's
 buckets, memory and time growing with the area reached, not the map). Initial assignment
 (:mod:`lamp.mrmp.assignment`): least longest distance first, then least sum (TSWAP's
-bottleneck-then-sum), over distances computed only for the pairs that can matter;
+bottleneck-then-sum), over distances computed only for the pairs that can matter (for
+fleets whose exact searches would be very large, over a coarse block graph, each chosen
+pair then costed exactly);
 ``assignment="sum"`` gives the least-sum assignment of earlier versions (with it the plans
 are bit for bit those of the all-pairs implementation on teams below 32 robots). A goal no
 robot can reach is reported at once. Robot-robot checks and goal swaps use neighbour
