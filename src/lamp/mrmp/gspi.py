@@ -80,7 +80,7 @@ from numpy.typing import ArrayLike
 
 from lamp.geometry.robot_space import RobotSpace
 from lamp.mrmp.assignment import assign, unreached_reason
-from lamp.mrmp.coarse import get_coarse
+from lamp.mrmp.coarse import coarse_below, get_coarse
 from lamp.mrmp.distance_field import Lattice, get_lattice
 from lamp.mrmp.goal_distances import GoalDistances
 from lamp.mrmp.gspi_inputs import PlanInputs, check_inputs
@@ -127,6 +127,10 @@ def warmup() -> None:
     grid = np.stack(np.meshgrid(np.arange(6), np.arange(6)), -1).reshape(-1, 2) * 0.3 + 0.2
     team = Scene("warmup-team", (2.2, 2.2), tuple(map(tuple, grid.tolist())), (), ())
     plan_paths(team, grid, grid[::-1] + 0.05, time_limit=1e6)
+    # the coarse assignment of large fleets (lamp.mrmp.coarse)
+    cg = get_coarse(get_lattice(RobotSpace.from_scene(team), 0.05))
+    one = np.zeros(1, np.int64)
+    coarse_below(one, one, 1.0, one, one, grid, grid, cg.rep, cg.nbr, cg.wlen, cg.unit)
 
 
 def plan_paths(
