@@ -143,3 +143,20 @@ def test_lists_cut_to_a_smaller_radius_are_its_lists(pts, radius, cut) -> None:
     p2, i2 = within(ptr, idx, px, py, small)
     want_p, want_i = neighbour_lists(px, py, small)
     assert np.array_equal(p2, want_p) and np.array_equal(i2, want_i)
+
+
+def test_coarse_assignment_past_its_deadline_stops_without_the_exact_one() -> None:
+    """Past the deadline the coarse way returns at its first check (timed out), or its
+    assignment when the first bound already matches; it never falls back to the exact
+    searches then."""
+    gm, S, G, lat, links, hs = _setup(5, 80)
+
+    def exact(*args):
+        raise AssertionError("the exact assignment ran past the deadline")
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(assignment, "COARSE_NODES", -1.0)
+        mp.setattr(assignment, "_bottleneck", exact)
+        got = assignment.assign(links.graph, lat.V, hs, S, G, np.zeros(len(G), bool),
+                                "bottleneck", None, 0.0, get_coarse(lat))
+    assert got.timed_out or got.goal is not None

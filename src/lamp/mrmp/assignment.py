@@ -313,7 +313,8 @@ def _coarse_bottleneck(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray,
                        deadline: float) -> Assignment | None:
     """Bottleneck, then sum, over the coarse distances (:mod:`lamp.mrmp.coarse`); each
     chosen pair's cost then its exact lattice distance. None when the coarse graph finds
-    no assignment or a chosen pair has no lattice path (the caller then solves exactly)."""
+    no assignment or a chosen pair has no lattice path (the caller then solves exactly);
+    past the deadline, the timed-out result."""
     N, M = len(S), len(G)
     xptr, xidx = gr[3], gr[4]
 
@@ -336,6 +337,8 @@ def _coarse_bottleneck(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray,
         return Assignment(None, np.zeros(N)) if bound > far else None
 
     got = _least_bottleneck(E, floor, below, exhausted, deadline, 4.0 * hs.step)
+    if got.timed_out:
+        return got
     if got.goal is None:
         return None
     held = np.nonzero(got.goal >= 0)[0]
