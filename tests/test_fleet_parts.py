@@ -138,6 +138,32 @@ def test_fleet_threads_share_malloc_arenas() -> None:
     assert 1 <= heaps <= cap
 
 
+_MMAP_PROBE = r"""
+import ctypes, numpy as np
+from lamp.fleet.turns import Turns
+class MI(ctypes.Structure):
+    _fields_ = [(n, ctypes.c_size_t) for n in ("arena", "ordblks", "smblks", "hblks",
+                "hblkhd", "usmblks", "fsmblks", "uordblks", "fordblks", "keepcost")]
+libc = ctypes.CDLL("libc.so.6")
+libc.mallinfo2.restype = MI
+Turns()
+big = np.ones(8 << 20, np.uint8)
+del big  # freed: glibc would now raise its threshold to 8 MB
+before = libc.mallinfo2().hblkhd
+mid = np.ones(400 << 10, np.uint8)  # 400 kB
+print(libc.mallinfo2().hblkhd - before)
+"""
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="glibc's malloc")
+def test_fleet_pins_the_mmap_threshold() -> None:
+    """Once a fleet starts, an array of a few hundred kB allocated after a larger one was
+    freed is still mapped on its own (handed back when freed), not cut from the heap."""
+    out = subprocess.run([sys.executable, "-c", _MMAP_PROBE], capture_output=True,
+                         text=True, check=True).stdout.split()
+    assert int(out[0]) >= 400 << 10
+
+
 # ------------------------------------------------------------------ the grid
 
 #: steps of up to 5 cm; no subnormal coordinates (GEOS, the reference, projects a point

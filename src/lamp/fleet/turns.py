@@ -16,7 +16,11 @@ memory freed into one is not handed back or reused by the others. Threads that n
 at once gain nothing from that, so :func:`share_malloc_arenas` caps the process at
 ``MALLOC_ARENAS`` before the first thread starts: ``fleet-16`` (11 loops alive at once)
 peaks at 1.52 GB instead of 2.12 GB with the same result (``/usr/bin/time -v lamp run
-fleet-16``).
+fleet-16``). glibc also raises its mmap threshold to the size of every large block freed
+(up to 32 MB), after which the loops' many short-lived arrays of a few hundred kB to a
+few MB (robot spaces, distance tiles, lattice potentials) come from those two heaps and
+stay there, fragmented; the threshold is therefore pinned at ``MMAP_THRESHOLD``, so each
+such array is mapped on its own and handed back when freed.
 """
 
 from __future__ import annotations
@@ -28,25 +32,31 @@ import threading
 from collections.abc import Callable
 from typing import Any
 
-__all__ = ["MALLOC_ARENAS", "Abandoned", "Turns", "share_malloc_arenas"]
+__all__ = ["MALLOC_ARENAS", "MMAP_THRESHOLD", "Abandoned", "Turns", "share_malloc_arenas"]
 
 #: malloc arenas the process keeps once fleet threads start (glibc's ``M_ARENA_MAX``): the
 #: main thread's and one more for the libraries' own worker threads
 MALLOC_ARENAS = 2
+#: blocks of at least this many bytes are mapped on their own (glibc's ``M_MMAP_THRESHOLD``,
+#: its initial value, pinned: set, it no longer grows with the blocks freed)
+MMAP_THRESHOLD = 128 * 1024
 _M_ARENA_MAX = -8  # glibc <malloc.h>
+_M_MMAP_THRESHOLD = -3
 
 
 @functools.cache
 def share_malloc_arenas() -> bool:
-    """Cap glibc's malloc arenas at ``MALLOC_ARENAS`` (see the module docstring), once per
-    process; True when the C library took the setting (False elsewhere: not glibc)."""
+    """Cap glibc's malloc arenas at ``MALLOC_ARENAS`` and pin its mmap threshold at
+    ``MMAP_THRESHOLD`` (see the module docstring), once per process; True when the C
+    library took both settings (False elsewhere: not glibc)."""
     name = ctypes.util.find_library("c")
     try:
         mallopt = ctypes.CDLL(name).mallopt
     except (OSError, AttributeError, TypeError):
         return False
     mallopt.argtypes, mallopt.restype = [ctypes.c_int, ctypes.c_int], ctypes.c_int
-    return mallopt(_M_ARENA_MAX, MALLOC_ARENAS) == 1
+    pinned = mallopt(_M_MMAP_THRESHOLD, MMAP_THRESHOLD) == 1
+    return mallopt(_M_ARENA_MAX, MALLOC_ARENAS) == 1 and pinned
 
 
 class Abandoned(BaseException):
