@@ -344,7 +344,8 @@ class Fleet(TeamChanges):
         if an object moves aside or to its goal with the blocked one's robots."""
         decided = make_way(self.scene, self.objects, blocked,
                            np.asarray(self.executor.object_poses, float),
-                           self.executor.robot_positions, self.made_way, self.may_start)
+                           self.executor.robot_positions, self.made_way, self.may_start,
+                           self.after)
         self.made_way.update(decided.tried)
         for what, j, detail in decided.notes:
             self.stats.note(self.clock, what, j, detail)

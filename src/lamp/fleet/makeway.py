@@ -151,16 +151,18 @@ def with_goal(scene: Scene, k: int, goal: np.ndarray) -> Scene:
     return replace(scene, objects=tuple(objs))
 
 
-def stands_still(o: ObjectState, objects: Sequence[ObjectState], scene: Scene) -> bool:
+def stands_still(o: ObjectState, objects: Sequence[ObjectState],
+                 after: Callable[[int], Sequence[int]]) -> bool:
     """Whether ``o`` stays where it stands until something is done for it: its planner
-    waits for a change (with robots), or it waits for robots, or to start (its ``after``
-    objects placed); and it is on no detour."""
+    waits for a change (with robots), or it waits for robots, or to start (the objects
+    its current task waits for, ``after(k)``: ``Board.after``, placed); and it is on no
+    detour."""
     if o.detour is not None:
         return False
     if o.status == ObjectStatus.ACTIVE:
         return (o.blocked_at is not None and bool(o.team)) or o.needs_team
     return o.status == ObjectStatus.WAITING and all(
-        objects[a].status == ObjectStatus.PLACED for a in scene.objects[o.index].after)
+        objects[a].status == ObjectStatus.PLACED for a in after(o.index))
 
 
 @dataclass(frozen=True)
@@ -188,15 +190,17 @@ class MakeWay:
 
 def make_way(scene: Scene, objects: Sequence[ObjectState], blocked: Sequence[ObjectState],
              poses: np.ndarray, robot_positions: np.ndarray, tried: Set[tuple[int, int]],
-             may_start: Callable[[int], bool]) -> MakeWay:
+             may_start: Callable[[int], bool], after: Callable[[int], Sequence[int]]
+             ) -> MakeWay:
     """For the first of ``blocked`` (priority order) in whose way an object stands still
     (module docstring; pairs in ``tried`` are not tried again): that object moves aside,
     or, without robots and with its own way clear, gets the blocked one's robots and goes
-    to its goal (``may_start``: whether an object may start now). Objects at ``poses``,
+    to its goal (``may_start``: whether an object may start now; ``after``: the objects
+    each object's current task waits for, ``Board.after``). Objects at ``poses``,
     robots at ``robot_positions``; the decision is ``Fleet``'s to apply."""
     out = MakeWay()
     poses = np.asarray(poses, float)
-    still = [p.index for p in objects if stands_still(p, objects, scene)]
+    still = [p.index for p in objects if stands_still(p, objects, after)]
     unplaced = [p.index for p in objects if p.unplaced]
     for o in blocked:
         k = o.index

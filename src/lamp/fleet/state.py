@@ -5,8 +5,8 @@ An object's status is a small state machine (:class:`ObjectStatus`, the allowed 
 ``TRANSITIONS``): ``waiting`` (not started) -> ``active`` (a sub-team moves it) ->
 ``placed`` or ``failed``; a waiting object may also fail without starting (an object it
 waits for failed); a placed or failed object waits again when its next task is released
-(``fleet.tasks``: lifelong scenes). :meth:`ObjectState.move_to` is the only way a status changes, and an
-illegal move raises :class:`IllegalTransition`. Guarantee (``tests/test_fleet_state.py``):
+(``fleet.tasks``: lifelong scenes). :meth:`ObjectState.move_to` is the only way a status
+changes, and an illegal move raises :class:`IllegalTransition`. Guarantee (``tests/test_fleet_state.py``):
 every sequence of moves either follows ``TRANSITIONS`` or raises, leaving the state as it
 was.
 """
