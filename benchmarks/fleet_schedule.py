@@ -29,7 +29,8 @@ from lamp.scene.loader import load_scene
 from lamp.suites.registry import resolve_scene
 
 
-def _records(folder: Path) -> dict[str, dict]:
+def records_by_scene(folder: Path) -> dict[str, dict]:
+    """A ``lamp bench`` folder's records by scene (the last of a scene wins)."""
     out = {}
     for line in (folder / "results.jsonl").read_text().splitlines():
         if line.strip():
@@ -38,7 +39,7 @@ def _records(folder: Path) -> dict[str, dict]:
     return out
 
 
-def _collisions(folder: Path, rec: dict) -> int | None:
+def collisions(folder: Path, rec: dict) -> int | None:
     """Violations the safety check finds in the job's recording (None: not recorded)."""
     from lamp.record.safety import check_run_dir
 
@@ -66,8 +67,8 @@ def _makespan(rec: dict | None) -> str:
 
 
 def table(seq: Path, con: Path, peer: Path | None) -> str:
-    s_recs, c_recs = _records(seq), _records(con)
-    p_recs = _records(peer) if peer else {}
+    s_recs, c_recs = records_by_scene(seq), records_by_scene(con)
+    p_recs = records_by_scene(peer) if peer else {}
     rows = ["| scene | robots | objects | map (m) | lower bound (s) | seq ok | seq makespan (s) | "
             "conc ok | conc makespan (s) | conc / bound | ratio | plan/seg seq (s) | "
             "plan/seg conc (s) | working | collisions | peer ok | peer makespan (s) |",
@@ -87,7 +88,7 @@ def table(seq: Path, con: Path, peer: Path | None) -> str:
             if scene.n_robots >= 3 * MAX_ROBOTS:
                 big.append(ratio)
         ok += bool(c["success"])
-        n_hits = _collisions(con, c)
+        n_hits = collisions(con, c)
         if n_hits is not None:
             checked += 1
             hits += n_hits
@@ -138,7 +139,7 @@ def seeds_summary(folder: Path) -> str:
         lines.append(f"- seed {seed}: {ok}/{len(recs)} ({100 * ok / len(recs):.0f}%); "
                      f"failed: {failed}")
         for r in recs:
-            n = _collisions(folder, r)
+            n = collisions(folder, r)
             if n is not None:
                 checked, hits = checked + 1, hits + n
     lines.append(f"- collisions found by the safety check: {hits} in {checked} recordings")

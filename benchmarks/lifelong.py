@@ -16,28 +16,10 @@ the throughput ratio fleet / baseline and of the median-service-time ratio.
 from __future__ import annotations
 
 import argparse
-import json
 import statistics
 from pathlib import Path
 
-
-def _records(folder: Path) -> dict[str, dict]:
-    out = {}
-    for line in (folder / "results.jsonl").read_text().splitlines():
-        if line.strip():
-            rec = json.loads(line)
-            out[rec["scene"]] = rec  # the last record of a scene wins (reruns)
-    return out
-
-
-def _collisions(folder: Path, rec: dict) -> int | None:
-    """Violations the safety check finds in the job's recording (None: not recorded)."""
-    from lamp.record.safety import check_run_dir
-
-    run = folder / "recordings" / rec["suite"] / f"{rec['scene']}-{rec['planner']}-s{rec['seed']}"
-    if not (run / "recording.json").exists():
-        return None
-    return len(check_run_dir(run).violations)
+from fleet_schedule import collisions, records_by_scene
 
 
 def _f(x: float | None, fmt: str = ".0f") -> str:
@@ -54,7 +36,7 @@ def _row(rec: dict, hits: int | None) -> list[str]:
 
 def table(con: Path, fcfs: Path) -> str:
     """The markdown table and summary of the module docstring."""
-    a, b = _records(con), _records(fcfs)
+    a, b = records_by_scene(con), records_by_scene(fcfs)
     lines = [
         "| scene | robots | objects | fleet: done | per hour | service median (s) | p95 (s) "
         "| makespan (s) | bound (s) | collisions | FCFS: done | per hour | service median "
@@ -67,7 +49,7 @@ def table(con: Path, fcfs: Path) -> str:
         ra, rb = a.get(name), b.get(name)
         if ra is None or rb is None:
             continue
-        ha, hb = _collisions(con, ra), _collisions(fcfs, rb)
+        ha, hb = collisions(con, ra), collisions(fcfs, rb)
         la, lb = ra.get("lifelong") or {}, rb.get("lifelong") or {}
         t = (la["throughput_per_hour"] / lb["throughput_per_hour"]
              if la.get("throughput_per_hour") and lb.get("throughput_per_hour") else None)
