@@ -28,7 +28,8 @@ from lamp.viz.animation import PATH_COLOR, PENALISED_COLOR, VERIFIED_COLOR
 from lamp.viz.replay_options import CONTACT_COLOR, TRAIL_COLOR, RenderOptions, outcome_text
 from lamp.viz.scene_plot import GOAL_COLOR, OBSTACLE_COLOR, ROBOT_COLOR, object_color
 
-#: Placeholders of viewer.html that ``write_html`` replaces.
+#: Placeholders of a self-contained page (the viewer's, ``lamp serve``'s live page) that
+#: :func:`inline_page` replaces, in this order.
 PLACEHOLDERS = ("__LAMP_TITLE__", "__LAMP_CSS__", "__LAMP_JS__", "__LAMP_DATA__")
 
 
@@ -37,7 +38,7 @@ def _b64(arr: np.ndarray, dtype: str) -> str:
                             .tobytes()).decode("ascii")
 
 
-def _shape(shape: Any, pose: Any | None) -> dict[str, Any]:
+def shape_payload(shape: Any, pose: Any | None) -> dict[str, Any]:
     """A circle as its radius (plus its centre ``at`` for an obstacle), anything else as its
     outline: world frame for an obstacle (``pose`` given), the shape's own frame otherwise."""
     if isinstance(shape, Circle):
@@ -54,8 +55,8 @@ def payload(recording: Recording, options: RenderOptions | None = None) -> dict[
     opt = options or RenderOptions()
     scene = recording.scene_model()
     a = recording.arrays
-    obstacles = [_shape(o.shape, o.pose) for o in scene.obstacles]
-    objects = [{**_shape(o.shape, None), "color": object_color(k),
+    obstacles = [shape_payload(o.shape, o.pose) for o in scene.obstacles]
+    objects = [{**shape_payload(o.shape, None), "color": object_color(k),
                 "start": [float(v) for v in o.start], "goal": [float(v) for v in o.goal],
                 "tick": float(half_extents(o.shape)[0])} for k, o in enumerate(scene.objects)]
     segments = []
@@ -117,23 +118,30 @@ def _asset(name: str) -> str:
     return (resources.files("lamp.viz") / "viewer" / name).read_text(encoding="utf-8")
 
 
-def viewer_html(recording: Recording, options: RenderOptions | None = None) -> str:
-    """The viewer page for ``recording``: no external reference (no src=, href= or url())."""
-    data = json.dumps(payload(recording, options), separators=(",", ":"))
-    # inside <script> only "</" can end the element early; JSON allows "<\/" for it
-    data = data.replace("</", "<\\/")
-    page = _asset("viewer.html")
-    if "</script" in _asset("viewer.js").lower():
-        raise RuntimeError("viewer.js must not contain '</script' (it is inlined)")
-    parts = {
-        "__LAMP_TITLE__": html.escape(f"LAMP replay - {recording.planner}"),
-        "__LAMP_CSS__": _asset("viewer.css"),
-        "__LAMP_JS__": _asset("viewer.js"),
-        "__LAMP_DATA__": data,
-    }
-    for key in PLACEHOLDERS:  # one pass each, in order; the data goes in last
+def inline_page(template: str, title: str, css: str, js: str, data: Any,
+                script: str) -> str:
+    """``template`` (a page with the ``PLACEHOLDERS``) with ``title`` (escaped), ``css``,
+    ``js`` and ``data`` (as JSON) inlined: no external reference. Each placeholder is
+    replaced once, in order, the data last (nothing in it is read as a placeholder);
+    inside ``<script>`` only ``</`` could end the element early, so the data's are
+    written ``<\\/`` (valid JSON) and a script ``script`` containing ``</script`` is
+    refused (RuntimeError)."""
+    if "</script" in js.lower():
+        raise RuntimeError(f"{script} must not contain '</script' (it is inlined)")
+    text = json.dumps(data, separators=(",", ":")).replace("</", "<\\/")
+    parts = {"__LAMP_TITLE__": html.escape(title), "__LAMP_CSS__": css, "__LAMP_JS__": js,
+             "__LAMP_DATA__": text}
+    page = template
+    for key in PLACEHOLDERS:
         page = page.replace(key, parts[key], 1)
     return page
+
+
+def viewer_html(recording: Recording, options: RenderOptions | None = None) -> str:
+    """The viewer page for ``recording``: no external reference (no src=, href= or url())."""
+    return inline_page(_asset("viewer.html"), f"LAMP replay - {recording.planner}",
+                       _asset("viewer.css"), _asset("viewer.js"),
+                       payload(recording, options), "viewer.js")
 
 
 def write_html(recording: Recording, path: str | Path,
