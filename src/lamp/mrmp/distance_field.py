@@ -27,6 +27,7 @@ import numpy as np
 
 from lamp.geometry.clearance_kernels import segment_clearance, segments_clearance
 from lamp.geometry.robot_space import RobotSpace
+from lamp.mrmp.obstacle_grid import get_grid, grid_clear_segments
 
 __all__ = ["Lattice", "clear_segments", "get_lattice", "DIRS"]
 
@@ -37,9 +38,6 @@ DIRS = np.array(
 _FIELD_CACHE_SIZE = 16
 #: Lattice rows whose edges are decided together, against the obstacles near them.
 EDGE_BAND = 32
-#: Side (m) of the square tiles whose links are checked together, against the obstacles
-#: near the tile.
-LINK_TILE = 1.0
 #: Up to this many points or segments, links are looked up point by point and checked
 #: against all obstacles at once (cheaper than tiles for LAMP's teams of a few robots).
 FEW = 64
@@ -324,9 +322,9 @@ def clear_segments(geometry: Any, workspace: tuple[float, float], a: np.ndarray,
                    b: np.ndarray, need: np.ndarray) -> np.ndarray:
     """Whether each straight segment ``a[k] -> b[k]`` keeps an exact clearance of at least
     ``need[k] - 1e-12`` (``need > 0``) from the obstacles of ``geometry`` (a
-    ``GeometrySet``) and the workspace border: the segments tile by tile (by their start)
-    against the obstacles near the tile only (``GeometrySet.near``: the same decisions
-    as against all of them)."""
+    ``GeometrySet``) and the workspace border: a few against all obstacles at once, more
+    against the obstacles near each one only (the bucket grid of
+    :mod:`lamp.mrmp.obstacle_grid`: the same decisions as against all of them)."""
     W, H = workspace
     ok = np.zeros(len(a), dtype=bool)
     if len(a) == 0:
@@ -335,18 +333,13 @@ def clear_segments(geometry: Any, workspace: tuple[float, float], a: np.ndarray,
         g = geometry
         return segments_clearance(np.ascontiguousarray(a), np.ascontiguousarray(b), g.circles,
                                   g.verts, g.ptr, W, H) >= need - 1e-12
-    tile = np.floor(a / LINK_TILE).astype(np.int64)
-    key = tile[:, 0] * (1 << 20) + tile[:, 1]
-    order = np.argsort(key, kind="stable")
-    for grp in np.split(order, np.flatnonzero(np.diff(key[order])) + 1):
-        ext = float(np.hypot(*(b[grp] - a[grp]).T).max())
-        x0, y0 = tile[grp[0]] * LINK_TILE
-        near = geometry.near((x0 - ext, y0 - ext, x0 + LINK_TILE + ext,
-                              y0 + LINK_TILE + ext), float(need[grp].max()))
-        clr = segments_clearance(np.ascontiguousarray(a[grp]), np.ascontiguousarray(b[grp]),
-                                 near.circles, near.verts, near.ptr, W, H)
-        ok[grp] = clr >= need[grp] - 1e-12
-    return ok
+    grid = get_grid(geometry)
+    return grid_clear_segments(np.ascontiguousarray(a, dtype=np.float64),
+                               np.ascontiguousarray(b, dtype=np.float64),
+                               np.ascontiguousarray(need, dtype=np.float64),
+                               geometry.circles, geometry.verts, geometry.ptr, float(W),
+                               float(H), grid.ptr, grid.idx, grid.box, grid.nx, grid.ny,
+                               grid.cell)
 
 
 def get_lattice(space: RobotSpace, step: float = 0.05) -> Lattice:

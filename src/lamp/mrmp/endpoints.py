@@ -8,18 +8,13 @@ from numpy.typing import ArrayLike
 from scipy.spatial import cKDTree
 
 from lamp.errors import InputError
-from lamp.geometry.clearance_kernels import points_clearance
 from lamp.geometry.robot_space import RobotSpace
+from lamp.mrmp.obstacle_grid import get_grid, grid_points_clearance
 
 __all__ = ["as_points", "check_points", "exact_clearance"]
 
 #: Up to this many points, all pairs and all obstacles are measured at once.
 DENSE_POINTS = 64
-#: Tiles (m) whose points are measured together, against the obstacles near the tile.
-CLEARANCE_TILE = 1.0
-#: Obstacles within this distance (m) of a tile are measured; a point at least this far
-#: from all of them is measured against every obstacle.
-CLEARANCE_REACH = 0.5
 
 
 def as_points(x: ArrayLike, name: str) -> np.ndarray:
@@ -87,24 +82,15 @@ def _first_overlap(pts: np.ndarray, limit: float) -> tuple[int, int] | None:
 
 
 def exact_clearance(space: RobotSpace, pts: np.ndarray) -> np.ndarray:
-    """``space.clearance(pts, exact=True)``, the same values: the points tile by tile
-    against the obstacles within :data:`CLEARANCE_REACH` of their tile
-    (``GeometrySet.near``); a point found farther than that from all of them is measured
-    against every obstacle."""
+    """``space.clearance(pts, exact=True)``, the same values: a few points against every
+    obstacle, more against the obstacles near each one (the bucket grid of
+    :mod:`lamp.mrmp.obstacle_grid`; a point with no obstacle within its reach is measured
+    against every obstacle)."""
     if len(pts) <= DENSE_POINTS:
         return space.clearance(pts, exact=True)
     W, H = space.workspace
     g = space.geometry
-    out = np.empty(len(pts))
-    tile = np.floor(pts / CLEARANCE_TILE).astype(np.int64)
-    key = tile[:, 0] * (1 << 20) + tile[:, 1]
-    order = np.argsort(key, kind="stable")
-    for grp in np.split(order, np.flatnonzero(np.diff(key[order])) + 1):
-        x0, y0 = tile[grp[0]] * CLEARANCE_TILE
-        near = g.near((x0, y0, x0 + CLEARANCE_TILE, y0 + CLEARANCE_TILE), CLEARANCE_REACH)
-        out[grp] = points_clearance(np.ascontiguousarray(pts[grp]), near.circles,
-                                    near.verts, near.ptr, W, H)
-    far = out >= CLEARANCE_REACH
-    if far.any():
-        out[far] = space.clearance(pts[far], exact=True)
-    return out
+    grid = get_grid(g)
+    return grid_points_clearance(np.ascontiguousarray(pts, dtype=np.float64), g.circles,
+                                 g.verts, g.ptr, float(W), float(H), grid.ptr, grid.idx,
+                                 grid.box, grid.nx, grid.ny, grid.cell)

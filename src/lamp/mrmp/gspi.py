@@ -81,7 +81,8 @@ from numpy.typing import ArrayLike
 from lamp.geometry.robot_space import RobotSpace
 from lamp.mrmp.assignment import assign, unreached_reason
 from lamp.mrmp.coarse import coarse_below, get_coarse
-from lamp.mrmp.distance_field import Lattice, get_lattice
+from lamp.mrmp.distance_field import FEW, Lattice, clear_segments, get_lattice
+from lamp.mrmp.endpoints import DENSE_POINTS, exact_clearance
 from lamp.mrmp.goal_distances import GoalDistances
 from lamp.mrmp.gspi_inputs import PlanInputs, check_inputs
 from lamp.mrmp.gspi_kernels import ALL_PAIRS_BELOW, Graph, run_steps
@@ -131,6 +132,10 @@ def warmup() -> None:
     cg = get_coarse(get_lattice(RobotSpace.from_scene(team), 0.05))
     one = np.zeros(1, np.int64)
     coarse_below(one, one, 1.0, one, one, grid, grid, cg.rep, cg.nbr, cg.wlen, cg.unit)
+    # the obstacles' bucket grid of large fleets' clearance checks (lamp.mrmp.obstacle_grid)
+    exact_clearance(sp, np.tile(grid[:1], (DENSE_POINTS + 1, 1)))
+    clear_segments(sp.geometry, sp.workspace, np.tile(grid[:1], (FEW + 1, 1)),
+                   np.tile(grid[1:2], (FEW + 1, 1)), np.full(FEW + 1, 0.01))
 
 
 def plan_paths(
