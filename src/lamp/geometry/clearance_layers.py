@@ -50,7 +50,9 @@ def lru_put(cache: OrderedDict, key: Any, val: Any, size: int,
     while len(cache) > size:
         cache.popitem(last=False)
     if nbytes is not None:
-        total = sum(nbytes(v) for v in cache.values())
+        # the plain dict's view: an OrderedDict's own re-hashes every key as it iterates
+        # (tuples of obstacles, some hundred dataclass hashes each)
+        total = sum(nbytes(v) for v in dict.values(cache))
         while total > max_bytes and len(cache) > 1:
             _, old = cache.popitem(last=False)
             total -= nbytes(old)

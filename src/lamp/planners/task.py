@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 from collections import OrderedDict
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -179,10 +180,16 @@ class ManipulationTask:
         ``window`` (default: the whole map). Cached, bounded in entries and bytes."""
         key = (tuple(np.round(np.asarray(q_object, float), 4)),
                None if window is None else tuple(float(v) for v in window))
+        return self._cached(key, lambda: RobotSpace.from_scene(
+            self.scene, object_poses=self.poses_with(q_object), window=window))
+
+    def _cached(self, key: tuple, build: Callable[[], RobotSpace]) -> RobotSpace:
+        """The robot space cached under ``key``, built by ``build`` on a miss; the least
+        recently used are dropped beyond ``_SPACES_KEPT`` entries or
+        ``LoopConfig.space_cache_mb`` (the newest is always kept)."""
         space = self._spaces.get(key)
         if space is None:
-            space = RobotSpace.from_scene(self.scene, object_poses=self.poses_with(q_object),
-                                          window=window)
+            space = build()
             self._spaces[key] = space
             total = sum(sp.nbytes for sp in self._spaces.values())
             budget = self.config.loop.space_cache_mb * 2**20
@@ -197,7 +204,9 @@ class ManipulationTask:
     def static_space_near(self, q_object: np.ndarray) -> RobotSpace:
         """The space without the manipulated object (see :attr:`static_space`) over the
         window of :meth:`window` around ``q_object``: it answers every point within
-        ``WINDOW_MARGIN`` of the object (farther points may read as not free)."""
-        return RobotSpace.from_scene(self.scene, object_poses=self.object_poses,
-                                     exclude_objects=(self.index,),
-                                     window=self.window(q_object))
+        ``WINDOW_MARGIN`` of the object (farther points may read as not free). Cached by
+        window (the other objects stand still for the task's life)."""
+        window = self.window(q_object)
+        return self._cached(("static", window), lambda: RobotSpace.from_scene(
+            self.scene, object_poses=self.object_poses, exclude_objects=(self.index,),
+            window=window))
