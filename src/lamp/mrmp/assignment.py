@@ -42,7 +42,7 @@ from scipy.optimize import linear_sum_assignment
 
 from lamp.mrmp.coarse import CoarseGraph, coarse_below
 from lamp.mrmp.goal_distances import GoalDistances, hval, hval_pairs, start_costs
-from lamp.mrmp.gspi_kernels import Graph
+from lamp.mrmp.gspi_kernels import ALL_PAIRS_BELOW, Graph
 from lamp.mrmp.heuristic_reads import hval_below
 
 __all__ = ["ASSIGNMENTS", "Assignment", "assign", "straight_line_bottleneck", "unreached_reason"]
@@ -274,15 +274,19 @@ def _straight_floor(E: np.ndarray) -> float:
         if _grow_matching(ptr, pi, val, cap, np.full(M, -1, np.int64), empty.copy()) == M:
             break
         t, cap = cap, 2.0 * cap
-    if _grow_matching(ptr, pi, val, t, np.full(M, -1, np.int64), empty.copy()) == M:
+    base_g, base_r = np.full(M, -1, np.int64), empty.copy()
+    if _grow_matching(ptr, pi, val, t, base_g, base_r) == M:
         return 0.0
     lo, hi = t, cap
+    # each trial grows a maximum matching of the pairs within lo (one of them is one
+    # within mid): the same decisions as from an empty matching, in less work
     for _ in range(8):
         mid = 0.5 * (lo + hi)
-        if _grow_matching(ptr, pi, val, mid, np.full(M, -1, np.int64), empty.copy()) == M:
+        mg, mr = base_g.copy(), base_r.copy()
+        if _grow_matching(ptr, pi, val, mid, mg, mr) == M:
             hi = mid
         else:
-            lo = mid
+            lo, base_g, base_r = mid, mg, mr
     return lo
 
 
@@ -291,8 +295,12 @@ def _bottleneck(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray, G: np.ndarr
     """Bottleneck, then sum, over the exact lattice distances."""
     N, M = len(S), len(G)
 
+    # fleets: first windows wide enough for two more rounds, none reopened (smaller
+    # teams keep the windows, and so the searches, they were tested bit for bit with)
+    room = _GROWTH**2 if N >= ALL_PAIRS_BELOW else 1.0
+
     def below(pm: np.ndarray, pi: np.ndarray, bound: float) -> np.ndarray:
-        return hval_below(pm, V + pi, bound, gr, V, V + N, hs)
+        return hval_below(pm, V + pi, bound, gr, V, V + N, hs, room)
 
     def exhausted(has_pair: np.ndarray, bound: float) -> Assignment | None:
         # searches that are complete (whole lattice, queue empty) know all they can reach
