@@ -14,7 +14,9 @@ pairs below it admit a perfect matching (Kuhn's augmenting paths,
 compiled, each round growing the last round's matching); ``B*`` is then found by
 bisection over the distances below ``B``, each trial growing the matching of the pairs
 below the previous bound, and the sum is minimised over the pairs within ``B*``
-(``scipy.optimize.linear_sum_assignment``). On a 9.6 m map with 400
+(``scipy.optimize.linear_sum_assignment``; for fleets of :data:`~lamp.mrmp.
+gspi_kernels.ALL_PAIRS_BELOW` robots or more, over those pairs only,
+:mod:`lamp.mrmp.sparse_lsa`, ties broken by :data:`TIE`). On a 9.6 m map with 400
 robots each goal's search stops about 1.5 m out instead of covering the map.
 
 Large fleets (``coarse`` given, the goals times the lattice nodes within the straight-line
@@ -23,9 +25,10 @@ lattice's block graph (:mod:`lamp.mrmp.coarse`), then each chosen pair's exact l
 distance as its cost; the exact procedure when the block graph finds no assignment or a
 chosen pair has no lattice path.
 
-Guarantee (tested against brute force over all permutations on small instances): the
-returned assignment reaches every goal, its longest distance is the least possible, and
-its sum is the least among assignments with that longest distance. Over the block graph
+Guarantee (tested against brute force over all permutations on small instances, and
+for fleets against the whole cost matrix): the returned assignment reaches every goal,
+its longest distance is the least possible, and its sum is the least among assignments
+with that longest distance (for fleets to within :data:`TIE` times the summed squares). Over the block graph
 (tested with the coarse way forced): every goal has one robot, the costs are the exact
 lattice distances and ``bound`` their largest, which is at least the exact ``B*``.
 """
@@ -44,6 +47,7 @@ from lamp.mrmp.coarse import CoarseGraph, coarse_below
 from lamp.mrmp.goal_distances import GoalDistances, hval, hval_pairs, start_costs
 from lamp.mrmp.gspi_kernels import ALL_PAIRS_BELOW, Graph
 from lamp.mrmp.heuristic_reads import hval_below
+from lamp.mrmp.sparse_lsa import sparse_assignment
 
 __all__ = ["ASSIGNMENTS", "Assignment", "assign", "straight_line_bottleneck", "unreached_reason"]
 
@@ -57,6 +61,10 @@ DENSE_PAIRS = 64
 #: Fleets whose exact searches would settle more nodes than this (the goals times the
 #: lattice nodes within the straight-line bottleneck) are assigned over the coarse graph.
 COARSE_NODES = 1e7
+#: Fleets' least sum over the pairs within ``B*`` breaks ties by the summed squares:
+#: each cost ``c`` counts as ``c + TIE * c**2`` (among equal sums, the one with the
+#: shorter longest ways; the sum is least to within ``TIE`` times the summed squares).
+TIE = 1e-6
 #: Growth factor of the bound ``B`` between rounds (from the straight-line floor; each
 #: round evaluates the pairs not yet known to be below the bound).
 _GROWTH = 1.1
@@ -415,6 +423,17 @@ def _least_sum_within(M: int, N: int, ptr: np.ndarray, pm: np.ndarray, pi: np.nd
             a = mid + 1
     best = float(vals[a])
     keep = c <= best
+    if N >= ALL_PAIRS_BELOW:  # fleets: over the pairs within B* only (sparse_lsa)
+        kg, ki, kc = pm[keep], pi[keep], c[keep]
+        got = sparse_assignment(np.searchsorted(kg, np.arange(M + 1)), ki, kc + TIE * kc**2,
+                                N)
+        if got is not None:
+            chosen = np.flatnonzero(ki == got[kg])  # one pair per goal
+            goal = np.full(N, -1, dtype=np.int64)
+            goal[ki[chosen]] = kg[chosen]
+            cost = np.zeros(N)
+            cost[ki[chosen]] = kc[chosen]
+            return Assignment(goal, cost, bound=best)
     # least sum over the pairs within B* (a perfect matching exists among them, so the
     # stand-in cost of the other pairs is never chosen); the dense solver is faster here
     # than the sparse one, whose augmenting paths crawl on such tight graphs
