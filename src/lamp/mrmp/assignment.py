@@ -47,6 +47,7 @@ from lamp.mrmp.coarse import CoarseGraph, coarse_below
 from lamp.mrmp.goal_distances import GoalDistances, hval, hval_pairs, start_costs
 from lamp.mrmp.gspi_kernels import ALL_PAIRS_BELOW, Graph
 from lamp.mrmp.heuristic_reads import hval_below
+from lamp.mrmp.near_pairs import NearPairs
 from lamp.mrmp.sparse_lsa import sparse_assignment
 
 __all__ = ["ASSIGNMENTS", "Assignment", "assign", "straight_line_bottleneck", "unreached_reason"]
@@ -207,7 +208,7 @@ def assign(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray, G: np.ndarray,
         return Assignment(goal0.copy(), cost)
     if objective == "sum" or N * M <= DENSE_PAIRS:
         return _dense(gr, V, hs, S, G, deadline, objective == "bottleneck")
-    E = np.hypot(G[:, None, 0] - S[None, :, 0], G[:, None, 1] - S[None, :, 1])  # (M, N)
+    E = NearPairs(S, G)  # the straight lines, found within a bound as needed
     floor = _straight_floor(E)
     if coarse is not None and M * np.pi * floor**2 / hs.step**2 > COARSE_NODES:
         got = _coarse_bottleneck(gr, V, hs, S, G, E, floor, coarse, deadline)
@@ -267,18 +268,17 @@ def _chosen(C: np.ndarray, rows: np.ndarray, cols: np.ndarray) -> Assignment:
     return Assignment(goal, cost, bound=float(C[rows, cols].max()))
 
 
-def _straight_floor(E: np.ndarray) -> float:
-    """A lower bound on the straight-line bottleneck of the (M, N) distances ``E``: the
-    largest threshold found (by doubling, then bisection) at which the pairs no longer
+def _straight_floor(E: NearPairs) -> float:
+    """A lower bound on the straight-line bottleneck of the goal-robot distances ``E``:
+    the largest threshold found (by doubling, then bisection) at which the pairs no longer
     than it match no more than ``M - 1`` goals; 0 when even the least one matches all."""
-    M = E.shape[0]
-    t = float(E.min(axis=1).max())  # every goal needs a robot
-    empty = np.full(E.shape[1], -1, np.int64)
+    M = E.M
+    t = E.nearest()  # every goal needs a robot
+    empty = np.full(E.N, -1, np.int64)
     cap = 2.0 * t
     while True:
-        pm, pi = np.nonzero(cap >= E)
+        pm, pi, val = E.within(cap, strict=False)
         ptr = np.searchsorted(pm, np.arange(M + 1))
-        val = E[pm, pi]
         if _grow_matching(ptr, pi, val, cap, np.full(M, -1, np.int64), empty.copy()) == M:
             break
         t, cap = cap, 2.0 * cap
@@ -299,7 +299,7 @@ def _straight_floor(E: np.ndarray) -> float:
 
 
 def _bottleneck(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray, G: np.ndarray,
-                E: np.ndarray, floor: float, deadline: float) -> Assignment:
+                E: NearPairs, floor: float, deadline: float) -> Assignment:
     """Bottleneck, then sum, over the exact lattice distances."""
     N, M = len(S), len(G)
 
@@ -325,7 +325,7 @@ def _bottleneck(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray, G: np.ndarr
 
 
 def _coarse_bottleneck(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray,
-                       G: np.ndarray, E: np.ndarray, floor: float, cg: CoarseGraph,
+                       G: np.ndarray, E: NearPairs, floor: float, cg: CoarseGraph,
                        deadline: float) -> Assignment | None:
     """Bottleneck, then sum, over the coarse distances (:mod:`lamp.mrmp.coarse`); each
     chosen pair's cost then its exact lattice distance. None when the coarse graph finds
@@ -366,25 +366,31 @@ def _coarse_bottleneck(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray,
     return Assignment(got.goal, cost, bound=float(cost.max()))
 
 
-def _least_bottleneck(E: np.ndarray, floor: float, below: Callable, exhausted: Callable,
+def _least_bottleneck(E: NearPairs, floor: float, below: Callable, exhausted: Callable,
                       deadline: float, least: float) -> Assignment:
     """Bottleneck, then sum, over the distances ``below(pm, pi, bound)`` gives for pairs
     (goal ``pm[k]``, robot ``pi[k]``) (inf at or above ``bound``; never below the straight
     line); ``exhausted(has_pair, bound)``: an Assignment that ends the search when no
-    larger bound can give a perfect matching, else None; ``E (M, N)``: the straight lines,
+    larger bound can give a perfect matching, else None; ``E``: the straight lines,
     ``floor``: :func:`_straight_floor` of them."""
-    M, N = E.shape
+    M, N = E.M, E.N
     # distances are at least the straight lines: no bound below theirs can do
     bound = max(floor * 1.02, least)
     lo = 0.0  # no perfect matching among the pairs with distance < lo
     mg = np.full(M, -1, dtype=np.int64)  # a maximum matching of the pairs below the bound
     mr = np.full(N, -1, dtype=np.int64)
-    known = np.full((M, N), np.inf)  # exact where below the last bound
+    # the pairs whose straight line is below the last bound (goal * N + robot, ascending)
+    # and their distances (exact where below that bound, else inf)
+    keys, known = np.zeros(0, np.int64), np.zeros(0)
     while True:
-        pm, pi = np.nonzero((bound > E) & np.isinf(known))  # grouped by goal
-        known[pm, pi] = below(pm, pi, bound)
-        pm, pi = np.nonzero(bound > known)
-        c = known[pm, pi]
+        gm, gi, _ = E.within(bound, strict=True)
+        fresh = np.full(len(gm), np.inf)
+        fresh[np.searchsorted(gm * N + gi, keys)] = known  # the bound only grows
+        keys, known = gm * N + gi, fresh
+        todo = np.flatnonzero(np.isinf(known))  # grouped by goal
+        known[todo] = below(gm[todo], gi[todo], bound)
+        ok = np.flatnonzero(bound > known)
+        pm, pi, c = gm[ok], gi[ok], known[ok]
         ptr = np.searchsorted(pm, np.arange(M + 1))
         # pairs are only added as the bound grows: the last matching is still one
         if _grow_matching(ptr, pi, c, np.inf, mg, mr) == M:

@@ -11,6 +11,7 @@ import numpy as np
 from lamp.geometry.robot_space import RobotSpace
 from lamp.mrmp.distance_field import Lattice, clear_segments
 from lamp.mrmp.gspi_kernels import Graph
+from lamp.mrmp.near_pairs import near_pairs
 
 __all__ = ["Links", "link_special_vertices"]
 
@@ -65,8 +66,7 @@ def link_special_vertices(space: RobotSpace, lat: Lattice, S: np.ndarray, G: np.
     src: list[np.ndarray] = [np.repeat(V + np.arange(N), ns), g_ids, g_nodes]
     dst: list[np.ndarray] = [s_nodes, g_nodes, g_ids]
     # direct start -> goal moves for robots already close to a goal
-    dSG = np.hypot(S[:, None, 0] - G[None, :, 0], S[:, None, 1] - G[None, :, 1])
-    si, gi = np.nonzero(dSG <= R)
+    si, gi, _ = near_pairs(S, G, R)
     direct = np.zeros((N, M), dtype=bool)
     if len(si):
         ok = clear_segments(space.geometry, space.workspace, S[si], G[gi],
