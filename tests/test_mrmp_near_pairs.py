@@ -44,3 +44,14 @@ def test_straight_lines_of_a_fleet() -> None:
         for strict in (True, False):
             for w, g in zip(_dense(G, S, bound, strict), E.within(bound, strict), strict=True):
                 assert np.array_equal(w, g)
+
+
+def test_growing_and_shrinking_bounds_give_the_pairs_of_each() -> None:
+    rng = np.random.default_rng(5)
+    S = rng.integers(0, 60, (400, 2)) * 0.15
+    G = rng.integers(0, 60, (300, 2)) * 0.15
+    E = NearPairs(S, G)
+    for bound in (0.3, 0.45, 0.3, 0.6, 1.5, 0.15, 0.9):
+        for strict in (True, False):
+            for w, g in zip(_dense(G, S, bound, strict), E.within(bound, strict), strict=True):
+                assert np.array_equal(w, g)

@@ -303,12 +303,8 @@ def _bottleneck(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray, G: np.ndarr
     """Bottleneck, then sum, over the exact lattice distances."""
     N, M = len(S), len(G)
 
-    # fleets: first windows wide enough for two more rounds, none reopened (smaller
-    # teams keep the windows, and so the searches, they were tested bit for bit with)
-    room = _GROWTH**2 if N >= ALL_PAIRS_BELOW else 1.0
-
     def below(pm: np.ndarray, pi: np.ndarray, bound: float) -> np.ndarray:
-        return hval_below(pm, V + pi, bound, gr, V, V + N, hs, room)
+        return hval_below(pm, V + pi, bound, gr, V, V + N, hs)
 
     def exhausted(has_pair: np.ndarray, bound: float) -> Assignment | None:
         # searches that are complete (whole lattice, queue empty) know all they can reach
@@ -321,7 +317,10 @@ def _bottleneck(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray, G: np.ndarr
                               "every goal (some goals are reachable only by the same robots)")
         return None
 
-    return _least_bottleneck(E, floor, below, exhausted, deadline, 4.0 * hs.step)
+    # fleets: each search while its window is in cache reaches the bounds of the next two
+    # rounds (smaller teams keep the searches they were tested bit for bit with)
+    ahead = 2 if N >= ALL_PAIRS_BELOW else 0
+    return _least_bottleneck(E, floor, below, exhausted, deadline, 4.0 * hs.step, ahead)
 
 
 def _coarse_bottleneck(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray,
@@ -352,7 +351,7 @@ def _coarse_bottleneck(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray,
     def exhausted(has_pair: np.ndarray, bound: float) -> Assignment | None:
         return Assignment(None, np.zeros(N)) if bound > far else None
 
-    got = _least_bottleneck(E, floor, below, exhausted, deadline, 4.0 * hs.step)
+    got = _least_bottleneck(E, floor, below, exhausted, deadline, 4.0 * hs.step, 3)
     if got.timed_out:
         return got
     if got.goal is None:
@@ -367,12 +366,14 @@ def _coarse_bottleneck(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray,
 
 
 def _least_bottleneck(E: NearPairs, floor: float, below: Callable, exhausted: Callable,
-                      deadline: float, least: float) -> Assignment:
+                      deadline: float, least: float, ahead: int = 0) -> Assignment:
     """Bottleneck, then sum, over the distances ``below(pm, pi, bound)`` gives for pairs
     (goal ``pm[k]``, robot ``pi[k]``) (inf at or above ``bound``; never below the straight
     line); ``exhausted(has_pair, bound)``: an Assignment that ends the search when no
     larger bound can give a perfect matching, else None; ``E``: the straight lines,
-    ``floor``: :func:`_straight_floor` of them."""
+    ``floor``: :func:`_straight_floor` of them. ``ahead``: each search reaches the bound of
+    the round this many rounds later, so that the rounds up to there need none (the
+    rounds, and so the result, are the same; only the searches are fewer and wider)."""
     M, N = E.M, E.N
     # distances are at least the straight lines: no bound below theirs can do
     bound = max(floor * 1.02, least)
@@ -382,13 +383,18 @@ def _least_bottleneck(E: NearPairs, floor: float, below: Callable, exhausted: Ca
     # the pairs whose straight line is below the last bound (goal * N + robot, ascending)
     # and their distances (exact where below that bound, else inf)
     keys, known = np.zeros(0, np.int64), np.zeros(0)
+    searched = 0.0  # the pairs' distances are exact below it (inf: not below it)
     while True:
-        gm, gi, _ = E.within(bound, strict=True)
-        fresh = np.full(len(gm), np.inf)
-        fresh[np.searchsorted(gm * N + gi, keys)] = known  # the bound only grows
-        keys, known = gm * N + gi, fresh
-        todo = np.flatnonzero(np.isinf(known))  # grouped by goal
-        known[todo] = below(gm[todo], gi[todo], bound)
+        if bound > searched:
+            searched = bound
+            for _ in range(ahead):  # as the bound will grow, to the same float
+                searched *= _GROWTH
+            gm, gi, _ = E.within(searched, strict=True)
+            fresh = np.full(len(gm), np.inf)
+            fresh[np.searchsorted(gm * N + gi, keys)] = known  # the bound only grows
+            keys, known = gm * N + gi, fresh
+            todo = np.flatnonzero(np.isinf(known))  # grouped by goal
+            known[todo] = below(gm[todo], gi[todo], searched)
         ok = np.flatnonzero(bound > known)
         pm, pi, c = gm[ok], gi[ok], known[ok]
         ptr = np.searchsorted(pm, np.arange(M + 1))

@@ -19,42 +19,58 @@ __all__ = ["DENSE", "NearPairs", "near_pairs"]
 
 #: Up to this many point pairs, the dense matrix.
 DENSE = 4096
+#: :meth:`NearPairs.within` finds the pairs this much (relatively) beyond the bound asked
+#: for, and answers larger bounds up to there from them.
+REACH_AHEAD = 0.3
 
 
 def near_pairs(A: np.ndarray, B: np.ndarray, r: float, strict: bool = False,
-               tree: cKDTree | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(a, b, distance) of the pairs within ``r`` (see the module docstring); ``tree``: a
-    k-d tree of ``B`` already built."""
+               trees: tuple[cKDTree, cKDTree] | None = None
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(a, b, distance) of the pairs within ``r`` (see the module docstring); ``trees``:
+    k-d trees of ``A`` and ``B`` already built."""
     A = np.asarray(A, dtype=np.float64).reshape(-1, 2)
     B = np.asarray(B, dtype=np.float64).reshape(-1, 2)
     if len(A) * len(B) <= DENSE or not np.isfinite(r):
         D = np.hypot(A[:, None, 0] - B[None, :, 0], A[:, None, 1] - B[None, :, 1])
         a, b = np.nonzero(r > D if strict else r >= D)
         return a, b, D[a, b]
-    if tree is None:
-        tree = cKDTree(B)
-    got = tree.query_ball_point(A, r * (1.0 + 1e-9) + 1e-12, return_sorted=True)
-    n = np.fromiter((len(g) for g in got), dtype=np.int64, count=len(got))
-    a = np.repeat(np.arange(len(A), dtype=np.int64), n)
-    b = np.concatenate([np.zeros(0, np.int64)] + [np.asarray(g, np.int64) for g in got])
+    ta, tb = trees if trees is not None else (cKDTree(A), cKDTree(B))
+    got = ta.sparse_distance_matrix(tb, r * (1.0 + 1e-9) + 1e-12, output_type="ndarray")
+    a = got["i"].astype(np.int64)
+    b = got["j"].astype(np.int64)
+    order = np.argsort(a * len(B) + b, kind="stable")
+    a, b = a[order], b[order]
     d = np.hypot(A[a, 0] - B[b, 0], A[a, 1] - B[b, 1])
-    keep = d < r if strict else d <= r
+    keep = r > d if strict else r >= d
     return a[keep], b[keep], d[keep]
 
 
 class NearPairs:
     """Goal-robot pairs of the straight lines ``|G[m] - S[i]|`` (the matrix ``E`` of
-    :mod:`lamp.mrmp.assignment`), found within a bound as needed."""
+    :mod:`lamp.mrmp.assignment`), found within a bound as needed (the same pairs, order
+    and distances as :func:`near_pairs` for every bound)."""
 
     def __init__(self, S: np.ndarray, G: np.ndarray) -> None:
         self.S, self.G = S, G
         self.M, self.N = len(G), len(S)
-        self._tree = cKDTree(S) if self.M * self.N > DENSE else None
+        big = self.M * self.N > DENSE
+        self._tree = cKDTree(S) if big else None
+        self._trees = (cKDTree(G), self._tree) if big else None
+        self._cache: tuple | None = None  # (radius, goal, robot, distance) found
 
     def within(self, bound: float, strict: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(goal, robot, straight line) of the pairs within ``bound`` (below it when
         ``strict``), by goal then robot."""
-        return near_pairs(self.G, self.S, bound, strict, self._tree)
+        if self._trees is None:
+            return near_pairs(self.G, self.S, bound, strict)
+        if self._cache is None or bound > self._cache[0]:
+            # a third beyond the bound: the next rounds' pairs found in the same query
+            R = bound * (1.0 + REACH_AHEAD)
+            self._cache = (R, *near_pairs(self.G, self.S, R, False, self._trees))
+        _, a, b, d = self._cache
+        keep = bound > d if strict else bound >= d
+        return a[keep], b[keep], d[keep]
 
     def nearest(self) -> float:
         """The largest, over the goals, of the distance to the nearest robot."""
