@@ -382,13 +382,11 @@ def lattice_h(m: int, v: int, nbr: np.ndarray, dlen: np.ndarray, hs: tuple) -> f
 
 
 @nb.njit(cache=True)
-def expand_to(m: int, bound: float, nbr: np.ndarray, dlen: np.ndarray, hs: tuple,
-              room: float = 1.0) -> None:
-    """Settle every node of goal m's search closer than ``bound`` (metres); a first
-    window is opened ``room`` times wider than the bound (for expansions to come)."""
+def expand_to(m: int, bound: float, nbr: np.ndarray, dlen: np.ndarray, hs: tuple) -> None:
+    """Settle every node of goal m's search closer than ``bound`` (metres)."""
     rad, step = hs[1], hs[17]
     if rad[m] == 0.0:
-        _open_window(m, max(bound * room, _FIRST_RADIUS_STEPS * step), nbr, dlen, hs)
+        _open_window(m, max(bound, _FIRST_RADIUS_STEPS * step), nbr, dlen, hs)
     elif rad[m] < bound:
         _open_window(m, max(bound, 1.25 * rad[m]), nbr, dlen, hs)
     _run_until(m, -1, bound, nbr, dlen, hs)

@@ -48,10 +48,10 @@ def hval_fast(m: int, v: int, gr: tuple, V: int, gv0: int, hs: tuple) -> float:
 
 @nb.njit(cache=True)
 def hval_below(pm: np.ndarray, pv: np.ndarray, bound: float, gr: tuple, V: int, gv0: int,
-               hs: tuple, room: float = 1.0) -> np.ndarray:
+               hs: tuple) -> np.ndarray:
     """For pairs (goal ``pm[k]``, special vertex ``pv[k]``): the exact distance when it is
-    below ``bound``, else inf (each goal's search is expanded to ``bound`` once, a first
-    window opened ``room`` times wider; pairs are best grouped by goal). A pair's value is its best link: the link's length plus its
+    below ``bound``, else inf (each goal's search is expanded to ``bound`` once; pairs are
+    best grouped by goal). A pair's value is its best link: the link's length plus its
     lattice node's settled value (``+ EPS`` for a direct link to the goal)."""
     coords, _, _, xptr, xidx = gr
     win = hs[0]
@@ -62,7 +62,7 @@ def hval_below(pm: np.ndarray, pv: np.ndarray, bound: float, gr: tuple, V: int, 
     for k in range(pm.shape[0]):
         m = pm[k]
         if m != last:
-            expand_to(m, bound, gr[1], gr[2], hs, room)
+            expand_to(m, bound, gr[1], gr[2], hs)
             last = m
             dd, dn = hs[2][m], hs[3][m]
             a0, b0, na, nbw = win[m, 0], win[m, 1], win[m, 2], win[m, 3]
