@@ -317,9 +317,10 @@ def _bottleneck(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray, G: np.ndarr
                               "every goal (some goals are reachable only by the same robots)")
         return None
 
-    # fleets: each search while its window is in cache reaches the bounds of the next two
-    # rounds (smaller teams keep the searches they were tested bit for bit with)
-    ahead = 2 if N >= ALL_PAIRS_BELOW else 0
+    # fleets: the first search, while each window is in cache, reaches the bound of two
+    # rounds later; later ones, resumed with the windows out of cache, go no further
+    # than needed (smaller teams keep the searches they were tested bit for bit with)
+    ahead = (2, 0) if N >= ALL_PAIRS_BELOW else (0, 0)
     return _least_bottleneck(E, floor, below, exhausted, deadline, 4.0 * hs.step, ahead)
 
 
@@ -351,7 +352,8 @@ def _coarse_bottleneck(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray,
     def exhausted(has_pair: np.ndarray, bound: float) -> Assignment | None:
         return Assignment(None, np.zeros(N)) if bound > far else None
 
-    got = _least_bottleneck(E, floor, below, exhausted, deadline, 4.0 * hs.step, 3)
+    # block searches start again each time: each reaches the bound of three rounds later
+    got = _least_bottleneck(E, floor, below, exhausted, deadline, 4.0 * hs.step, (3, 3))
     if got.timed_out:
         return got
     if got.goal is None:
@@ -366,14 +368,16 @@ def _coarse_bottleneck(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray,
 
 
 def _least_bottleneck(E: NearPairs, floor: float, below: Callable, exhausted: Callable,
-                      deadline: float, least: float, ahead: int = 0) -> Assignment:
+                      deadline: float, least: float,
+                      ahead: tuple[int, int] = (0, 0)) -> Assignment:
     """Bottleneck, then sum, over the distances ``below(pm, pi, bound)`` gives for pairs
     (goal ``pm[k]``, robot ``pi[k]``) (inf at or above ``bound``; never below the straight
     line); ``exhausted(has_pair, bound)``: an Assignment that ends the search when no
     larger bound can give a perfect matching, else None; ``E``: the straight lines,
-    ``floor``: :func:`_straight_floor` of them. ``ahead``: each search reaches the bound of
-    the round this many rounds later, so that the rounds up to there need none (the
-    rounds, and so the result, are the same; only the searches are fewer and wider)."""
+    ``floor``: :func:`_straight_floor` of them. ``ahead``: the first search reaches the bound
+    of the round this many rounds later, and each later one that many (the second
+    number), so that the rounds up to there need none (the rounds, and so the result,
+    are the same; only the searches are fewer and wider)."""
     M, N = E.M, E.N
     # distances are at least the straight lines: no bound below theirs can do
     bound = max(floor * 1.02, least)
@@ -386,8 +390,9 @@ def _least_bottleneck(E: NearPairs, floor: float, below: Callable, exhausted: Ca
     searched = 0.0  # the pairs' distances are exact below it (inf: not below it)
     while True:
         if bound > searched:
+            rounds = ahead[0] if searched == 0.0 else ahead[1]
             searched = bound
-            for _ in range(ahead):  # as the bound will grow, to the same float
+            for _ in range(rounds):  # as the bound will grow, to the same float
                 searched *= _GROWTH
             gm, gi, _ = E.within(searched, strict=True)
             fresh = np.full(len(gm), np.inf)
