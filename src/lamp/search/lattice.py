@@ -68,6 +68,7 @@ from lamp.search.lattice_primitives import (
     REVERSE,
     UNKNOWN,
     check_lattice_args,
+    edge_words,
     primitive_costs,
     successor_kernel,
 )
@@ -149,7 +150,8 @@ class ObjectLattice:
         # zero-filled (UNKNOWN): the pages of nodes never looked at stay untouched, so the
         # memory they take grows with the part of the map the search visits
         self._node_valid = np.zeros(self.n_nodes, dtype=np.int8)
-        self._edge_valid = np.zeros((self.n_nodes, len(PRIMITIVES)), dtype=np.int8)
+        self._edge_valid = np.zeros(edge_words(self.n_i, self.n_j, self.n_headings),
+                                    dtype=np.uint64)
         self._succ: dict[Node, list[tuple[Node, float]]] = {}
         self._tolerant: dict[float, ObjectSpace] = {}
         #: statistics: poses and motions checked so far

@@ -6,8 +6,16 @@ heading bins, and the 2 pure rotations), ``REVERSE`` the index of each one's rev
 whose arguments are malformed) with a ValueError naming the argument;
 :func:`primitive_costs` gives each primitive's cost and the farthest one's reach.
 :func:`successor_kernel` lists a node's valid edges, checking and caching
-(``UNKNOWN``/``BLOCKED``/``FREE`` in ``int8`` arrays) only what is not known yet; each
-motion is checked once, from its lower-id end, and stored for both directions.
+(``UNKNOWN``/``BLOCKED``/``FREE``) only what is not known yet; each motion is checked once,
+from its lower-id end, and stored for both directions.
+
+Nodes' states are an ``int8`` array by node id. Edges' states are packed: a node's 26 take
+2 bits each of one ``uint64`` word, and the words lie in tiles of ``EDGE_TILE`` x
+``EDGE_TILE`` cells (every heading of a cell together; :func:`edge_words` sizes the
+zero-filled store). Node ids run y-fastest, so a search along the x axis visits cells
+``n_j`` ids apart: stored by node id (26 bytes a node, 416 a cell) each cell it visits
+touched a page of its own; tiled and packed a page holds four 4 x 4 tiles and the pages
+touched follow the area searched (tested: ``tests/test_lattice_edge_store.py``).
 """
 
 from __future__ import annotations
@@ -37,6 +45,32 @@ PRIMITIVES: tuple[tuple[int, int, int], ...] = tuple(
 )
 #: The index of each primitive's reverse (``PRIMITIVES[REVERSE[p]]`` undoes ``PRIMITIVES[p]``).
 REVERSE = tuple(PRIMITIVES.index((-di, -dj, -dk)) for di, dj, dk in PRIMITIVES)
+#: Side (cells) of the square tiles the edge states are stored in (module docstring).
+EDGE_TILE = 4
+assert 2 * len(PRIMITIVES) <= 64  # a node's edge states fit one uint64 word
+
+
+def edge_words(n_i: int, n_j: int, n_k: int) -> int:
+    """Words of the edge store of an ``n_i x n_j`` cell lattice with ``n_k`` headings
+    (whole tiles: up to ``EDGE_TILE - 1`` cells of padding on each axis)."""
+    t = EDGE_TILE
+    return -(-n_i // t) * -(-n_j // t) * t * t * n_k
+
+
+@numba.njit(cache=True, inline="always")
+def edge_word(ii: int, jj: int, k: int, n_j: int, n_k: int) -> int:
+    """The word of the edge store holding node ``(ii, jj, k)``'s edge states."""
+    t = EDGE_TILE
+    ti = ii // t
+    tj = jj // t
+    return ((((ti * ((n_j + t - 1) // t) + tj) * t + (ii - ti * t)) * t + (jj - tj * t))
+            * n_k + k)
+
+
+@numba.njit(cache=True, inline="always")
+def edge_state(store: np.ndarray, w: int, p: int) -> int:
+    """Edge ``p``'s state in word ``w`` of the edge store."""
+    return int((store[w] >> np.uint64(2 * p)) & np.uint64(3))
 
 
 def check_lattice_args(
@@ -108,7 +142,7 @@ def successor_kernel(
     reach2: float,
 ) -> tuple[int, int, int]:
     """Fill ``out_ids``/``out_prim`` with u's valid edges, checking (and caching in
-    ``node_valid``/``edge_valid``) what is unknown. Returns (count, pose checks, motion
+    ``node_valid`` and the edge store ``edge_valid``, module docstring) what is unknown. Returns (count, pose checks, motion
     checks). Poses are computed exactly as ``ObjectLattice.poses`` does; each motion is
     checked from its lower-id end and stored for both directions."""
     n_i = node_valid.shape[0] // (n_j * n_k)
@@ -116,6 +150,7 @@ def successor_kernel(
     k = u - rest * n_k
     ii = rest // n_j
     jj = rest - ii * n_j
+    wu = edge_word(ii, jj, k, n_j, n_k)
     two_pi = 2.0 * math.pi
     xu = ax + (ii + i_min) * step
     yu = ay + (jj + j_min) * step
@@ -145,7 +180,7 @@ def successor_kernel(
             n_pose += 1
         if node_valid[v] == BLOCKED:
             continue
-        if edge_valid[u, p] == UNKNOWN:
+        if edge_state(edge_valid, wu, p) == UNKNOWN:
             if u < v:
                 free = motion_free_kernel(
                     xu, yu, tu, xv, yv, tv, margin, reach, sd, res, width, height, fp, reach2
@@ -155,9 +190,10 @@ def successor_kernel(
                     xv, yv, tv, xu, yu, tu, margin, reach, sd, res, width, height, fp, reach2
                 )
             n_motion += 1
-            edge_valid[u, p] = BLOCKED + free
-            edge_valid[v, rev[p]] = BLOCKED + free
-        if edge_valid[u, p] == FREE:
+            state = np.uint64(BLOCKED + free)
+            edge_valid[wu] |= state << np.uint64(2 * p)
+            edge_valid[edge_word(ni, nj, nk, n_j, n_k)] |= state << np.uint64(2 * rev[p])
+        if edge_state(edge_valid, wu, p) == FREE:
             out_ids[n] = v
             out_prim[n] = p
             n += 1
