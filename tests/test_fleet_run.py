@@ -65,6 +65,13 @@ def test_concurrent_run_places_every_object_safely_and_sooner(rooms_runs) -> Non
     assert 0.0 < use["working"] <= 1.0 and 0.0 <= use["moving"] <= use["working"]
     assert use["working"] + use["waiting"] + use["idle"] == pytest.approx(1.0, abs=1e-3)
     assert "fleet" not in sequential.to_dict()["stats"]
+    waits = fleet["waits"]  # why segments waited, per object
+    assert len(waits) == len(placed)
+    for k, why in enumerate(waits):
+        for reason, n in why.items():
+            kind, j = reason.split()
+            assert kind in ("running", "claim") and int(j) != k and n >= 1
+    assert sum(sum(w.values()) for w in waits) >= fleet["waited"]
 
 
 def test_concurrent_runs_are_deterministic(rooms_runs) -> None:

@@ -80,3 +80,26 @@ def test_no_module_probes_an_executor_s_abilities_by_name() -> None:
                     and isinstance(node.args[1], ast.Constant) and node.args[1].value in PROBED):
                 bad.append(f"{path.relative_to(SRC)}:{node.lineno}")
     assert bad == []
+
+
+@given(st.lists(st.tuples(st.integers(0, 3), st.sampled_from(["running", "claim"]),
+                          st.integers(0, 3), st.booleans()), max_size=40))
+def test_waits_count_every_meets_note_by_object_and_reason(notes) -> None:
+    """``FleetStats.report``'s ``waits``: per object, each "meets" reason noted and how
+    often, most frequent first; other notes are not counted."""
+    from collections import Counter
+    from types import SimpleNamespace
+
+    from lamp.fleet.stats import FleetStats
+
+    stats = FleetStats(2)
+    expect = [Counter() for _ in range(4)]
+    for k, kind, j, meets in notes:
+        stats.note(1.0, "meets" if meets else "handed", k, f"{kind} {j}")
+        if meets:
+            expect[k][f"{kind} {j}"] += 1
+    objects = [SimpleNamespace(index=k, placed_at_s=None) for k in range(4)]
+    waits = stats.report(objects, {}, 1.0)["waits"]  # type: ignore[arg-type]
+    assert [Counter(w) for w in waits] == expect
+    for w in waits:
+        assert list(w.values()) == sorted(w.values(), reverse=True)

@@ -11,6 +11,7 @@ through ``Fleet.stats``): working + waiting + idle = the clock, for every robot.
 
 from __future__ import annotations
 
+from collections import Counter, defaultdict
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -66,14 +67,20 @@ class FleetStats:
         self.log: list[tuple[float, str, int, str]] = []
         self.transit_planning_s = 0.0
         self.robot_time = RobotTime(n_robots)
+        #: per waiting object, why its segments waited (``admission.meets_moving``'s
+        #: answers, "running j" / "claim j") and how often
+        self.waits: defaultdict[int, Counter[str]] = defaultdict(Counter)
 
     def count(self, what: str, n: int = 1) -> None:
         """Add ``n`` to count ``what`` (one of ``COUNTS``; ``KeyError`` otherwise)."""
         self.counts[what] += n
 
     def note(self, clock: float, what: str, k: int, detail: str) -> None:
-        """Log a decision about object ``k`` at simulated time ``clock``."""
+        """Log a decision about object ``k`` at simulated time ``clock``; a segment that
+        waits (``what`` "meets") is also counted by its reason (``waits``)."""
         self.log.append((clock, what, k, detail))
+        if what == "meets":
+            self.waits[k][detail] += 1
 
     def report(self, objects: Sequence[ObjectState], failed_at: Mapping[int, float],
                clock: float) -> dict[str, Any]:
@@ -81,7 +88,10 @@ class FleetStats:
         failed, and the robots' utilisation over ``clock`` seconds: shares of robot-time
         working (their sub-team's segment runs), moving (working and driven), waiting (in
         a sub-team, its segment not running) and idle (in no sub-team); working + waiting
-        + idle = 1."""
+        + idle = 1; and ``waits``: per object, how often a segment of it met a running one
+        or a claim (``admission.meets_moving``: "running j", "claim j"), most frequent
+        first; together at least ``waited`` (a segment that also meets a standing body
+        waits without counting there)."""
         return {
             **self.counts,
             "placed_at_s": [None if o.placed_at_s is None else round(o.placed_at_s, 4)
@@ -89,4 +99,5 @@ class FleetStats:
             "robots_failed_at_s": {str(i): round(t, 4) for i, t in sorted(failed_at.items())},
             "transit_planning_s": round(self.transit_planning_s, 4),
             "utilisation": self.robot_time.shares(clock),
+            "waits": [dict(self.waits[o.index].most_common()) for o in objects],
         }
