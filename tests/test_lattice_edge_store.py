@@ -21,7 +21,7 @@ def test_every_node_has_its_own_word_inside_the_store(n_i, n_j, n_k):
     words = [edge_word(i, j, k, n_j, n_k)
              for i in range(n_i) for j in range(n_j) for k in range(n_k)]
     assert len(set(words)) == n_i * n_j * n_k
-    assert 0 <= min(words) and max(words) < edge_words(n_i, n_j, n_k)
+    assert min(words) >= 0 and max(words) < edge_words(n_i, n_j, n_k)
 
 
 @settings(max_examples=30)
