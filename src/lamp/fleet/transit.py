@@ -325,6 +325,9 @@ def transit(view: FleetView, world: Callable[[], Scene], k: int, seed: int = 0
             if plan is None or not plan.success:
                 plan = hop(scene, k, poses, pos, far, field, HOP_LENGTH / 2, seed=seed)
         planning += time.perf_counter() - t0
+        # the routes' grid spans the map (some 10 MB at 60 x 40 m): not held while the
+        # hop runs, when every other team may be transiting too
+        del field, scene
         if plan is None or not plan.success:
             break
         reply = view.execute(plan.paths)
