@@ -14,7 +14,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from lamp.contract.plan import LoopPolicy, Plan, PlanStatus
@@ -275,6 +275,9 @@ def test_drift_then_exact_always_arrives(dx, dy, step, side, n_drift) -> None:
     change the run."""
     goal = START + [dx, dy, 0.0]
     dist = float(np.hypot(dx, dy))
+    # on the stop distance itself the loop's own sum (goal - pose, rounded) may fall on
+    # either side of it
+    assume(abs(dist - CONFIG.loop.stop_position) > 1e-9)
     watched = run(FakeExecutor(drifting(n_drift, side)), policy=DRIFT_ONLY,
                   planner=StraightPlanner(goal, step), goal=goal)
     ex = FakeExecutor(drifting(n_drift, side))
