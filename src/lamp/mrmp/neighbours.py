@@ -5,7 +5,8 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-__all__ = ["ALL_PAIRS_BELOW", "cell_hash", "doubled", "neighbour_lists", "within"]
+__all__ = ["ALL_PAIRS_BELOW", "cell_hash", "cell_start", "cell_starts", "doubled",
+           "neighbour_lists", "within"]
 
 #: Teams smaller than this swap goals over all pairs and check all pairs (no hashing).
 ALL_PAIRS_BELOW = 32
@@ -27,6 +28,30 @@ def cell_hash(px: np.ndarray, py: np.ndarray, cs: float
         key[i] = (int((px[i] - x0) / cs) + 1) * ny + int((py[i] - y0) / cs) + 1
     order = np.argsort(key, kind="mergesort")
     return key, order, key[order], ny
+
+
+@nb.njit(cache=True)
+def cell_starts(skey: np.ndarray, ny: int) -> tuple[bool, np.ndarray]:
+    """For :func:`cell_hash`'s sorted keys ``skey``: (True, each key's first entry in
+    ``skey``) when the keys span few cells (at most ``64 n + 65536``), else (False, an
+    unused array): :func:`cell_start` then finds an entry by binary search."""
+    n = skey.shape[0]
+    ncell = skey[n - 1] + ny + 2 if n else 0
+    table = ncell <= 64 * n + 65536
+    first = np.zeros(ncell + 1 if table else 1, dtype=np.int64)
+    if table:
+        p = 0
+        for kk in range(ncell + 1):
+            while p < n and skey[p] < kk:
+                p += 1
+            first[kk] = p
+    return table, first
+
+
+@nb.njit(cache=True, inline="always")
+def cell_start(kk: int, skey: np.ndarray, table: bool, first: np.ndarray) -> int:
+    """The first entry of key ``kk`` in ``skey`` (``cell_starts``'s answer)."""
+    return first[kk] if table else np.searchsorted(skey, kk)
 
 
 @nb.njit(cache=True)
@@ -59,17 +84,7 @@ def neighbour_lists(px: np.ndarray, py: np.ndarray, radius: float
             ptr[i + 1] = q
         return ptr, idx
     key, order, skey, ny = cell_hash(px, py, max(radius, 1e-9))
-    # each key's first entry in ``skey``: a table when the cells are few, else found by
-    # binary search
-    ncell = skey[N - 1] + ny + 2
-    table = ncell <= 64 * N + 65536
-    first = np.zeros(ncell + 1 if table else 1, dtype=np.int64)
-    if table:
-        lo = 0
-        for kk in range(ncell + 1):
-            while lo < N and skey[lo] < kk:
-                lo += 1
-            first[kk] = lo
+    table, first = cell_starts(skey, ny)
     r2 = radius * radius
     buf = np.empty(64, dtype=np.int64)
     cnt = np.zeros(N, dtype=np.int64)
@@ -80,7 +95,7 @@ def neighbour_lists(px: np.ndarray, py: np.ndarray, radius: float
         for dx in range(-1, 2):
             for dy in range(-1, 2):
                 kk = key[i] + dx * ny + dy
-                lo = first[kk] if table else np.searchsorted(skey, kk)
+                lo = cell_start(kk, skey, table, first)
                 while lo < N and skey[lo] == kk:
                     j = order[lo]
                     lo += 1

@@ -118,6 +118,23 @@ def _gather(x0: float, y0: float, x1: float, y1: float, t: float, gptr: np.ndarr
     return n
 
 
+@nb.njit(cache=True, inline="always")
+def _alone(o: int, circles: np.ndarray, vptr: np.ndarray, none_c: np.ndarray,
+           one_c: np.ndarray, one_p: np.ndarray, no_p: np.ndarray
+           ) -> tuple[np.ndarray, np.ndarray]:
+    """Obstacle ``o`` (circles first, then polygons) alone, as the (circles, polygon
+    offsets) arguments of the clearance kernels, written into the scratch arrays."""
+    C = circles.shape[0]
+    if o < C:
+        one_c[0, 0] = circles[o, 0]
+        one_c[0, 1] = circles[o, 1]
+        one_c[0, 2] = circles[o, 2]
+        return one_c, no_p
+    one_p[0] = vptr[o - C]
+    one_p[1] = vptr[o - C + 1]
+    return none_c, one_p
+
+
 @nb.njit(cache=True)
 def grid_clear_segments(a: np.ndarray, b: np.ndarray, need: np.ndarray, circles: np.ndarray,
                         verts: np.ndarray, vptr: np.ndarray, W: float, H: float,
@@ -126,7 +143,6 @@ def grid_clear_segments(a: np.ndarray, b: np.ndarray, need: np.ndarray, circles:
     """Whether each segment ``a[k] -> b[k]`` keeps an exact clearance of at least
     ``need[k] - 1e-12`` (``need > 0``) from the obstacles and the workspace border."""
     K = a.shape[0]
-    C = circles.shape[0]
     ok = np.empty(K, np.bool_)
     seen = np.zeros(box.shape[0], np.int64)
     near = np.empty(box.shape[0], np.int64)
@@ -145,16 +161,8 @@ def grid_clear_segments(a: np.ndarray, b: np.ndarray, need: np.ndarray, circles:
         for q in range(n):
             if not good:
                 break
-            o = near[q]
-            if o < C:
-                one_c[0, 0] = circles[o, 0]
-                one_c[0, 1] = circles[o, 1]
-                one_c[0, 2] = circles[o, 2]
-                d = segment_clearance(ax, ay, bx, by, one_c, verts, no_p, W, H)
-            else:
-                one_p[0] = vptr[o - C]
-                one_p[1] = vptr[o - C + 1]
-                d = segment_clearance(ax, ay, bx, by, none_c, verts, one_p, W, H)
+            cs, ps = _alone(near[q], circles, vptr, none_c, one_c, one_p, no_p)
+            d = segment_clearance(ax, ay, bx, by, cs, verts, ps, W, H)
             good = d >= lim
         ok[k] = good
     return ok
@@ -167,7 +175,6 @@ def grid_points_clearance(pts: np.ndarray, circles: np.ndarray, verts: np.ndarra
                           cell: float) -> np.ndarray:
     """Exact signed clearance of each point (``points_clearance`` over all obstacles)."""
     K = pts.shape[0]
-    C = circles.shape[0]
     out = np.empty(K)
     seen = np.zeros(box.shape[0], np.int64)
     near = np.empty(box.shape[0], np.int64)
@@ -181,16 +188,8 @@ def grid_points_clearance(pts: np.ndarray, circles: np.ndarray, verts: np.ndarra
                     near)
         best = min(px, W - px, py, H - py)
         for q in range(n):
-            o = near[q]
-            if o < C:
-                one_c[0, 0] = circles[o, 0]
-                one_c[0, 1] = circles[o, 1]
-                one_c[0, 2] = circles[o, 2]
-                d = point_clearance(px, py, one_c, verts, no_p, W, H)
-            else:
-                one_p[0] = vptr[o - C]
-                one_p[1] = vptr[o - C + 1]
-                d = point_clearance(px, py, none_c, verts, one_p, W, H)
+            cs, ps = _alone(near[q], circles, vptr, none_c, one_c, one_p, no_p)
+            d = point_clearance(px, py, cs, verts, ps, W, H)
             if d < best:
                 best = d
         if best >= POINT_REACH:

@@ -64,7 +64,7 @@ import math
 import numba as nb
 import numpy as np
 
-from lamp.mrmp.neighbours import cell_hash, doubled
+from lamp.mrmp.neighbours import cell_hash, cell_start, cell_starts, doubled
 from lamp.mrmp.retime_pairs import find, lock_violations, segment_distance, union
 
 __all__ = ["RETIME_QUANTA", "densify", "drop_waits", "retime"]
@@ -150,17 +150,7 @@ def _close_pairs(rob: np.ndarray, lo: np.ndarray, hi: np.ndarray, seg: np.ndarra
         half = max(half, 0.5 * math.hypot(seg[a, 2] - seg[a, 0], seg[a, 3] - seg[a, 1]))
     cs = two_r + 2.0 * half + 1e-9
     key, order, skey, ny = cell_hash(mx, my, cs)
-    # each key's first entry in ``skey``: a table when the cells are few (as
-    # neighbours.neighbour_lists), else found by binary search
-    ncell = skey[S - 1] + ny + 2 if S else 0
-    table = ncell <= 64 * S + 65536
-    first = np.zeros(ncell + 1 if table else 1, dtype=np.int64)
-    if table:
-        p = 0
-        for kk in range(ncell + 1):
-            while p < S and skey[p] < kk:
-                p += 1
-            first[kk] = p
+    table, first = cell_starts(skey, ny)
     A = np.empty(4 * S + 16, np.int64)
     B = np.empty(4 * S + 16, np.int64)
     n = 0
@@ -168,7 +158,7 @@ def _close_pairs(rob: np.ndarray, lo: np.ndarray, hi: np.ndarray, seg: np.ndarra
         for ddx in range(-1, 2):
             for ddy in range(-1, 2):
                 kk = key[a] + ddx * ny + ddy
-                p = first[kk] if table else np.searchsorted(skey, kk)
+                p = cell_start(kk, skey, table, first)
                 while p < S and skey[p] == kk:
                     b = order[p]
                     p += 1
