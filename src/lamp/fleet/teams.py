@@ -5,10 +5,10 @@ those whose goal lies in the way of no other object still to start (:func:`in_th
 placed early, it would make that object go round it or wait), then the head of the
 longest chain of such objects (:func:`chain_depths`: the critical path), then those with
 the fewest others standing ahead on their way (:func:`standing_ahead`: a queue in an aisle
-from its head), then those whose way crosses the fewest ways of the objects moving. :func:`allocate` shares the free
-robots equally among the ready objects, each the robots nearest to it: at most
-``MAX_ROBOTS`` each (the model's budget: more would stand idle), at least
-``MIN_TEAM``; a lone robot only when no other object is moving (no robot will be
+from its head), then those whose way crosses the fewest ways of the objects moving.
+:func:`allocate` shares the free robots equally among the ready objects, each the robots
+nearest to it: at most ``MAX_ROBOTS`` each (the model's budget: more would stand idle), at
+least ``MIN_TEAM``; a lone robot only when no other object is moving (no robot will be
 freed); robots left over when the next object cannot start join the started teams
 (:func:`reinforce`). A team keeps its robots until its object is placed or given up
 (then they are free for the next object), but for a far robot whose place a free robot

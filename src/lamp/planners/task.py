@@ -24,6 +24,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from lamp.geometry.clearance_layers import lru_get, lru_put
 from lamp.geometry.exact_space import ExactSpace
 from lamp.geometry.object_space import ObjectSpace
 from lamp.geometry.robot_space import RobotSpace
@@ -187,18 +188,11 @@ class ManipulationTask:
         """The robot space cached under ``key``, built by ``build`` on a miss; the least
         recently used are dropped beyond ``_SPACES_KEPT`` entries or
         ``LoopConfig.space_cache_mb`` (the newest is always kept)."""
-        space = self._spaces.get(key)
+        space = lru_get(self._spaces, key)
         if space is None:
             space = build()
-            self._spaces[key] = space
-            total = sum(sp.nbytes for sp in self._spaces.values())
-            budget = self.config.loop.space_cache_mb * 2**20
-            while len(self._spaces) > 1 and (len(self._spaces) > _SPACES_KEPT
-                                             or total > budget):
-                _, old = self._spaces.popitem(last=False)
-                total -= old.nbytes
-        else:
-            self._spaces.move_to_end(key)
+            lru_put(self._spaces, key, space, _SPACES_KEPT,
+                    self.config.loop.space_cache_mb * 2**20, lambda sp: sp.nbytes)
         return space
 
     def static_space_near(self, q_object: np.ndarray) -> RobotSpace:
