@@ -3,12 +3,11 @@
 Which ready objects go first is :func:`start_order` (:func:`least_conflict_order`):
 those whose goal lies in the way of no other object still to start (:func:`in_the_way`:
 placed early, it would make that object go round it or wait), then the head of the
-longest chain of such objects (:func:`chain_depths`: the critical path), then those with
-the fewest others standing ahead on their way (:func:`standing_ahead`: a queue in an aisle
-from its head), then those whose way crosses the fewest ways of the objects moving.
-:func:`allocate` shares the free robots equally among the ready objects, each the robots
-nearest to it: at most ``MAX_ROBOTS`` each (the model's budget: more would stand idle), at
-least ``MIN_TEAM``; a lone robot only when no other object is moving (no robot will be
+longest chain of such objects (:func:`chain_depths`: the critical path), then those whose
+way crosses the fewest ways of the objects moving. :func:`allocate` shares the free
+robots equally among the ready objects, each the robots nearest to it: at most
+``MAX_ROBOTS`` each (the model's budget: more would stand idle), at least
+``MIN_TEAM``; a lone robot only when no other object is moving (no robot will be
 freed); robots left over when the next object cannot start join the started teams
 (:func:`reinforce`). A team keeps its robots until its object is placed or given up
 (then they are free for the next object), but for a far robot whose place a free robot
@@ -33,7 +32,7 @@ from lamp.scene.model import Scene, Shape
 
 __all__ = ["GROW_REACH", "MIN_TEAM", "allocate", "chain_depths", "corridor", "goal_blocks",
            "in_the_way", "least_conflict_order", "near_way", "nearest", "needed_space",
-           "planar_distance", "reinforce", "standing_ahead", "start_order"]
+           "planar_distance", "reinforce", "start_order"]
 
 #: The smallest sub-team an object starts with while other objects are moving.
 MIN_TEAM = 2
@@ -105,26 +104,21 @@ def reinforce(pool: Sequence[int], robot_positions: np.ndarray, object_poses: np
 
 def least_conflict_order(candidates: Sequence[int], corridors: Mapping[int, shapely.Geometry],
                          busy: Sequence[shapely.Geometry],
-                         blocks: Mapping[int, Set[int]] | None = None,
-                         ahead: Mapping[int, Set[int]] | None = None) -> list[int]:
+                         blocks: Mapping[int, Set[int]] | None = None) -> list[int]:
     """``candidates`` in the order they should start: greedily, next the one whose goal
     lies in the way of the fewest candidates not yet put (``blocks[k]``: the objects whose
     way ``k``'s goal lies in, :func:`in_the_way`; none when ``blocks`` is None), then
     that heads the longest chain of objects that must start after it (:func:`chain_depths`:
-    the critical path first), then that has the fewest candidates not yet put standing
-    ahead of it on its way (``ahead[k]``, :func:`standing_ahead`: the head of a queue in
-    an aisle before those behind it; none when ``ahead`` is None), then whose corridor
-    (``corridors[k]``: the way it has to go) meets the fewest of ``busy`` (the moving
-    objects' corridors) and of the corridors of those put before it; ties by index.
-    Objects whose ways do not cross start together, crossing ones wait, and an object
-    whose goal would bar another's way starts after it."""
+    the critical path first), then whose corridor (``corridors[k]``: the way it has to go)
+    meets the fewest of ``busy`` (the moving objects' corridors) and of the corridors of
+    those put before it; ties by index. Objects whose ways do not cross start together,
+    crossing ones wait, and an object whose goal would bar another's way starts after
+    it."""
     rest, taken, out = sorted(candidates), list(busy), []
-    blocks, ahead = blocks or {}, ahead or {}
+    blocks = blocks or {}
     depth = chain_depths(rest, blocks)
     while rest:
-        others = set(rest)
-        k = min(rest, key=lambda k: (len(blocks.get(k, set()) & (others - {k})), -depth[k],
-                                     len(ahead.get(k, set()) & (others - {k})),
+        k = min(rest, key=lambda k: (len(blocks.get(k, set()) & (set(rest) - {k})), -depth[k],
                                      sum(corridors[k].intersects(b) for b in taken), k))
         rest.remove(k)
         out.append(k)
@@ -185,19 +179,6 @@ def corridor(shape: Shape, pose: np.ndarray, goal: np.ndarray, robot_radius: flo
     return ends.convex_hull.buffer(2 * float(robot_radius))
 
 
-def standing_ahead(corridors: Mapping[int, shapely.Geometry],
-                   bodies: Mapping[int, shapely.Geometry], poses: Mapping[int, np.ndarray],
-                   goal_poses: Mapping[int, np.ndarray]) -> dict[int, set[int]]:
-    """For each object ``k``: the objects ``j`` standing ahead of it on its way, that is,
-    ``j``'s footprint where it stands (``bodies[j]``) meets ``k``'s corridor and lies
-    nearer ``k`` than ``k``'s goal does (between them, not beside or beyond the goal).
-    Started first, ``j`` clears ``k``'s way as it goes; started after, it stands there."""
-    return {k: {j for j in bodies if j != k and bodies[j].intersects(corridors[k])
-                and planar_distance(poses[k], poses[j])
-                < planar_distance(poses[k], goal_poses[k])}
-            for k in corridors}
-
-
 def goal_blocks(scene: Scene, poses: np.ndarray, candidates: Sequence[int]
                 ) -> tuple[dict[int, shapely.Geometry], dict[int, set[int]]]:
     """The :func:`corridor` of each of ``candidates`` (objects of ``scene`` at ``poses``)
@@ -213,16 +194,12 @@ def goal_blocks(scene: Scene, poses: np.ndarray, candidates: Sequence[int]
 def start_order(scene: Scene, poses: np.ndarray, candidates: Sequence[int],
                 moving: Sequence[int]) -> list[int]:
     """``candidates`` (objects of ``scene`` at ``poses``) in :func:`least_conflict_order`,
-    the corridors of the ``moving`` objects busy, :func:`in_the_way` and
-    :func:`standing_ahead` taken among the candidates (:func:`goal_blocks`)."""
+    the corridors of the ``moving`` objects busy and :func:`in_the_way` taken among the
+    candidates (:func:`goal_blocks`)."""
     objs, r = scene.objects, scene.robot_radius
     ways, blocks = goal_blocks(scene, poses, candidates)
-    ahead = standing_ahead(ways, {k: to_shapely(objs[k].shape, np.asarray(poses[k], float))
-                                  for k in candidates},
-                           {k: poses[k] for k in candidates},
-                           {k: objs[k].goal for k in candidates})
     busy = [corridor(objs[k].shape, poses[k], objs[k].goal, r) for k in moving]
-    return least_conflict_order(candidates, ways, busy, blocks, ahead)
+    return least_conflict_order(candidates, ways, busy, blocks)
 
 
 def near_way(scene: Scene, k: int, pose: np.ndarray, pool: Sequence[int],
