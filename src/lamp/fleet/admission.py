@@ -43,6 +43,8 @@ __all__ = ["CLAIM_AREA_SLACK", "CROSSING", "PASS_STEP", "crosses", "ends_box", "
 CLAIM_AREA_SLACK = 1e-4
 #: A way that runs at most this far (m) inside a claim, and ends outside it, crosses it.
 CROSSING = 1.5
+#: Answers of :func:`passes_ahead` a memo of :func:`heeded_claims` keeps at most.
+_MEMO_KEPT = 4096
 #: The spacing (m) of the points at which :func:`passes_ahead` compares two ways.
 PASS_STEP = 0.1
 
@@ -163,7 +165,7 @@ def standing_in(region: shapely.Geometry, scene: Scene, object_poses: np.ndarray
 
 def heeded_claims(objects: Sequence[ObjectState], me: ObjectState, cross_near: float,
                   cross_waiting: float, reach: Sequence[float] = (),
-                  pass_margin: float = math.inf
+                  pass_margin: float = math.inf, memo: dict | None = None
                   ) -> list[tuple[int, shapely.Geometry, shapely.Geometry]]:
     """The claims of the ``objects`` ranked above ``me`` that bind it (not those that
     exempt it), as :func:`meets_moving` takes them: (index, claim, the part a plan that
@@ -173,16 +175,35 @@ def heeded_claims(objects: Sequence[ObjectState], me: ObjectState, cross_near: f
     of it; otherwise the whole claim. Where ``me``'s way passes through the claim ahead
     of its object (:func:`passes_ahead`, ``reach[k]`` each object's share of the reach,
     ``pass_margin``) only the near part binds, for both: it may go through, never into
-    the near part."""
+    the near part. ``memo`` (a dict the caller keeps) remembers
+    :func:`passes_ahead`'s answers by the plans' geometries, which never change once
+    made: the same answers, each found once."""
     out = []
     for o in objects:
         if o.rank >= me.rank or o.claim is None or me.index in o.exempt:
             continue
         if (math.isfinite(pass_margin) and me.way is not None and o.way is not None
-                and passes_ahead(me.way, o.claim, o.way, reach[me.index] + reach[o.index],
-                                 pass_margin)):
+                and _passes(me.way, o.claim, o.way, reach[me.index] + reach[o.index],
+                            pass_margin, memo)):
             out.append((o.index, o.near, o.near))
         else:
             out.append((o.index, o.claim, o.near if cross_near > 0
                         or (cross_waiting > 0 and o.held_up) else o.claim))
     return out
+
+
+def _passes(way: shapely.LineString, claim: shapely.Geometry, claimer_way: shapely.LineString,
+            reach: float, margin: float, memo: dict | None) -> bool:
+    """:func:`passes_ahead`, remembered in ``memo`` under the geometries' identities (the
+    entry holds them, so no identity is reused while it stands; at most ``_MEMO_KEPT``
+    entries, the memo emptied when full)."""
+    if memo is None:
+        return passes_ahead(way, claim, claimer_way, reach, margin)
+    key = (id(way), id(claim), id(claimer_way), reach, margin)
+    hit = memo.get(key)
+    if hit is None:
+        if len(memo) >= _MEMO_KEPT:
+            memo.clear()
+        hit = memo[key] = (passes_ahead(way, claim, claimer_way, reach, margin),
+                           way, claim, claimer_way)
+    return hit[0]

@@ -61,6 +61,8 @@ class Board:
         self.owner = np.full(scene.n_robots, FREE)  # robot -> object of its team (FREE, ...)
         #: robots that failed (``executor.failed``), and when
         self.failed_at: dict[int, float] = {}
+        #: answers of ``admission.passes_ahead`` by the plans they compared
+        self.passing: dict = {}
 
     @property
     def events(self) -> int:

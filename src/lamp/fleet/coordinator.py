@@ -308,7 +308,7 @@ class Fleet(TeamChanges):
         running = [o.running for o in self.objects if o.running is not None and o is not me]
         why = meets_moving(seg, running, heeded_claims(
             self.objects, me, cfg.cross_near, cfg.cross_waiting, self.reach,
-            cfg.pass_margin), me.way)
+            cfg.pass_margin, self.passing), me.way)
         if why:
             self.stats.note(self.clock, "meets", seg.index, why)
         return why

@@ -84,6 +84,10 @@ class Segment:
     #: when a rejoin changes the rows)
     spaces: dict[str, shapely.Geometry] = field(default_factory=dict, init=False, repr=False,
                                                 compare=False)
+    #: boxes derived from its rows, filled on first use and kept with the rows they
+    #: came from (``spacetime.reach_box``)
+    bounds: dict[str, tuple] = field(default_factory=dict, init=False, repr=False,
+                                     compare=False)
 
     def __post_init__(self) -> None:
         self.touch = self.first_touch()

@@ -85,7 +85,13 @@ def _robots_clear(rows: np.ndarray, phases: list[tuple[float, shapely.Geometry]]
         begin = max(begin, end)
         if part.size == 0:
             continue
-        pts = shapely.points(part.reshape(-1, 2))
+        xy = part.reshape(-1, 2)
+        x0, y0, x1, y1 = region.bounds  # a point outside them grown is farther: not near
+        inside = ((xy[:, 0] >= x0 - clearance) & (xy[:, 0] <= x1 + clearance)
+                  & (xy[:, 1] >= y0 - clearance) & (xy[:, 1] <= y1 + clearance))
+        if not inside.any():
+            continue
+        pts = shapely.points(xy[inside])
         near = shapely.dwithin(region, pts, clearance)  # a prepared test, then the few exactly
         if near.any() and np.min(shapely.distance(region, pts[near])) < clearance:
             return False
@@ -110,11 +116,24 @@ def reach_box(seg: Segment) -> np.ndarray:
     """(x0, y0, x1, y1): a box holding the centres of ``seg``'s robots at every row from
     its cursor on (its last row held) and each of its object's spaces (first, along its
     motion, final)."""
-    rows = seg.rows[:, min(seg.cursor, seg.rows.shape[1] - 1):].reshape(-1, 2)
-    boxes = [np.concatenate([rows.min(axis=0), rows.max(axis=0)])]
-    boxes += [np.asarray(_space(seg, w).bounds, float) for w in ("first", "motion", "final")]
-    stack = np.stack(boxes)
-    return np.concatenate([stack[:, :2].min(axis=0), stack[:, 2:].max(axis=0)])
+    lo, hi, spaces = _bounds(seg)
+    row = min(seg.cursor, seg.rows.shape[1] - 1)
+    return np.concatenate([np.minimum(lo[row], spaces[:2]), np.maximum(hi[row], spaces[2:])])
+
+
+def _bounds(seg: Segment) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(G, 2) the least and greatest robot centre over each row on (``lo[g]``, ``hi[g]``:
+    rows g, g + 1, ...), and (4,) the box of its object's three spaces; computed once
+    for its rows (a rejoin replaces them)."""
+    cached = seg.bounds.get("reach")
+    if cached is not None and cached[0] is seg.rows:
+        return cached[1:]
+    lo = np.minimum.accumulate(seg.rows.min(axis=0)[::-1], axis=0)[::-1]
+    hi = np.maximum.accumulate(seg.rows.max(axis=0)[::-1], axis=0)[::-1]
+    stack = np.array([_space(seg, w).bounds for w in ("first", "motion", "final")], float)
+    spaces = np.concatenate([stack[:, :2].min(axis=0), stack[:, 2:].max(axis=0)])
+    seg.bounds["reach"] = (seg.rows, lo, hi, spaces)
+    return lo, hi, spaces
 
 
 def apart(a: np.ndarray, b: np.ndarray, gap: float) -> bool:
