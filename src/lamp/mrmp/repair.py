@@ -38,11 +38,12 @@ import numba as nb
 import numpy as np
 
 from lamp.mrmp.goal_distances import hval
-from lamp.mrmp.gspi_kernels import conflict
 from lamp.mrmp.heuristic_reads import read_settled
 from lamp.mrmp.neighbours import doubled
+from lamp.mrmp.repair_hash import build_hash, cell, move_ok, set_key
 
-__all__ = ["REPAIR_BUDGET", "REPAIR_EXCHANGES", "REPAIR_GROUP", "REPAIR_WAIT", "repair_last"]
+__all__ = ["REPAIR_BUDGET", "REPAIR_EXCHANGES", "REPAIR_GROUP", "REPAIR_WAIT", "arrival_estimates",
+           "repair_last"]
 
 #: States a call may expand in all (the work bound; not the clock, for determinism).
 REPAIR_BUDGET = 200_000
@@ -62,61 +63,6 @@ def _arrival(VX: np.ndarray, i: int) -> int:
     while a > 0 and VX[a - 1, i] == VX[K1 - 1, i]:
         a -= 1
     return a
-
-
-@nb.njit(cache=True)
-def _cell(x: float, y: float, x0: float, y0: float, cs: float, ny: int) -> int:
-    return (int((x - x0) / cs) + 1) * ny + int((y - y0) / cs) + 1
-
-
-@nb.njit(cache=True)
-def _move_ok(i: int, t: int, a: int, b: int, VX: np.ndarray, coords: np.ndarray, gv0: int,
-             sk: np.ndarray, so: np.ndarray, x0: float, y0: float, cs: float, ny: int,
-             two_r: float, skip: np.ndarray, found: np.ndarray) -> bool:
-    """Whether robot i moving from vertex a to b in step t (row t -> t+1) keeps clear of
-    every other robot's motion in that step."""
-    ax = coords[a, 0]
-    ay = coords[a, 1]
-    bx = coords[b, 0]
-    by = coords[b, 1]
-    kc = _cell(ax, ay, x0, y0, cs, ny)
-    N = VX.shape[1]
-    b_goal = b >= gv0
-    for dx in range(-1, 2):  # the three cells of a column have consecutive keys
-        k0 = kc + dx * ny - 1
-        p = np.searchsorted(sk[t], k0)
-        while p < N and sk[t, p] <= k0 + 2:
-            k = so[t, p]
-            p += 1
-            if k == i or skip[k]:
-                continue
-            u = VX[t, k]
-            w = VX[t + 1, k]
-            if conflict(ax, ay, bx, by, coords[u, 0], coords[u, 1], coords[w, 0],
-                        coords[w, 1], two_r, b_goal and w >= gv0):
-                if found.shape[0] == 0:
-                    return False
-                found[k] = True
-    return True
-
-
-@nb.njit(cache=True)
-def _set_key(t: int, i: int, key: int, sk: np.ndarray, so: np.ndarray) -> None:
-    """Move robot i's entry of step t's sorted (key, robot) arrays to ``key``."""
-    N = sk.shape[1]
-    p = 0
-    while so[t, p] != i:
-        p += 1
-    for q in range(p, N - 1):  # out, then in at its place (keys ascending)
-        sk[t, q] = sk[t, q + 1]
-        so[t, q] = so[t, q + 1]
-    q = N - 1
-    while q > 0 and sk[t, q - 1] > key:
-        sk[t, q] = sk[t, q - 1]
-        so[t, q] = so[t, q - 1]
-        q -= 1
-    sk[t, q] = key
-    so[t, q] = i
 
 
 @nb.njit(cache=True, inline="always")
@@ -152,7 +98,7 @@ def _cost(VX: np.ndarray, i: int, coords: np.ndarray, wait_cost: float) -> float
 
 @nb.njit(cache=True)
 def _search(i: int, target: float, gr: tuple, V: int, gv0: int, hs: tuple, goal: np.ndarray,
-            VX: np.ndarray, sk: np.ndarray, so: np.ndarray, x0: float, y0: float, cs: float,
+            VX: np.ndarray, hh: tuple, x0: float, y0: float, cs: float,
             ny: int, two_r: float, wait_cost: float, mark: np.ndarray, pos: np.ndarray,
             stamp: int, budget: int, out: np.ndarray, skip: np.ndarray
             ) -> tuple[int, float, int]:
@@ -168,7 +114,7 @@ def _search(i: int, target: float, gr: tuple, V: int, gv0: int, hs: tuple, goal:
     # the robot may stay on its goal from row `free` on
     free = 0
     for s in range(K1 - 2, -1, -1):
-        if not _move_ok(i, s, g, g, VX, coords, gv0, sk, so, x0, y0, cs, ny, two_r, skip,
+        if not move_ok(i, s, g, g, VX, coords, gv0, hh, x0, y0, cs, ny, two_r, skip,
                         none):
             free = s + 1
             break
@@ -219,7 +165,7 @@ def _search(i: int, target: float, gr: tuple, V: int, gv0: int, hs: tuple, goal:
                     wa0, wb0, wna, wnb = hs[0][m, 0], hs[0][m, 1], hs[0][m, 2], hs[0][m, 3]
                 if not nc + hu < best - 1e-9:
                     continue
-                if not _move_ok(i, t, v, u, VX, coords, gv0, sk, so, x0, y0, cs, ny,
+                if not move_ok(i, t, v, u, VX, coords, gv0, hh, x0, y0, cs, ny,
                                 two_r, skip, none):
                     continue
                 if mark[u] == stamp + t + 1:
@@ -255,18 +201,18 @@ def _search(i: int, target: float, gr: tuple, V: int, gv0: int, hs: tuple, goal:
 
 @nb.njit(cache=True)
 def _write(i: int, path: np.ndarray, a: int, K: int, VX: np.ndarray, coords: np.ndarray,
-           sk: np.ndarray, so: np.ndarray, x0: float, y0: float, cs: float, ny: int) -> None:
+           hh: tuple, x0: float, y0: float, cs: float, ny: int) -> None:
     """Robot i's rows 0..K become ``path[:a + 1]`` then its last vertex (hash kept)."""
     for t in range(K + 1):
         v = path[t] if t <= a else path[a]
         if v != VX[t, i]:
             VX[t, i] = v
-            _set_key(t, i, _cell(coords[v, 0], coords[v, 1], x0, y0, cs, ny), sk, so)
+            set_key(t, i, cell(coords[v, 0], coords[v, 1], x0, y0, cs, ny), hh)
 
 
 @nb.njit(cache=True)
 def _blockers(i: int, path: np.ndarray, a: int, K: int, VX: np.ndarray, coords: np.ndarray,
-              gv0: int, sk: np.ndarray, so: np.ndarray, x0: float, y0: float, cs: float,
+              gv0: int, hh: tuple, x0: float, y0: float, cs: float,
               ny: int, two_r: float, skip: np.ndarray) -> np.ndarray:
     """The robots whose motions conflict with robot i following ``path`` (arrival ``a``,
     then staying) up to row K."""
@@ -274,13 +220,13 @@ def _blockers(i: int, path: np.ndarray, a: int, K: int, VX: np.ndarray, coords: 
     for t in range(K):
         u = path[t] if t <= a else path[a]
         w = path[t + 1] if t + 1 <= a else path[a]
-        _move_ok(i, t, u, w, VX, coords, gv0, sk, so, x0, y0, cs, ny, two_r, skip, found)
+        move_ok(i, t, u, w, VX, coords, gv0, hh, x0, y0, cs, ny, two_r, skip, found)
     return np.nonzero(found)[0]
 
 
 @nb.njit(cache=True)
 def _group(members: np.ndarray, target: float, gr: tuple, V: int, gv0: int, hs: tuple,
-           goal: np.ndarray, VX: np.ndarray, sk: np.ndarray, so: np.ndarray, x0: float,
+           goal: np.ndarray, VX: np.ndarray, hh: tuple, x0: float,
            y0: float, cs: float, ny: int, two_r: float, wait_cost: float, mark: np.ndarray,
            pos: np.ndarray, stamp: int, budget: int, out: np.ndarray, skip: np.ndarray,
            old: np.ndarray, newc: np.ndarray) -> tuple[bool, int, int]:
@@ -298,27 +244,27 @@ def _group(members: np.ndarray, target: float, gr: tuple, V: int, gv0: int, hs: 
     for q in range(nm):
         r = members[q]
         skip[r] = False
-        a, c, w = _search(r, target, gr, V, gv0, hs, goal, VX, sk, so, x0, y0, cs, ny,
+        a, c, w = _search(r, target, gr, V, gv0, hs, goal, VX, hh, x0, y0, cs, ny,
                           two_r, wait_cost, mark, pos, stamp, budget - work, out, skip)
         work += w
         stamp += K + 3
         if a < 0:
             break
-        _write(r, out, a, K, VX, coords, sk, so, x0, y0, cs, ny)
+        _write(r, out, a, K, VX, coords, hh, x0, y0, cs, ny)
         newc[q] = c
         done += 1
     for q in range(nm):
         skip[members[q]] = False
     if done < nm:
         for q in range(nm):
-            _write(members[q], old[:, q], K, K, VX, coords, sk, so, x0, y0, cs, ny)
+            _write(members[q], old[:, q], K, K, VX, coords, hh, x0, y0, cs, ny)
         return False, work, stamp
     return True, work, stamp
 
 
 @nb.njit(cache=True)
 def _with_blockers(first: np.ndarray, target: float, gr: tuple, V: int, gv0: int, hs: tuple,
-                   goal: np.ndarray, VX: np.ndarray, sk: np.ndarray, so: np.ndarray,
+                   goal: np.ndarray, VX: np.ndarray, hh: tuple,
                    x0: float, y0: float, cs: float, ny: int, two_r: float, wait_cost: float,
                    mark: np.ndarray, pos: np.ndarray, stamp: int, budget: int,
                    out: np.ndarray, skip: np.ndarray, every: np.ndarray, old: np.ndarray,
@@ -333,13 +279,13 @@ def _with_blockers(first: np.ndarray, target: float, gr: tuple, V: int, gv0: int
     inway = np.zeros(N, np.bool_)
     for q in range(first.shape[0]):
         r = first[q]
-        a, c, w = _search(r, target, gr, V, gv0, hs, goal, VX, sk, so, x0, y0, cs, ny,
+        a, c, w = _search(r, target, gr, V, gv0, hs, goal, VX, hh, x0, y0, cs, ny,
                           two_r, wait_cost, mark, pos, stamp, budget - work, out, every)
         work += w
         stamp += K + 3
         if a < 0:
             return False, first, work, stamp
-        for b in _blockers(r, out, a, K, VX, coords, gv0, sk, so, x0, y0, cs, ny, two_r,
+        for b in _blockers(r, out, a, K, VX, coords, gv0, hh, x0, y0, cs, ny, two_r,
                            skip):
             inway[b] = True
     for q in range(first.shape[0]):
@@ -353,7 +299,7 @@ def _with_blockers(first: np.ndarray, target: float, gr: tuple, V: int, gv0: int
     members = np.empty(first.shape[0] + grp.shape[0], np.int64)
     members[: first.shape[0]] = first
     members[first.shape[0]:] = grp
-    ok, w, stamp = _group(members, target, gr, V, gv0, hs, goal, VX, sk, so, x0, y0, cs, ny,
+    ok, w, stamp = _group(members, target, gr, V, gv0, hs, goal, VX, hh, x0, y0, cs, ny,
                           two_r, wait_cost, mark, pos, stamp, budget - work, out, skip, old,
                           newc)
     return ok, members, work + w, stamp
@@ -361,8 +307,8 @@ def _with_blockers(first: np.ndarray, target: float, gr: tuple, V: int, gv0: int
 
 @nb.njit(cache=True)
 def _exchange(i: int, target: float, gr: tuple, V: int, gv0: int, hs: tuple,
-              goal: np.ndarray, holder: np.ndarray, VX: np.ndarray, sk: np.ndarray,
-              so: np.ndarray, x0: float, y0: float, cs: float, ny: int, two_r: float,
+              goal: np.ndarray, holder: np.ndarray, VX: np.ndarray, hh: tuple, x0: float,
+              y0: float, cs: float, ny: int, two_r: float,
               wait_cost: float, mark: np.ndarray, pos: np.ndarray, stamp: int, budget: int,
               out: np.ndarray, skip: np.ndarray, every: np.ndarray, old: np.ndarray,
               newc: np.ndarray, max_group: int, n_exchange: int
@@ -402,7 +348,7 @@ def _exchange(i: int, target: float, gr: tuple, V: int, gv0: int, hs: tuple,
         two[0] = i
         two[1] = j
         ok, members, w, stamp = _with_blockers(
-            two, target, gr, V, gv0, hs, goal, VX, sk, so, x0, y0, cs, ny, two_r, wait_cost,
+            two, target, gr, V, gv0, hs, goal, VX, hh, x0, y0, cs, ny, two_r, wait_cost,
             mark, pos, stamp, budget - work, out, skip, every, old, newc, max_group)
         work += w
         if ok:
@@ -433,18 +379,7 @@ def repair_last(gr: tuple, V: int, gv0: int, hs: tuple, VX: np.ndarray, goal: np
         VX2[t] = VX[K0 - 1]
     VX = VX2
     cs = two_r + 2.0 * max_move + 1e-6
-    x0 = coords[:, 0].min()
-    y0 = coords[:, 1].min()
-    ny = int((coords[:, 1].max() - y0) / cs) + 3
-    sk = np.empty((K1, N), np.int64)
-    so = np.empty((K1, N), np.int64)
-    for t in range(K1):
-        for k in range(N):
-            v = VX[t, k]
-            sk[t, k] = _cell(coords[v, 0], coords[v, 1], x0, y0, cs, ny)
-        o = np.argsort(sk[t], kind="mergesort")
-        so[t] = o
-        sk[t] = sk[t][o]
+    hh, x0, y0, ny = build_hash(VX, coords, cs, True)
     cost = np.empty(N)
     for k in range(N):
         cost[k] = _cost(VX, k, coords, wait_cost)
@@ -468,23 +403,23 @@ def repair_last(gr: tuple, V: int, gv0: int, hs: tuple, VX: np.ndarray, goal: np
         if goal[i] < 0:
             break
         target = cost[i] - 1e-6
-        a, c, w = _search(i, target, gr, V, gv0, hs, goal, VX, sk, so, x0, y0, cs, ny, two_r,
+        a, c, w = _search(i, target, gr, V, gv0, hs, goal, VX, hh, x0, y0, cs, ny, two_r,
                           wait_cost, mark, pos, stamp, budget - work, out, skip)
         work += w
         stamp += K1 + 2
         if a >= 0:
-            _write(i, out, a, K1 - 1, VX, coords, sk, so, x0, y0, cs, ny)
+            _write(i, out, a, K1 - 1, VX, coords, hh, x0, y0, cs, ny)
             cost[i] = c
             replaced += 1
             continue
         one[0] = i
         ok, members, w, stamp = _with_blockers(
-            one, target, gr, V, gv0, hs, goal, VX, sk, so, x0, y0, cs, ny, two_r, wait_cost,
+            one, target, gr, V, gv0, hs, goal, VX, hh, x0, y0, cs, ny, two_r, wait_cost,
             mark, pos, stamp, budget - work, out, skip, every, old, newc, max_group)
         work += w
         if not ok:
             ok, members, w, stamp = _exchange(
-                i, target, gr, V, gv0, hs, goal, holder, VX, sk, so, x0, y0, cs, ny, two_r,
+                i, target, gr, V, gv0, hs, goal, holder, VX, hh, x0, y0, cs, ny, two_r,
                 wait_cost, mark, pos, stamp, budget - work, out, skip, every, old, newc,
                 max_group, n_exchange)
             work += w
@@ -497,3 +432,12 @@ def repair_last(gr: tuple, V: int, gv0: int, hs: tuple, VX: np.ndarray, goal: np
     for k in range(N):
         K = max(K, _arrival(VX, k))
     return VX[: K + 1].copy(), replaced, work
+
+
+@nb.njit(cache=True)
+def arrival_estimates(VX: np.ndarray, coords: np.ndarray, wait_cost: float) -> np.ndarray:
+    """Every robot's arrival estimate in the rows ``VX`` (:func:`_cost`)."""
+    out = np.empty(VX.shape[1])
+    for k in range(VX.shape[1]):
+        out[k] = _cost(VX, k, coords, wait_cost)
+    return out

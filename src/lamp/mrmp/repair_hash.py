@@ -1,0 +1,135 @@
+"""The spatial hash of :mod:`lamp.mrmp.repair`: where every robot is at each row.
+
+Per row ``t``, the robots sorted by the key of their position's cell (``sk[t]`` the keys,
+``so[t]`` the robots), cells wider than the distance within which two robots can
+conflict in one row, and a table ``first[t, k]``: the first entry of row t whose key is
+at least ``k``. The robots of three consecutive keys (a column of three cells) are then
+the entries ``first[t, k0] .. first[t, k0 + 3]``: two reads, where a binary search over
+the row took about a third of a repair's time at 400 robots. Rows whose table would be
+too large (:data:`TABLE_ENTRIES`, huge maps with many rows) fall back to the binary
+search; both give the same entries.
+
+:func:`move_ok` is the repair's check of one motion against every other robot's motion in
+its row, with Gspi's own rule (:func:`lamp.mrmp.gspi_kernels.conflict`).
+"""
+
+from __future__ import annotations
+
+import numba as nb
+import numpy as np
+
+from lamp.mrmp.gspi_kernels import conflict
+
+__all__ = ["TABLE_ENTRIES", "build_hash", "cell", "move_ok", "set_key"]
+
+#: The most entries (rows x cells) of the ``first`` table; beyond, binary search.
+TABLE_ENTRIES = 1 << 23
+
+
+@nb.njit(cache=True)
+def cell(x: float, y: float, x0: float, y0: float, cs: float, ny: int) -> int:
+    """The key of the cell of (x, y)."""
+    return (int((x - x0) / cs) + 1) * ny + int((y - y0) / cs) + 1
+
+
+@nb.njit(cache=True)
+def build_hash(VX: np.ndarray, coords: np.ndarray, cs: float, table: bool
+               ) -> tuple[tuple, float, float, int]:
+    """The hash ``(sk, so, first)`` of the rows ``VX`` (vertices, positions ``coords``),
+    cells of side ``cs``, and the cells' origin and row stride (x0, y0, ny); ``first``
+    empty when not ``table`` or too large."""
+    K1, N = VX.shape
+    x0 = coords[:, 0].min()
+    y0 = coords[:, 1].min()
+    ny = int((coords[:, 1].max() - y0) / cs) + 3
+    ncell = (int((coords[:, 0].max() - x0) / cs) + 4) * ny + 4
+    sk = np.empty((K1, N), np.int64)
+    so = np.empty((K1, N), np.int64)
+    for t in range(K1):
+        for k in range(N):
+            v = VX[t, k]
+            sk[t, k] = cell(coords[v, 0], coords[v, 1], x0, y0, cs, ny)
+        o = np.argsort(sk[t], kind="mergesort")
+        so[t] = o
+        sk[t] = sk[t][o]
+    if table and K1 * ncell <= TABLE_ENTRIES:
+        first = np.empty((K1, ncell), np.int32)
+        for t in range(K1):
+            p = 0
+            for kk in range(ncell):
+                while p < N and sk[t, p] < kk:
+                    p += 1
+                first[t, kk] = p
+    else:
+        first = np.zeros((0, 0), np.int32)
+    return (sk, so, first), x0, y0, ny
+
+
+@nb.njit(cache=True, inline="always")
+def _span(t: int, k0: int, hh: tuple) -> tuple[int, int]:
+    """The entries of row t with keys k0 .. k0 + 2."""
+    sk, _, first = hh
+    if first.shape[0] > 0:
+        return first[t, k0], first[t, k0 + 3]
+    p = np.searchsorted(sk[t], k0)
+    q = p
+    N = sk.shape[1]
+    while q < N and sk[t, q] <= k0 + 2:
+        q += 1
+    return p, q
+
+
+@nb.njit(cache=True)
+def move_ok(i: int, t: int, a: int, b: int, VX: np.ndarray, coords: np.ndarray, gv0: int,
+            hh: tuple, x0: float, y0: float, cs: float, ny: int, two_r: float,
+            skip: np.ndarray, found: np.ndarray) -> bool:
+    """Whether robot i moving from vertex a to b in step t (row t -> t+1) keeps clear of
+    the motion of every other robot not in ``skip`` in that step; with a non-empty
+    ``found``, every robot it does not keep clear of is marked there instead."""
+    so = hh[1]
+    ax = coords[a, 0]
+    ay = coords[a, 1]
+    bx = coords[b, 0]
+    by = coords[b, 1]
+    kc = cell(ax, ay, x0, y0, cs, ny)
+    b_goal = b >= gv0
+    for dx in range(-1, 2):  # the three cells of a column have consecutive keys
+        p, q = _span(t, kc + dx * ny - 1, hh)
+        for e in range(p, q):
+            k = so[t, e]
+            if k == i or skip[k]:
+                continue
+            u = VX[t, k]
+            w = VX[t + 1, k]
+            if conflict(ax, ay, bx, by, coords[u, 0], coords[u, 1], coords[w, 0],
+                        coords[w, 1], two_r, b_goal and w >= gv0):
+                if found.shape[0] == 0:
+                    return False
+                found[k] = True
+    return True
+
+
+@nb.njit(cache=True)
+def set_key(t: int, i: int, key: int, hh: tuple) -> None:
+    """Move robot i's entry of row t to ``key`` (the sorted arrays and the table)."""
+    sk, so, first = hh
+    N = sk.shape[1]
+    p = 0
+    while so[t, p] != i:
+        p += 1
+    old = sk[t, p]
+    for q in range(p, N - 1):  # out, then in at its place (keys ascending)
+        sk[t, q] = sk[t, q + 1]
+        so[t, q] = so[t, q + 1]
+    q = N - 1
+    while q > 0 and sk[t, q - 1] > key:
+        sk[t, q] = sk[t, q - 1]
+        so[t, q] = so[t, q - 1]
+        q -= 1
+    sk[t, q] = key
+    so[t, q] = i
+    if first.shape[0] > 0:
+        for kk in range(old + 1, key + 1):  # one entry fewer below these keys
+            first[t, kk] -= 1
+        for kk in range(key + 1, old + 1):  # one more
+            first[t, kk] += 1
