@@ -51,8 +51,9 @@ TSWAP more closely, for shorter makespans: goals are swapped only with a robot r
 its goal (or without one) and only when the longer of the two ways left gets shorter (or
 stays and the sum drops), so swaps never lengthen the longest way left; a robot on its way
 is never pushed back more than one lattice step. After the steps, the robots that
-arrive last are planned again (:mod:`lamp.mrmp.repair`) and every robot then moves at
-its own speed along its path (:mod:`lamp.mrmp.retime`).
+arrive last are planned again (:mod:`lamp.mrmp.repair`), the paths of the robots that
+arrive last are straightened where nothing is in the way (:mod:`lamp.mrmp.shortcut`), and
+every robot then moves at its own speed along its path (:mod:`lamp.mrmp.retime`).
 
 Output: the vertex sequence, all-wait steps dropped; below 32 robots each step cut into
 the fewest equal sub-steps that keep every robot's consecutive rows <= ``max_spacing``
@@ -92,10 +93,12 @@ from lamp.mrmp.repair import (
     REPAIR_EXCHANGES,
     REPAIR_GROUP,
     REPAIR_WAIT,
+    arrival_estimates,
     repair_last,
 )
 from lamp.mrmp.result import GspiStatus, MRMPPlan
 from lamp.mrmp.retime import RETIME_QUANTA, densify, drop_waits, retime
+from lamp.mrmp.shortcut import shortcut_rows
 from lamp.scene.model import Scene
 
 __all__ = ["GspiStatus", "MRMPPlan", "plan_paths", "warmup"]
@@ -443,8 +446,15 @@ def _attempt(space: RobotSpace, S: np.ndarray, G: np.ndarray, c_start: np.ndarra
         stats["time_repair"] = time.perf_counter() - clock
         clock = time.perf_counter()
         VX = drop_waits(VX, links.graph.coords)
-        paths, _ = retime(links.graph.coords[VX], 2.0 * space.radius, L / RETIME_QUANTA,
-                          opts.max_spacing)
+        coords = links.graph.coords
+        est = arrival_estimates(VX, coords, REPAIR_WAIT * L)
+        P, stats["shortcuts"] = shortcut_rows(coords[VX], np.greater_equal(VX, gv0), est,
+                                              2.0 * space.radius, links.max_move,
+                                              space.geometry, space.workspace,
+                                              space.threshold)
+        stats["time_shortcut"] = time.perf_counter() - clock
+        clock = time.perf_counter()
+        paths, _ = retime(P, 2.0 * space.radius, L / RETIME_QUANTA, opts.max_spacing)
         stats["time_retime"] = time.perf_counter() - clock
     else:
         paths = densify(links.graph.coords[VX], opts.max_spacing)
