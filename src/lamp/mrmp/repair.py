@@ -40,7 +40,7 @@ import numpy as np
 from lamp.mrmp.goal_distances import hval
 from lamp.mrmp.heuristic_reads import read_settled
 from lamp.mrmp.neighbours import doubled
-from lamp.mrmp.repair_hash import build_hash, cell, move_ok, set_key
+from lamp.mrmp.repair_hash import build_hash, cell, clear_of, gather, move_ok, set_key
 
 __all__ = ["REPAIR_BUDGET", "REPAIR_EXCHANGES", "REPAIR_GROUP", "REPAIR_WAIT", "arrival_estimates",
            "repair_last"]
@@ -134,6 +134,10 @@ def _search(i: int, target: float, gr: tuple, V: int, gv0: int, hs: tuple, goal:
     best = target
     best_q = -1
     best_t = -1
+    # the robots near a vertex, gathered once per state (repair_hash.gather); a move is
+    # at most (cs - 2r) / 2 long, so robots farther than `reach` keep clear of all of them
+    reach = two_r + 0.5 * (cs - two_r) + 1e-6
+    buf = np.empty((VX.shape[1], 5))
     if VX[0, i] == g and free == 0:
         best_q, best_t, best = 0, 0, 0.0
     for t in range(K1 - 1):
@@ -144,6 +148,7 @@ def _search(i: int, target: float, gr: tuple, V: int, gv0: int, hs: tuple, goal:
         for q in range(a0, a1):
             v = lv[q]
             cv = lc[q]
+            nn = -1
             work += 1
             if work > budget:
                 return -1, 0.0, work
@@ -165,8 +170,11 @@ def _search(i: int, target: float, gr: tuple, V: int, gv0: int, hs: tuple, goal:
                     wa0, wb0, wna, wnb = hs[0][m, 0], hs[0][m, 1], hs[0][m, 2], hs[0][m, 3]
                 if not nc + hu < best - 1e-9:
                     continue
-                if not move_ok(i, t, v, u, VX, coords, gv0, hh, x0, y0, cs, ny,
-                                two_r, skip, none):
+                if nn < 0:
+                    nn = gather(i, t, v, VX, coords, gv0, hh, x0, y0, cs, ny, reach, skip,
+                                buf)
+                if not clear_of(coords[v, 0], coords[v, 1], coords[u, 0], coords[u, 1],
+                                u >= gv0, buf, nn, two_r):
                     continue
                 if mark[u] == stamp + t + 1:
                     r = pos[u]

@@ -10,7 +10,11 @@ too large (:data:`TABLE_ENTRIES`, huge maps with many rows) fall back to the bin
 search; both give the same entries.
 
 :func:`move_ok` is the repair's check of one motion against every other robot's motion in
-its row, with Gspi's own rule (:func:`lamp.mrmp.gspi_kernels.conflict`).
+its row, with Gspi's own rule (:func:`lamp.mrmp.gspi_kernels.conflict`). The repair's
+search checks the moves out of one vertex in one row against the same robots:
+:func:`gather` collects them once (only those whose motion comes within ``2r`` plus the
+longest move of the vertex: the others keep ``2r`` from any move out of it), and
+:func:`clear_of` checks a move against them, in the same order, with the same answer.
 """
 
 from __future__ import annotations
@@ -18,9 +22,11 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
+from lamp.geometry.kernels import point_segment_distance
 from lamp.mrmp.gspi_kernels import conflict
 
-__all__ = ["TABLE_ENTRIES", "build_hash", "cell", "move_ok", "set_key"]
+__all__ = ["TABLE_ENTRIES", "build_hash", "cell", "clear_of", "gather", "hash_rows", "move_ok",
+           "set_key", "span"]
 
 #: The most entries (rows x cells) of the ``first`` table; beyond, binary search.
 TABLE_ENTRIES = 1 << 23
@@ -39,16 +45,32 @@ def build_hash(VX: np.ndarray, coords: np.ndarray, cs: float, table: bool
     cells of side ``cs``, and the cells' origin and row stride (x0, y0, ny); ``first``
     empty when not ``table`` or too large."""
     K1, N = VX.shape
+    X = np.empty((K1, N))
+    Y = np.empty((K1, N))
+    for t in range(K1):
+        for k in range(N):
+            X[t, k] = coords[VX[t, k], 0]
+            Y[t, k] = coords[VX[t, k], 1]
     x0 = coords[:, 0].min()
     y0 = coords[:, 1].min()
-    ny = int((coords[:, 1].max() - y0) / cs) + 3
-    ncell = (int((coords[:, 0].max() - x0) / cs) + 4) * ny + 4
+    hh, ny = hash_rows(X, Y, x0, y0, coords[:, 0].max(), coords[:, 1].max(), cs, table)
+    return hh, x0, y0, ny
+
+
+@nb.njit(cache=True)
+def hash_rows(X: np.ndarray, Y: np.ndarray, x0: float, y0: float, x1: float, y1: float,
+              cs: float, table: bool) -> tuple[tuple, int]:
+    """The hash ``(sk, so, first)`` of the positions (``X[t, k]``, ``Y[t, k]``) of rows
+    t, all of them and all positions keyed later within [x0, x1] x [y0, y1]; and the row
+    stride ``ny`` of the keys."""
+    K1, N = X.shape
+    ny = int((y1 - y0) / cs) + 3
+    ncell = (int((x1 - x0) / cs) + 4) * ny + 4
     sk = np.empty((K1, N), np.int64)
     so = np.empty((K1, N), np.int64)
     for t in range(K1):
         for k in range(N):
-            v = VX[t, k]
-            sk[t, k] = cell(coords[v, 0], coords[v, 1], x0, y0, cs, ny)
+            sk[t, k] = cell(X[t, k], Y[t, k], x0, y0, cs, ny)
         o = np.argsort(sk[t], kind="mergesort")
         so[t] = o
         sk[t] = sk[t][o]
@@ -62,11 +84,11 @@ def build_hash(VX: np.ndarray, coords: np.ndarray, cs: float, table: bool
                 first[t, kk] = p
     else:
         first = np.zeros((0, 0), np.int32)
-    return (sk, so, first), x0, y0, ny
+    return (sk, so, first), ny
 
 
 @nb.njit(cache=True, inline="always")
-def _span(t: int, k0: int, hh: tuple) -> tuple[int, int]:
+def span(t: int, k0: int, hh: tuple) -> tuple[int, int]:
     """The entries of row t with keys k0 .. k0 + 2."""
     sk, _, first = hh
     if first.shape[0] > 0:
@@ -94,7 +116,7 @@ def move_ok(i: int, t: int, a: int, b: int, VX: np.ndarray, coords: np.ndarray, 
     kc = cell(ax, ay, x0, y0, cs, ny)
     b_goal = b >= gv0
     for dx in range(-1, 2):  # the three cells of a column have consecutive keys
-        p, q = _span(t, kc + dx * ny - 1, hh)
+        p, q = span(t, kc + dx * ny - 1, hh)
         for e in range(p, q):
             k = so[t, e]
             if k == i or skip[k]:
@@ -133,3 +155,47 @@ def set_key(t: int, i: int, key: int, hh: tuple) -> None:
             first[t, kk] -= 1
         for kk in range(key + 1, old + 1):  # one more
             first[t, kk] += 1
+
+
+@nb.njit(cache=True)
+def gather(i: int, t: int, a: int, VX: np.ndarray, coords: np.ndarray, gv0: int, hh: tuple,
+           x0: float, y0: float, cs: float, ny: int, reach: float, skip: np.ndarray,
+           buf: np.ndarray) -> int:
+    """The robots (but i and those in ``skip``) whose motion in step t comes within
+    ``reach`` of vertex a, in :func:`move_ok`'s order: their motions' ends in
+    ``buf[:n, :4]``, ``buf[:n, 4]`` 1 where the motion ends on a goal. Returns n."""
+    so = hh[1]
+    ax = coords[a, 0]
+    ay = coords[a, 1]
+    kc = cell(ax, ay, x0, y0, cs, ny)
+    n = 0
+    for dx in range(-1, 2):
+        p, q = span(t, kc + dx * ny - 1, hh)
+        for e in range(p, q):
+            k = so[t, e]
+            if k == i or skip[k]:
+                continue
+            u = VX[t, k]
+            w = VX[t + 1, k]
+            cx, cy, dx_, dy_ = coords[u, 0], coords[u, 1], coords[w, 0], coords[w, 1]
+            if point_segment_distance(ax, ay, cx, cy, dx_, dy_) >= reach:
+                continue
+            buf[n, 0] = cx
+            buf[n, 1] = cy
+            buf[n, 2] = dx_
+            buf[n, 3] = dy_
+            buf[n, 4] = 1.0 if w >= gv0 else 0.0
+            n += 1
+    return n
+
+
+@nb.njit(cache=True, inline="always")
+def clear_of(ax: float, ay: float, bx: float, by: float, b_goal: bool, buf: np.ndarray,
+             n: int, two_r: float) -> bool:
+    """Whether the motion a -> b keeps clear of the ``n`` motions :func:`gather` found
+    (:func:`move_ok`'s answer when b is at most the longest move from a)."""
+    for q in range(n):
+        if conflict(ax, ay, bx, by, buf[q, 0], buf[q, 1], buf[q, 2], buf[q, 3], two_r,
+                    b_goal and buf[q, 4] > 0.5):
+            return False
+    return True

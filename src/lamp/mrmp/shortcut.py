@@ -25,9 +25,10 @@ wait, :func:`lamp.mrmp.repair._cost`), largest first, those within ``frac`` of t
 largest; along each robot's path greedily from its start: the farthest ``e`` (at most
 ``window`` rows on) whose run can be replaced, then on from ``e``. Deterministic.
 
-Other robots are found through a spatial hash of the positions at each row (cells wider
-than the distance within which two robots can conflict in one row; a new move is never
-longer than the move it replaces, so the cells stay wide enough).
+Other robots are found through the repair's spatial hash of the positions at each row
+(:mod:`lamp.mrmp.repair_hash`: cells wider than the distance within which two robots can
+conflict in one row; a new move is never longer than the move it replaces, and a new
+position lies between two old ones, so the cells and the table stay valid).
 """
 
 from __future__ import annotations
@@ -39,6 +40,7 @@ import numpy as np
 
 from lamp.mrmp.gspi_kernels import conflict
 from lamp.mrmp.obstacle_grid import grid_clear_segments
+from lamp.mrmp.repair_hash import cell, hash_rows, set_key, span
 
 __all__ = ["SHORTCUT_FRAC", "SHORTCUT_WINDOW", "shortcut_rows"]
 
@@ -49,50 +51,24 @@ SHORTCUT_WINDOW = 16
 
 
 @nb.njit(cache=True)
-def _key(x: float, y: float, x0: float, y0: float, cs: float, ny: int) -> int:
-    return (int((x - x0) / cs) + 1) * ny + int((y - y0) / cs) + 1
-
-
-@nb.njit(cache=True)
-def _rekey(t: int, i: int, key: int, sk: np.ndarray, so: np.ndarray) -> None:
-    """Move robot i's entry of row t's sorted (key, robot) arrays to ``key``."""
-    N = sk.shape[1]
-    p = 0
-    while so[t, p] != i:
-        p += 1
-    for q in range(p, N - 1):
-        sk[t, q] = sk[t, q + 1]
-        so[t, q] = so[t, q + 1]
-    q = N - 1
-    while q > 0 and sk[t, q - 1] > key:
-        sk[t, q] = sk[t, q - 1]
-        so[t, q] = so[t, q - 1]
-        q -= 1
-    sk[t, q] = key
-    so[t, q] = i
-
-
-@nb.njit(cache=True)
 def _clear_of_robots(i: int, s: int, Q: np.ndarray, goal_end: bool, P: np.ndarray,
-                     isgoal: np.ndarray, sk: np.ndarray, so: np.ndarray, x0: float,
-                     y0: float, cs: float, ny: int, two_r: float) -> bool:
+                     isgoal: np.ndarray, hh: tuple, x0: float, y0: float, cs: float, ny: int,
+                     two_r: float) -> bool:
     """Whether robot i moving through ``Q`` (its positions at rows s, s+1, ...) keeps
     clear of every other robot's motion in each of those rows; ``goal_end``: its last
     position is its goal."""
-    N = P.shape[1]
+    so = hh[1]
     n = Q.shape[0] - 1
     for m in range(n):
         t = s + m
         ax, ay = Q[m, 0], Q[m, 1]
         bx, by = Q[m + 1, 0], Q[m + 1, 1]
-        kc = _key(ax, ay, x0, y0, cs, ny)
+        kc = cell(ax, ay, x0, y0, cs, ny)
         at_goal = goal_end and m == n - 1
         for dx in range(-1, 2):
-            k0 = kc + dx * ny - 1
-            p = np.searchsorted(sk[t], k0)
-            while p < N and sk[t, p] <= k0 + 2:
-                k = so[t, p]
-                p += 1
+            p, q = span(t, kc + dx * ny - 1, hh)
+            for e in range(p, q):
+                k = so[t, e]
                 if k == i:
                     continue
                 if conflict(ax, ay, bx, by, P[t, k, 0], P[t, k, 1], P[t + 1, k, 0],
@@ -123,9 +99,8 @@ def _run_positions(P: np.ndarray, i: int, s: int, e: int, cum: np.ndarray,
 
 
 @nb.njit(cache=True)
-def _one_robot(i: int, P: np.ndarray, isgoal: np.ndarray, sk: np.ndarray, so: np.ndarray,
-               x0: float, y0: float, cs: float, ny: int, two_r: float, window: int,
-               ob: tuple) -> int:
+def _one_robot(i: int, P: np.ndarray, isgoal: np.ndarray, hh: tuple, x0: float, y0: float,
+               cs: float, ny: int, two_r: float, window: int, ob: tuple) -> int:
     """Shortcut robot i's path greedily from its start (module docstring); returns the
     runs replaced."""
     K1 = P.shape[0]
@@ -137,36 +112,41 @@ def _one_robot(i: int, P: np.ndarray, isgoal: np.ndarray, sk: np.ndarray, so: np
         cum[t] = cum[t - 1] + math.hypot(P[t, i, 0] - P[t - 1, i, 0],
                                          P[t, i, 1] - P[t - 1, i, 1])
     Q = np.empty((window + 1, 2))
-    sa = np.empty((1, 2))
-    sb = np.empty((1, 2))
-    need, circles, verts, vptr, W, H, gptr, gidx, box, gnx, gny, cell = ob
+    sa = np.empty((window, 2))
+    sb = np.empty((window, 2))
+    cand = np.empty(window, np.int64)
+    need, circles, verts, vptr, W, H, gptr, gidx, box, gnx, gny, gcell = ob
+    needs = np.full(window, need[0])
     done = 0
     s = 0
     while s < a - 1:
         nxt = s + 1
+        nc = 0  # the ends e that would shorten the path, farthest first
         for e in range(min(a, s + window), s + 1, -1):
-            if cum[e] - cum[s] <= 0.0:
+            d = math.hypot(P[e, i, 0] - P[s, i, 0], P[e, i, 1] - P[s, i, 1])
+            if cum[e] - cum[s] <= 0.0 or cum[e] - cum[s] - d <= 1e-9:
                 continue
-            if _run_positions(P, i, s, e, cum, Q) <= 1e-9:
+            sa[nc, 0], sa[nc, 1] = P[s, i, 0], P[s, i, 1]
+            sb[nc, 0], sb[nc, 1] = P[e, i, 0], P[e, i, 1]
+            cand[nc] = e
+            nc += 1
+        clear = grid_clear_segments(sa[:nc], sb[:nc], needs[:nc], circles, verts, vptr, W, H,
+                                    gptr, gidx, box, gnx, gny, gcell)
+        for c in range(nc):
+            e = cand[c]
+            if not clear[c]:
                 continue
-            sa[0, 0], sa[0, 1] = P[s, i, 0], P[s, i, 1]
-            sb[0, 0], sb[0, 1] = P[e, i, 0], P[e, i, 1]
-            if not grid_clear_segments(sa, sb, need, circles, verts, vptr, W, H, gptr, gidx,
-                                       box, gnx, gny, cell)[0]:
-                continue
-            if not _clear_of_robots(i, s, Q[: e - s + 1], isgoal[e, i], P, isgoal, sk, so,
-                                    x0, y0, cs, ny, two_r):
+            _run_positions(P, i, s, e, cum, Q)
+            if not _clear_of_robots(i, s, Q[: e - s + 1], isgoal[e, i], P, isgoal, hh, x0,
+                                    y0, cs, ny, two_r):
                 continue
             for m in range(1, e - s):
                 t = s + m
                 P[t, i, 0] = Q[m, 0]
                 P[t, i, 1] = Q[m, 1]
                 isgoal[t, i] = False
-                _rekey(t, i, _key(Q[m, 0], Q[m, 1], x0, y0, cs, ny), sk, so)
-            for t in range(s + 1, e + 1):
-                cum[t] = cum[t - 1] + math.hypot(P[t, i, 0] - P[t - 1, i, 0],
-                                                 P[t, i, 1] - P[t - 1, i, 1])
-            for t in range(e + 1, K1):
+                set_key(t, i, cell(Q[m, 0], Q[m, 1], x0, y0, cs, ny), hh)
+            for t in range(s + 1, K1):
                 cum[t] = cum[t - 1] + math.hypot(P[t, i, 0] - P[t - 1, i, 0],
                                                  P[t, i, 1] - P[t - 1, i, 1])
             done += 1
@@ -182,26 +162,15 @@ def _shortcut(P: np.ndarray, isgoal: np.ndarray, order: np.ndarray, two_r: float
     """Shortcut the robots of ``order`` in turn, in place; returns the runs replaced."""
     K1, N, _ = P.shape
     cs = two_r + 2.0 * max_move + 1e-6
-    x0 = np.inf
-    y0 = np.inf
-    ymax = -np.inf
-    for t in range(K1):
-        for k in range(N):
-            x0 = min(x0, P[t, k, 0])
-            y0 = min(y0, P[t, k, 1])
-            ymax = max(ymax, P[t, k, 1])
-    ny = int((ymax - y0) / cs) + 3
-    sk = np.empty((K1, N), np.int64)
-    so = np.empty((K1, N), np.int64)
-    for t in range(K1):
-        for k in range(N):
-            sk[t, k] = _key(P[t, k, 0], P[t, k, 1], x0, y0, cs, ny)
-        o = np.argsort(sk[t], kind="mergesort")
-        so[t] = o
-        sk[t] = sk[t][o]
+    x0 = P[:, :, 0].min()
+    y0 = P[:, :, 1].min()
+    xmax = P[:, :, 0].max()
+    ymax = P[:, :, 1].max()
+    hh, ny = hash_rows(np.ascontiguousarray(P[:, :, 0]), np.ascontiguousarray(P[:, :, 1]),
+                       x0, y0, xmax, ymax, cs, True)
     done = 0
     for q in range(order.shape[0]):
-        done += _one_robot(order[q], P, isgoal, sk, so, x0, y0, cs, ny, two_r, window, ob)
+        done += _one_robot(order[q], P, isgoal, hh, x0, y0, cs, ny, two_r, window, ob)
     return done
 
 
