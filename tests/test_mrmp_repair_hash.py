@@ -8,18 +8,19 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from lamp.mrmp.gspi_kernels import conflict
-from lamp.mrmp.repair_hash import build_hash, cell, move_ok, set_key
+from lamp.mrmp.repair_hash import build_hash, cell, clear_of, gather, move_ok, set_key
 
 
 @settings(max_examples=40, deadline=None)
 @given(seed=st.integers(0, 10**6), n=st.integers(1, 40), rows=st.integers(2, 6),
-       moves=st.integers(0, 60), span=st.floats(0.3, 3.0))
+       moves=st.integers(0, 60), span=st.floats(0.15, 1.5))
 def test_table_follows_moves_and_checks_match_brute_force(seed, n, rows, moves,
                                                           span) -> None:
     """After random key changes the table is the one a rebuild gives, and every motion's
-    check (with and without the table) is the brute-force check over all robots."""
+    check (with and without the table, and through the robots gathered for its start)
+    is the brute-force check over all robots."""
     rng = np.random.default_rng(seed)
-    V = 3 * n + 5
+    V = 6 * n + 5
     coords = rng.random((V, 2)) * span
     VX = rng.integers(0, V, size=(rows, n))
     two_r, cs = 0.1, 0.1 + 2 * 0.05 + 1e-6
@@ -36,12 +37,12 @@ def test_table_follows_moves_and_checks_match_brute_force(seed, n, rows, moves,
     none = np.zeros(0, np.bool_)
     gv0 = V - 4
     for t in range(rows - 1):
-        for _ in range(5):
-            i, b = int(rng.integers(n)), int(rng.integers(V))
+        for _ in range(20):
+            i = int(rng.integers(n))
             a = VX[t, i]
             # only motions short enough for the cells (as in the repair)
-            if np.hypot(*(coords[a] - coords[b])) > 0.05:
-                b = a
+            near = np.nonzero(np.hypot(*(coords - coords[a]).T) <= 0.05)[0]
+            b = int(rng.choice(near))
             want = np.zeros(n, np.bool_)
             for k in range(n):
                 if k != i and not skip[k]:
@@ -56,5 +57,11 @@ def test_table_follows_moves_and_checks_match_brute_force(seed, n, rows, moves,
                 long_ = np.array([np.hypot(*(coords[VX[t, k]] - coords[VX[t + 1, k]])) > 0.05
                                   for k in range(n)])
                 assert np.array_equal(found & ~long_, want)
-                assert move_ok(i, t, a, b, VX, coords, gv0, h, x0, y0, cs, ny, two_r, skip
-                               | long_, none) == (not want.any())
+                ok = move_ok(i, t, a, b, VX, coords, gv0, h, x0, y0, cs, ny, two_r,
+                             skip | long_, none)
+                assert ok == (not want.any())
+                # the robots gathered once for vertex a answer the same for any short move
+                buf = np.empty((n, 5))
+                got = gather(i, t, a, VX, coords, gv0, h, x0, y0, cs, ny, two_r + 0.05 + 1e-6,
+                             skip | long_, buf)
+                assert clear_of(*coords[a], *coords[b], b >= gv0, buf, got, two_r) == ok
