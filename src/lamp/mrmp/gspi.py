@@ -135,6 +135,11 @@ def warmup() -> None:
     cg = get_coarse(get_lattice(RobotSpace.from_scene(team), 0.05))
     one = np.zeros(1, np.int64)
     coarse_below(one, one, 1.0, one, one, grid, grid, cg.rep, cg.nbr, cg.wlen, cg.unit)
+    # the shortcuts of fleets' rows (lamp.mrmp.shortcut), on rows of its own: the team's
+    # plan may be too short to reach the compiled part
+    rows = np.stack([grid[:2], grid[:2] + 0.03, grid[:2] + (0.06, 0.03)])
+    shortcut_rows(rows, np.zeros(rows.shape[:2], bool), np.ones(2), 0.1, 0.05, sp.geometry,
+                  sp.workspace, sp.threshold)
     # the obstacles' bucket grid of large fleets' clearance checks (lamp.mrmp.obstacle_grid)
     exact_clearance(sp, np.tile(grid[:1], (DENSE_POINTS + 1, 1)))
     clear_segments(sp.geometry, sp.workspace, np.tile(grid[:1], (FEW + 1, 1)),
