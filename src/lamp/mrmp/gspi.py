@@ -140,6 +140,10 @@ def warmup() -> None:
     rows = np.stack([grid[:2], grid[:2] + 0.03, grid[:2] + (0.06, 0.03)])
     shortcut_rows(rows, np.zeros(rows.shape[:2], bool), np.ones(2), 0.1, 0.05, sp.geometry,
                   sp.workspace, sp.threshold)
+    # the retiming's exact pair checks (lamp.mrmp.retime_pairs): two moves of one step
+    # that come within 2r, their ends farther apart, are checked rather than locked
+    retime(np.array([[[0.2, 0.2], [0.3, 0.23]], [[0.24, 0.2], [0.34, 0.23]]]), 0.1,
+           0.03 / RETIME_QUANTA, 0.02)
     # the obstacles' bucket grid of large fleets' clearance checks (lamp.mrmp.obstacle_grid)
     exact_clearance(sp, np.tile(grid[:1], (DENSE_POINTS + 1, 1)))
     clear_segments(sp.geometry, sp.workspace, np.tile(grid[:1], (FEW + 1, 1)),
