@@ -17,11 +17,20 @@ read as "not free", so a missing tile can never make a colliding pose free).
   exact where ``D <= cap`` and capped beyond (still a lower bound), stored as float32
   rounded down (so still a lower bound, within 1e-7 relative of the float64 value).
   Memory and time grow with the part of the map the queries touch, not with the map.
+* **A shared base** (large maps): a grid may be laid over a ``base`` grid of the map's
+  static obstacles (:func:`shared_tiles`: one per obstacle tuple, workspace, resolution
+  and cap, shared by every grid over it while one lives). A tile whose halo none of the
+  grid's own obstacles reaches holds what the base's tile holds (the same occupancy,
+  so the same values), and the grid points to the base's tile instead of a copy: a
+  grid holds only the tiles its own obstacles change. The table tells: ``t >= 0`` the
+  grid's tile ``t``, ``-1`` not filled, ``t <= -2`` the base's tile ``-2 - t``.
 """
 
 from __future__ import annotations
 
 import math
+import mmap
+import weakref
 from collections.abc import Sequence
 from functools import lru_cache
 
@@ -34,7 +43,7 @@ from lamp.geometry.primitives import Obstacle
 from lamp.geometry.shapes import obstacle_geometry
 
 __all__ = ["DistanceTiles", "TILE", "FULL_GRID_CELLS", "DEFAULT_GRID_CAP", "obstacle_box",
-           "obstacle_cells"]
+           "obstacle_cells", "shared_tiles"]
 
 #: Cells per tile side.
 TILE = 128
@@ -109,13 +118,19 @@ def _round_down(values: np.ndarray) -> np.ndarray:
 class DistanceTiles:
     """The obstacle distance grid of ``obstacles`` in ``workspace`` (see module doc).
 
-    ``args`` is what the compiled readers take: ``(tiles, table, rows, columns)``.
-    ``capped`` tells whether tiles are filled on demand with distances capped at ``cap``.
+    ``args`` is what the compiled readers take: ``(tiles, base tiles, table, rows,
+    columns)``. ``capped`` tells whether tiles are filled on demand with distances capped
+    at ``cap``. With ``base`` (a capped grid of the same workspace, resolution and cap)
+    the distances are those of its obstacles and ``obstacles`` together, and tiles that
+    ``obstacles`` leave alone are the base's (module doc). ``slotted``: every tile has its
+    place in one store allocated at once (untouched pages take no memory), so the store
+    is never moved: what a base needs, as grids over it hold its store.
     """
 
     def __init__(self, workspace: tuple[float, float], obstacles: Sequence[Obstacle],
                  resolution: float, cap: float = DEFAULT_GRID_CAP,
-                 full_grid_cells: int = FULL_GRID_CELLS) -> None:
+                 full_grid_cells: int = FULL_GRID_CELLS, base: DistanceTiles | None = None,
+                 slotted: bool = False) -> None:
         if not (cap > 0 and math.isfinite(cap)):
             raise ValueError(f"cap must be finite and > 0, got {cap!r}")
         self.workspace = (float(workspace[0]), float(workspace[1]))
@@ -127,25 +142,40 @@ class DistanceTiles:
         self._halo = int(math.ceil(self.cap / self.resolution))
         self.table = np.full((-(-ny // TILE), -(-nx // TILE)), -1, dtype=np.int32)
         self.capped = ny * nx > full_grid_cells
-        self._store = np.zeros((0, TILE, TILE), dtype=np.float32 if self.capped else np.float64)
+        if base is not None and not (base.capped and base.shape == self.shape and self.capped
+                                     and (base.resolution, base.cap) == (resolution, cap)):
+            raise ValueError("base must be a capped grid of this grid's workspace, "
+                             "resolution and cap")
+        self.slotted = bool(slotted) and self.capped
+        dtype = np.float32 if self.capped else np.float64
+        self._store = (_lazy_zeros((self.table.size, TILE, TILE), dtype) if self.slotted
+                       else np.zeros((0, TILE, TILE), dtype=dtype))
         self._n = 0
         #: tile boxes (tx0, ty0, tx1, ty1) known to be filled
         self._ready: set[tuple[int, int, int, int]] = set()
         # each obstacle's cells are tested when a tile within its box is first filled
         boxes = [(ob, obstacle_box(ob, self.workspace, self.resolution)) for ob in obstacles]
-        self._obstacles = [ob for ob, b in boxes if b is not None]
-        self._boxes = np.array([b[1:] for _, b in boxes if b is not None],
-                               dtype=np.int64).reshape(-1, 4)
+        own = np.array([b[1:] for _, b in boxes if b is not None], dtype=np.int64).reshape(-1, 4)
+        self._base, self._own_boxes = base, own
+        self._obstacles = ([] if base is None else base._obstacles) + [
+            ob for ob, b in boxes if b is not None]
+        self._boxes = own if base is None else np.concatenate([base._boxes, own])
         if not self.capped:
             self._fill_whole()
-        self.args: tuple = (self._store[: self._n], self.table, ny, nx)
+        self._refresh()
+
+    def _refresh(self) -> None:
+        """``args`` for the tiles filled so far."""
+        store = self._store if self.slotted else self._store[: self._n]
+        base = self._store[:0] if self._base is None else self._base._store
+        self.args = (store, base, self.table, *self.shape)
 
     # ---------------------------------------------------------------- filling
     def _occupancy(self, r0: int, c0: int, r1: int, c1: int) -> np.ndarray:
         """Occupied cells of rows r0..r1 and columns c0..c1 (inclusive)."""
         occ = np.zeros((r1 - r0 + 1, c1 - c0 + 1), dtype=bool)
         b = self._boxes
-        hit = np.nonzero((b[:, 0] <= r1) & (b[:, 2] >= r0) & (b[:, 1] <= c1) & (b[:, 3] >= c0))[0]
+        hit = np.nonzero(_meets(b, r0, c0, r1, c1))[0]
         for k in hit.tolist():
             cells = obstacle_cells(self._obstacles[k], self.workspace, self.resolution)
             if cells is None:
@@ -158,7 +188,7 @@ class DistanceTiles:
         return occ
 
     def _reserve(self, n: int) -> None:
-        if n > len(self._store):
+        if n > len(self._store) and not self.slotted:
             size = n if not self.capped else _GROW * -(-n // _GROW)
             grown = np.zeros((size, TILE, TILE), dtype=self._store.dtype)
             grown[: self._n] = self._store[: self._n]
@@ -187,16 +217,23 @@ class DistanceTiles:
         g = self._halo
         R0, C0 = max(0, r0 - g), max(0, c0 - g)
         R1, C1 = min(ny - 1, r1 + g), min(nx - 1, c1 + g)
+        base = self._base
+        if base is not None and not _meets(self._own_boxes, R0, C0, R1, C1).any():
+            if base.table[tr, tc] == -1:  # the same occupancy: the base's tile
+                base._fill_tile(tr, tc)
+            self.table[tr, tc] = -2 - base.table[tr, tc]
+            return
         occ = self._occupancy(R0, C0, R1, C1)
+        slot = tr * self.table.shape[1] + tc if self.slotted else self._n
         self._reserve(self._n + 1)
-        out = self._store[self._n]
+        out = self._store[slot]
         if occ.any():
             d = ndimage.distance_transform_edt(~occ, sampling=self.resolution)
             blk = np.minimum(d[r0 - R0 : r1 - R0 + 1, c0 - C0 : c1 - C0 + 1], self.cap)
             out[: blk.shape[0], : blk.shape[1]] = _round_down(blk - self.two_h)
         else:
             out[:] = _round_down(np.array([self.cap - self.two_h]))[0]
-        self.table[tr, tc] = self._n
+        self.table[tr, tc] = slot
         self._n += 1
 
     def ensure_point(self, x: float, y: float, radius: float) -> None:
@@ -212,11 +249,11 @@ class DistanceTiles:
             return
         table = self.table
         todo = [(tr, tc) for tr in range(ty0, ty1 + 1) for tc in range(tx0, tx1 + 1)
-                if table[tr, tc] < 0]
+                if table[tr, tc] == -1]
         for tr, tc in todo:
             self._fill_tile(tr, tc)
         if todo:
-            self.args = (self._store[: self._n], self.table, *self.shape)
+            self._refresh()
         self._ready.add(key)
 
     def ensure(self, points: ArrayLike, radius: float) -> None:
@@ -240,25 +277,60 @@ class DistanceTiles:
                 ok = (tx <= hi[:, 0]) & (ty <= hi[:, 1])
                 ids.append(ty[ok] * ntx + tx[ok])
         flat = np.unique(np.concatenate(ids)) if ids else np.zeros(0, np.int64)
-        missing = flat[self.table.ravel()[flat] < 0]
+        missing = flat[self.table.ravel()[flat] == -1]
         need = [(int(f // ntx), int(f % ntx)) for f in missing]
         if not need:
             return
         for tr, tc in need:
             self._fill_tile(tr, tc)
-        self.args = (self._store[: self._n], self.table, ny, nx)
+        self._refresh()
 
     @property
     def nbytes(self) -> int:
-        """Bytes of the filled tiles and the table."""
-        return int(self._store[: self._n].nbytes + self.table.nbytes)
+        """Bytes of the tiles this grid filled (not its base's) and the table."""
+        return int(self._n * TILE * TILE * self._store.itemsize + self.table.nbytes)
 
     def values(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
         """Stored values of cells (rows, cols) (indices inside the grid); -inf where the
         tile is not filled."""
-        tiles, table = self.args[0], self.table
+        tiles, base, table = self.args[:3]
         t = table[rows // TILE, cols // TILE]
         out = np.full(np.shape(rows), -np.inf)
-        ok = t >= 0
-        out[ok] = tiles[t[ok], rows[ok] % TILE, cols[ok] % TILE]
+        r, c = rows % TILE, cols % TILE
+        own, shared = t >= 0, t <= -2
+        out[own] = tiles[t[own], r[own], c[own]]
+        out[shared] = base[-2 - t[shared], r[shared], c[shared]]
         return out
+
+
+def _lazy_zeros(shape: tuple[int, ...], dtype: type) -> np.ndarray:
+    """Zeros whose pages the system provides as they are first written: an anonymous
+    mapping of its own, in small pages (numpy asks for huge pages on large arrays, which
+    would make one written tile hold 2 MB)."""
+    size = int(np.prod(shape)) * np.dtype(dtype).itemsize
+    return np.frombuffer(mmap.mmap(-1, max(1, size)), dtype=dtype,
+                         count=int(np.prod(shape))).reshape(shape)
+
+
+def _meets(boxes: np.ndarray, r0: int, c0: int, r1: int, c1: int) -> np.ndarray:
+    """Which (row0, col0, row1, col1) ``boxes`` meet rows r0..r1 and columns c0..c1."""
+    return (boxes[:, 0] <= r1) & (boxes[:, 2] >= r0) & (boxes[:, 1] <= c1) & (boxes[:, 3] >= c0)
+
+
+#: The live shared bases (:func:`shared_tiles`), freed with the last grid over them.
+_SHARED: weakref.WeakValueDictionary = weakref.WeakValueDictionary()
+
+
+def shared_tiles(workspace: tuple[float, float], obstacles: tuple[Obstacle, ...],
+                 resolution: float, cap: float) -> DistanceTiles:
+    """The slotted, capped grid of ``obstacles`` (a map's static obstacles) that grids over
+    the same tuple object, workspace, resolution and cap share as their ``base``: one
+    while any of them lives."""
+    key = (id(obstacles), tuple(float(v) for v in workspace), float(resolution), float(cap))
+    hit = _SHARED.get(key)
+    if hit is not None and hit.static is obstacles:
+        return hit
+    base = DistanceTiles(workspace, obstacles, resolution, cap, full_grid_cells=0, slotted=True)
+    base.static = obstacles  # held: no other tuple takes its id while the base lives
+    _SHARED[key] = base
+    return base

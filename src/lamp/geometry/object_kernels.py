@@ -37,17 +37,20 @@ def _point_in_polygon(px: float, py: float, poly: np.ndarray) -> bool:
 def _grid_bound(sd: tuple, res: float, px: float, py: float) -> float:
     """The distance grid's clearance lower bound at world point p: the value of the cell
     containing p (points outside the workspace take the nearest border cell); -inf in a
-    tile not filled yet. ``sd`` is :attr:`DistanceTiles.args`."""
-    tiles, table, ny, nx = sd
+    tile not filled yet. ``sd`` is :attr:`DistanceTiles.args` (a table entry ``t <= -2``
+    is the base's tile ``-2 - t``)."""
+    tiles, base, table, ny, nx = sd
     ci = min(max(int(math.floor(px / res)), 0), nx - 1)
     ri = min(max(int(math.floor(py / res)), 0), ny - 1)
     T = tiles.shape[1]
     tr = ri // T
     tc = ci // T
     t = table[tr, tc]
-    if t < 0:
+    if t >= 0:
+        return tiles[t, ri - tr * T, ci - tc * T]
+    if t == -1:
         return -np.inf
-    return tiles[t, ri - tr * T, ci - tc * T]
+    return base[-2 - t, ri - tr * T, ci - tc * T]
 
 
 @numba.njit(cache=True)

@@ -74,7 +74,14 @@ import numpy as np
 import shapely
 from numpy.typing import ArrayLike
 
-from lamp.geometry.distance_tiles import DEFAULT_GRID_CAP, DistanceTiles
+from lamp.geometry.distance_tiles import (
+    DEFAULT_GRID_CAP,
+    FULL_GRID_CELLS,
+    TILE,
+    DistanceTiles,
+    grid_shape,
+    shared_tiles,
+)
 from lamp.geometry.object_kernels import (
     batch_clearance,
     batch_motions_free,
@@ -88,6 +95,9 @@ if TYPE_CHECKING:  # the scene layer builds on geometry, not the other way round
 DEFAULT_RESOLUTION = 0.004
 DEFAULT_MOTION_MARGIN = 0.005
 DEFAULT_COVER_CELL = 0.08
+#: A shared grid of static obstacles is used where its store (allocated at once, its
+#: pages taken as tiles are filled) would be at most this many bytes.
+SHARED_STORE_BYTES = 2**32
 #: Spacing (m) of the positions along a motion around which the grid is prepared.
 _PREPARE_STEP = 0.1
 
@@ -182,6 +192,21 @@ def _cover_disks(poly: np.ndarray, cell: float) -> tuple[np.ndarray, np.ndarray]
     return centres, np.full(len(centres), 0.5 * math.hypot(sx, sy))
 
 
+def _new_grid(workspace: tuple[float, float], obstacles: tuple[Obstacle, ...],
+              resolution: float, cap: float, static: tuple[Obstacle, ...]) -> DistanceTiles:
+    """The distance grid of ``obstacles``: over the shared grid of their leading ``static``
+    part where the map is large enough to be tiled on demand and that grid's store stays
+    within ``SHARED_STORE_BYTES``; else one of its own."""
+    n = len(static)
+    ny, nx = grid_shape(workspace, resolution)
+    tiles = -(-ny // TILE) * -(-nx // TILE)
+    if (n and ny * nx > FULL_GRID_CELLS and tiles * TILE * TILE * 4 <= SHARED_STORE_BYTES
+            and obstacles[:n] == static):
+        base = shared_tiles(workspace, static, resolution, cap)
+        return DistanceTiles(workspace, obstacles[n:], resolution, cap, base=base)
+    return DistanceTiles(workspace, obstacles, resolution, cap=cap)
+
+
 class ObjectSpace:
     """Collision/clearance queries for one movable object among static obstacles.
 
@@ -199,6 +224,10 @@ class ObjectSpace:
         grid: the distance grid to use (it depends on the obstacles, workspace and
             resolution only, so spaces of the same obstacles with other inflations share
             it); default: a new one.
+        static: the map's static obstacles when they lead ``obstacles`` (the same tuple
+            object for every space of the map, e.g. ``Scene.obstacles``): on large maps the
+            new grid then lies over their shared grid (``distance_tiles.shared_tiles``) and
+            holds only the tiles the other obstacles change. The same values either way.
 
     See the module docstring for the conservativeness guarantee and the error ``band``.
     """
@@ -215,6 +244,7 @@ class ObjectSpace:
         motion_margin: float = DEFAULT_MOTION_MARGIN,
         cover_cell: float = DEFAULT_COVER_CELL,
         grid: DistanceTiles | None = None,
+        static: tuple[Obstacle, ...] = (),
     ) -> None:
         w, h = (float(v) for v in workspace)
         if not (w > 0 and h > 0 and math.isfinite(w) and math.isfinite(h)):
@@ -233,6 +263,7 @@ class ObjectSpace:
         self.shape = shape
         self.workspace = (w, h)
         self.obstacles = tuple(obstacles)
+        self.static = static
         self.inflation = float(inflation)
         self.resolution = float(resolution)
         self.sample_spacing = spacing
@@ -264,8 +295,8 @@ class ObjectSpace:
         self.min_grid_cap = float(max(np.max(drad, initial=0.0), np.max(crad, initial=0.0))
                                   + self.band + self.motion_margin)
         if grid is None:
-            grid = DistanceTiles(self.workspace, self.obstacles, self.resolution,
-                                 cap=max(DEFAULT_GRID_CAP, self.min_grid_cap))
+            grid = _new_grid(self.workspace, self.obstacles, self.resolution,
+                             max(DEFAULT_GRID_CAP, self.min_grid_cap), static)
         elif (grid.workspace, grid.resolution) != (self.workspace, self.resolution):
             raise ValueError("grid must have this space's workspace and resolution")
         elif grid.capped and grid.cap < self.min_grid_cap:
@@ -300,6 +331,7 @@ class ObjectSpace:
             scene.workspace,
             tuple(scene.obstacles) + tuple(others),
             inflation,
+            static=scene.obstacles,
             **kwargs,
         )
 
@@ -317,6 +349,7 @@ class ObjectSpace:
             cover_cell=self.cover_cell,
             grid=self.grid if not self.grid.capped or self.grid.cap >= self.min_grid_cap
             + abs(inflation - self.inflation) else None,
+            static=self.static,
         )
 
     # ------------------------------------------------------------------ grid
