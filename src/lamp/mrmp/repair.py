@@ -97,6 +97,18 @@ def _cost(VX: np.ndarray, i: int, coords: np.ndarray, wait_cost: float) -> float
 
 
 @nb.njit(cache=True)
+def _free_from(i: int, g: int, VX: np.ndarray, coords: np.ndarray, gv0: int, hh: tuple,
+               x0: float, y0: float, cs: float, ny: int, two_r: float,
+               skip: np.ndarray) -> int:
+    """The first row from which robot i may stay on its goal vertex g to the end."""
+    none = np.zeros(0, np.bool_)
+    for s in range(VX.shape[0] - 2, -1, -1):
+        if not move_ok(i, s, g, g, VX, coords, gv0, hh, x0, y0, cs, ny, two_r, skip, none):
+            return s + 1
+    return 0
+
+
+@nb.njit(cache=True)
 def _search(i: int, target: float, gr: tuple, V: int, gv0: int, hs: tuple, goal: np.ndarray,
             VX: np.ndarray, hh: tuple, x0: float, y0: float, cs: float,
             ny: int, two_r: float, wait_cost: float, mark: np.ndarray, pos: np.ndarray,
@@ -110,14 +122,7 @@ def _search(i: int, target: float, gr: tuple, V: int, gv0: int, hs: tuple, goal:
     K1 = VX.shape[0]
     m = goal[i]
     g = gv0 + m
-    none = np.zeros(0, np.bool_)
-    # the robot may stay on its goal from row `free` on
-    free = 0
-    for s in range(K1 - 2, -1, -1):
-        if not move_ok(i, s, g, g, VX, coords, gv0, hh, x0, y0, cs, ny, two_r, skip,
-                        none):
-            free = s + 1
-            break
+    free = _free_from(i, g, VX, coords, gv0, hh, x0, y0, cs, ny, two_r, skip)
     dd, dn = hs[2][m], hs[3][m]  # goal m's window (heuristic_reads.read_settled)
     wa0, wb0, wna, wnb = hs[0][m, 0], hs[0][m, 1], hs[0][m, 2], hs[0][m, 3]
     cap = 1 << 14
@@ -134,9 +139,7 @@ def _search(i: int, target: float, gr: tuple, V: int, gv0: int, hs: tuple, goal:
     best = target
     best_q = -1
     best_t = -1
-    # the robots near a vertex, gathered once per state (repair_hash.gather); a move is
-    # at most (cs - 2r) / 2 long, so robots farther than `reach` keep clear of all of them
-    reach = two_r + 0.5 * (cs - two_r) + 1e-6
+    reach = two_r + 0.5 * (cs - two_r) + 1e-6  # moves are <= (cs - 2r) / 2 (gather)
     buf = np.empty((VX.shape[1], 5))
     if VX[0, i] == g and free == 0:
         best_q, best_t, best = 0, 0, 0.0
