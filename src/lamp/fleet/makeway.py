@@ -68,7 +68,7 @@ def route_of(scene: Scene, k: int, pose: np.ndarray, step: float = BUFFER_STEP
     (``landmark.route_path``; the other objects move, so they do not count); None when
     none joins them."""
     obj = scene.objects[k]
-    space = ObjectSpace(obj.shape, scene.workspace, scene.obstacles, static=scene.obstacles)
+    space = ObjectSpace(obj.shape, scene.workspace, scene.obstacles, static=scene.fixed_obstacles)
     return route_path(space, (float(pose[0]), float(pose[1])),
                       (float(obj.goal[0]), float(obj.goal[1])), step)
 
@@ -121,7 +121,7 @@ def buffer_pose(scene: Scene, j: int, poses: np.ndarray, robot_positions: np.nda
         return None
     space = ObjectSpace.from_scene(scene, j, poses)
     onward = ObjectSpace(obj.shape, scene.workspace, (*scene.obstacles, *then),
-                         static=scene.obstacles)
+                         static=scene.fixed_obstacles)
     goal = (float(obj.goal[0]), float(obj.goal[1]))
     checked: set[tuple[int, int]] = set()  # positions whose route was sought
     reach = BUFFER_REACH

@@ -67,7 +67,7 @@ def goal_cuts(scene: Scene, poses: np.ndarray, step: float | None = None,
             if shapely.dwithin(at_goal, to_shapely(obj.shape, poses[j]), 2 * r):
                 continue  # k's goal is where j stands: j leaves first anyway (or makes way)
             space = ObjectSpace(obj.shape, scene.workspace, (*scene.obstacles, placed),
-                                static=scene.obstacles)
+                                static=scene.fixed_obstacles)
             if route_length(space, (poses[j][0], poses[j][1]), (obj.goal[0], obj.goal[1]),
                             step) is None:
                 edges.append((k, j))

@@ -15,12 +15,12 @@ from typing import Any
 
 import numpy as np
 
-from lamp.geometry.clearance_kernels import fill_field
 from lamp.geometry.geometry_set import GeometrySet, as_obstacle
 from lamp.geometry.primitives import Obstacle
+from lamp.geometry.static_field import clear_static_fields, static_field
 
-__all__ = ["Derived", "as_obstacles", "base_layer", "clear_base_layers", "grid_nodes",
-           "lru_get", "lru_put", "static_token", "window_nodes"]
+__all__ = ["Derived", "as_obstacles", "base_layer", "base_window", "clear_base_layers",
+           "grid_nodes", "lru_get", "lru_put", "static_token", "window_nodes"]
 
 #: Most base layers kept, and their byte bound.
 _BASE_CACHE_SIZE = 16
@@ -30,8 +30,9 @@ _BASE_CACHE: OrderedDict[Any, tuple[np.ndarray, GeometrySet]] = OrderedDict()
 
 
 def clear_base_layers() -> None:
-    """Drop the cached static base layers."""
+    """Drop the cached static base layers and tiled static fields."""
     _BASE_CACHE.clear()
+    clear_static_fields()
 
 
 def lru_get(cache: OrderedDict, key: Any) -> Any:
@@ -86,23 +87,31 @@ def base_layer(
     workspace: tuple[float, float], obstacles: tuple[Obstacle, ...], h: float, cap: float,
     nodes: tuple[int, int, int, int],
 ) -> tuple[np.ndarray, GeometrySet]:
+    """The clearance of the window ``nodes`` to the border and the static ``obstacles``
+    (read-only, cached) and their geometry."""
     key = (workspace, static_token(obstacles), h, cap, nodes)
     hit = lru_get(_BASE_CACHE, key)
     if hit is not None:
         return hit
-    W, H = workspace
-    i0, j0, i1, j1 = nodes
-    xs = np.arange(i0, i1 + 1) * h
-    ys = np.arange(j0, j1 + 1) * h
-    bx = np.minimum(xs, W - xs)
-    by = np.minimum(ys, H - ys)
-    field = np.minimum(np.minimum(bx[None, :], by[:, None]), cap).astype(np.float64)
-    geo = GeometrySet(obstacles)
-    fill_field(field, h, cap, geo.circles, geo.verts, geo.ptr, i0, j0)
+    field, geo = base_window(workspace, obstacles, h, cap, nodes)
     field.setflags(write=False)
     lru_put(_BASE_CACHE, key, (field, geo), _BASE_CACHE_SIZE, _BASE_CACHE_BYTES,
              lambda v: v[0].nbytes)
     return field, geo
+
+
+def base_window(
+    workspace: tuple[float, float], obstacles: tuple[Obstacle, ...], h: float, cap: float,
+    nodes: tuple[int, int, int, int],
+) -> tuple[np.ndarray, GeometrySet]:
+    """:func:`base_layer`'s values as a new writable array (from the map's tiled static
+    field, ``static_field``: the same values), and the obstacles' geometry."""
+    token = static_token(obstacles)
+    hit = lru_get(_BASE_CACHE, (workspace, token, h, cap, nodes))
+    if hit is not None:
+        return hit[0].copy(), hit[1]
+    sf = static_field(workspace, obstacles, token, h, cap, grid_nodes(workspace, h))
+    return sf.window(nodes), sf.geometry
 
 
 _TOKENS: OrderedDict[int, tuple[tuple, int]] = OrderedDict()

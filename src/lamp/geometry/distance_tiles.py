@@ -43,7 +43,7 @@ from lamp.geometry.primitives import Obstacle
 from lamp.geometry.shapes import obstacle_geometry
 
 __all__ = ["DistanceTiles", "TILE", "FULL_GRID_CELLS", "DEFAULT_GRID_CAP", "obstacle_box",
-           "obstacle_cells", "shared_tiles"]
+           "lazy_zeros", "obstacle_cells", "shared_tiles"]
 
 #: Cells per tile side.
 TILE = 128
@@ -148,7 +148,7 @@ class DistanceTiles:
                              "resolution and cap")
         self.slotted = bool(slotted) and self.capped
         dtype = np.float32 if self.capped else np.float64
-        self._store = (_lazy_zeros((self.table.size, TILE, TILE), dtype) if self.slotted
+        self._store = (lazy_zeros((self.table.size, TILE, TILE), dtype) if self.slotted
                        else np.zeros((0, TILE, TILE), dtype=dtype))
         self._n = 0
         #: tile boxes (tx0, ty0, tx1, ty1) known to be filled
@@ -303,7 +303,7 @@ class DistanceTiles:
         return out
 
 
-def _lazy_zeros(shape: tuple[int, ...], dtype: type) -> np.ndarray:
+def lazy_zeros(shape: tuple[int, ...], dtype: type) -> np.ndarray:
     """Zeros whose pages the system provides as they are first written: an anonymous
     mapping of its own, in small pages (numpy asks for huge pages on large arrays, which
     would make one written tile hold 2 MB)."""

@@ -331,7 +331,7 @@ class ObjectSpace:
             scene.workspace,
             tuple(scene.obstacles) + tuple(others),
             inflation,
-            static=scene.obstacles,
+            static=scene.fixed_obstacles,
             **kwargs,
         )
 

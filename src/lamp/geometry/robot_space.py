@@ -56,6 +56,7 @@ from lamp.geometry.clearance_layers import (
     Derived,
     as_obstacles,
     base_layer,
+    base_window,
     clear_base_layers,
     grid_nodes,
     lru_get,
@@ -164,18 +165,17 @@ class RobotSpace:
         #: (NX, NY): nodes of the whole workspace grid.
         self.grid_nodes: tuple[int, int] = grid_nodes(self.workspace, self.resolution)
         self.window_nodes = nodes
-        base_field, base_geo = base_layer(self.workspace, base_obs, self.resolution, self.cap,
-                                           nodes)
         if over_obs:
-            field = base_field.copy()
+            field, base_geo = base_window(self.workspace, base_obs, self.resolution,
+                                          self.cap, nodes)
             over_geo = GeometrySet(over_obs)
             fill_field(field, self.resolution, self.cap, over_geo.circles, over_geo.verts,
                        over_geo.ptr, nodes[0], nodes[1])
             field.setflags(write=False)
             self.geometry = GeometrySet.concat(base_geo, over_geo)
         else:
-            field = base_field
-            self.geometry = base_geo
+            field, self.geometry = base_layer(self.workspace, base_obs, self.resolution,
+                                              self.cap, nodes)
         self.field: np.ndarray = field
         self.base_obstacles = base_obs
         self.overlay_obstacles = over_obs
@@ -222,7 +222,8 @@ class RobotSpace:
             if not 0 <= k < K:
                 raise ValueError(f"exclude_objects holds {k}, not an object index in [0, {K})")
         r = float(scene.robot_radius if robot_radius is None else robot_radius)
-        overlay: list[Obstacle] = [
+        fixed = scene.fixed_obstacles  # the map's own: the base; the rest laid over it
+        overlay: list[Obstacle] = list(scene.obstacles[len(fixed):]) + [
             Obstacle(o.shape, tuple(float(v) for v in poses[k]))  # type: ignore[arg-type]
             for k, o in enumerate(scene.objects)
             if k not in excl
@@ -230,15 +231,14 @@ class RobotSpace:
         overlay.extend(as_obstacle(o) for o in extra_obstacles)
         ws = tuple(float(v) for v in scene.workspace)
         key = (
-            ws, static_token(scene.obstacles), tuple(overlay), r, float(margin),
+            ws, static_token(fixed), tuple(overlay), r, float(margin),
             float(resolution),
             float(cap), window_nodes(ws, float(resolution), window),  # type: ignore[arg-type]
         )
         hit = lru_get(_SPACE_CACHE, key)
         if hit is not None:
             return hit
-        space = cls(scene.workspace, scene.obstacles, r, margin, overlay, resolution, cap,
-                    window)
+        space = cls(scene.workspace, fixed, r, margin, overlay, resolution, cap, window)
         lru_put(_SPACE_CACHE, key, space, _SPACE_CACHE_SIZE, _SPACE_CACHE_BYTES,
                  lambda sp: sp.nbytes)
         return space

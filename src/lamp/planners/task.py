@@ -57,7 +57,7 @@ def route_distance(scene: Scene, index: int, pose: np.ndarray, step: float) -> f
     obj = scene.objects[index]
     start, goal = np.asarray(pose, float), np.asarray(obj.goal, float)
     straight = float(np.hypot(*(goal[:2] - start[:2])))
-    space = ObjectSpace(obj.shape, scene.workspace, scene.obstacles, static=scene.obstacles)
+    space = ObjectSpace(obj.shape, scene.workspace, scene.obstacles, static=scene.fixed_obstacles)
     route = route_length(space, (start[0], start[1]), (goal[0], goal[1]), step)
     return straight if route is None else max(straight, route)
 

@@ -28,7 +28,7 @@ def team_scene(scene: Scene, team: list[int], standing: Mapping[int, np.ndarray]
     stopped = tuple(Obstacle(Circle(float(scene.robot_radius)), (float(p[0]), float(p[1]), 0.0))
                     for _, p in sorted(standing.items()))
     out = replace(scene, robot_starts=tuple(scene.robot_starts[i] for i in team),
-                  obstacles=tuple(scene.obstacles) + stopped)
+                  obstacles=tuple(scene.obstacles) + stopped, fixed=scene.fixed_obstacles)
     return out if at is None else out.with_robot_starts(at)
 
 

@@ -91,6 +91,24 @@ class Scene:
     #: Tasks released while the robots work (:class:`Task`), beyond each object's own
     #: goal; a scene with tasks is a lifelong one (``lamp.fleet.tasks``).
     tasks: tuple[Task, ...] = ()
+    #: The map's own obstacles when ``obstacles`` adds others after them (robots of other
+    #: teams standing still, ``planners.team.team_scene``); None: all of them. Not part
+    #: of the scene file: it lets spaces share what depends on the map alone.
+    fixed: tuple[Obstacle, ...] | None = field(default=None, compare=False, repr=False)
+
+    @property
+    def fixed_obstacles(self) -> tuple[Obstacle, ...]:
+        """The leading obstacles that are the map's own (the same tuple object for a scene
+        and the team scenes made from it): ``fixed`` while it leads ``obstacles``, else
+        every obstacle."""
+        f = self.fixed
+        if f is None or f is self.obstacles:
+            return self.obstacles
+        n = len(f)
+        if n <= len(self.obstacles) and all(
+                a is b for a, b in zip(f, self.obstacles[:n], strict=True)):
+            return f
+        return self.obstacles
 
     @property
     def n_robots(self) -> int:
