@@ -255,7 +255,9 @@ def test_run_progress_quiet_verbose_and_summary(small: Path, tmp_path: Path) -> 
     out = tmp_path / "o"
     res = runner.invoke(app, ["run", str(small), "-m", "geometric", "-o", str(out)])
     assert res.exit_code == 0, res.output
-    assert "segment" not in res.stderr  # not a terminal: no progress
+    # not a terminal: no status line, a line per object done
+    assert res.stderr.strip().splitlines()[-1].startswith("object 1/1: reached its goal")
+    assert "planning" not in res.stderr and ": segment" not in res.stderr
     d = json.loads((out / "result.json").read_text())
     # the one per-segment figure printed is the report's (total planning / segments)
     from lamp.bench.report import scenario_planning_time
@@ -291,11 +293,13 @@ def test_progress_on_a_terminal_is_a_status_line() -> None:
     text = stream.getvalue()
     assert "object 1/2: segment 3, 1 replans" in text
     assert "object 1/2: reached its goal after 3 segments, 1 replans" in text
-    piped = io.StringIO()
+    piped = io.StringIO()  # piped: no status line, a line per object done
     with RunProgress(stream=piped, terminal=False) as progress:
         progress(ProgressEvent("segment", 0, 2, segments=3))
         progress(ProgressEvent("compiling"))
-    assert piped.getvalue().strip() == ProgressEvent("compiling").describe()
+        progress(ProgressEvent("object-done", 1, 2, segments=4, success=False))
+    assert piped.getvalue().strip().splitlines() == [
+        ProgressEvent("compiling").describe(), "object 2/2: failed after 4 segments, 0 replans"]
 
 
 def test_check_exits_1_when_the_task_failed(tmp_path: Path) -> None:

@@ -171,8 +171,9 @@ class StatusLine:
 
 
 class RunProgress:
-    """Shows a run's progress on stderr: a live status line on a terminal, nothing when
-    piped (unless ``verbose``: one line per event), nothing at all when ``quiet``.
+    """Shows a run's progress on stderr: a live status line on a terminal, a line per
+    object done when piped (``verbose``: one line per event), nothing at all when
+    ``quiet``.
 
     Compilation notices are always shown (unless ``quiet``): a silent 20-30 s pause is the
     thing to avoid.
@@ -192,7 +193,7 @@ class RunProgress:
         text = event.describe()
         if self.verbose or event.kind in ("compiling", "compiled"):
             self._print(text)
-        elif self.live and event.kind == "object-done":
+        elif event.kind == "object-done":
             self.close()
             self._print(text)
         elif self.live:
