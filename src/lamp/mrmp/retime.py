@@ -139,7 +139,9 @@ def _close_pairs(rob: np.ndarray, lo: np.ndarray, hi: np.ndarray, seg: np.ndarra
                  move: np.ndarray, two_r: float) -> tuple[np.ndarray, np.ndarray]:
     """The pairs (a < b) of states of different robots whose segments come within
     ``two_r``, but for two stays at once (positions that coexisted); a spatial hash of
-    the segments' midpoints (cells wider than ``2r`` plus the longest segment)."""
+    the segments' midpoints (cells wider than ``2r`` plus the longest segment), each pair
+    met once: the states in key order, each against the later entries of its own cell
+    column (three consecutive keys) and every entry of the next column."""
     S = rob.shape[0]
     mx = np.empty(S)
     my = np.empty(S)
@@ -151,31 +153,36 @@ def _close_pairs(rob: np.ndarray, lo: np.ndarray, hi: np.ndarray, seg: np.ndarra
     cs = two_r + 2.0 * half + 1e-9
     key, order, skey, ny = cell_hash(mx, my, cs)
     table, first = cell_starts(skey, ny)
+    sx = mx[order]
+    sy = my[order]
     A = np.empty(4 * S + 16, np.int64)
     B = np.empty(4 * S + 16, np.int64)
     n = 0
-    for a in range(S):
-        for ddx in range(-1, 2):
-            for ddy in range(-1, 2):
-                kk = key[a] + ddx * ny + ddy
-                p = cell_start(kk, skey, table, first)
-                while p < S and skey[p] == kk:
-                    b = order[p]
-                    p += 1
-                    if b <= a or rob[b] == rob[a] or math.hypot(
-                            mx[b] - mx[a], my[b] - my[a]) > cs:
-                        continue
-                    if not move[a] and not move[b] and hi[a] >= lo[b] and hi[b] >= lo[a]:
-                        continue
-                    if segment_distance(seg[a, 0], seg[a, 1], seg[a, 2], seg[a, 3],
-                                        seg[b, 0], seg[b, 1], seg[b, 2], seg[b, 3]) >= two_r:
-                        continue
-                    if n == A.shape[0]:
-                        A = doubled(A, n)
-                        B = doubled(B, n)
-                    A[n] = a
-                    B[n] = b
-                    n += 1
+    for p in range(S):
+        a = order[p]
+        for col in range(2):
+            kk = skey[p] + col * ny - 1
+            q0 = p + 1 if col == 0 else cell_start(kk, skey, table, first)
+            q1 = cell_start(kk + 3, skey, table, first)
+            for q in range(q0, q1):
+                ddx = sx[q] - sx[p]
+                ddy = sy[q] - sy[p]
+                if ddx * ddx + ddy * ddy > cs * cs:
+                    continue
+                b = order[q]
+                if rob[b] == rob[a]:
+                    continue
+                if not move[a] and not move[b] and hi[a] >= lo[b] and hi[b] >= lo[a]:
+                    continue
+                if segment_distance(seg[a, 0], seg[a, 1], seg[a, 2], seg[a, 3],
+                                    seg[b, 0], seg[b, 1], seg[b, 2], seg[b, 3]) >= two_r:
+                    continue
+                if n == A.shape[0]:
+                    A = doubled(A, n)
+                    B = doubled(B, n)
+                A[n] = min(a, b)
+                B[n] = max(a, b)
+                n += 1
     return A[:n], B[:n]
 
 
