@@ -56,6 +56,21 @@ def test_segment_decisions_match_all_obstacles(seed: int, n: int) -> None:
     assert np.array_equal(clear_segments(g, (W, H), a, b, need), ref)
 
 
+@settings(max_examples=30, deadline=None)
+@given(st.integers(0, 2**31 - 1), st.integers(0, 400), st.integers(1, 64))
+def test_few_segments_among_many_obstacles_decide_the_same(seed: int, n: int,
+                                                           k: int) -> None:
+    """A few segments among hundreds of obstacles (through the grid beyond
+    ``FEW_PAIRS`` segment-obstacle pairs) decide as against every obstacle."""
+    rng = np.random.default_rng(seed)
+    g = _geometry(rng, n)
+    a = rng.uniform(-0.1, [W + 0.1, H + 0.1], (k, 2))
+    b = a + rng.normal(0.0, 1.0, (k, 2)) * rng.choice([0.0, 0.02, 0.1, 1.0], (k, 1))
+    need = rng.uniform(1e-4, 0.4, k)
+    ref = segments_clearance(a, b, g.circles, g.verts, g.ptr, W, H) >= need - 1e-12
+    assert np.array_equal(clear_segments(g, (W, H), a, b, need), ref)
+
+
 @settings(max_examples=40)
 @given(st.integers(0, 2**31 - 1), st.integers(0, 40))
 def test_point_clearance_bit_for_bit(seed: int, n: int) -> None:

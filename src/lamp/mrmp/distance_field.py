@@ -41,6 +41,9 @@ EDGE_BAND = 32
 #: Up to this many points or segments, links are looked up point by point and checked
 #: against all obstacles at once (cheaper than tiles for LAMP's teams of a few robots).
 FEW = 64
+#: ... and while the segments times the obstacles stay below this: more (a few links
+#: on a map of hundreds of obstacles) go through the bucket grid (the same decisions).
+FEW_PAIRS = 4096
 
 
 @nb.njit(cache=True)
@@ -322,14 +325,16 @@ def clear_segments(geometry: Any, workspace: tuple[float, float], a: np.ndarray,
                    b: np.ndarray, need: np.ndarray) -> np.ndarray:
     """Whether each straight segment ``a[k] -> b[k]`` keeps an exact clearance of at least
     ``need[k] - 1e-12`` (``need > 0``) from the obstacles of ``geometry`` (a
-    ``GeometrySet``) and the workspace border: a few against all obstacles at once, more
-    against the obstacles near each one only (the bucket grid of
+    ``GeometrySet``) and the workspace border: a few among few obstacles
+    (:data:`FEW_PAIRS`) against all obstacles at once, more against the obstacles near
+    each one only (the bucket grid of
     :mod:`lamp.mrmp.obstacle_grid`: the same decisions as against all of them)."""
     W, H = workspace
     ok = np.zeros(len(a), dtype=bool)
     if len(a) == 0:
         return ok
-    if len(a) <= FEW:  # a few: against all obstacles at once
+    n_obstacles = len(geometry.circles) + max(0, len(geometry.ptr) - 1)
+    if len(a) <= FEW and len(a) * n_obstacles <= FEW_PAIRS:  # against all at once
         g = geometry
         return segments_clearance(np.ascontiguousarray(a), np.ascontiguousarray(b), g.circles,
                                   g.verts, g.ptr, W, H) >= need - 1e-12
