@@ -69,8 +69,9 @@ def neighbour_lists(px: np.ndarray, py: np.ndarray, radius: float
     """CSR lists (ptr, idx): for each point i, the other points within ``radius`` (all of
     them when ``radius`` is inf or there are fewer than :data:`ALL_PAIRS_BELOW`), in
     increasing index order. A spatial hash (cells of side ``radius``, points sorted by
-    cell, each of the 9 cells around a point found in a table of the cells, or by binary
-    search when the cells are many) keeps it O(N log N + pairs)."""
+    cell; the 9 cells around a point are three runs of consecutive keys, each run's
+    entries found in a table of the cells, or by binary search when the cells are many)
+    keeps it O(N log N + pairs)."""
     N = px.shape[0]
     ptr = np.zeros(N + 1, dtype=np.int64)
     if N < ALL_PAIRS_BELOW or not radius < np.inf:
@@ -93,23 +94,22 @@ def neighbour_lists(px: np.ndarray, py: np.ndarray, radius: float
     for i in range(N):
         n = 0
         for dx in range(-1, 2):
-            for dy in range(-1, 2):
-                kk = key[i] + dx * ny + dy
-                lo = cell_start(kk, skey, table, first)
-                while lo < N and skey[lo] == kk:
-                    j = order[lo]
-                    lo += 1
-                    if j == i:
-                        continue
-                    ex = px[j] - px[i]
-                    ey = py[j] - py[i]
-                    if ex * ex + ey * ey <= r2:
-                        if n == buf.shape[0]:
-                            nb_ = np.empty(2 * n, dtype=np.int64)
-                            nb_[:n] = buf
-                            buf = nb_
-                        buf[n] = j
-                        n += 1
+            # the three cells dy = -1, 0, 1 have consecutive keys: one range of entries
+            kk = key[i] + dx * ny
+            for p in range(cell_start(kk - 1, skey, table, first),
+                           cell_start(kk + 2, skey, table, first)):
+                j = order[p]
+                if j == i:
+                    continue
+                ex = px[j] - px[i]
+                ey = py[j] - py[i]
+                if ex * ex + ey * ey <= r2:
+                    if n == buf.shape[0]:
+                        nb_ = np.empty(2 * n, dtype=np.int64)
+                        nb_[:n] = buf
+                        buf = nb_
+                    buf[n] = j
+                    n += 1
         if q + n > out.shape[0]:
             grown = np.empty(2 * (q + n), dtype=np.int64)
             grown[:q] = out[:q]
