@@ -1,6 +1,6 @@
 """The retiming's close pairs (``lamp.mrmp.retime._close_pairs``) against a brute-force
 reference over every pair of states, on random plans with crowded, coinciding and
-spread-out positions (Hypothesis)."""
+spread-out positions, and its counting sort against a stable argsort (Hypothesis)."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from lamp.mrmp.retime import _close_pairs, _states
+from lamp.mrmp.retime import _close_pairs, _stable_order, _states
 from lamp.mrmp.retime_pairs import segment_distance
 
 
@@ -48,3 +48,12 @@ def test_close_pairs_match_every_pair_checked(seed, n, k, spread, grid) -> None:
     assert all(a < b for a, b in pairs)
     assert len(set(pairs)) == len(pairs)
     assert set(pairs) == _reference(rob, lo, hi, seg, move, two_r)
+
+
+@settings(max_examples=60, deadline=None)
+@given(keys=st.lists(st.integers(0, 40), max_size=300), extra=st.integers(1, 5))
+def test_stable_order_is_argsort_stable(keys, extra) -> None:
+    """The retiming's counting sort orders the edges as a stable argsort does."""
+    key = np.array(keys, dtype=np.int64)
+    got = _stable_order(key, (max(keys) if keys else 0) + extra)
+    assert np.array_equal(got, np.argsort(key, kind="stable"))

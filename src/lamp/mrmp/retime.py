@@ -236,6 +236,21 @@ def _constraints(rob: np.ndarray, lo: np.ndarray, hi: np.ndarray, seg: np.ndarra
 
 
 @nb.njit(cache=True)
+def _stable_order(key: np.ndarray, nkey: int) -> np.ndarray:
+    """``np.argsort(key, kind="stable")`` of keys in ``[0, nkey)`` (a counting sort)."""
+    cnt = np.zeros(nkey + 1, np.int64)
+    for k in range(key.shape[0]):
+        cnt[key[k] + 1] += 1
+    for b in range(nkey):
+        cnt[b + 1] += cnt[b]
+    o = np.empty(key.shape[0], np.int64)
+    for k in range(key.shape[0]):
+        o[cnt[key[k]]] = k
+        cnt[key[k]] += 1
+    return o
+
+
+@nb.njit(cache=True)
 def _earliest(evk: np.ndarray, parent: np.ndarray, ef: np.ndarray, et: np.ndarray,
               w: np.ndarray) -> np.ndarray:
     """Earliest event times (quanta): longest paths over the edges ``ef -> et`` of weight
@@ -253,9 +268,9 @@ def _earliest(evk: np.ndarray, parent: np.ndarray, ef: np.ndarray, et: np.ndarra
     # edges grouped by the level of their target, sources of lower level first
     lvl_t = evk[dst]
     lvl_s = evk[src]
-    o = np.argsort(lvl_t * (evk.max() + 2) + lvl_s, kind="mergesort")
-    T = np.zeros(E, np.int64)
     K = evk.max() if E else 0
+    o = _stable_order(lvl_t * (K + 2) + lvl_s, (K + 1) * (K + 2))
+    T = np.zeros(E, np.int64)
     p = 0
     for lv in range(K + 1):
         q0 = p
