@@ -293,13 +293,26 @@ def _pibt_step(
             sp -= 1
 
 
+@nb.njit(cache=True, inline="always")
+def _h_now(i: int, g: int, cur: np.ndarray, gr: tuple, V: int, gv0: int, hs: tuple,
+           hcur: np.ndarray, hgoal: np.ndarray) -> float:
+    """Robot i's value to its goal g from where it is (0 without a goal), kept."""
+    if g < 0:
+        return 0.0
+    if hgoal[i] != g:
+        hcur[i] = hval_fast(g, cur[i], gr, V, gv0, hs)
+        hgoal[i] = g
+    return hcur[i]
+
+
 @nb.njit(cache=True)
 def _swap_goals(gr: tuple, V: int, gv0: int, hs: tuple, cur: np.ndarray, goal: np.ndarray,
                 prio: np.ndarray, sptr: np.ndarray, sidx: np.ndarray, cool: np.ndarray,
-                fleet: bool) -> int:
+                fleet: bool, hcur: np.ndarray, hgoal: np.ndarray) -> int:
     """Pairwise goal swaps that lower the summed heuristic (priorities travel along), over
     the pairs (i, j > i) of the neighbour lists, in index order; robots with ``cool > 0``
-    (just traded goals to break a deadlock) take no part.
+    (just traded goals to break a deadlock) take no part. ``hcur[i]``: robot i's value
+    to goal ``hgoal[i]`` from where it is, when that is its goal (read once, kept here).
 
     In a fleet, TSWAP's rule: a pair swaps only when one of them rests on its goal (or has
     none), and only when the swap lowers the longer of their two distances, or keeps it
@@ -318,8 +331,8 @@ def _swap_goals(gr: tuple, V: int, gv0: int, hs: tuple, cur: np.ndarray, goal: n
                 continue
             if fleet and gi >= 0 and gj >= 0 and cur[i] != gv0 + gi and cur[j] != gv0 + gj:
                 continue
-            hi = hval_fast(gi, cur[i], gr, V, gv0, hs) if gi >= 0 else 0.0
-            hj = hval_fast(gj, cur[j], gr, V, gv0, hs) if gj >= 0 else 0.0
+            hi = _h_now(i, gi, cur, gr, V, gv0, hs, hcur, hgoal)
+            hj = _h_now(j, gj, cur, gr, V, gv0, hs, hcur, hgoal)
             now = hi + hj
             now_max = max(hi, hj)
             # straight-line lower bound of the swapped sum: far pairs are skipped without
@@ -348,6 +361,7 @@ def _swap_goals(gr: tuple, V: int, gv0: int, hs: tuple, cur: np.ndarray, goal: n
             if better:
                 goal[i] = gj
                 goal[j] = gi
+                hcur[i], hgoal[i], hcur[j], hgoal[j] = sb, gj, sa, gi
                 p = prio[i]
                 prio[i] = prio[j]
                 prio[j] = p
@@ -425,6 +439,8 @@ def run_steps(
     status = np.zeros(N, dtype=np.int64)
     stack = np.empty(N, dtype=np.int64)
     mode = np.zeros(N, dtype=np.int64)
+    hcur = np.zeros(N)  # each robot's value read after a step, for the swaps
+    hgoal = np.full(N, -1, dtype=np.int64)  # the goal of hcur (-1: none read)
     small = N < ALL_PAIRS_BELOW
     aptr, aidx = neighbour_lists(np.zeros(N), np.zeros(N), np.inf)
     for t in range(t0, t1):
@@ -447,8 +463,10 @@ def run_steps(
                 nptr, nidx = neighbour_lists(px, py, near)
                 sptr, sidx = neighbour_lists(px, py, swap_radius) if swap else (nptr, nidx)
         if swap:
-            _swap_goals(gr, V, gv0, hs, cur, goal, prio, sptr, sidx, stuck[1], fleet)
+            _swap_goals(gr, V, gv0, hs, cur, goal, prio, sptr, sidx, stuck[1], fleet, hcur,
+                        hgoal)
             _break_deadlocks(gr, V, gv0, hs, cur, goal, prio, nptr, nidx, stuck, besth, near)
+        hgoal[:] = -1  # goals and positions change from here on
         _pibt_step(gr, V, gv0, hs, cur, goal, prio, two_r, seed, t, nxt, cand, ncand, ci,
                    status, stack, mode, nptr, nidx, fleet)
         s = 0.0
@@ -463,6 +481,7 @@ def run_steps(
             else:
                 prio[i] += 1.0
                 hv = hval_fast(g, cur[i], gr, V, gv0, hs)
+                hcur[i], hgoal[i] = hv, g
                 s += min(hv, 1e6)
                 if hv < besth[i] - 1e-9:
                     besth[i] = hv
