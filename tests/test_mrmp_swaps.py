@@ -1,4 +1,4 @@
-"""Gspi's goal swaps (``gspi_kernels._swap_goals``) against a plain reference of the
+"""Gspi's goal swaps (``gspi_swaps._swap_goals``) against a plain reference of the
 rule, with and without the values kept from the step before (Hypothesis)."""
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from lamp.geometry.robot_space import RobotSpace
 from lamp.mrmp.distance_field import get_lattice
 from lamp.mrmp.goal_distances import GoalDistances, hval
-from lamp.mrmp.gspi_kernels import _swap_goals
+from lamp.mrmp.gspi_swaps import _swap_goals
 from lamp.mrmp.links import link_special_vertices
 from lamp.mrmp.neighbours import neighbour_lists
 from lamp.scene.mapf import load_grid_map, random_instance
@@ -104,3 +104,39 @@ def test_swaps_match_the_rule_with_or_without_kept_values(seed, n, fleet, kept) 
     for g, p in results[1:]:
         assert np.array_equal(g, results[0][0])
         assert np.array_equal(p, results[0][1])
+
+
+@settings(max_examples=10, deadline=None)
+@given(seed=st.integers(0, 10_000), n=st.integers(2, 60), swap=st.booleans())
+def test_steps_sum_the_values_read_afresh(seed, n, swap) -> None:
+    """The summed heuristic after each step (the values kept from the candidates) is the
+    sum of every robot's value to its goal read afresh; with goal swaps, at the last
+    step (the goals it ends with)."""
+    from lamp.mrmp.assignment import assign
+    from lamp.mrmp.gspi_kernels import run_steps
+
+    gm = load_grid_map(MAPF / "random-32-32-20.map")
+    S, G = random_instance(gm, n, seed)
+    space = RobotSpace.from_scene(gm.scene)
+    lat = get_lattice(space, 0.03)
+    V, gv0 = lat.V, lat.V + n
+    links = link_special_vertices(space, lat, S, G, space.clearance(S, exact=True),
+                                  space.clearance(G, exact=True), 0.045, {})
+    gr = links.graph
+    hs = GoalDistances.build(links.goal_links, G, lat, 2 * n)
+    goal = assign(gr, V, hs, S, G, np.zeros(n, bool), "bottleneck", None, np.inf).goal
+    assert goal is not None
+    K = 12
+    cur = np.arange(V, V + n, dtype=np.int64)
+    hist = np.empty((K + 1, n), np.int64)
+    hist[0] = cur
+    hsum = np.zeros(K + 1)
+    near = 0.1 + 2 * links.max_move + 1e-9
+    t, _ = run_steps(gr, V, gv0, hs, cur, goal, np.random.default_rng(seed).random(n), 0.1,
+                     seed, swap, hist, hsum, 0, K, links.max_candidates, near, 2 * near,
+                     np.zeros((2, n), np.int64), np.full(n, np.inf), n >= 32)
+    ref = GoalDistances.build(links.goal_links, G, lat, 2 * n)
+    for s in ([t] if swap else range(1, t + 1)):
+        want = sum(min(hval(int(goal[i]), int(hist[s, i]), gr, V, gv0, ref), 1e6)
+                   for i in range(n) if hist[s, i] != gv0 + goal[i])
+        assert hsum[s] == want

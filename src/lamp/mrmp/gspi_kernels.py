@@ -29,14 +29,12 @@ import numpy as np
 
 from lamp.geometry.kernels import point_segment_distance
 from lamp.mrmp.goal_distances import hval
+from lamp.mrmp.gspi_swaps import _break_deadlocks, _swap_goals
 from lamp.mrmp.heuristic_reads import hval_fast, read_settled
 from lamp.mrmp.neighbours import ALL_PAIRS_BELOW, neighbour_lists, within
 
 __all__ = ["ALL_PAIRS_BELOW", "Graph", "conflict", "neighbour_lists", "run_steps"]
 
-#: Steps a robot may go without progress towards its goal before it trades goals with a
-#: neighbour that blocks it (``_break_deadlocks``).
-STUCK_STEPS = 10
 _UNDECIDED, _TENTATIVE, _DECIDED = 0, 1, 2
 
 
@@ -94,11 +92,13 @@ def conflict(
 def _build_cands(
     i: int, v: int, gr: tuple, V: int, gv0: int, hs: tuple, goal: np.ndarray, seed: int,
     t: int, cand: np.ndarray, ncand: np.ndarray, fleet: bool, keys: np.ndarray,
+    hvc: np.ndarray,
 ) -> None:
     """Candidates of robot i at vertex v sorted by heuristic (wait included); ties are
     broken by a seeded hash; a robot without a goal tries waiting first. In a fleet, a
     robot on its way has no candidate more than one lattice step farther from its goal:
-    pushed, it steps back one step at most, else its parent moves otherwise or waits."""
+    pushed, it steps back one step at most, else its parent moves otherwise or waits.
+    ``hvc[i, k]``: candidate k's value (with a goal), for the step's end."""
     _, nbr, _, xptr, xidx = gr
     cand[i, 0] = v
     n = 1
@@ -132,6 +132,7 @@ def _build_cands(
                 dd = hs[2][g]
                 dn = hs[3][g]
                 a0, b0, na, nbw = win[g, 0], win[g, 1], win[g, 2], win[g, 3]
+            hvc[i, k] = hv
             if k == 0:
                 h0 = hv
                 keys[0] = hv + 1e-9 * _hash01(seed, t, i, v)
@@ -143,13 +144,16 @@ def _build_cands(
     for a in range(1, n):
         kk = keys[a]
         cc = cand[i, a]
+        hc = hvc[i, a]
         b = a - 1
         while b >= 0 and keys[b] > kk:
             keys[b + 1] = keys[b]
             cand[i, b + 1] = cand[i, b]
+            hvc[i, b + 1] = hvc[i, b]
             b -= 1
         keys[b + 1] = kk
         cand[i, b + 1] = cc
+        hvc[i, b + 1] = hc
     # drop candidates with infinite heuristic except waiting (they lead nowhere useful)
     m = n
     while m > 1 and keys[m - 1] == np.inf and cand[i, m - 1] != v:
@@ -204,17 +208,18 @@ def _check_move(i: int, c: int, coords: np.ndarray, cur: np.ndarray, nxt: np.nda
 @nb.njit(cache=True, inline="always")
 def _first_cands(i: int, cur: np.ndarray, gr: tuple, V: int, gv0: int, hs: tuple,
                  goal: np.ndarray, seed: int, t: int, cand: np.ndarray, ncand: np.ndarray,
-                 fleet: bool, keys: np.ndarray, lazy: np.ndarray) -> None:
+                 fleet: bool, keys: np.ndarray, lazy: np.ndarray, hvc: np.ndarray) -> None:
     """Robot i's candidates; for a robot at rest (on its goal, or without one) only
     waiting, its first (heuristic 0, every other at least EPS), with ``lazy[i]`` set: the
     others are built when waiting fails (the same decisions, without building them for
     every robot at rest)."""
     if goal[i] < 0 or cur[i] == gv0 + goal[i]:
         cand[i, 0] = cur[i]
+        hvc[i, 0] = -1.0  # not read
         ncand[i] = 1
         lazy[i] = 1
     else:
-        _build_cands(i, cur[i], gr, V, gv0, hs, goal, seed, t, cand, ncand, fleet, keys)
+        _build_cands(i, cur[i], gr, V, gv0, hs, goal, seed, t, cand, ncand, fleet, keys, hvc)
 
 
 @nb.njit(cache=True)
@@ -223,7 +228,7 @@ def _pibt_step(
     prio: np.ndarray, two_r: float, seed: int, t: int, nxt: np.ndarray,
     cand: np.ndarray, ncand: np.ndarray, ci: np.ndarray, status: np.ndarray,
     stack: np.ndarray, mode: np.ndarray, nptr: np.ndarray, nidx: np.ndarray,
-    fleet: bool,
+    fleet: bool, hvc: np.ndarray,
 ) -> None:
     """One PIBT step (priority inheritance with backtracking), iterative.
 
@@ -249,7 +254,8 @@ def _pibt_step(
         if status[r0] != _UNDECIDED:
             continue
         status[r0] = _TENTATIVE
-        _first_cands(r0, cur, gr, V, gv0, hs, goal, seed, t, cand, ncand, fleet, keys, lazy)
+        _first_cands(r0, cur, gr, V, gv0, hs, goal, seed, t, cand, ncand, fleet, keys, lazy,
+                     hvc)
         ci[r0] = 0
         stack[0] = r0
         sp = 1
@@ -259,7 +265,7 @@ def _pibt_step(
                 if lazy[i]:
                     lazy[i] = 0
                     _build_cands(i, cur[i], gr, V, gv0, hs, goal, seed, t, cand, ncand, fleet,
-                                 keys)
+                                 keys, hvc)
                     continue
                 if mode[i] == 0 and sp > 1:
                     mode[i] = 1  # yield pass (see docstring)
@@ -283,7 +289,7 @@ def _pibt_step(
                 # priority inheritance: the blocker decides first, then i re-checks c
                 status[blocker] = _TENTATIVE
                 _first_cands(blocker, cur, gr, V, gv0, hs, goal, seed, t, cand, ncand, fleet,
-                             keys, lazy)
+                             keys, lazy, hvc)
                 ci[blocker] = 0
                 mode[blocker] = 0
                 stack[sp] = blocker
@@ -294,126 +300,16 @@ def _pibt_step(
 
 
 @nb.njit(cache=True, inline="always")
-def _h_now(i: int, g: int, cur: np.ndarray, gr: tuple, V: int, gv0: int, hs: tuple,
-           hcur: np.ndarray, hgoal: np.ndarray) -> float:
-    """Robot i's value to its goal g from where it is (0 without a goal), kept."""
-    if g < 0:
-        return 0.0
-    if hgoal[i] != g:
-        hcur[i] = hval_fast(g, cur[i], gr, V, gv0, hs)
-        hgoal[i] = g
-    return hcur[i]
-
-
-@nb.njit(cache=True)
-def _swap_goals(gr: tuple, V: int, gv0: int, hs: tuple, cur: np.ndarray, goal: np.ndarray,
-                prio: np.ndarray, sptr: np.ndarray, sidx: np.ndarray, cool: np.ndarray,
-                fleet: bool, hcur: np.ndarray, hgoal: np.ndarray) -> int:
-    """Pairwise goal swaps that lower the summed heuristic (priorities travel along), over
-    the pairs (i, j > i) of the neighbour lists, in index order; robots with ``cool > 0``
-    (just traded goals to break a deadlock) take no part. ``hcur[i]``: robot i's value
-    to goal ``hgoal[i]`` from where it is, when that is its goal (read once, kept here).
-
-    In a fleet, TSWAP's rule: a pair swaps only when one of them rests on its goal (or has
-    none), and only when the swap lowers the longer of their two distances, or keeps it
-    and lowers the sum: swaps never lengthen the longest way left."""
-    coords = gr[0]
-    N = cur.shape[0]
-    nswap = 0
-    for i in range(N):
-        for q in range(sptr[i], sptr[i + 1]):
-            j = sidx[q]
-            if j <= i or cool[i] > 0 or cool[j] > 0:
-                continue
-            gi = goal[i]
-            gj = goal[j]
-            if gi < 0 and gj < 0:
-                continue
-            if fleet and gi >= 0 and gj >= 0 and cur[i] != gv0 + gi and cur[j] != gv0 + gj:
-                continue
-            hi = _h_now(i, gi, cur, gr, V, gv0, hs, hcur, hgoal)
-            hj = _h_now(j, gj, cur, gr, V, gv0, hs, hcur, hgoal)
-            now = hi + hj
-            now_max = max(hi, hj)
-            # straight-line lower bound of the swapped sum: far pairs are skipped without
-            # expanding either goal's search to the other robot (the same decisions)
-            la = 0.0
-            lb = 0.0
-            if gi >= 0:
-                la = math.hypot(coords[cur[j], 0] - coords[gv0 + gi, 0],
-                                coords[cur[j], 1] - coords[gv0 + gi, 1])
-            if gj >= 0:
-                lb = math.hypot(coords[cur[i], 0] - coords[gv0 + gj, 0],
-                                coords[cur[i], 1] - coords[gv0 + gj, 1])
-            if la + lb >= now - 1e-9 and (not fleet or max(la, lb) >= now_max - 1e-9):
-                continue
-            if fleet and max(la, lb) > now_max + 1e-9:
-                continue
-            sa = hval_fast(gi, cur[j], gr, V, gv0, hs) if gi >= 0 else 0.0
-            sb = hval_fast(gj, cur[i], gr, V, gv0, hs) if gj >= 0 else 0.0
-            sw = sa + sb
-            if fleet:
-                sw_max = max(sa, sb)
-                better = sw_max < now_max - 1e-9 or (sw_max <= now_max + 1e-9
-                                                     and sw < now - 1e-9)
-            else:
-                better = sw < now - 1e-9
-            if better:
-                goal[i] = gj
-                goal[j] = gi
-                hcur[i], hgoal[i], hcur[j], hgoal[j] = sb, gj, sa, gi
-                p = prio[i]
-                prio[i] = prio[j]
-                prio[j] = p
-                nswap += 1
-    return nswap
-
-
-@nb.njit(cache=True)
-def _break_deadlocks(gr: tuple, V: int, gv0: int, hs: tuple, cur: np.ndarray,
-                     goal: np.ndarray, prio: np.ndarray, nptr: np.ndarray, nidx: np.ndarray,
-                     stuck: np.ndarray, besth: np.ndarray, near: float) -> int:
-    """TSWAP's deadlock rule in continuous space: a robot that has made no progress
-    towards its goal for :data:`STUCK_STEPS` steps trades goals (and priorities)
-    with the first robot within reach, in index order, that is stuck too, or that rests
-    on its goal nearer to the stuck robot's goal (it stands in the way); "within reach":
-    closer than ``near``, so that the two can block each other. The summed
-    heuristic may grow; what it buys is that neither blocks the other any more (two
-    robots each blocking the other's last move are otherwise stuck for good)."""
-    coords = gr[0]
-    N = cur.shape[0]
-    n = 0
-    for i in range(N):
-        gi = goal[i]
-        if stuck[0, i] < STUCK_STEPS or gi < 0:
-            continue
-        hi = hval(gi, cur[i], gr, V, gv0, hs)
-        xi = coords[cur[i], 0]
-        yi = coords[cur[i], 1]
-        for q in range(nptr[i], nptr[i + 1]):
-            j = nidx[q]
-            gj = goal[j]
-            if gj < 0 or math.hypot(coords[cur[j], 0] - xi, coords[cur[j], 1] - yi) > near:
-                continue
-            resting = cur[j] == gv0 + gj
-            if not (stuck[0, j] >= STUCK_STEPS
-                    or (resting and hval(gi, cur[j], gr, V, gv0, hs) < hi - 1e-9)):
-                continue
-            goal[i] = gj
-            goal[j] = gi
-            p = prio[i]
-            prio[i] = prio[j]
-            prio[j] = p
-            stuck[0, i] = 0
-            stuck[0, j] = 0
-            # no improving swap undoes the trade before either has moved on
-            stuck[1, i] = 2 * STUCK_STEPS
-            stuck[1, j] = 2 * STUCK_STEPS
-            besth[i] = np.inf
-            besth[j] = np.inf
-            n += 1
+def _chosen_value(i: int, g: int, v: int, cand: np.ndarray, ncand: np.ndarray,
+                  hvc: np.ndarray, gr: tuple, V: int, gv0: int, hs: tuple) -> float:
+    """Robot i's value to goal g at v, where its step took it: read when its candidates
+    were built (every robot that ends a step off its goal built them), else afresh."""
+    for k in range(ncand[i]):
+        if cand[i, k] == v:
+            if hvc[i, k] >= 0.0:
+                return hvc[i, k]
             break
-    return n
+    return hval_fast(g, v, gr, V, gv0, hs)
 
 
 @nb.njit(cache=True)
@@ -430,7 +326,8 @@ def run_steps(
     per robot, the steps since its heuristic last reached a new least value ``besth``,
     ``stuck[1]`` the steps it still sits out of goal swapping after a deadlock trade
     (all kept across calls); ``fleet``: the fleet rules of ``_swap_goals`` and
-    ``_build_cands`` (teams of :data:`ALL_PAIRS_BELOW` or more)."""
+    ``_build_cands`` (teams of :data:`ALL_PAIRS_BELOW` or more; the swaps and the deadlock
+    rule: :mod:`lamp.mrmp.gspi_swaps`)."""
     N = cur.shape[0]
     nxt = np.empty(N, dtype=np.int64)
     cand = np.empty((N, maxc), dtype=np.int64)
@@ -440,6 +337,7 @@ def run_steps(
     stack = np.empty(N, dtype=np.int64)
     mode = np.zeros(N, dtype=np.int64)
     hcur = np.zeros(N)  # each robot's value read after a step, for the swaps
+    hvc = np.empty((N, maxc))  # the candidates' values (_build_cands)
     hgoal = np.full(N, -1, dtype=np.int64)  # the goal of hcur (-1: none read)
     small = N < ALL_PAIRS_BELOW
     aptr, aidx = neighbour_lists(np.zeros(N), np.zeros(N), np.inf)
@@ -468,7 +366,7 @@ def run_steps(
             _break_deadlocks(gr, V, gv0, hs, cur, goal, prio, nptr, nidx, stuck, besth, near)
         hgoal[:] = -1  # goals and positions change from here on
         _pibt_step(gr, V, gv0, hs, cur, goal, prio, two_r, seed, t, nxt, cand, ncand, ci,
-                   status, stack, mode, nptr, nidx, fleet)
+                   status, stack, mode, nptr, nidx, fleet, hvc)
         s = 0.0
         for i in range(N):
             cur[i] = nxt[i]
@@ -480,7 +378,7 @@ def run_steps(
                 besth[i] = 0.0
             else:
                 prio[i] += 1.0
-                hv = hval_fast(g, cur[i], gr, V, gv0, hs)
+                hv = _chosen_value(i, g, cur[i], cand, ncand, hvc, gr, V, gv0, hs)
                 hcur[i], hgoal[i] = hv, g
                 s += min(hv, 1e6)
                 if hv < besth[i] - 1e-9:
