@@ -16,7 +16,7 @@ from typing import Any
 from lamp.contract.params import apply_overrides, check_fields, param
 from lamp.errors import InputError
 
-__all__ = ["CLAIM_NEAR", "MIN_SPACE_CACHE_MB", "PARAMS", "PASS_MARGIN", "PREFIX",
+__all__ = ["CLAIM_NEAR", "MIN_SPACE_CACHE_MB", "PARAMS", "PASS_MARGIN", "PLAN_NEAR", "PREFIX",
            "REJOIN_SLACK", "SPACE_CACHE_MB", "FleetConfig", "split_overrides"]
 
 #: The near part of a claim (``regions.claims``): the footprints along this much (m) of an
@@ -26,6 +26,9 @@ CLAIM_NEAR = 2.0
 #: How far ahead (m of travel) a plan must pass each point of a higher-ranked object's
 #: claim to go through it (``admission.passes_ahead``; ``pass_margin``'s default).
 PASS_MARGIN = 1.0
+#: An object's loop plans around the other teams' robots standing this near (m) to its
+#: own (``plan_near``'s default): farther ones move before it comes.
+PLAN_NEAR = 5.0
 #: The rows a segment's rejoins may insert, as a share of its planned rows; past it the
 #: segment ends (``segments.Segment.rejoin``; ``rejoin_slack``'s default). A push jammed
 #: on a shelf corner otherwise runs event after event without ending.
@@ -64,6 +67,12 @@ class FleetConfig:
                                "it this much (m) of travel before that object comes near, "
                                "or leave a claim it stands in; inf: it waits for that "
                                "object to pass.", low=0.0, unbounded=True)
+    plan_near: float = param(PLAN_NEAR, "Concurrent schedule: an object's loop plans "
+                             "around the other teams' robots standing within this distance "
+                             "(m) of its own robots and leaves the farther ones out (they "
+                             "move before it comes; admission holds back a segment that "
+                             "meets one still standing, and the loop plans anew there); "
+                             "inf: around all of them.", low=0.0, unbounded=True)
     rejoin_limit: int = param(0, "Concurrent schedule: a segment whose robots had to move "
                               "back to their rows this many times (held back by what they "
                               "push) ends, stopped; 0: never.", low=0)

@@ -81,11 +81,16 @@ class LoopHost(SharedWorld, Protocol):
         ...
 
 
-def sub_scene(scene: Scene, team: list[int], robot_positions: np.ndarray) -> Scene:
+def sub_scene(scene: Scene, team: list[int], robot_positions: np.ndarray,
+              near: float = math.inf) -> Scene:
     """``scene`` as ``team`` plans in it (``team.team_scene``): its robots only, where
-    they stand now, and every other robot a disk obstacle where it stands."""
+    they stand now, and every other robot within ``near`` (m) of one of them a disk
+    obstacle where it stands."""
     pos = np.asarray(robot_positions, float)
-    others = {i: pos[i] for i in range(scene.n_robots) if i not in team}
+    mine = pos[list(team), :2]
+    others = {i: pos[i] for i in range(scene.n_robots) if i not in team and (
+        not math.isfinite(near) or not len(mine)
+        or float(np.min(np.hypot(*(mine - pos[i, :2]).T))) <= near)}
     return team_scene(scene, list(team), others, pos[list(team)])
 
 
@@ -116,8 +121,8 @@ def object_main(runner: ClosedLoopRunner, observe: Callable[[SegmentEvent], None
                 fleet.wait_for_team(k)
             view = fleet.view(k)
 
-            def world(team: list[int] = view.team) -> Scene:
-                return sub_scene(scene, team, fleet.executor.robot_positions)
+            def world(team: list[int] = view.team, near: float = math.inf) -> Scene:
+                return sub_scene(scene, team, fleet.executor.robot_positions, near)
 
             hops, planning = transit(view, world, k, seed)
             fleet.stats.count("transit_hops", hops)
@@ -125,7 +130,8 @@ def object_main(runner: ClosedLoopRunner, observe: Callable[[SegmentEvent], None
             if view.team_changed:  # a robot failed or joined during transit
                 continue
             detour = fleet.detour_of(k)
-            scene_k = world() if detour is None else with_goal(world(), k, detour)
+            mine = world(near=settings.plan_near)  # farther robots move before it comes
+            scene_k = mine if detour is None else with_goal(mine, k, detour)
             fleet.world_taken(k)
             if detour is not None:  # a place to stand aside: any heading will do
                 config = config.but(stop_orientation=math.pi)
