@@ -1,4 +1,5 @@
-"""Gspi's compiled core (Numba): PIBT steps and goal swaps over neighbour lists.
+"""Gspi's compiled core (Numba): PIBT steps over neighbour lists (the goal swaps and the
+deadlock rule: :mod:`lamp.mrmp.gspi_swaps`).
 
 The driver, :mod:`lamp.mrmp.gspi`, builds the arrays and calls :func:`run_steps`;
 everything else here is its machinery. Two bundles of arrays travel through every kernel,
