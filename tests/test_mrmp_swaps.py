@@ -1,4 +1,4 @@
-"""Gspi's goal swaps (``gspi_swaps._swap_goals``) against a plain reference of the
+"""Gspi's goal swaps (``gspi_swaps.swap_goals``) against a plain reference of the
 rule, with and without the values kept from the step before (Hypothesis)."""
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from lamp.geometry.robot_space import RobotSpace
 from lamp.mrmp.distance_field import get_lattice
 from lamp.mrmp.goal_distances import GoalDistances, hval
-from lamp.mrmp.gspi_swaps import _swap_goals
+from lamp.mrmp.gspi_swaps import swap_goals
 from lamp.mrmp.links import link_special_vertices
 from lamp.mrmp.neighbours import neighbour_lists
 from lamp.scene.mapf import load_grid_map, random_instance
@@ -22,7 +22,7 @@ MAPF = Path(__file__).resolve().parent / "data" / "mapf"
 
 
 def _reference(gr, V, gv0, hs, cur, goal, prio, sptr, sidx, cool, fleet) -> None:
-    """The swap rule of ``_swap_goals``'s docstring, every value read afresh."""
+    """The swap rule of ``swap_goals``'s docstring, every value read afresh."""
     coords = gr[0]
 
     def h(g: int, v: int) -> float:
@@ -99,7 +99,7 @@ def test_swaps_match_the_rule_with_or_without_kept_values(seed, n, fleet, kept) 
                 for i in np.flatnonzero((rng.random(N) < kept) & (goal >= 0)).tolist():
                     hcur[i] = hval(int(goal[i]), int(cur[i]), gr, V, gv0, hs)
                     hgoal[i] = goal[i]
-            _swap_goals(gr, V, gv0, hs, cur, g, p, sptr, sidx, cool, fleet, hcur, hgoal)
+            swap_goals(gr, V, gv0, hs, cur, g, p, sptr, sidx, cool, fleet, hcur, hgoal)
         results.append((g, p))
     for g, p in results[1:]:
         assert np.array_equal(g, results[0][0])

@@ -27,7 +27,7 @@ Each time step (GCo's Gspi, with the continuous-space changes of step 2):
    part, the others grow by 1;
 4. deadlocks (TSWAP's rule, before step 2): a robot with no progress towards its goal for
    10 steps trades goals with a neighbour that is stuck too or rests on its goal nearer
-   to the stuck robot's goal (``gspi_swaps._break_deadlocks``): two robots each
+   to the stuck robot's goal (``gspi_swaps.break_deadlocks``): two robots each
    blocking the other's last move, as in a one-cell pocket, no longer stall the team.
 
 Heuristic: one Dijkstra per goal over the lattice (8-connected, diagonal moves cost

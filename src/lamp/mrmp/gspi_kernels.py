@@ -30,7 +30,7 @@ import numpy as np
 
 from lamp.geometry.kernels import point_segment_distance
 from lamp.mrmp.goal_distances import hval
-from lamp.mrmp.gspi_swaps import _break_deadlocks, _swap_goals
+from lamp.mrmp.gspi_swaps import break_deadlocks, swap_goals
 from lamp.mrmp.heuristic_reads import hval_fast, read_settled
 from lamp.mrmp.neighbours import ALL_PAIRS_BELOW, neighbour_lists, within
 
@@ -326,7 +326,7 @@ def run_steps(
     (``2r + 2 * maxmove``); ``swap_radius``: the goal-swapping neighbourhood; ``stuck[0]``:
     per robot, the steps since its heuristic last reached a new least value ``besth``,
     ``stuck[1]`` the steps it still sits out of goal swapping after a deadlock trade
-    (all kept across calls); ``fleet``: the fleet rules of ``_swap_goals`` and
+    (all kept across calls); ``fleet``: the fleet rules of ``swap_goals`` and
     ``_build_cands`` (teams of :data:`ALL_PAIRS_BELOW` or more; the swaps and the deadlock
     rule: :mod:`lamp.mrmp.gspi_swaps`)."""
     N = cur.shape[0]
@@ -362,9 +362,9 @@ def run_steps(
                 nptr, nidx = neighbour_lists(px, py, near)
                 sptr, sidx = neighbour_lists(px, py, swap_radius) if swap else (nptr, nidx)
         if swap:
-            _swap_goals(gr, V, gv0, hs, cur, goal, prio, sptr, sidx, stuck[1], fleet, hcur,
+            swap_goals(gr, V, gv0, hs, cur, goal, prio, sptr, sidx, stuck[1], fleet, hcur,
                         hgoal)
-            _break_deadlocks(gr, V, gv0, hs, cur, goal, prio, nptr, nidx, stuck, besth, near)
+            break_deadlocks(gr, V, gv0, hs, cur, goal, prio, nptr, nidx, stuck, besth, near)
         hgoal[:] = -1  # goals and positions change from here on
         _pibt_step(gr, V, gv0, hs, cur, goal, prio, two_r, seed, t, nxt, cand, ncand, ci,
                    status, stack, mode, nptr, nidx, fleet, hvc)

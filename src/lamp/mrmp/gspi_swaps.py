@@ -11,10 +11,10 @@ import numpy as np
 from lamp.mrmp.goal_distances import hval
 from lamp.mrmp.heuristic_reads import hval_fast
 
-__all__ = ["STUCK_STEPS"]
+__all__ = ["STUCK_STEPS", "break_deadlocks", "swap_goals"]
 
 #: Steps a robot may go without progress towards its goal before it trades goals with a
-#: neighbour that blocks it (``_break_deadlocks``).
+#: neighbour that blocks it (``break_deadlocks``).
 STUCK_STEPS = 10
 
 
@@ -31,7 +31,7 @@ def _h_now(i: int, g: int, cur: np.ndarray, gr: tuple, V: int, gv0: int, hs: tup
 
 
 @nb.njit(cache=True)
-def _swap_goals(gr: tuple, V: int, gv0: int, hs: tuple, cur: np.ndarray, goal: np.ndarray,
+def swap_goals(gr: tuple, V: int, gv0: int, hs: tuple, cur: np.ndarray, goal: np.ndarray,
                 prio: np.ndarray, sptr: np.ndarray, sidx: np.ndarray, cool: np.ndarray,
                 fleet: bool, hcur: np.ndarray, hgoal: np.ndarray) -> int:
     """Pairwise goal swaps that lower the summed heuristic (priorities travel along), over
@@ -95,7 +95,7 @@ def _swap_goals(gr: tuple, V: int, gv0: int, hs: tuple, cur: np.ndarray, goal: n
 
 
 @nb.njit(cache=True)
-def _break_deadlocks(gr: tuple, V: int, gv0: int, hs: tuple, cur: np.ndarray,
+def break_deadlocks(gr: tuple, V: int, gv0: int, hs: tuple, cur: np.ndarray,
                      goal: np.ndarray, prio: np.ndarray, nptr: np.ndarray, nidx: np.ndarray,
                      stuck: np.ndarray, besth: np.ndarray, near: float) -> int:
     """TSWAP's deadlock rule in continuous space: a robot that has made no progress
