@@ -45,4 +45,4 @@ def test_only_robots_near_the_team_stand_as_obstacles(points, team_size, near) -
 
 
 def test_the_default_reach_is_the_documented_constant() -> None:
-    assert FleetConfig().plan_near == PLAN_NEAR == 5.0
+    assert FleetConfig().plan_near == PLAN_NEAR == math.inf

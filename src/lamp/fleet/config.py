@@ -9,6 +9,7 @@ construction like every parameter set (``lamp.contract.params``).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from typing import Any
@@ -27,8 +28,10 @@ CLAIM_NEAR = 2.0
 #: claim to go through it (``admission.passes_ahead``; ``pass_margin``'s default).
 PASS_MARGIN = 1.0
 #: An object's loop plans around the other teams' robots standing this near (m) to its
-#: own (``plan_near``'s default): farther ones move before it comes.
-PLAN_NEAR = 5.0
+#: own (``plan_near``'s default, inf: all of them). 5 m places every load of the 72-robot
+#: long-haul depot (one is lost with inf) but loses one of the 15 held-out scenes
+#: (``docs/fleet.md``, What each object gets).
+PLAN_NEAR = math.inf
 #: The rows a segment's rejoins may insert, as a share of its planned rows; past it the
 #: segment ends (``segments.Segment.rejoin``; ``rejoin_slack``'s default). A push jammed
 #: on a shelf corner otherwise runs event after event without ending.
