@@ -23,8 +23,6 @@ from lamp.fleet.regions import (
     OBJECT_MARGIN,
     ROBOT_MARGIN,
     STATIC_SLACK,
-    _densified,
-    _step_hulls,
     claim,
     claims,
     footprints,
@@ -682,15 +680,3 @@ def test_footprints_are_the_very_geometries_built_pose_by_pose(shape, seed, n, g
                               shapely.get_coordinates(to_shapely(shape, q)))
     new, old = footprints(shape, poses, grow), _footprints_pair_by_pair(shape, poses, grow)
     assert np.array_equal(shapely.get_coordinates(new), shapely.get_coordinates(old))
-
-
-@settings(max_examples=40, deadline=None)
-@given(shape=st.sampled_from([Rectangle((0.5, 0.4)), Rectangle((0.2, 0.9)),
-                              Polygon(((0.0, 0.0), (0.5, 0.0), (0.3, 0.4), (0.1, 0.2)))]),
-       steps=st.lists(st.tuples(st.floats(-0.3, 0.3), st.floats(-0.3, 0.3),
-                                st.floats(-0.5, 0.5)), min_size=1, max_size=30))
-def test_step_hulls_are_the_hulls_of_the_unions_bit_for_bit(shape, steps) -> None:
-    poses = np.cumsum(np.array([(1.0, 1.0, 0.0), *steps], float), axis=0)
-    parts = to_shapely_many(shape, _densified(poses))
-    want = shapely.convex_hull(shapely.union(parts[:-1], parts[1:]))
-    assert all(shapely.equals_exact(_step_hulls(shape, parts), want, tolerance=0.0))

@@ -29,7 +29,7 @@ import shapely
 from lamp.fleet.config import CLAIM_NEAR
 from lamp.geometry.se2 import interpolate, pose_distance
 from lamp.geometry.shapes import to_shapely, to_shapely_many
-from lamp.scene.model import Circle, Shape
+from lamp.scene.model import Shape
 
 __all__ = ["OBJECT_MARGIN", "ROBOT_MARGIN", "STATIC_SLACK", "claim", "claims",
            "footprints", "robot_disks", "standing", "standing_robots", "swept"]
@@ -66,20 +66,9 @@ def footprints(shape: Shape, poses: np.ndarray, grow: float = 0.0) -> shapely.Ge
     if len(parts) == 1:
         geom = parts[0]
     else:  # each step's hull, then all at once (the same geometry as pair by pair)
-        geom = shapely.union_all(np.concatenate([parts, _step_hulls(shape, parts)]))
+        geom = shapely.union_all(np.concatenate([
+            parts, shapely.convex_hull(shapely.union(parts[:-1], parts[1:]))]))
     return geom.buffer(grow) if grow > 0 else geom
-
-
-def _step_hulls(shape: Shape, parts: np.ndarray) -> np.ndarray:
-    """The convex hull of each two consecutive footprints ``parts``. A polygon's hull is
-    that of the two outlines' vertices (the union's extra vertices lie on their edges:
-    the same hull, bit for bit, tested), found without the union; a circle's outline has
-    too many vertices for that to pay."""
-    n = shapely.get_num_coordinates(parts)
-    if isinstance(shape, Circle) or np.any(n != n[0]):
-        return shapely.convex_hull(shapely.union(parts[:-1], parts[1:]))
-    xy = shapely.get_coordinates(parts).reshape(len(parts), int(n[0]), 2)
-    return shapely.convex_hull(shapely.multipoints(np.concatenate([xy[:-1], xy[1:]], axis=1)))
 
 
 def robot_disks(paths: np.ndarray, radius: float) -> shapely.Geometry:
