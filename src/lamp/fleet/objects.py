@@ -87,11 +87,12 @@ def sub_scene(scene: Scene, team: list[int], robot_positions: np.ndarray,
     they stand now, and every other robot within ``near`` (m) of one of them a disk
     obstacle where it stands."""
     pos = np.asarray(robot_positions, float)
-    mine = pos[list(team), :2]
-    others = {i: pos[i] for i in range(scene.n_robots) if i not in team and (
-        not math.isfinite(near) or not len(mine)
-        or float(np.min(np.hypot(*(mine - pos[i, :2]).T))) <= near)}
-    return team_scene(scene, list(team), others, pos[list(team)])
+    mine = pos[list(team)]
+    reach = (np.full(len(pos), True) if not math.isfinite(near) or not len(mine) else
+             np.hypot(*np.moveaxis(pos[:, None, :2] - mine[None, :, :2], -1, 0)).min(axis=1)
+             <= near)
+    others = {i: pos[i] for i in range(scene.n_robots) if i not in team and reach[i]}
+    return team_scene(scene, list(team), others, mine)
 
 
 def given_up(scene: Scene, k: int, pose: np.ndarray, why: str) -> ObjectOutcome:

@@ -89,11 +89,12 @@ def base_layer(
 ) -> tuple[np.ndarray, GeometrySet]:
     """The clearance of the window ``nodes`` to the border and the static ``obstacles``
     (read-only, cached) and their geometry."""
-    key = (workspace, static_token(obstacles), h, cap, nodes)
+    token = static_token(obstacles)
+    key = (workspace, token, h, cap, nodes)
     hit = lru_get(_BASE_CACHE, key)
     if hit is not None:
         return hit
-    field, geo = base_window(workspace, obstacles, h, cap, nodes)
+    field, geo = _from_tiles(workspace, obstacles, token, h, cap, nodes)
     field.setflags(write=False)
     lru_put(_BASE_CACHE, key, (field, geo), _BASE_CACHE_SIZE, _BASE_CACHE_BYTES,
              lambda v: v[0].nbytes)
@@ -110,6 +111,14 @@ def base_window(
     hit = lru_get(_BASE_CACHE, (workspace, token, h, cap, nodes))
     if hit is not None:
         return hit[0].copy(), hit[1]
+    return _from_tiles(workspace, obstacles, token, h, cap, nodes)
+
+
+def _from_tiles(workspace: tuple[float, float], obstacles: tuple[Obstacle, ...], token: int,
+                h: float, cap: float, nodes: tuple[int, int, int, int]
+                ) -> tuple[np.ndarray, GeometrySet]:
+    """The window ``nodes`` copied from the map's tiled static field (``token``: the
+    obstacles' :func:`static_token`), and the obstacles' geometry."""
     sf = static_field(workspace, obstacles, token, h, cap, grid_nodes(workspace, h))
     return sf.window(nodes), sf.geometry
 
