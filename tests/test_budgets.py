@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import lamp
-from lamp.contract.plan import PlanStatus
+from lamp.contract.plan import Plan, PlanStatus
 from lamp.planners.config import PlannerConfig
 from lamp.planners.lamp_astar import LampAStar
 from lamp.planners.lazy import LazyPlanner
@@ -106,6 +106,37 @@ def test_lazy_verify_budget_names_itself(proposer):
     assert task.stats.verify_calls == 2  # counted from the call's start, never past it
 
 
+def test_lazy_object_verify_budget_spans_the_calls_and_ends_the_loop(proposer):
+    """``lazy_max_object_verify`` bounds the Verify calls of all an object's plan calls
+    (the per-call ``max_verify_calls`` starts afresh each call): the call that reaches
+    it names it, the next makes none, and the closed loop ends for good on it (no retry,
+    no wait for the world) with the object's verdict naming it."""
+    from lamp.planners.config import LAZY_VERIFY_RATE
+
+    task = _task(proposer, PlannerConfig())
+    q_O, q_R = task.object_poses[0], task.scene.robot_starts_array
+    assert LazyPlanner.from_task(task).plan(q_O, q_R).solved
+    used = task.stats.verify_calls
+    assert used > 1
+    short = _task(proposer, PlannerConfig.of(lazy_max_object_verify=used - 1))
+    planner = LazyPlanner.from_task(short)
+    plan = planner.plan(q_O, q_R)
+    assert plan.limit == "lazy_max_object_verify" and plan.spent
+    assert plan.reason == "no plan found: lazy_max_object_verify exhausted"
+    assert short.stats.verify_calls == used - 1  # never past it
+    assert planner.plan(q_O, q_R).spent and short.stats.verify_calls == used - 1
+    assert not Plan.failed(PlanStatus.BUDGET_EXHAUSTED, limit="max_verify_calls").spent
+    assert PlannerConfig.of(planning_time_limit=30.0).lazy_verify_calls == round(
+        30 * LAZY_VERIFY_RATE)
+    res = lamp.solve(scene_from_dict(SCENE), "lazy", seed=1, model=proposer,
+                     config=PlannerConfig.of(lazy_max_object_verify=used - 1)).to_dict()
+    obj = res["objects"][0]
+    assert obj["failure_reason"] == "no plan found: lazy_max_object_verify exhausted"
+    assert obj["verify_calls"] == used - 1 and obj["segments"] == 0
+    ok = lamp.solve(scene_from_dict(SCENE), "lazy", seed=1, model=proposer).to_dict()
+    assert ok["objects"][0]["verify_calls"] == ok["stats"]["verify_calls"] > 0
+
+
 def test_astar_expansion_budget_names_itself(proposer):
     task = _task(proposer, PlannerConfig.of(astar_max_expansions=3))
     plan = LampAStar.from_task(task).plan(task.object_poses[0], task.scene.robot_starts_array)
@@ -194,6 +225,7 @@ def test_solve_time_limit_sets_the_astar_budget(proposer, monkeypatch):
 
 @pytest.mark.parametrize("field, value", [("max_verify_calls", 0), ("astar_max_expansions", -1),
                                           ("lazy_max_expansions", 0),
+                                          ("lazy_max_object_verify", 0),
                                           ("max_plan_iterations", 1.5),
                                           ("gspi_time_limit", 0.0)])
 def test_config_rejects_bad_budgets(field, value):

@@ -18,9 +18,17 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from lamp.contract.plan import LoopPolicy, Plan, PlanStatus
+from lamp.contract.runner import ALONE, LoopEnd, LoopHooks
 from lamp.contract.trajectory import MAX_STEP, straight_moves
 from lamp.contract.transition import Transition
-from lamp.planners.closed_loop import ROBOT_SNAP, ClosedLoop, LoopRecord, SegmentEvent
+from lamp.planners.closed_loop import (
+    NO_PLAN_YET,
+    ROBOT_SNAP,
+    WORLD_CHANGED,
+    ClosedLoop,
+    LoopRecord,
+    SegmentEvent,
+)
 from lamp.planners.config import PlannerConfig
 
 LAZY = LoopPolicy(replan_on_drift=True, replan_when_done=True, replan_on_stall=True)
@@ -119,7 +127,7 @@ def stalled(seg: int, d: np.ndarray) -> np.ndarray:
 
 
 def run(executor, policy=LAZY, config=CONFIG, planner=None, reroute=None, goal=GOAL,
-        clearance=None, reach=0.0, route=None):
+        clearance=None, reach=0.0, route=None, hooks=ALONE):
     planner = planner or StraightPlanner(goal)
     events: list[SegmentEvent] = []
     record = LoopRecord()
@@ -131,7 +139,7 @@ def run(executor, policy=LAZY, config=CONFIG, planner=None, reroute=None, goal=G
 
     loop = ClosedLoop(planner, policy, executor, index=0, goal=goal, config=config,
                       reroute=reroute or default_reroute, record=record, observer=events.append,
-                      clearance=clearance, reach=reach, route=route)
+                      clearance=clearance, reach=reach, route=route, hooks=hooks)
     result = loop.run()
     return SimpleNamespace(result=result, events=events, record=record, planner=planner,
                            reroutes=reroutes)
@@ -251,6 +259,29 @@ def test_failed_plans(final: bool) -> None:
     assert len(out.planner.calls) == (1 if final else 3)
     assert out.result.failure_reason == ("no plan found" if final else
                                         "segment limit reached (0 segments and 3 failed steps of 3)")
+
+
+@pytest.mark.parametrize("fails", [True, False])
+def test_a_loop_that_waits_for_the_world_says_why(fails: bool) -> None:
+    """A loop sharing its world ends ``WORLD_CHANGED`` when its host waits for a change:
+    after a failed plan its reason is ``NO_PLAN_YET`` (the fleet plans nearer then),
+    after a declined segment ``WORLD_CHANGED``."""
+    class Failing(StraightPlanner):
+        def plan(self, q_O, q_R, deadline=None) -> Plan:
+            self.calls.append((q_O, q_R))
+            return Plan.failed(PlanStatus.BUDGET_EXHAUSTED)
+
+    class Declining(FakeExecutor):
+        def execute(self, robot_paths, record_every=None, stop=None):
+            return SimpleNamespace(declined=True)
+
+    waits: list[int] = []
+    hooks = LoopHooks(plan_failed=lambda: waits.append(1) or True)
+    out = (run(FakeExecutor(exact), planner=Failing(GOAL), hooks=hooks) if fails else
+           run(Declining(exact), hooks=hooks))
+    assert out.record.end is LoopEnd.WORLD_CHANGED and out.result.segments == 0
+    assert out.result.failure_reason == (NO_PLAN_YET if fails else WORLD_CHANGED)
+    assert waits == ([1] if fails else [])
 
 
 def test_robots_off_the_plan_are_joined_or_rerouted() -> None:

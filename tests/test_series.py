@@ -14,13 +14,14 @@ from lamp.planners.config import PlannerConfig
 from lamp.planners.series import LoopSeries
 
 
-def _loop(segments: int, planning: float, end: LoopEnd = LoopEnd.WORLD_CHANGED
-          ) -> ObjectOutcome:
+def _loop(segments: int, planning: float, end: LoopEnd = LoopEnd.WORLD_CHANGED,
+          verify: int = 0, expansions: int = 0) -> ObjectOutcome:
     result = ObjectResult(success=False, final_pose=[0.0, 0.0, 0.0], goal=[1.0, 0.0, 0.0],
                           position_error=1.0, orientation_error=0.0, left_workspace=False,
                           segments=segments, full_horizon_plan=False,
                           failure_reason="the world changed around the plan", replans=1,
-                          planning_time_s=planning)
+                          planning_time_s=planning, verify_calls=verify,
+                          search_expansions=expansions)
     return ObjectOutcome(result, [planning / max(1, segments)] * segments, 10 * segments,
                          end=end)
 
@@ -76,4 +77,24 @@ def test_the_count_budgets_do_not_shrink_with_the_clock() -> None:
     cfg = series.config(base)
     assert cfg.loop.planning_time_limit == pytest.approx(300.0 - 123.4)
     assert cfg.lazy_expansions == base.lazy_expansions == 300_000
+    assert cfg.lazy_verify_calls == base.lazy_verify_calls == 12_000
     assert cfg.astar_expansions == base.astar_expansions
+
+
+@given(st.lists(st.tuples(st.integers(0, 9_000), st.integers(0, 200_000)), min_size=1,
+                max_size=5), st.booleans())
+def test_the_count_budgets_bound_the_object_not_each_loop(loops, timed) -> None:
+    """LAMP-Lazy's per-object budgets (``lazy_verify_calls``, ``lazy_expansions``) are
+    shared by the loops: each next loop gets max(1, budget - what the earlier loops
+    counted), with or without a planning limit; the outcome sums the counts."""
+    base = PlannerConfig.of(planning_time_limit=300.0)
+    series = LoopSeries(10**6, 300.0 if timed else None)
+    verify = expansions = 0
+    for v, e in loops:
+        cfg = series.config(base)
+        assert cfg.lazy_verify_calls == max(1, 12_000 - verify)
+        assert cfg.lazy_expansions == max(1, 300_000 - expansions)
+        series.add(_loop(1, 0.0, verify=v, expansions=e))
+        verify, expansions = verify + v, expansions + e
+    out = series.outcome(np.zeros(3), np.zeros(3)).result
+    assert (out.verify_calls, out.search_expansions) == (verify, expansions)

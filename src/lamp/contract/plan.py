@@ -18,7 +18,7 @@ import numpy as np
 if TYPE_CHECKING:
     from lamp.contract.transition import Transition
 
-__all__ = ["LoopPolicy", "ObjectPlanner", "Plan", "PlanStatus"]
+__all__ = ["OBJECT_BUDGETS", "LoopPolicy", "ObjectPlanner", "Plan", "PlanStatus"]
 
 Edge = tuple[np.ndarray, np.ndarray]
 
@@ -58,6 +58,12 @@ _REASONS = {
 }
 
 
+#: The counts that bound an object over all its plan calls, and all its loops
+#: (``planners.series``): once one ran out, no later call can plan, so the closed loop
+#: ends for good (``Plan.spent``).
+OBJECT_BUDGETS = frozenset({"lazy_max_expansions", "lazy_max_object_verify"})
+
+
 @dataclass
 class Plan:
     """A plan for one object: transitions to execute in order (all of them verified, for
@@ -72,7 +78,8 @@ class Plan:
     penalised_edges: list[Edge] = field(default_factory=list)
     #: Which limit ended a ``BUDGET_EXHAUSTED`` or ``TIME_LIMIT`` call: the name of the
     #: ``PlannerConfig`` count that ran out (``max_plan_iterations``, ``max_verify_calls``,
-    #: ``astar_max_expansions``, ``lazy_max_expansions``) or ``"deadline"`` (wall clock); "" otherwise.
+    #: ``astar_max_expansions``, ``lazy_max_expansions``, ``lazy_max_object_verify``) or
+    #: ``"deadline"`` (wall clock); "" otherwise.
     limit: str = ""
     #: The transitions do not reach the goal (a recovery push): the loop plans again
     #: after them, and the object's plan does not count as full-horizon.
@@ -93,6 +100,11 @@ class Plan:
     @property
     def solved(self) -> bool:
         return self.status is PlanStatus.SOLVED
+
+    @property
+    def spent(self) -> bool:
+        """Whether the call ended on one of the object's budgets (``OBJECT_BUDGETS``)."""
+        return self.status is PlanStatus.BUDGET_EXHAUSTED and self.limit in OBJECT_BUDGETS
 
     @property
     def object_path(self) -> np.ndarray:

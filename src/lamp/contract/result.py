@@ -30,6 +30,11 @@ class ObjectResult:
     failure_reason: str = ""
     replans: int = 0
     planning_time_s: float = 0.0
+    #: What its planning counted (``TaskStats``): Verify calls and search expansions, over
+    #: all its plan calls; the budgets ``lazy_max_object_verify`` / ``lazy_max_expansions``
+    #: bound them.
+    verify_calls: int = 0
+    search_expansions: int = 0
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)

@@ -18,7 +18,7 @@ from lamp.contract.params import apply_overrides, check_fields, param
 from lamp.errors import InputError
 
 __all__ = ["CLAIM_NEAR", "MIN_SPACE_CACHE_MB", "PARAMS", "PASS_MARGIN", "PLAN_NEAR", "PREFIX",
-           "REJOIN_SLACK", "SPACE_CACHE_MB", "FleetConfig", "split_overrides"]
+           "REJOIN_SLACK", "REPLAN_NEAR", "SPACE_CACHE_MB", "FleetConfig", "split_overrides"]
 
 #: The near part of a claim (``regions.claims``): the footprints along this much (m) of an
 #: object's planned travel, which even a plan that only crosses its claim keeps out of
@@ -32,6 +32,11 @@ PASS_MARGIN = 1.0
 #: long-haul depot (one is lost with inf) but loses one of the 15 held-out scenes
 #: (``docs/fleet.md``, What each object gets).
 PLAN_NEAR = math.inf
+#: After its planner found no plan, an object's loops plan around only the other teams'
+#: robots standing this near (m) to its own (``replan_near``'s default): a long haul whose
+#: every plan around all of them used up its search budget then plans in a few seconds
+#: (``docs/fleet.md``, What each object gets).
+REPLAN_NEAR = 5.0
 #: The rows a segment's rejoins may insert, as a share of its planned rows; past it the
 #: segment ends (``segments.Segment.rejoin``; ``rejoin_slack``'s default). A push jammed
 #: on a shelf corner otherwise runs event after event without ending.
@@ -76,6 +81,10 @@ class FleetConfig:
                              "move before it comes; admission holds back a segment that "
                              "meets one still standing, and the loop plans anew there); "
                              "inf: around all of them.", low=0.0, unbounded=True)
+    replan_near: float = param(REPLAN_NEAR, "Concurrent schedule: once an object's planner "
+                               "found no plan, its later loops plan around only the other "
+                               "teams' robots within this distance (m) of its own (at most "
+                               "plan_near); inf: as plan_near.", low=0.0, unbounded=True)
     rejoin_limit: int = param(0, "Concurrent schedule: a segment whose robots had to move "
                               "back to their rows this many times (held back by what they "
                               "push) ends, stopped; 0: never.", low=0)

@@ -36,6 +36,7 @@ from lamp.fleet.parking import park
 from lamp.fleet.stats import FleetStats
 from lamp.fleet.transit import transit
 from lamp.fleet.view import FleetView, SharedWorld
+from lamp.planners.closed_loop import NO_PLAN_YET
 from lamp.planners.runner import ClosedLoopRunner
 from lamp.planners.series import LoopSeries
 from lamp.planners.team import team_scene
@@ -115,6 +116,7 @@ def object_main(runner: ClosedLoopRunner, observe: Callable[[SegmentEvent], None
         scene, cfg = fleet.scene, runner.config  # the object's goal: its task's
         seed = runner.seed * 1000 + k  # the object's tasks' seed (``ClosedLoopRunner.loop``)
         series = LoopSeries.of(scene, k, fleet.executor.object_poses[k], cfg, planning=True)
+        near = settings.plan_near
         while True:
             config = series.config(cfg).but(space_cache_mb=max(MIN_SPACE_CACHE_MB, min(
                 cfg.loop.space_cache_mb, SPACE_CACHE_MB / max(1, fleet.moving()))))
@@ -131,12 +133,14 @@ def object_main(runner: ClosedLoopRunner, observe: Callable[[SegmentEvent], None
             if view.team_changed:  # a robot failed or joined during transit
                 continue
             detour = fleet.detour_of(k)
-            mine = world(near=settings.plan_near)  # farther robots move before it comes
+            mine = world(near=near)  # farther robots move before it comes
             scene_k = mine if detour is None else with_goal(mine, k, detour)
             fleet.world_taken(k)
             if detour is not None:  # a place to stand aside: any heading will do
                 config = config.but(stop_orientation=math.pi)
             last = series.add(runner.loop(scene_k, k, view, config, observe, view.hooks))
+            if last.result.failure_reason == NO_PLAN_YET:  # from now on: only those near
+                near = min(near, settings.replan_near)
             ended = last.end not in (LoopEnd.WORLD_CHANGED, LoopEnd.TEAM_CHANGED)
             if ended and detour is not None:  # aside (or no way there): on to its goal
                 fleet.detour_done(k)

@@ -86,8 +86,11 @@ def adapt_to_robots(trans: Transition, q_R: np.ndarray, reroute: Reroute) -> Tra
 STALL_FRACTION = 0.25
 #: ``failure_reason`` of a loop that ended with ``LoopEnd.TEAM_CHANGED``.
 TEAM_CHANGED = "a robot failed"
-#: ``failure_reason`` of a loop that ended with ``LoopEnd.WORLD_CHANGED``.
+#: ``failure_reason`` of a loop that ended with ``LoopEnd.WORLD_CHANGED``: its segment was
+#: declined ...
 WORLD_CHANGED = "the world changed around the plan"
+#: ... or its planner found no plan and its host waited for the world to change.
+NO_PLAN_YET = "no plan in the world as it stood"
 #: Drift and stall tests keep this many standard deviations of the averaged reading above
 #: the sensor's noise (``LoopConfig.sensing_sigma``).
 NOISE_SIGMAS = 3.0
@@ -225,11 +228,14 @@ class ClosedLoop:
             st.full_horizon = st.plan.solved and self.policy.full_horizon and not st.plan.partial
         st.planned_once = True
         st.replanned = True
+        if st.plan.spent:  # no later call can plan: waiting or retrying would not help
+            self._end(st, LoopEnd.FINISHED, st.plan.reason)
+            return "stop"
         if not st.plan.solved:
             # a loop sharing its world (``lamp.fleet``) may wait for the world to change:
             # True, and the loop stops so that its runner plans anew
             if self.hooks.plan_failed():
-                self._end(st, LoopEnd.WORLD_CHANGED, WORLD_CHANGED)
+                self._end(st, LoopEnd.WORLD_CHANGED, NO_PLAN_YET)
                 return "stop"
             if self.policy.failure_is_final:
                 end = LoopEnd.NO_PLAN if st.plan.status is PlanStatus.NO_PATH else LoopEnd.FINISHED

@@ -32,6 +32,14 @@ ASTAR_EXPANSION_RATE = 8.0
 #: benchmark scene (``maze-16``) and 151 k for a whole ``fleet`` run (``fleet-20``, 10
 #: objects), the same runs to the millisecond with the budget as without.
 LAZY_EXPANSION_RATE = 1000.0
+#: LAMP-Lazy's default Verify-call budget per object, over all its plan calls, per second
+#: of planning limit (12 k for the default 300 s: three plan calls that each spend their
+#: whole ``max_verify_calls``). A plan call that fails that way makes about 120 Verify
+#: calls/s (the 40 x 30 m long-haul depot, 72 robots: 4,000 in 33 s), so the count ends
+#: such an object at about 1/3 of the wall-clock limit, before the clock on a loaded
+#: machine. Ordinary objects need far less: at most 3.5 k (``warehouse-xl``), 30-50 calls
+#: per second of a whole fleet run's planning.
+LAZY_VERIFY_RATE = 40.0
 
 
 #: The paper's limit: at most 100 executed segments ("execution iterations") per object.
@@ -159,6 +167,11 @@ class LazyConfig:
     max_plan_iterations: int = param(400, "Most D* Lite replans inside one LAMP-Lazy Plan "
                                      "call.", low=1)
     max_verify_calls: int = param(4000, "Most Verify calls in one LAMP-Lazy Plan call.", low=1)
+    lazy_max_object_verify: int | None = param(None, "Most Verify calls LAMP-Lazy makes per "
+                                               "object, over all its plan calls; none: "
+                                               "LAZY_VERIFY_RATE per second of "
+                                               "planning_time_limit.", kind=int, low=1,
+                                               optional=True)
     lazy_max_expansions: int | None = param(None, "Most D* Lite expansions LAMP-Lazy makes "
                                             "per object, over all its plan calls; none: "
                                             "LAZY_EXPANSION_RATE per second of "
@@ -237,6 +250,13 @@ class PlannerConfig:
         """LAMP-Lazy's D* Lite expansion budget per object (``lazy_max_expansions`` or its
         default: ``LAZY_EXPANSION_RATE`` per second of the loop's planning limit)."""
         return _budget(self.lazy.lazy_max_expansions, LAZY_EXPANSION_RATE,
+                       self.loop.planning_time_limit)
+
+    @property
+    def lazy_verify_calls(self) -> int:
+        """LAMP-Lazy's Verify-call budget per object (``lazy_max_object_verify`` or its
+        default: ``LAZY_VERIFY_RATE`` per second of the loop's planning limit)."""
+        return _budget(self.lazy.lazy_max_object_verify, LAZY_VERIFY_RATE,
                        self.loop.planning_time_limit)
 
 

@@ -190,8 +190,8 @@ class LazyPlanner:
 
         Departure: the paper's loop (lines 10-40) runs until a plan is found; here it runs at
         most ``max_plan_iterations`` times and makes at most ``max_verify_calls`` Verify
-        calls, and D* Lite expands at most ``lazy_expansions`` vertices over all the
-        object's calls (each ``BUDGET_EXHAUSTED``, ``Plan.limit`` naming the count): counts,
+        calls (and ``lazy_verify_calls`` over all the object's calls), and D* Lite expands
+        at most ``lazy_expansions`` vertices over all the object's calls (each ``BUDGET_EXHAUSTED``, ``Plan.limit`` naming the count): counts,
         so the result does not depend on the machine's speed; ``deadline``
         (``TIME_LIMIT``) is only an outer cap.
         """
@@ -202,7 +202,10 @@ class LazyPlanner:
         if self.plane.separated(q_O_now, self.lattice.pose(self.lattice.goal_node)):
             return self._recover(q_O_now, q_R_now, Plan.failed(PlanStatus.SEPARATED,
                                                                self.penalised))
-        verify_cap = stats.verify_calls + self.config.lazy.max_verify_calls
+        per_call = stats.verify_calls + self.config.lazy.max_verify_calls
+        verify_cap = (per_call, "max_verify_calls")
+        if self.config.lazy_verify_calls < per_call:  # the object's budget ends it first
+            verify_cap = (self.config.lazy_verify_calls, "lazy_max_object_verify")
         expanded_before = stats.search_expansions
         try:
             return self._plan(q_O_now, q_R_now, deadline, verify_cap)
@@ -211,8 +214,9 @@ class LazyPlanner:
                                             stats.search_expansions - expanded_before)
 
     def _plan(self, q_O_now: np.ndarray, q_R_now: np.ndarray, deadline: float | None,
-              verify_cap: int) -> Plan:
-        """:meth:`plan`'s loop (lines 10-42), its Verify calls capped at ``verify_cap``."""
+              verify_cap: tuple[int, str]) -> Plan:
+        """:meth:`plan`'s loop (lines 10-42), its Verify calls capped at ``verify_cap``
+        (the count, and the name of the budget that sets it)."""
         cfg = self.config
         goal = self.lattice.goal_node
         stats = self.verifier.stats
@@ -221,9 +225,9 @@ class LazyPlanner:
                 rescue = self._recover(q_O_now, q_R_now, Plan.failed(PlanStatus.NO_PATH))
                 if rescue.solved:
                     return rescue
-            if stats.verify_calls >= verify_cap:
+            if stats.verify_calls >= verify_cap[0]:
                 return self._recover(q_O_now, q_R_now, Plan.failed(
-                    PlanStatus.BUDGET_EXHAUSTED, self.penalised, "max_verify_calls"))
+                    PlanStatus.BUDGET_EXHAUSTED, self.penalised, verify_cap[1]))
             if deadline is not None and time.perf_counter() > deadline:
                 return Plan.failed(PlanStatus.TIME_LIMIT, self.penalised, "deadline")
             start, edges = join_lattice(self.lattice, np.asarray(q_O_now, float))
@@ -253,9 +257,9 @@ class LazyPlanner:
             for nxt in path[1:]:  # line 13: each q_next on P_O
                 if self.lattice.is_node(curr) and curr in self.tree_eval:  # line 14: in Tree_eval, break
                     break
-                if stats.verify_calls >= verify_cap:
+                if stats.verify_calls >= verify_cap[0]:
                     return self._recover(q_O_now, q_R_now, Plan.failed(
-                        PlanStatus.BUDGET_EXHAUSTED, self.penalised, "max_verify_calls"))
+                        PlanStatus.BUDGET_EXHAUSTED, self.penalised, verify_cap[1]))
                 attempt = self.failures.get((curr, nxt), 0)
                 trans = self.verifier.verify(self.lattice.pose(curr), self.lattice.pose(nxt), q_R, attempt)
                 if trans is None:  # lines 17-20: no C_R, UpdateChange

@@ -13,6 +13,7 @@ disturbances, one loop per team of the robots still working (``TeamView``), in a
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -80,6 +81,8 @@ class ClosedLoopRunner:
         self.totals.add(task.stats)
         task.close()
         self.watch_stops += record.watch_stops
+        result = replace(result, verify_calls=task.stats.verify_calls,
+                         search_expansions=task.stats.search_expansions)
         return ObjectOutcome(result, record.planning_time_s, record.makespan,
                              record.unexecuted_planning_s, end=record.end)
 

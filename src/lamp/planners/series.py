@@ -55,7 +55,9 @@ def merged(parts: list[ObjectOutcome]) -> ObjectOutcome:
     result = replace(last, segments=sum(p.result.segments for p in parts),
                      replans=sum(p.result.replans for p in parts) + len(parts) - 1,
                      full_horizon_plan=parts[0].result.full_horizon_plan,
-                     planning_time_s=sum(p.result.planning_time_s for p in parts))
+                     planning_time_s=sum(p.result.planning_time_s for p in parts),
+                     verify_calls=sum(p.result.verify_calls for p in parts),
+                     search_expansions=sum(p.result.search_expansions for p in parts))
     return ObjectOutcome(result, [t for p in parts for t in p.planning_time_s],
                          sum(p.makespan for p in parts),
                          sum(p.unexecuted_planning_s for p in parts), end=parts[-1].end)
@@ -103,19 +105,31 @@ class LoopSeries:
         """Planning time the loops so far spent (s)."""
         return sum(p.result.planning_time_s for p in self.parts)
 
+    @property
+    def verify_calls(self) -> int:
+        """Verify calls the loops so far made."""
+        return sum(p.result.verify_calls for p in self.parts)
+
+    @property
+    def search_expansions(self) -> int:
+        """Search expansions the loops so far made."""
+        return sum(p.result.search_expansions for p in self.parts)
+
     def config(self, base: PlannerConfig) -> PlannerConfig:
-        """``base`` for the next loop: the segments left (at least 1) and, with a planning
-        limit, the planning time left (at least ``MIN_PLANNING_S``). The searches' count
-        budgets stay ``base``'s (``lazy_expansions``, ``astar_expansions``): they are
-        derived from the planning limit when not set, and the time left depends on the
-        machine, the counts must not (a run stays the same on a loaded machine)."""
+        """``base`` for the next loop: the segments left (at least 1), what is left of
+        LAMP-Lazy's per-object count budgets (``lazy_verify_calls``, ``lazy_expansions``:
+        at least 1; they bound the object, not each loop) and, with a planning limit, the
+        planning time left (at least ``MIN_PLANNING_S``). The counts are ``base``'s, not
+        derived from the time left: that depends on the machine, the counts must not (a
+        run stays the same on a loaded machine)."""
         left = max(1, self.segment_limit - self.segments)
+        counts = dict(lazy_max_object_verify=max(1, base.lazy_verify_calls - self.verify_calls),
+                      lazy_max_expansions=max(1, base.lazy_expansions - self.search_expansions))
         if self.planning_limit is None:
-            return base.but(max_segments=left)
+            return base.but(max_segments=left, **counts)
         return base.but(max_segments=left, planning_time_limit=max(
             MIN_PLANNING_S, self.planning_limit - self.planning_s),
-            lazy_max_expansions=base.lazy_expansions,
-            astar_max_expansions=base.astar_expansions)
+            astar_max_expansions=base.astar_expansions, **counts)
 
     def add(self, outcome: ObjectOutcome) -> ObjectOutcome:
         """Record a loop's outcome; returns it."""
