@@ -28,9 +28,9 @@ CLAIM_NEAR = 2.0
 #: claim to go through it (``admission.passes_ahead``; ``pass_margin``'s default).
 PASS_MARGIN = 1.0
 #: An object's loop plans around the other teams' robots standing this near (m) to its
-#: own (``plan_near``'s default, inf: all of them). 5 m places every load of the 72-robot
-#: long-haul depot (one is lost with inf) but loses one of the 15 held-out scenes
-#: (``docs/fleet.md``, What each object gets).
+#: own (``plan_near``'s default, inf: all of them). 5 m shortens some runs and lengthens
+#: others, and loses one of the 15 held-out scenes (``docs/fleet.md``, What each object
+#: gets).
 PLAN_NEAR = math.inf
 #: After its planner found no plan, an object's loops plan around only the other teams'
 #: robots standing this near (m) to its own (``replan_near``'s default): a long haul whose

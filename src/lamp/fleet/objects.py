@@ -4,17 +4,18 @@ world changed around its plan.
 :func:`object_main` is what ``Fleet`` runs in object ``k``'s thread: a
 :class:`~lamp.planners.runner.ClosedLoopRunner` loop on the object's sub-team
 (``Fleet.view``), in the world as it is when the loop starts (``sub_scene``: every other
-robot a disk obstacle where it stands). A team that stands far from its object first
-drives to it (``lamp.fleet.transit``); a team whose object is placed moves out of the
-others' way before its robots go free (``lamp.fleet.parking``). A loop that ends with ``WORLD_CHANGED`` (its
-segment was declined, or it found no plan while others moved) or ``TEAM_CHANGED`` (a robot
-of its sub-team failed: ``Fleet`` took it out of the team) is followed by a new one, and so
-is a loop that took the object aside to a detour's end (``lamp.fleet.makeway``),
-within the object's segment limit and cumulative planning limit (``planners.series``:
-when one of them ends it, the object's failure names that limit); the object's outcome
-merges every loop's (each new loop counts as a replan). The objects
-moving at once share ``config.SPACE_CACHE_MB`` of robot-space cache. What the loops ask
-of the fleet is :class:`LoopHost`.
+robot a disk obstacle where it stands; once a loop's planner found no plan, only those
+within ``replan_near`` of its team, ``FleetConfig``). A team that stands far from its
+object first drives to it (``lamp.fleet.transit``); a team whose object is placed moves
+out of the others' way before its robots go free (``lamp.fleet.parking``). A loop that
+ends with ``WORLD_CHANGED`` (its segment was declined, or it found no plan while others
+moved) or ``TEAM_CHANGED`` (a robot of its sub-team failed: ``Fleet`` took it out of the
+team) is followed by a new one, and so is a loop that took the object aside to a detour's
+end (``lamp.fleet.makeway``), within the object's segment limit, its planners' count
+budgets and its cumulative planning limit (``planners.series``: when one of them ends it,
+the object's failure names that limit); the object's outcome merges every loop's (each
+new loop counts as a replan). The objects moving at once share ``config.SPACE_CACHE_MB``
+of robot-space cache. What the loops ask of the fleet is :class:`LoopHost`.
 """
 
 from __future__ import annotations

@@ -3,8 +3,9 @@
 A loop ends for good or so that its runner plans anew (``contract.runner.LoopEnd``): a
 robot of its team failed (the sequential runner under disturbances), or the world changed
 around its plan (the fleet schedule). :class:`LoopSeries` is what both runners share:
-each next loop gets the segments (and, when the series has one, the cumulative planning
-time) the earlier loops left; the series has run out when its loops used the segment
+each next loop gets the segments, LAMP-Lazy's per-object count budgets (Verify calls,
+search expansions) and, when the series has one, the cumulative planning time the earlier
+loops left; the series has run out when its loops used the segment
 limit, or made as many loops as the limit allows, or spent the planning limit
 (:func:`limit_reached`); the object's outcome merges the loops' (:func:`merged`: each
 new loop counts as a replan) and is judged on the object's true pose (:func:`judged`).
