@@ -99,6 +99,7 @@ from lamp.mrmp.repair import (
 from lamp.mrmp.result import GspiStatus, MRMPPlan
 from lamp.mrmp.retime import RETIME_QUANTA, densify, drop_waits, retime
 from lamp.mrmp.shortcut import shortcut_rows
+from lamp.mrmp.timed_repair import timed_repair
 from lamp.scene.model import Scene
 
 __all__ = ["GspiStatus", "MRMPPlan", "plan_paths", "warmup"]
@@ -463,8 +464,15 @@ def _attempt(space: RobotSpace, S: np.ndarray, G: np.ndarray, c_start: np.ndarra
                                               space.threshold)
         stats["time_shortcut"] = time.perf_counter() - clock
         clock = time.perf_counter()
-        paths, _ = retime(P, 2.0 * space.radius, L / RETIME_QUANTA, opts.max_spacing)
+        paths, _, times = retime(P, 2.0 * space.radius, L / RETIME_QUANTA,
+                                 opts.max_spacing, times=True)
         stats["time_retime"] = time.perf_counter() - clock
+        clock = time.perf_counter()
+        paths, stats["timed_repairs"], stats["timed_states"] = timed_repair(
+            paths, times, links.graph, V, gv0, hs, goal, 2.0 * space.radius,
+            L / RETIME_QUANTA, links.max_move, opts.max_spacing, space.geometry,
+            space.workspace, space.threshold)
+        stats["time_timed_repair"] = time.perf_counter() - clock
     else:
         paths = densify(links.graph.coords[VX], opts.max_spacing)
     reason = run.reason

@@ -300,9 +300,11 @@ def _earliest(evk: np.ndarray, parent: np.ndarray, ef: np.ndarray, et: np.ndarra
 
 @nb.njit(cache=True)
 def _rows(P: np.ndarray, rob: np.ndarray, seg: np.ndarray, ev0: np.ndarray,
-          ev1: np.ndarray, T: np.ndarray, q: float, max_spacing: float) -> np.ndarray:
+          ev1: np.ndarray, T: np.ndarray, q: float, max_spacing: float
+          ) -> tuple[np.ndarray, np.ndarray]:
     """(N, R, 2) rows at every event time, subdivided to keep each move per row <=
-    ``max_spacing`` (a robot covers at most one quantum of length per quantum)."""
+    ``max_spacing`` (a robot covers at most one quantum of length per quantum), and the
+    rows' times (quanta)."""
     N = P.shape[1]
     tmax = T.max()
     used = np.zeros(tmax + 1, np.bool_)
@@ -349,14 +351,15 @@ def _rows(P: np.ndarray, rob: np.ndarray, seg: np.ndarray, ev0: np.ndarray,
                 out[i, r, 0] = seg[st, 0]
                 out[i, r, 1] = seg[st, 1]
         a = b
-    return out
+    return out, tt
 
 
 def retime(P: np.ndarray, two_r: float, quantum: float, max_spacing: float,
-           lazy: bool = True, max_rounds: int = 12) -> tuple[np.ndarray, float]:
+           lazy: bool = True, max_rounds: int = 12, times: bool = False) -> tuple:
     """Rows (N, R, 2) of the retimed plan of the synchronised step positions ``P``
     (K+1, N, 2), robots of radius ``two_r / 2``, event times in multiples of ``quantum``
-    (metres at unit speed); and its makespan (metres)."""
+    (metres at unit speed); and its makespan (metres); with ``times``, also the rows'
+    times (R,) (metres)."""
     P = np.ascontiguousarray(P, dtype=np.float64)
     rob, lo, hi, seg, move, ev0, ev1, evk = _states(P)
     parent = np.arange(len(evk), dtype=np.int64)
@@ -380,7 +383,9 @@ def retime(P: np.ndarray, two_r: float, quantum: float, max_spacing: float,
             union(parent, ev0[pa[e]], ev0[pb[e]])
             union(parent, ev1[pa[e]], ev1[pb[e]])
         T = _earliest(evk, parent, ef, et, w)
-    rows = _rows(P, rob, seg, ev0, ev1, T, float(quantum), float(max_spacing))
+    rows, tt = _rows(P, rob, seg, ev0, ev1, T, float(quantum), float(max_spacing))
+    if times:
+        return rows, float(T.max()) * quantum, tt * quantum
     return rows, float(T.max()) * quantum
 
 
