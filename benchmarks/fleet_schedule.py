@@ -23,10 +23,9 @@ import json
 import statistics
 from pathlib import Path
 
+from lamp.bench.scene_bounds import record_scene
 from lamp.contract.model import MAX_ROBOTS
 from lamp.scene.bounds import makespan_lower_bound
-from lamp.scene.loader import load_scene
-from lamp.suites.registry import resolve_scene
 
 
 def records_by_scene(folder: Path) -> dict[str, dict]:
@@ -49,13 +48,6 @@ def collisions(folder: Path, rec: dict) -> int | None:
     return len(check_run_dir(run).violations)
 
 
-def _scene(rec: dict):
-    """The job's scene: its file when the suite was a folder (the recorded path exists),
-    else the built-in scene of that name (built-in records name a package-relative file)."""
-    path = Path(rec.get("scene_file") or "")
-    return load_scene(path) if path.is_file() else resolve_scene(rec["scene"])
-
-
 def _f(x: float | None, fmt: str = ".1f") -> str:
     return "-" if x is None else format(x, fmt)
 
@@ -76,7 +68,7 @@ def table(seq: Path, con: Path, peer: Path | None) -> str:
     ratios, big, over, ok, hits, checked = [], [], [], 0, 0, 0
     for name in sorted(c_recs):
         c, s, p = c_recs[name], s_recs.get(name), p_recs.get(name)
-        scene = _scene(c)
+        scene = record_scene(c)
         bound = makespan_lower_bound(scene).seconds
         c_over = c["makespan_s"] / bound if c["success"] and bound else None
         if c_over is not None:
