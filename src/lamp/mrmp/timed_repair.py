@@ -47,12 +47,17 @@ from lamp.mrmp.obstacle_grid import grid_clear_segments
 from lamp.mrmp.repair_hash import hash_rows
 from lamp.mrmp.timed_checks import arrivals, free_time, motion_clear, with_way
 
-__all__ = ["KNIGHT", "OCTILE", "TIMED_BUDGET", "TIMED_ROUNDS", "TIMED_WAIT", "timed_repair"]
+__all__ = ["KNIGHT", "OCTILE", "TIMED_BUDGET", "TIMED_ENTRIES", "TIMED_ROUNDS", "TIMED_WAIT",
+           "timed_repair"]
 
 #: States all the searches of one call may expand together (the work bound).
 TIMED_BUDGET = 5000
 #: The most robots planned again in one call.
 TIMED_ROUNDS = 24
+#: Plans of more rows times robots are left as they are: the rows' hash and the
+#: searches' checks grow with them (a 1,600-robot plan on ``den520d``, 1.4-1.9 million,
+#: took 0.15-0.35 s for a few hundredths of a metre).
+TIMED_ENTRIES = 1_000_000
 #: Quanta of one wait action.
 TIMED_WAIT = 2
 #: The knight moves of the search (lattice index offsets): with the 8 lattice directions,
@@ -319,12 +324,13 @@ def timed_repair(rows: np.ndarray, times: np.ndarray, gr: tuple, V: int, gv0: in
     distances ``hs``, robot i's start vertex ``V + i``, goal m's ``gv0 + m``);
     ``quantum``: the time step of the new ways (metres), ``max_move``: the graph's
     longest edge; ``geometry``, ``workspace``, ``need``: the obstacles, the workspace and
-    the clearance a knight move keeps (the space's threshold). Returns the rows, the
+    the clearance a knight move keeps (the space's threshold). Plans of more than
+    :data:`TIMED_ENTRIES` rows times robots are returned as they are. Returns the rows, the
     robots planned again and the states expanded."""
     from lamp.mrmp.obstacle_grid import get_grid
 
     rows = np.asarray(rows, dtype=np.float64)
-    if rows.shape[0] < 2 or rows.shape[1] < 2:
+    if rows.shape[0] < 2 or rows.shape[1] < 2 or rows.shape[0] * rows.shape[1] > TIMED_ENTRIES:
         return rows, 0, 0
     X = np.ascontiguousarray(rows[:, :, 0].T)
     Y = np.ascontiguousarray(rows[:, :, 1].T)
