@@ -61,7 +61,7 @@ _REASONS = {
 #: The counts that bound an object over all its plan calls, and all its loops
 #: (``planners.series``): once one ran out, no later call can plan, so the closed loop
 #: ends for good (``Plan.spent``).
-OBJECT_BUDGETS = frozenset({"lazy_max_expansions", "lazy_max_object_verify"})
+OBJECT_BUDGETS = frozenset({"lazy_max_object_verify"})
 
 
 @dataclass

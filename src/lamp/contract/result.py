@@ -31,8 +31,7 @@ class ObjectResult:
     replans: int = 0
     planning_time_s: float = 0.0
     #: What its planning counted (``TaskStats``): Verify calls and search expansions, over
-    #: all its plan calls; the budgets ``lazy_max_object_verify`` / ``lazy_max_expansions``
-    #: bound them.
+    #: all its plan calls (``lazy_max_object_verify`` bounds the Verify calls).
     verify_calls: int = 0
     search_expansions: int = 0
 

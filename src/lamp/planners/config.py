@@ -33,13 +33,13 @@ ASTAR_EXPANSION_RATE = 8.0
 #: objects), the same runs to the millisecond with the budget as without.
 LAZY_EXPANSION_RATE = 1000.0
 #: LAMP-Lazy's default Verify-call budget per object, over all its plan calls, per second
-#: of planning limit (12 k for the default 300 s: three plan calls that each spend their
+#: of planning limit (24 k for the default 300 s: six plan calls that each spend their
 #: whole ``max_verify_calls``). A plan call that fails that way makes about 120 Verify
 #: calls/s (the 40 x 30 m long-haul depot, 72 robots: 4,000 in 33 s), so the count ends
 #: such an object at about 1/3 of the wall-clock limit, before the clock on a loaded
 #: machine. Ordinary objects need far less: at most 3.5 k (``warehouse-xl``), 30-50 calls
 #: per second of a whole fleet run's planning.
-LAZY_VERIFY_RATE = 40.0
+LAZY_VERIFY_RATE = 80.0
 
 
 #: The paper's limit: at most 100 executed segments ("execution iterations") per object.

@@ -3,9 +3,8 @@
 A loop ends for good or so that its runner plans anew (``contract.runner.LoopEnd``): a
 robot of its team failed (the sequential runner under disturbances), or the world changed
 around its plan (the fleet schedule). :class:`LoopSeries` is what both runners share:
-each next loop gets the segments, LAMP-Lazy's per-object count budgets (Verify calls,
-search expansions) and, when the series has one, the cumulative planning time the earlier
-loops left; the series has run out when its loops used the segment
+each next loop gets the segments, LAMP-Lazy's per-object Verify budget and, when the
+series has one, the cumulative planning time the earlier loops left; the series has run out when its loops used the segment
 limit, or made as many loops as the limit allows, or spent the planning limit
 (:func:`limit_reached`); the object's outcome merges the loops' (:func:`merged`: each
 new loop counts as a replan) and is judged on the object's true pose (:func:`judged`).
@@ -118,14 +117,15 @@ class LoopSeries:
 
     def config(self, base: PlannerConfig) -> PlannerConfig:
         """``base`` for the next loop: the segments left (at least 1), what is left of
-        LAMP-Lazy's per-object count budgets (``lazy_verify_calls``, ``lazy_expansions``:
-        at least 1; they bound the object, not each loop) and, with a planning limit, the
-        planning time left (at least ``MIN_PLANNING_S``). The counts are ``base``'s, not
-        derived from the time left: that depends on the machine, the counts must not (a
-        run stays the same on a loaded machine)."""
+        LAMP-Lazy's per-object Verify budget (``lazy_verify_calls``, at least 1: it bounds
+        the object, not each loop) and, with a planning limit, the planning time left (at
+        least ``MIN_PLANNING_S``). The searches' expansion budgets are ``base``'s for each
+        loop (a new loop searches a new world from scratch). The counts are ``base``'s,
+        not derived from the time left: that depends on the machine, the counts must not
+        (a run stays the same on a loaded machine)."""
         left = max(1, self.segment_limit - self.segments)
         counts = dict(lazy_max_object_verify=max(1, base.lazy_verify_calls - self.verify_calls),
-                      lazy_max_expansions=max(1, base.lazy_expansions - self.search_expansions))
+                      lazy_max_expansions=base.lazy_expansions)
         if self.planning_limit is None:
             return base.but(max_segments=left, **counts)
         return base.but(max_segments=left, planning_time_limit=max(
