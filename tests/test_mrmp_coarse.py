@@ -19,7 +19,7 @@ from lamp.mrmp import plan_paths
 from lamp.mrmp.coarse import BLOCK, get_coarse
 from lamp.mrmp.distance_field import get_lattice
 from lamp.mrmp.goal_distances import GoalDistances, expand_to, hval
-from lamp.mrmp.heuristic_reads import hval_fast
+from lamp.mrmp.heuristic_reads import hval_fast, hval_in, read_in, read_settled
 from lamp.mrmp.links import link_special_vertices
 from lamp.mrmp.neighbours import neighbour_lists, within
 from lamp.scene.mapf import load_grid_map, random_instance
@@ -118,8 +118,9 @@ def test_fleet_plan_over_the_coarse_assignment_passes_both_checkers(
 @settings(max_examples=10, deadline=None)
 @given(seed=st.integers(0, 10_000), bound=st.floats(0.0, 2.0))
 def test_fast_heuristic_reads_equal_hval(seed: int, bound: float) -> None:
-    """``hval_fast`` (settled values read in place) gives ``hval``'s value for lattice
-    nodes and special vertices, settled or not, after any partial expansion."""
+    """``hval_fast`` and ``hval_in`` (settled values read in place) give ``hval``'s value
+    for lattice nodes and special vertices, settled or not, after any partial expansion;
+    ``read_in`` (tables passed in) reads what ``read_settled`` reads: -1 or that value."""
     _, S, G, lat, links, hs = _setup(seed % 50, 40)
     ref = GoalDistances.build(links.goal_links, G, lat, 80)
     gr, V = links.graph, lat.V
@@ -127,9 +128,17 @@ def test_fast_heuristic_reads_equal_hval(seed: int, bound: float) -> None:
     rng = np.random.default_rng(seed)
     for v in np.concatenate([rng.integers(0, V, 60), V + np.arange(0, 80, 7)]).tolist():
         m = int(rng.integers(0, 2))
-        a = hval_fast(m, v, gr, V, V + 40, hs)
+        w = hs.win
+        # in-place reads (tables passed in, or read from the tuple): -1 or the value
+        got = read_in(m, v, V, hs.va, hs.vb, hs.sdone, hs.sval, hs.dist[m], hs.done[m],
+                      *w[m, :4].tolist())
+        assert got == read_settled(m, v, V, hs, hs.dist[m], hs.done[m], *w[m, :4].tolist())
         b = hval(m, v, gr, V, V + 40, ref)
+        assert got == -1.0 or got == b or (np.isinf(got) and np.isinf(b))
+        a = hval_fast(m, v, gr, V, V + 40, hs)
         assert a == b or (np.isinf(a) and np.isinf(b))
+        c = hval_in(m, v, gr, V, V + 40, hs, hs.win, hs.va, hs.vb, hs.sdone, hs.sval)
+        assert c == b or (np.isinf(c) and np.isinf(b))
 
 
 @settings(max_examples=30, deadline=None)

@@ -31,7 +31,7 @@ import numpy as np
 from lamp.geometry.kernels import point_segment_distance
 from lamp.mrmp.goal_distances import hval
 from lamp.mrmp.gspi_swaps import break_deadlocks, swap_goals
-from lamp.mrmp.heuristic_reads import hval_fast, read_settled
+from lamp.mrmp.heuristic_reads import hval_fast, read_in
 from lamp.mrmp.neighbours import ALL_PAIRS_BELOW, neighbour_lists, within
 
 __all__ = ["ALL_PAIRS_BELOW", "Graph", "conflict", "neighbour_lists", "run_steps"]
@@ -121,13 +121,13 @@ def _build_cands(
     else:
         # goal g's settled values read straight from its window (a call per value costs
         # forty times as much); the others, and the window after a growth, from hval
-        win = hs[0]
+        win, va, vb, sdone, sval = hs[0], hs[11], hs[12], hs[9], hs[10]
         dd = hs[2][g]
         dn = hs[3][g]
         a0, b0, na, nbw = win[g, 0], win[g, 1], win[g, 2], win[g, 3]
         for k in range(n):
             u = cand[i, k]
-            hv = read_settled(g, u, V, hs, dd, dn, a0, b0, na, nbw)
+            hv = read_in(g, u, V, va, vb, sdone, sval, dd, dn, a0, b0, na, nbw)
             if hv < 0.0:
                 hv = hval(g, u, gr, V, gv0, hs)
                 dd = hs[2][g]
@@ -341,7 +341,9 @@ def run_steps(
     hvc = np.empty((N, maxc))  # the candidates' values (_build_cands)
     hgoal = np.full(N, -1, dtype=np.int64)  # the goal of hcur (-1: none read)
     small = N < ALL_PAIRS_BELOW
-    aptr, aidx = neighbour_lists(np.zeros(N), np.zeros(N), np.inf)
+    # every robot checks every other in small teams (fleets: spatial hash, each step)
+    aptr, aidx = neighbour_lists(np.zeros(N if small else 0), np.zeros(N if small else 0),
+                                 np.inf)
     for t in range(t0, t1):
         done = True
         for i in range(N):

@@ -9,7 +9,7 @@ import numba as nb
 import numpy as np
 
 from lamp.mrmp.goal_distances import hval
-from lamp.mrmp.heuristic_reads import hval_fast
+from lamp.mrmp.heuristic_reads import hval_in
 
 __all__ = ["STUCK_STEPS", "break_deadlocks", "swap_goals"]
 
@@ -20,12 +20,14 @@ STUCK_STEPS = 10
 
 @nb.njit(cache=True, inline="always")
 def _h_now(i: int, g: int, cur: np.ndarray, gr: tuple, V: int, gv0: int, hs: tuple,
-           hcur: np.ndarray, hgoal: np.ndarray) -> float:
-    """Robot i's value to its goal g from where it is (0 without a goal), kept."""
+           hcur: np.ndarray, hgoal: np.ndarray, tabs: tuple) -> float:
+    """Robot i's value to its goal g from where it is (0 without a goal), kept;
+    ``tabs``: ``hs[0], hs[11], hs[12], hs[9], hs[10]`` (``heuristic_reads.hval_in``)."""
     if g < 0:
         return 0.0
     if hgoal[i] != g:
-        hcur[i] = hval_fast(g, cur[i], gr, V, gv0, hs)
+        hcur[i] = hval_in(g, cur[i], gr, V, gv0, hs, tabs[0], tabs[1], tabs[2], tabs[3],
+                          tabs[4])
         hgoal[i] = g
     return hcur[i]
 
@@ -43,6 +45,8 @@ def swap_goals(gr: tuple, V: int, gv0: int, hs: tuple, cur: np.ndarray, goal: np
     none), and only when the swap lowers the longer of their two distances, or keeps it
     and lowers the sum: swaps never lengthen the longest way left."""
     coords = gr[0]
+    win, va, vb, sdone, sval = hs[0], hs[11], hs[12], hs[9], hs[10]
+    tabs = (win, va, vb, sdone, sval)
     N = cur.shape[0]
     nswap = 0
     for i in range(N):
@@ -56,8 +60,8 @@ def swap_goals(gr: tuple, V: int, gv0: int, hs: tuple, cur: np.ndarray, goal: np
                 continue
             if fleet and gi >= 0 and gj >= 0 and cur[i] != gv0 + gi and cur[j] != gv0 + gj:
                 continue
-            hi = _h_now(i, gi, cur, gr, V, gv0, hs, hcur, hgoal)
-            hj = _h_now(j, gj, cur, gr, V, gv0, hs, hcur, hgoal)
+            hi = _h_now(i, gi, cur, gr, V, gv0, hs, hcur, hgoal, tabs)
+            hj = _h_now(j, gj, cur, gr, V, gv0, hs, hcur, hgoal, tabs)
             now = hi + hj
             now_max = max(hi, hj)
             # straight-line lower bound of the swapped sum: far pairs are skipped without
@@ -74,8 +78,10 @@ def swap_goals(gr: tuple, V: int, gv0: int, hs: tuple, cur: np.ndarray, goal: np
                 continue
             if fleet and max(la, lb) > now_max + 1e-9:
                 continue
-            sa = hval_fast(gi, cur[j], gr, V, gv0, hs) if gi >= 0 else 0.0
-            sb = hval_fast(gj, cur[i], gr, V, gv0, hs) if gj >= 0 else 0.0
+            sa = hval_in(gi, cur[j], gr, V, gv0, hs, win, va, vb, sdone,
+                         sval) if gi >= 0 else 0.0
+            sb = hval_in(gj, cur[i], gr, V, gv0, hs, win, va, vb, sdone,
+                         sval) if gj >= 0 else 0.0
             sw = sa + sb
             if fleet:
                 sw_max = max(sa, sb)

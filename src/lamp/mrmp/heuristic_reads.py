@@ -16,7 +16,7 @@ import numpy as np
 
 from lamp.mrmp.goal_distances import EPS, expand_to, hval
 
-__all__ = ["hval_below", "hval_fast", "read_settled"]
+__all__ = ["hval_below", "hval_fast", "hval_in", "read_in", "read_settled"]
 
 
 @nb.njit(cache=True, inline="always")
@@ -39,10 +39,39 @@ def read_settled(m: int, v: int, V: int, hs: tuple, dd: np.ndarray, dn: np.ndarr
 
 
 @nb.njit(cache=True, inline="always")
+def read_in(m: int, v: int, V: int, va: np.ndarray, vb: np.ndarray, sdone: np.ndarray,
+            sval: np.ndarray, dd: np.ndarray, dn: np.ndarray, a0: int, b0: int, na: int,
+            nbw: int) -> float:
+    """:func:`read_settled` with the tables ``hs[11]``, ``hs[12]``, ``hs[9]``, ``hs[10]``
+    (``va``, ``vb``, ``sdone``, ``sval``) read once by the caller: in a hot loop each read
+    of a tuple's array costs a reference count."""
+    if v < V:
+        a = va[v] - a0
+        b = vb[v] - b0
+        if 0 <= a < na and 0 <= b < nbw:
+            j = (b + 1) * (na + 2) + a + 1
+            if dn[j]:
+                return dd[j]
+    elif sdone[m, v - V]:
+        return sval[m, v - V]
+    return -1.0
+
+
+@nb.njit(cache=True, inline="always")
 def hval_fast(m: int, v: int, gr: tuple, V: int, gv0: int, hs: tuple) -> float:
     """:func:`hval`, compiled into its caller: a settled or memoised value read in place."""
     w = hs[0]
     h = read_settled(m, v, V, hs, hs[2][m], hs[3][m], w[m, 0], w[m, 1], w[m, 2], w[m, 3])
+    return h if h >= 0.0 else hval(m, v, gr, V, gv0, hs)
+
+
+@nb.njit(cache=True, inline="always")
+def hval_in(m: int, v: int, gr: tuple, V: int, gv0: int, hs: tuple, win: np.ndarray,
+            va: np.ndarray, vb: np.ndarray, sdone: np.ndarray, sval: np.ndarray) -> float:
+    """:func:`hval_fast` with the tables ``hs[0]``, ``hs[11]``, ``hs[12]``, ``hs[9]``,
+    ``hs[10]`` read once by the caller (see :func:`read_in`)."""
+    h = read_in(m, v, V, va, vb, sdone, sval, hs[2][m], hs[3][m], win[m, 0], win[m, 1],
+                win[m, 2], win[m, 3])
     return h if h >= 0.0 else hval(m, v, gr, V, gv0, hs)
 
 
@@ -54,7 +83,7 @@ def hval_below(pm: np.ndarray, pv: np.ndarray, bound: float, gr: tuple, V: int, 
     best grouped by goal). A pair's value is its best link: the link's length plus its
     lattice node's settled value (``+ EPS`` for a direct link to the goal)."""
     coords, _, _, xptr, xidx = gr
-    win = hs[0]
+    win, va, vb, sdone, sval = hs[0], hs[11], hs[12], hs[9], hs[10]
     out = np.empty(pm.shape[0])
     last = -1
     dd, dn = hs[2][0], hs[3][0]
@@ -77,7 +106,7 @@ def hval_below(pm: np.ndarray, pv: np.ndarray, bound: float, gr: tuple, V: int, 
                 dy = coords[v, 1] - coords[n, 1]
                 ln = math.sqrt(dx * dx + dy * dy)
                 if n < V:
-                    h = read_settled(m, n, V, hs, dd, dn, a0, b0, na, nbw)
+                    h = read_in(m, n, V, va, vb, sdone, sval, dd, dn, a0, b0, na, nbw)
                     c = ln + (h if h >= 0.0 else np.inf)
                 elif n == gv0 + m:
                     c = ln + EPS

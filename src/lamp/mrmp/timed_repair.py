@@ -41,7 +41,7 @@ import numba as nb
 import numpy as np
 
 from lamp.mrmp.goal_distances import hval
-from lamp.mrmp.heuristic_reads import read_settled
+from lamp.mrmp.heuristic_reads import read_in
 from lamp.mrmp.neighbours import doubled
 from lamp.mrmp.obstacle_grid import grid_clear_segments
 from lamp.mrmp.repair_hash import hash_rows
@@ -141,7 +141,7 @@ def _search(i: int, m: int, gr: tuple, V: int, gv0: int, hs: tuple, X: np.ndarra
     states expanded. Knight moves between lattice nodes (:data:`KNIGHT`) are taken when
     their segment keeps the clearance ``ob[0]`` (exact; ``ob``: the obstacles' grid)."""
     coords, nbr, _, xptr, xidx = gr
-    va, vb, ids = hs[11], hs[12], hs[13]
+    va, vb, ids, sdone, sval = hs[11], hs[12], hs[13], hs[9], hs[10]
     kclear = dict()  # knight moves checked: (v * 8 + k) -> clear
     kclear[0] = True
     del kclear[0]
@@ -205,7 +205,7 @@ def _search(i: int, m: int, gr: tuple, V: int, gv0: int, hs: tuple, X: np.ndarra
             key = u * span_t + t2
             if key in seen:
                 continue
-            hu = read_settled(m, u, V, hs, dd, dn, wa0, wb0, wna, wnb)
+            hu = read_in(m, u, V, va, vb, sdone, sval, dd, dn, wa0, wb0, wna, wnb)
             if hu < 0.0:
                 hu = hval(m, u, gr, V, gv0, hs)
                 dd, dn = hs[2][m], hs[3][m]
