@@ -8,7 +8,15 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from lamp.mrmp.gspi_kernels import conflict
-from lamp.mrmp.repair_hash import build_hash, cell, clear_of, gather, move_ok, set_key
+from lamp.mrmp.repair_hash import (
+    build_hash,
+    cell,
+    clear_of,
+    gather,
+    hash_rows,
+    move_ok,
+    set_key,
+)
 
 
 @settings(max_examples=40, deadline=None)
@@ -65,3 +73,31 @@ def test_table_follows_moves_and_checks_match_brute_force(seed, n, rows, moves,
                 got = gather(i, t, a, VX, coords, gv0, h, x0, y0, cs, ny, two_r + 0.05 + 1e-6,
                              skip | long_, buf)
                 assert clear_of(*coords[a], *coords[b], b >= gv0, buf, got, two_r) == ok
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 10**6), n=st.integers(1, 60), rows=st.integers(1, 8),
+       span=st.floats(0.05, 3.0), table=st.booleans(), outside=st.booleans())
+def test_hash_rows_is_a_stable_sort_with_its_table(seed, n, rows, span, table,
+                                                   outside) -> None:
+    """``hash_rows`` (counting sorts when the table is wanted and every key is inside it,
+    else merge sorts): each row's keys sorted stably, as ``np.argsort(kind="stable")``
+    orders them, and the table's entry ``kk`` the row's count of keys below ``kk``; many
+    robots on a few cells (ties) included; a point outside the bounds takes the merge
+    sorts (same order, table counted from the sorted keys)."""
+    rng = np.random.default_rng(seed)
+    X = np.round(rng.random((rows, n)) * span, 1)  # rounded: many equal keys
+    Y = np.round(rng.random((rows, n)) * span, 1)
+    if outside:
+        X[0, 0] = span + 1.0
+    cs = 0.21
+    (sk, so, first), ny = hash_rows(X, Y, 0.0, 0.0, span, span, cs, table)
+    for t in range(rows):
+        keys = np.array([cell(X[t, k], Y[t, k], 0.0, 0.0, cs, ny) for k in range(n)])
+        order = np.argsort(keys, kind="stable")
+        assert np.array_equal(so[t], order) and np.array_equal(sk[t], keys[order])
+        if table:
+            ncell = (int(span / cs) + 4) * ny + 4
+            want = np.searchsorted(keys[order], np.arange(ncell), side="left")
+            assert np.array_equal(first[t], want)
+    assert first.shape[0] == (rows if table else 0)

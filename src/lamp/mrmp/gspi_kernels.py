@@ -89,7 +89,7 @@ def conflict(
     return point_segment_distance(0.0, 0.0, d0x, d0y, d1x, d1y) < thr - 1e-9
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def _build_cands(
     i: int, v: int, gr: tuple, V: int, gv0: int, hs: tuple, goal: np.ndarray, seed: int,
     t: int, cand: np.ndarray, ncand: np.ndarray, fleet: bool, keys: np.ndarray,

@@ -68,13 +68,20 @@ def hash_rows(X: np.ndarray, Y: np.ndarray, x0: float, y0: float, x1: float, y1:
     ncell = (int((x1 - x0) / cs) + 4) * ny + 4
     sk = np.empty((K1, N), np.int64)
     so = np.empty((K1, N), np.int64)
+    inside = True
     for t in range(K1):
         for k in range(N):
-            sk[t, k] = cell(X[t, k], Y[t, k], x0, y0, cs, ny)
+            kk = cell(X[t, k], Y[t, k], x0, y0, cs, ny)
+            sk[t, k] = kk
+            inside &= 0 <= kk < ncell
+    table = table and K1 * ncell <= TABLE_ENTRIES
+    if table and inside:  # counting sorts, whose running counts are the table
+        return (sk, so, _counting_sorts(sk, so, ncell)), ny
+    for t in range(K1):
         o = np.argsort(sk[t], kind="mergesort")
         so[t] = o
         sk[t] = sk[t][o]
-    if table and K1 * ncell <= TABLE_ENTRIES:
+    if table:
         first = np.empty((K1, ncell), np.int32)
         for t in range(K1):
             p = 0
@@ -85,6 +92,31 @@ def hash_rows(X: np.ndarray, Y: np.ndarray, x0: float, y0: float, x1: float, y1:
     else:
         first = np.zeros((0, 0), np.int32)
     return (sk, so, first), ny
+
+
+@nb.njit(cache=True)
+def _counting_sorts(sk: np.ndarray, so: np.ndarray, ncell: int) -> np.ndarray:
+    """Sort each row of the keys ``sk`` (all in ``[0, ncell)``) in place, stably (the
+    order of a stable argsort), with the order in ``so``; returns the table
+    ``first[t, kk]``: row t's entries with keys below kk."""
+    K1, N = sk.shape
+    first = np.zeros((K1, ncell), np.int32)
+    key = np.empty(N, np.int64)
+    for t in range(K1):
+        cnt = first[t]
+        for k in range(N):
+            key[k] = sk[t, k]
+            cnt[key[k]] += 1
+        p = 0
+        for kk in range(ncell):  # entries up to key kk
+            p += cnt[kk]
+            cnt[kk] = p
+        for k in range(N - 1, -1, -1):  # from the back: each count ends up below its key
+            q = cnt[key[k]] - 1
+            so[t, q] = k
+            sk[t, q] = key[k]
+            cnt[key[k]] = q
+    return first
 
 
 @nb.njit(cache=True, inline="always")
