@@ -62,8 +62,8 @@ def _ways_clear(i: int, ax: float, ay: float, bx: float, by: float, t0: float, t
                 end_goal: bool, ways: tuple, two_r: float, ends_goal: np.ndarray) -> bool:
     """:func:`motion_clear` against the new ways ``ways = (rep, WX, WY, WT, wptr, wrob,
     box)``: way w is robot ``wrob[w]``'s (-1: replaced since) through the points
-    ``WX, WY`` at times ``WT`` (entries ``wptr[w] .. wptr[w + 1]``), still after its last
-    point; ``box[w]``: its bounding box; ``rep[k]``: robot k follows a new way."""
+    ``WX, WY`` at times ``WT`` (entries ``wptr[w] .. wptr[w + 1]``), still before its
+    first point and after its last; ``box[w]``: its bounding box; ``rep[k]``: robot k follows a new way."""
     _, WX, WY, WT, wptr, wrob, box = ways
     lo_x = min(ax, bx) - two_r
     hi_x = max(ax, bx) + two_r
@@ -78,19 +78,14 @@ def _ways_clear(i: int, ax: float, ay: float, bx: float, by: float, t0: float, t
         p1 = wptr[w + 1]
         j = p0 + row_at(WT[p0:p1], t0)
         while j < p1:
-            e0 = WT[j]
+            e0 = WT[j] if j > p0 else -np.inf  # still at its first point before it
             e1 = WT[j + 1] if j + 1 < p1 else np.inf
             s0 = max(t0, e0)
             s1 = min(t1, e1)
             if s1 > s0:
                 ux, uy = _lerp(WX, WY, WT, j, p1, s0)
                 vx, vy = _lerp(WX, WY, WT, j, p1, s1)
-                f0 = (s0 - t0) / (t1 - t0)
-                f1 = (s1 - t0) / (t1 - t0)
-                px = ax + f0 * (bx - ax)
-                py = ay + f0 * (by - ay)
-                qx = bx if f1 >= 1.0 else ax + f1 * (bx - ax)
-                qy = by if f1 >= 1.0 else ay + f1 * (by - ay)
+                px, py, qx, qy = _piece(ax, ay, bx, by, t0, t1, s0, s1)
                 both = end_goal and s1 >= t1 and ends_goal[k] and j == p1 - 1
                 if conflict(px, py, qx, qy, ux, uy, vx, vy, two_r, both):
                     return False
@@ -98,6 +93,18 @@ def _ways_clear(i: int, ax: float, ay: float, bx: float, by: float, t0: float, t
                 break
             j += 1
     return True
+
+
+@nb.njit(cache=True, inline="always")
+def _piece(ax: float, ay: float, bx: float, by: float, t0: float, t1: float, s0: float,
+           s1: float) -> tuple[float, float, float, float]:
+    """The part from time s0 to s1 of the linear motion (ax, ay) at t0 to (bx, by) at
+    t1: its two ends (the end exactly (bx, by) when s1 reaches t1)."""
+    f0 = (s0 - t0) / (t1 - t0)
+    f1 = (s1 - t0) / (t1 - t0)
+    qx = bx if f1 >= 1.0 else ax + f1 * (bx - ax)
+    qy = by if f1 >= 1.0 else ay + f1 * (by - ay)
+    return ax + f0 * (bx - ax), ay + f0 * (by - ay), qx, qy
 
 
 @nb.njit(cache=True, inline="always")
@@ -134,14 +141,10 @@ def motion_clear(i: int, ax: float, ay: float, bx: float, by: float, t0: float, 
     r = row_at(tt, t0)
     s0 = t0
     while True:
-        s1 = t1 if r >= R - 1 else min(t1, tt[r + 1])
+        before = s0 < tt[r]  # before the first row: every robot stands at it
+        s1 = min(t1, tt[r]) if before else t1 if r >= R - 1 else min(t1, tt[r + 1])
         if s1 > s0:
-            f0 = (s0 - t0) / (t1 - t0)
-            f1 = (s1 - t0) / (t1 - t0)
-            px = ax + f0 * (bx - ax)
-            py = ay + f0 * (by - ay)
-            qx = bx if f1 >= 1.0 else ax + f1 * (bx - ax)
-            qy = by if f1 >= 1.0 else ay + f1 * (by - ay)
+            px, py, qx, qy = _piece(ax, ay, bx, by, t0, t1, s0, s1)
             at_end = end_goal and s1 >= t1
             kc = cell(px, py, x0, y0, cs, ny)
             for dx in range(-1, 2):
@@ -156,6 +159,11 @@ def motion_clear(i: int, ax: float, ay: float, bx: float, by: float, t0: float, 
                             and wy == Y[R - 1, k])
                     if conflict(px, py, qx, qy, ux, uy, wx, wy, two_r, both):
                         return False
+        if before:
+            if tt[r] >= t1:
+                return True
+            s0 = tt[r]
+            continue
         if r >= R - 1 or tt[r + 1] >= t1:
             return True
         r += 1
