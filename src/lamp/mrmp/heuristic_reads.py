@@ -16,7 +16,7 @@ import numpy as np
 
 from lamp.mrmp.goal_distances import EPS, expand_to, hval
 
-__all__ = ["hval_below", "hval_fast", "hval_in", "read_in", "read_settled"]
+__all__ = ["goal_views", "hval_below", "hval_fast", "hval_in", "read_in", "read_settled"]
 
 
 @nb.njit(cache=True, inline="always")
@@ -58,6 +58,14 @@ def read_in(m: int, v: int, V: int, va: np.ndarray, vb: np.ndarray, sdone: np.nd
 
 
 @nb.njit(cache=True, inline="always")
+def goal_views(m: int, hs: tuple) -> tuple[np.ndarray, np.ndarray, int, int, int, int]:
+    """Goal m's window tables and bounds as :func:`read_in` takes them: ``(dd, dn, a0,
+    b0, na, nbw)``. Read again after :func:`hval` on a miss: it may grow them."""
+    w = hs[0]
+    return hs[2][m], hs[3][m], w[m, 0], w[m, 1], w[m, 2], w[m, 3]
+
+
+@nb.njit(cache=True, inline="always")
 def hval_fast(m: int, v: int, gr: tuple, V: int, gv0: int, hs: tuple) -> float:
     """:func:`hval`, compiled into its caller: a settled or memoised value read in place."""
     w = hs[0]
@@ -83,7 +91,7 @@ def hval_below(pm: np.ndarray, pv: np.ndarray, bound: float, gr: tuple, V: int, 
     best grouped by goal). A pair's value is its best link: the link's length plus its
     lattice node's settled value (``+ EPS`` for a direct link to the goal)."""
     coords, _, _, xptr, xidx = gr
-    win, va, vb, sdone, sval = hs[0], hs[11], hs[12], hs[9], hs[10]
+    va, vb, sdone, sval = hs[11], hs[12], hs[9], hs[10]
     out = np.empty(pm.shape[0])
     last = -1
     dd, dn = hs[2][0], hs[3][0]
@@ -93,8 +101,7 @@ def hval_below(pm: np.ndarray, pv: np.ndarray, bound: float, gr: tuple, V: int, 
         if m != last:
             expand_to(m, bound, gr[1], gr[2], hs)
             last = m
-            dd, dn = hs[2][m], hs[3][m]
-            a0, b0, na, nbw = win[m, 0], win[m, 1], win[m, 2], win[m, 3]
+            dd, dn, a0, b0, na, nbw = goal_views(m, hs)
         v = pv[k]
         best = np.inf
         if v == gv0 + m:

@@ -38,7 +38,7 @@ import numba as nb
 import numpy as np
 
 from lamp.mrmp.goal_distances import hval
-from lamp.mrmp.heuristic_reads import read_in
+from lamp.mrmp.heuristic_reads import goal_views, read_in
 from lamp.mrmp.neighbours import doubled
 from lamp.mrmp.repair_hash import build_hash, cell, clear_of, gather, move_ok, set_key
 
@@ -123,9 +123,8 @@ def _search(i: int, target: float, gr: tuple, V: int, gv0: int, hs: tuple, goal:
     m = goal[i]
     g = gv0 + m
     free = _free_from(i, g, VX, coords, gv0, hh, x0, y0, cs, ny, two_r, skip)
-    dd, dn = hs[2][m], hs[3][m]  # goal m's window (heuristic_reads.read_in)
+    dd, dn, wa0, wb0, wna, wnb = goal_views(m, hs)  # goal m's window (read_in)
     va, vb, sdone, sval = hs[11], hs[12], hs[9], hs[10]  # read once: no counts per read
-    wa0, wb0, wna, wnb = hs[0][m, 0], hs[0][m, 1], hs[0][m, 2], hs[0][m, 3]
     cap = 1 << 14
     lv = np.empty(cap, np.int64)
     lp = np.empty(cap, np.int64)
@@ -170,8 +169,7 @@ def _search(i: int, target: float, gr: tuple, V: int, gv0: int, hs: tuple, goal:
                 hu = read_in(m, u, V, va, vb, sdone, sval, dd, dn, wa0, wb0, wna, wnb)
                 if hu < 0.0:
                     hu = hval(m, u, gr, V, gv0, hs)
-                    dd, dn = hs[2][m], hs[3][m]
-                    wa0, wb0, wna, wnb = hs[0][m, 0], hs[0][m, 1], hs[0][m, 2], hs[0][m, 3]
+                    dd, dn, wa0, wb0, wna, wnb = goal_views(m, hs)
                 if not nc + hu < best - 1e-9:
                     continue
                 if nn < 0:

@@ -41,7 +41,7 @@ import numba as nb
 import numpy as np
 
 from lamp.mrmp.goal_distances import hval
-from lamp.mrmp.heuristic_reads import read_in
+from lamp.mrmp.heuristic_reads import goal_views, read_in
 from lamp.mrmp.neighbours import doubled
 from lamp.mrmp.obstacle_grid import grid_clear_segments
 from lamp.mrmp.repair_hash import hash_rows
@@ -151,8 +151,7 @@ def _search(i: int, m: int, gr: tuple, V: int, gv0: int, hs: tuple, X: np.ndarra
     free = free_time(i, gx, gy, X, Y, tt, hh, x0, y0, cs, ny, two_r, ends_goal, ways)
     if not free < target * q:
         return none, none, 0
-    dd, dn = hs[2][m], hs[3][m]
-    wa0, wb0, wna, wnb = hs[0][m, 0], hs[0][m, 1], hs[0][m, 2], hs[0][m, 3]
+    dd, dn, wa0, wb0, wna, wnb = goal_views(m, hs)
     cap = 1 << 12
     sv = np.empty(cap, np.int64)
     st = np.empty(cap, np.int64)
@@ -208,8 +207,7 @@ def _search(i: int, m: int, gr: tuple, V: int, gv0: int, hs: tuple, X: np.ndarra
             hu = read_in(m, u, V, va, vb, sdone, sval, dd, dn, wa0, wb0, wna, wnb)
             if hu < 0.0:
                 hu = hval(m, u, gr, V, gv0, hs)
-                dd, dn = hs[2][m], hs[3][m]
-                wa0, wb0, wna, wnb = hs[0][m, 0], hs[0][m, 1], hs[0][m, 2], hs[0][m, 3]
+                dd, dn, wa0, wb0, wna, wnb = goal_views(m, hs)
             f = t2 + hu / (q * OCTILE)
             if not f < target - 1e-6:
                 continue
