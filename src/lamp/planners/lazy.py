@@ -191,9 +191,10 @@ class LazyPlanner:
         Departure: the paper's loop (lines 10-40) runs until a plan is found; here it runs at
         most ``max_plan_iterations`` times and makes at most ``max_verify_calls`` Verify
         calls (and ``lazy_verify_calls`` over all the object's calls), and D* Lite expands
-        at most ``lazy_expansions`` vertices over all the object's calls (each ``BUDGET_EXHAUSTED``, ``Plan.limit`` naming the count): counts,
-        so the result does not depend on the machine's speed; ``deadline``
-        (``TIME_LIMIT``) is only an outer cap.
+        at most ``lazy_expansions`` vertices over all the object's calls (each
+        ``BUDGET_EXHAUSTED``, ``Plan.limit`` naming the count): counts, so the result does
+        not depend on the machine's speed; ``deadline`` (``TIME_LIMIT``) is only an outer
+        cap.
         """
         self.calls += 1
         stats = self.verifier.stats

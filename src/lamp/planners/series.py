@@ -4,10 +4,11 @@ A loop ends for good or so that its runner plans anew (``contract.runner.LoopEnd
 robot of its team failed (the sequential runner under disturbances), or the world changed
 around its plan (the fleet schedule). :class:`LoopSeries` is what both runners share:
 each next loop gets the segments, LAMP-Lazy's per-object Verify budget and, when the
-series has one, the cumulative planning time the earlier loops left; the series has run out when its loops used the segment
-limit, or made as many loops as the limit allows, or spent the planning limit
-(:func:`limit_reached`); the object's outcome merges the loops' (:func:`merged`: each
-new loop counts as a replan) and is judged on the object's true pose (:func:`judged`).
+series has one, the cumulative planning time the earlier loops left; the series has run
+out when its loops used the segment limit, or made as many loops as the limit allows, or
+spent the planning limit (:func:`limit_reached`); the object's outcome merges the loops'
+(:func:`merged`: each new loop counts as a replan) and is judged on the object's true
+pose (:func:`judged`).
 Guarantees tested in ``tests/test_fleet_parts.py`` and ``tests/test_series.py``.
 """
 
@@ -109,11 +110,6 @@ class LoopSeries:
     def verify_calls(self) -> int:
         """Verify calls the loops so far made."""
         return sum(p.result.verify_calls for p in self.parts)
-
-    @property
-    def search_expansions(self) -> int:
-        """Search expansions the loops so far made."""
-        return sum(p.result.search_expansions for p in self.parts)
 
     def config(self, base: PlannerConfig) -> PlannerConfig:
         """``base`` for the next loop: the segments left (at least 1), what is left of
