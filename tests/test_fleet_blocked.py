@@ -136,3 +136,56 @@ def test_one_blocker_gone_wakes_it_while_another_stays() -> None:
     fleet.stats.counts["events"] += 1
     fleet._wake_blocked()
     assert o.blocked_at is None and o.replan
+
+
+def test_a_blocker_placed_where_it_stands_wakes_it_and_is_not_noted_again() -> None:
+    """A noted object placed inside the space (its body stays there for good) wakes the
+    planner at the next event; when that planner fails again, only the unplaced objects
+    in its way are noted (a placed body is an obstacle, no reason to wake)."""
+    fleet, robots, o = _blocked_fleet(third_box=True)
+    assert o.blockers == {1, 2}
+    fleet.objects[2].status = ObjectStatus.PLACED  # it stays at x = 3.2, in box 0's way
+    fleet.finished += 1
+    fleet.stats.counts["events"] += 1
+    fleet._wake_blocked()
+    assert o.blocked_at is None and o.replan
+    fleet.plan_failed(0)  # it fails again
+    assert o.blocked_at is not None and o.blockers == {1}
+
+
+def test_with_objects_noted_only_they_wake_it_not_another_finishing() -> None:
+    """Objects noted in its way: another object placed elsewhere does not wake the
+    planner (it changes nothing in that space); with none noted, it does."""
+    fleet, robots, o = _blocked_fleet()
+    assert o.blockers == {1}
+    fleet.finished += 1  # an object outside its way done
+    fleet.stats.counts["events"] += 1
+    fleet._wake_blocked()
+    assert o.blocked_at is not None
+    robots[2] = (2.5, 2.7)  # nobody in its way now
+    fleet.plan_failed(0)
+    assert o.blockers == frozenset()
+    fleet.finished += 1
+    fleet.stats.counts["events"] += 1
+    fleet._wake_blocked()
+    assert o.blocked_at is None
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(0, 12), st.booleans())
+def test_patience_grows_with_the_objects_moving(others: int, noted: bool) -> None:
+    """Whatever blocks it, a planner that failed while ``others`` other objects moved
+    plans again after exactly ``BLOCKED_WAKE_EVENTS`` events for each of them (one at
+    least), with nothing else waking it."""
+    fleet, robots, o = _blocked_fleet()
+    if not noted:
+        robots[2] = (2.5, 2.7)
+    fleet.moving = lambda: 1 + others  # as many others active (``Board.moving``)
+    fleet.plan_failed(0)
+    assert bool(o.blockers) == noted and o.others_moving == others
+    waited = 0
+    while o.blocked_at is not None:
+        fleet.stats.counts["events"] += 1
+        fleet._wake_blocked()
+        waited += 1
+    assert waited == BLOCKED_WAKE_EVENTS * max(1, others)
