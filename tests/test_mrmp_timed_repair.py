@@ -153,7 +153,7 @@ def test_timed_repair_inside_plan_paths(seed: int) -> None:
 
     def spy(rows, times, *args, **kw):
         out = real(rows, times, *args, **kw)
-        seen.update(before=_makespan(rows), done=out[1])
+        seen.update(before=_makespan(rows), done=out[2])
         return out
 
     with pytest.MonkeyPatch.context() as mp:

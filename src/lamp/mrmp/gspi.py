@@ -468,7 +468,8 @@ def _attempt(space: RobotSpace, S: np.ndarray, G: np.ndarray, c_start: np.ndarra
                                  opts.max_spacing, times=True)
         stats["time_retime"] = time.perf_counter() - clock
         clock = time.perf_counter()
-        paths, stats["timed_repairs"], stats["timed_states"] = timed_repair(
+        (paths, goal, stats["timed_repairs"], stats["timed_states"],
+         stats["timed_groups"]) = timed_repair(
             paths, times, links.graph, V, gv0, hs, goal, 2.0 * space.radius,
             L / RETIME_QUANTA, links.max_move, opts.max_spacing, space.geometry,
             space.workspace, space.threshold)

@@ -21,7 +21,8 @@ import numpy as np
 from lamp.mrmp.gspi_kernels import conflict
 from lamp.mrmp.repair_hash import cell, span
 
-__all__ = ["arrivals", "free_time", "motion_clear", "position_at", "row_at", "with_way"]
+__all__ = ["arrivals", "free_time", "motion_clear", "motion_hits", "position_at",
+           "rest_clear", "row_at", "with_way"]
 
 
 @nb.njit(cache=True)
@@ -59,11 +60,14 @@ def position_at(X: np.ndarray, Y: np.ndarray, tt: np.ndarray, r: int, k: int, t:
 
 @nb.njit(cache=True)
 def _ways_clear(i: int, ax: float, ay: float, bx: float, by: float, t0: float, t1: float,
-                end_goal: bool, ways: tuple, two_r: float, ends_goal: np.ndarray) -> bool:
+                end_goal: bool, ways: tuple, two_r: float, ends_goal: np.ndarray,
+                hit: np.ndarray) -> bool:
     """:func:`motion_clear` against the new ways ``ways = (rep, WX, WY, WT, wptr, wrob,
     box)``: way w is robot ``wrob[w]``'s (-1: replaced since) through the points
     ``WX, WY`` at times ``WT`` (entries ``wptr[w] .. wptr[w + 1]``), still before its
-    first point and after its last; ``box[w]``: its bounding box; ``rep[k]``: robot k follows a new way."""
+    first point and after its last; ``box[w]``: its bounding box; ``rep[k]``: robot k
+    follows a new way. With ``hit`` (N flags; empty: none) every robot in the way is
+    marked there and True returned."""
     _, WX, WY, WT, wptr, wrob, box = ways
     lo_x = min(ax, bx) - two_r
     hi_x = max(ax, bx) + two_r
@@ -88,7 +92,10 @@ def _ways_clear(i: int, ax: float, ay: float, bx: float, by: float, t0: float, t
                 px, py, qx, qy = _piece(ax, ay, bx, by, t0, t1, s0, s1)
                 both = end_goal and s1 >= t1 and ends_goal[k] and j == p1 - 1
                 if conflict(px, py, qx, qy, ux, uy, vx, vy, two_r, both):
-                    return False
+                    if hit.shape[0] == 0:
+                        return False
+                    hit[k] = True
+                    break
             if e1 >= t1:
                 break
             j += 1
@@ -133,7 +140,29 @@ def motion_clear(i: int, ax: float, ay: float, bx: float, by: float, t0: float, 
     checked with :func:`~lamp.mrmp.gspi_kernels.conflict`; ``end_goal``: (bx, by) is
     robot i's goal, and a robot k with ``ends_goal[k]`` is on its goal when at its last
     position."""
-    if not _ways_clear(i, ax, ay, bx, by, t0, t1, end_goal, ways, two_r, ends_goal):
+    return _motion(i, ax, ay, bx, by, t0, t1, end_goal, X, Y, tt, hh, x0, y0, cs, ny,
+                   two_r, ends_goal, ways, np.zeros(0, np.bool_))
+
+
+@nb.njit(cache=True)
+def motion_hits(i: int, ax: float, ay: float, bx: float, by: float, t0: float, t1: float,
+                end_goal: bool, X: np.ndarray, Y: np.ndarray, tt: np.ndarray, hh: tuple,
+                x0: float, y0: float, cs: float, ny: int, two_r: float,
+                ends_goal: np.ndarray, ways: tuple, hit: np.ndarray) -> None:
+    """:func:`motion_clear`, every robot the motion does not keep clear of marked in
+    ``hit`` (N flags) instead."""
+    _motion(i, ax, ay, bx, by, t0, t1, end_goal, X, Y, tt, hh, x0, y0, cs, ny, two_r,
+            ends_goal, ways, hit)
+
+
+@nb.njit(cache=True)
+def _motion(i: int, ax: float, ay: float, bx: float, by: float, t0: float, t1: float,
+            end_goal: bool, X: np.ndarray, Y: np.ndarray, tt: np.ndarray, hh: tuple,
+            x0: float, y0: float, cs: float, ny: int, two_r: float, ends_goal: np.ndarray,
+            ways: tuple, hit: np.ndarray) -> bool:
+    """:func:`motion_clear`; with ``hit`` (N flags, empty: none) marking every robot
+    in the way there and going on, True at the end."""
+    if not _ways_clear(i, ax, ay, bx, by, t0, t1, end_goal, ways, two_r, ends_goal, hit):
         return False
     rep = ways[0]
     so = hh[1]
@@ -158,7 +187,9 @@ def motion_clear(i: int, ax: float, ay: float, bx: float, by: float, t0: float, 
                     both = (at_end and ends_goal[k] and wx == X[R - 1, k]
                             and wy == Y[R - 1, k])
                     if conflict(px, py, qx, qy, ux, uy, wx, wy, two_r, both):
-                        return False
+                        if hit.shape[0] == 0:
+                            return False
+                        hit[k] = True
         if before:
             if tt[r] >= t1:
                 return True
@@ -168,6 +199,31 @@ def motion_clear(i: int, ax: float, ay: float, bx: float, by: float, t0: float, 
             return True
         r += 1
         s0 = tt[r]
+
+
+@nb.njit(cache=True)
+def rest_clear(i: int, ax: float, ay: float, bx: float, by: float, t0: float, t1: float,
+               X: np.ndarray, Y: np.ndarray, hh: tuple, x0: float, y0: float, cs: float,
+               ny: int, two_r: float, arr: np.ndarray) -> bool:
+    """Whether robot i moving linearly from (ax, ay) at t0 to (bx, by) at t1 keeps clear
+    (:func:`~lamp.mrmp.gspi_kernels.conflict`) of every other robot k's last position
+    from its arrival ``arr[k]`` on, their motions before ignored (a guide for the group
+    repair, not a check of the plan)."""
+    R = X.shape[0]
+    so = hh[1]
+    kc = cell(ax, ay, x0, y0, cs, ny)
+    for dx in range(-1, 2):
+        p, q = span(R - 1, kc + dx * ny - 1, hh)
+        for e in range(p, q):
+            k = so[R - 1, e]
+            if k == i or arr[k] >= t1:
+                continue
+            s0 = max(t0, arr[k])
+            px, py, qx, qy = _piece(ax, ay, bx, by, t0, t1, s0, t1)
+            kx, ky = X[R - 1, k], Y[R - 1, k]
+            if conflict(px, py, qx, qy, kx, ky, kx, ky, two_r, False):
+                return False
+    return True
 
 
 @nb.njit(cache=True)

@@ -1,0 +1,137 @@
+"""The timed repair's group and exchange rounds (``lamp.mrmp.timed_repair``,
+``timed_checks.motion_hits`` and ``rest_clear``): the robots named as in the way against
+a brute-force reference, robot by robot; and fleets whose last robots are planned again
+with the robots in their way or exchange goals with them, every plan checked by the
+independent fleet checker, the exchanged goals a permutation of the given ones, the last
+arrival never later, the plan the same on a second call."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from fleet_checker import check_fleet_plan
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from test_mrmp_timed_repair import _makespan, _pair_ok, _pos, _random_rows
+
+import lamp.mrmp.gspi as gspi
+from lamp.mrmp import plan_paths
+from lamp.mrmp.repair_hash import hash_rows
+from lamp.mrmp.timed_checks import arrivals, motion_hits, rest_clear
+from lamp.mrmp.timed_repair import timed_budget
+from lamp.scene.mapf import load_grid_map, random_instance
+
+MAPF = Path(__file__).resolve().parent / "data" / "mapf"
+R = 0.05
+SPACING = 0.02
+CS = 2 * R + 0.04 + 2 * SPACING + 1e-6
+
+
+def _blocked_by(k, a, b, t0, t1, X, Y, tt) -> bool:
+    """Whether the move a -> b over [t0, t1] comes closer to robot k's rows than the rule
+    allows, cut at every row time inside (no goal ends)."""
+    cuts = np.unique(np.concatenate([[t0, t1], tt[(tt > t0) & (tt < t1)]]))
+    for s0, s1 in zip(cuts[:-1], cuts[1:], strict=True):
+        p0 = a + (b - a) * (s0 - t0) / (t1 - t0)
+        p1 = a + (b - a) * (s1 - t0) / (t1 - t0)
+        if not _pair_ok(p0, p1, _pos(X, Y, tt, k, s0), _pos(X, Y, tt, k, s1)):
+            return True
+    return False
+
+
+def _move(rng, tt):
+    a = rng.uniform(0.1, 0.6, 2)
+    b = a + (rng.uniform(-0.04, 0.04, 2) if rng.random() < 0.8 else 0.0)
+    t0 = float(rng.uniform(-0.01, tt[-1] + 0.02))
+    return a, b, t0, t0 + float(rng.uniform(0.005, 0.08))
+
+
+@settings(max_examples=300, deadline=None)
+@given(seed=st.integers(0, 10_000), n=st.integers(2, 8), rows=st.integers(2, 12),
+       as_way=st.booleans())
+def test_motion_hits_names_exactly_the_robots_in_the_way(seed, n, rows, as_way) -> None:
+    """Random rows and a random move (or wait) of robot 0: the robots marked are exactly
+    those the reference finds too close, one by one; with robot 1's rows given as its new
+    way instead, the same."""
+    rng = np.random.default_rng(seed)
+    X, Y, tt = _random_rows(rng, n, rows)
+    a, b, t0, t1 = _move(rng, tt)
+    hh, ny = hash_rows(X, Y, -0.5, -0.5, 1.5, 1.5, CS, True)
+    rep = np.zeros(n, np.bool_)
+    ways = (rep, np.zeros(1), np.zeros(1), np.zeros(1), np.zeros(1, np.int64),
+            np.zeros(0, np.int64), np.zeros((0, 4)))
+    if as_way:
+        rep[1] = True
+        ways = (rep, X[:, 1].copy(), Y[:, 1].copy(), tt.copy(),
+                np.array([0, rows], np.int64), np.array([1], np.int64),
+                np.array([[X[:, 1].min(), X[:, 1].max(), Y[:, 1].min(), Y[:, 1].max()]]))
+    hit = np.zeros(n, np.bool_)
+    motion_hits(0, a[0], a[1], b[0], b[1], t0, t1, False, X, Y, tt, hh, -0.5, -0.5, CS, ny,
+                2 * R, np.zeros(n, np.bool_), ways, hit)
+    want = [k for k in range(1, n) if _blocked_by(k, a, b, t0, t1, X, Y, tt)]
+    assert np.flatnonzero(hit).tolist() == want
+
+
+@settings(max_examples=300, deadline=None)
+@given(seed=st.integers(0, 10_000), n=st.integers(2, 8), rows=st.integers(2, 12))
+def test_rest_clear_matches_a_reference(seed, n, rows) -> None:
+    """Random rows and a random move of robot 0: it is clear of the others' last positions
+    from their arrivals on exactly when the reference says so (each piece from
+    ``max(t0, arrival)`` to ``t1`` against the still robot)."""
+    rng = np.random.default_rng(seed)
+    X, Y, tt = _random_rows(rng, n, rows)
+    a, b, t0, t1 = _move(rng, tt)
+    hh, ny = hash_rows(X, Y, -0.5, -0.5, 1.5, 1.5, CS, True)
+    arr = arrivals(X, Y, tt)
+    got = rest_clear(0, a[0], a[1], b[0], b[1], t0, t1, X, Y, hh, -0.5, -0.5, CS, ny, 2 * R,
+                     arr)
+    want = True
+    for k in range(1, n):
+        if arr[k] >= t1:
+            continue
+        s0 = max(t0, arr[k])
+        p0 = a + (b - a) * (s0 - t0) / (t1 - t0)
+        last = np.array([X[-1, k], Y[-1, k]])
+        want &= _pair_ok(p0, b, last, last)
+    assert got == want
+
+
+def test_timed_budget_grows_with_the_square_of_the_fleet() -> None:
+    assert timed_budget(100) == timed_budget(400) == 5000
+    assert timed_budget(800) == 20_000
+    assert timed_budget(1600) == 40_000
+
+
+@pytest.mark.parametrize(("seed", "exchange"), [(2, False), (5, True)])
+def test_groups_and_exchanges_inside_plan_paths(seed: int, exchange: bool) -> None:
+    """800 robots on ``random-64-64-20`` (seed 2: a group round; seed 5: a goal
+    exchange), the stage spied on: it planned robots together, the goals it returns are
+    a permutation of those it was given and the plan's own, the fleet checker accepts the
+    plan (the general one takes minutes at this size), the last arrival is no later than
+    the retiming's, and a second call gives the same plan."""
+    gm = load_grid_map(MAPF / "random-64-64-20.map")
+    S, G = random_instance(gm, 800, seed)
+    seen = {}
+    real = gspi.timed_repair
+
+    def spy(rows, times, gr, V, gv0, hs, goal, *args, **kw):
+        out = real(rows, times, gr, V, gv0, hs, goal, *args, **kw)
+        seen.update(before=_makespan(rows), given=np.array(goal), out=out)
+        return out
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(gspi, "timed_repair", spy)
+        plan = plan_paths(gm.scene, S, G, seed=seed, time_limit=600.0)
+    assert plan.success and seen
+    _, goal, done, _, groups = seen["out"]
+    assert groups >= 1 and done >= 2
+    assert ((goal != seen["given"]).sum() == 2) == exchange
+    assert np.array_equal(np.sort(goal), np.sort(seen["given"]))
+    assert np.array_equal(plan.goal_of, goal)
+    assert _makespan(plan.paths) <= seen["before"] + 1e-6
+    assert check_fleet_plan(gm.scene.to_dict(), S, G, plan, R) == []
+    again = plan_paths(gm.scene, S, G, seed=seed, time_limit=600.0)
+    assert np.array_equal(again.paths, plan.paths)
+    assert np.array_equal(again.goal_of, plan.goal_of)
