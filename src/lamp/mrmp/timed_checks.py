@@ -140,8 +140,9 @@ def motion_clear(i: int, ax: float, ay: float, bx: float, by: float, t0: float, 
     checked with :func:`~lamp.mrmp.gspi_kernels.conflict`; ``end_goal``: (bx, by) is
     robot i's goal, and a robot k with ``ends_goal[k]`` is on its goal when at its last
     position."""
+    # no flags to mark: an empty view, not an array allocated on every call
     return _motion(i, ax, ay, bx, by, t0, t1, end_goal, X, Y, tt, hh, x0, y0, cs, ny,
-                   two_r, ends_goal, ways, np.zeros(0, np.bool_))
+                   two_r, ends_goal, ways, ends_goal[:0])
 
 
 @nb.njit(cache=True)

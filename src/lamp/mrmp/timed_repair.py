@@ -49,10 +49,11 @@ import math
 import numba as nb
 import numpy as np
 
+from lamp.mrmp.goal_distances import hval
 from lamp.mrmp.neighbours import doubled
 from lamp.mrmp.repair_hash import hash_rows
 from lamp.mrmp.timed_checks import arrivals, motion_hits, with_way
-from lamp.mrmp.timed_search import timed_search
+from lamp.mrmp.timed_search import TIGHT_FROM, timed_search
 
 __all__ = ["TIMED_BUDGET", "TIMED_BUDGET_MAX", "TIMED_BUDGET_ROBOTS", "TIMED_ENTRIES",
            "TIMED_EXCHANGES", "TIMED_GROUP", "TIMED_ROUNDS", "timed_budget", "timed_repair"]
@@ -71,7 +72,10 @@ TIMED_ROUNDS = 48
 #: searches' checks grow with them (a 1,600-robot plan on ``den520d``, 1.4-1.9 million,
 #: took 0.15-0.35 s for a few hundredths of a metre).
 TIMED_ENTRIES = 1_000_000
-#: The most robots in the way of the last one planned again with it (0: none).
+#: The most robots in the way of the last one planned again with it (0: none, and no
+#: exchanges nor lower-bound searches either: the default up to
+#: :data:`TIMED_BUDGET_ROBOTS` robots, where the plain search alone spends the budget
+#: in less time for as short plans, measured over 12 instances of 400 robots).
 TIMED_GROUP = 8
 #: Goal exchanges tried for the last robot with the robots in its way (0: none).
 TIMED_EXCHANGES = 4
@@ -144,9 +148,9 @@ def _plan_members(members: np.ndarray, pv: np.ndarray, pt: np.ndarray, target: i
     for j in members:
         if pv.shape[0] == 0:
             ways = (rep, WX, WY, WT, wptr[: nw + 1], wrob[:nw], box[:nw])
-            pv, pt, w = timed_search(j, goal[j], gr, V, gv0, hs, X, Y, tt, hh, x0, y0, cs, ny,
-                                two_r, ends_goal, q, target, budget - work, ob, ways, arr, 0,
-                                members.shape[0] > 1)
+            pv, pt, w = timed_search(j, goal[j], gr, V, gv0, hs, X, Y, tt, hh, x0, y0, cs,
+                                     ny, two_r, ends_goal, q, target, budget - work, ob, ways,
+                                     arr, 0, members.shape[0] > 1)
             work += w
             if pv.shape[0] == 0:
                 rep[:] = rep0
@@ -167,13 +171,30 @@ def _one_round(i: int, target: int, gr: tuple, V: int, gv0: int, hs: tuple,
                budget: int, ob: tuple, arr: np.ndarray, state: tuple, group: int,
                exchanges: int) -> tuple:
     """Robot i planned again to arrive before ``target`` (:func:`_rounds`): alone, else
-    with the robots in its way, else exchanging goals with one of them; returns the
-    state, whether it was, and the states expanded."""
+    (``group > 0``) alone with the lower-bound heuristic, with the robots in its way, or
+    exchanging goals with one of them; nothing more is tried when it has no such way even
+    with no other robot about. Returns the state, whether
+    it was planned, and the states expanded."""
     ends_goal = goal >= 0
     rep, WX, WY, WT, wptr, wrob, box, nw = state
     ways = (rep, WX, WY, WT, wptr[: nw + 1], wrob[:nw], box[:nw])
     pv, pt, work = timed_search(i, goal[i], gr, V, gv0, hs, X, Y, tt, hh, x0, y0, cs, ny,
-                           two_r, ends_goal, q, target, budget, ob, ways, arr)
+                                two_r, ends_goal, q, target, budget, ob, ways, arr)
+    fv, ft = pv, pt
+    if pv.shape[0] == 0 and group > 0:
+        # no earlier way even with nobody about: neither alone nor in a group
+        fv, ft, w = timed_search(i, goal[i], gr, V, gv0, hs, X, Y, tt, hh, x0, y0, cs, ny,
+                                 two_r, ends_goal, q, target, budget - work, ob, ways, arr, 2,
+                                 True)
+        work += w
+        if fv.shape[0] == 0:
+            return state, False, work
+        # the plain heuristic prunes at once the ways only knight moves make early enough
+        if hval(goal[i], V + i, gr, V, gv0, hs) >= TIGHT_FROM * target * q:
+            pv, pt, w = timed_search(i, goal[i], gr, V, gv0, hs, X, Y, tt, hh, x0, y0, cs,
+                                     ny, two_r, ends_goal, q, target, budget - work, ob, ways,
+                                     arr, 0, True)
+            work += w
     me = np.full(1, i, np.int64)
     if pv.shape[0] > 0:
         state, ok, w = _plan_members(me, pv, pt, target, gr, V, gv0, hs, goal, X, Y, tt, hh,
@@ -182,9 +203,12 @@ def _one_round(i: int, target: int, gr: tuple, V: int, gv0: int, hs: tuple,
     for alone in range(1, 3 if group > 0 else 1):
         if work >= budget:
             break
-        pv, pt, w = timed_search(i, goal[i], gr, V, gv0, hs, X, Y, tt, hh, x0, y0, cs, ny, two_r,
-                            ends_goal, q, target, budget - work, ob, ways, arr, alone, True)
-        work += w
+        pv, pt = fv, ft
+        if alone == 1:
+            pv, pt, w = timed_search(i, goal[i], gr, V, gv0, hs, X, Y, tt, hh, x0, y0, cs,
+                                     ny, two_r, ends_goal, q, target, budget - work, ob, ways,
+                                     arr, 1, True)
+            work += w
         if pv.shape[0] == 0:
             continue
         others = _in_the_way(i, pv, pt, gr[0], q, X, Y, tt, hh, x0, y0, cs, ny, two_r,
@@ -277,15 +301,16 @@ def timed_repair(rows: np.ndarray, times: np.ndarray, gr: tuple, V: int, gv0: in
                  hs: tuple, goal: np.ndarray, two_r: float, quantum: float,
                  max_move: float, max_spacing: float, geometry, workspace: tuple[float, float],
                  need: float, budget: int | None = None, rounds: int = TIMED_ROUNDS,
-                 group: int = TIMED_GROUP, exchanges: int = TIMED_EXCHANGES
+                 group: int | None = None, exchanges: int = TIMED_EXCHANGES
                  ) -> tuple[np.ndarray, np.ndarray, int, int, int]:
     """The retimed ``rows`` ((N, R, 2), at ``times``, metres at unit speed) with their
     last robots planned again in time (module docstring) over the graph ``gr`` (goal
     distances ``hs``, robot i's start vertex ``V + i``, goal m's ``gv0 + m``);
     ``quantum``: the time step of the new ways (metres), ``max_move``: the graph's
     longest edge; ``geometry``, ``workspace``, ``need``: the obstacles, the workspace and
-    the clearance a knight move keeps (the space's threshold). Plans of more than
-    :data:`TIMED_ENTRIES` rows times robots are returned as they are. Returns the rows,
+    the clearance a knight move keeps (the space's threshold); ``budget``, ``group``:
+    None for the defaults by fleet size (:func:`timed_budget`, :data:`TIMED_GROUP`).
+    Plans of more than :data:`TIMED_ENTRIES` rows times robots are returned as they are. Returns the rows,
     each robot's goal (``goal``, changed by the exchanges), the ways planned, the states
     expanded and the rounds that planned several robots together."""
     from lamp.mrmp.obstacle_grid import get_grid
@@ -294,6 +319,8 @@ def timed_repair(rows: np.ndarray, times: np.ndarray, gr: tuple, V: int, gv0: in
     goal = np.array(goal, dtype=np.int64)
     if budget is None:
         budget = timed_budget(rows.shape[0])
+    if group is None:
+        group = TIMED_GROUP if rows.shape[0] > TIMED_BUDGET_ROBOTS else 0
     if rows.shape[0] < 2 or rows.shape[1] < 2 or rows.shape[0] * rows.shape[1] > TIMED_ENTRIES:
         return rows, goal, 0, 0, 0
     X = np.ascontiguousarray(rows[:, :, 0].T)

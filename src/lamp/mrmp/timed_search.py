@@ -41,12 +41,13 @@ KNIGHT = np.array([[1, 2], [2, 1], [2, -1], [1, -2], [-1, -2], [-2, -1], [-2, 1]
 #: straight line), so the search finds an earlier way, not always the earliest; 1.0824
 #: makes it a lower bound, for about twice the states.
 OCTILE = 1.0
-#: The lower-bound divisor, used when the robot's lattice distance is at least
-#: :data:`TIGHT_FROM` times the target: there the plain one prunes the ways that only
-#: knight moves make early enough (a robot whose shortcut path beats its lattice
-#: distance: most of the last robots of an 800-robot fleet).
+#: The lower-bound divisor (``tight`` searches): the plain one prunes the ways that only
+#: knight moves make early enough, where the robot's lattice distance is near the target
+#: (a robot whose shortcut path beats its lattice distance: most of the last robots of an
+#: 800-robot fleet).
 OCTILE_BOUND = 1.0824
-#: See :data:`OCTILE_BOUND`.
+#: :mod:`lamp.mrmp.timed_repair` searches again with the lower bound when the robot's
+#: lattice distance is at least this share of the target.
 TIGHT_FROM = 0.95
 
 
@@ -122,8 +123,9 @@ def timed_search(i: int, m: int, gr: tuple, V: int, gv0: int, hs: tuple, X: np.n
     their segment keeps the clearance ``ob[0]`` (exact; ``ob``: the obstacles' grid).
     ``alone``: 1, as if the others were only at their last positions from their
     arrivals ``arr`` on; 2, as if there were no other robot (the ways the group repair
-    clears);
-    ``tight``: the lower-bound heuristic (:data:`OCTILE_BOUND`) whatever the distance."""
+    clears); there waiting never arrives earlier, so a vertex is kept at its earliest
+    time only and there are no waits;
+    ``tight``: the lower-bound heuristic (:data:`OCTILE_BOUND`), else :data:`OCTILE`."""
     coords, nbr, _, xptr, xidx = gr
     va, vb, ids, sdone, sval = hs[11], hs[12], hs[13], hs[9], hs[10]
     kclear = dict()  # knight moves checked: (v * 8 + k) -> clear
@@ -148,9 +150,7 @@ def timed_search(i: int, m: int, gr: tuple, V: int, gv0: int, hs: tuple, X: np.n
     seen[0] = 0
     del seen[0]
     v0 = V + i
-    h0 = hval(m, v0, gr, V, gv0, hs)
-    dd, dn, wa0, wb0, wna, wnb = goal_views(m, hs)
-    div = q * (OCTILE_BOUND if tight or h0 >= TIGHT_FROM * target * q else OCTILE)
+    div = q * (OCTILE_BOUND if tight else OCTILE)
     sv[0], st[0], sp[0] = v0, 0, -1
     n = 1
     nh = 0
@@ -172,7 +172,7 @@ def timed_search(i: int, m: int, gr: tuple, V: int, gv0: int, hs: tuple, X: np.n
         deg = 1 + (8 if v < V else 0) + (xptr[v + 1] - xptr[v])
         for e in range(deg + (8 if v < V else 0)):
             if e == 0:
-                u = v
+                u = -1 if alone > 0 else v  # alone, a wait never arrives earlier
             elif v < V and e <= 8:
                 u = nbr[v, e - 1]
             elif e >= deg:
@@ -189,8 +189,8 @@ def timed_search(i: int, m: int, gr: tuple, V: int, gv0: int, hs: tuple, X: np.n
             t2 = t + d
             if t2 >= target:
                 continue
-            key = u * span_t + t2
-            if key in seen:
+            key = u if alone > 0 else u * span_t + t2  # alone: the earliest time only
+            if key in seen and (alone == 0 or st[seen[key]] <= t2):
                 continue
             hu = read_in(m, u, V, va, vb, sdone, sval, dd, dn, wa0, wb0, wna, wnb)
             if hu < 0.0:
