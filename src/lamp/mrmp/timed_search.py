@@ -112,11 +112,10 @@ def _knight(v: int, k: int, va: np.ndarray, vb: np.ndarray, ids: np.ndarray,
 
 @nb.njit(cache=True)
 def timed_search(i: int, m: int, gr: tuple, V: int, gv0: int, hs: tuple, X: np.ndarray,
-            Y: np.ndarray, tt: np.ndarray, hh: tuple, x0: float, y0: float, cs: float,
-            ny: int, two_r: float, ends_goal: np.ndarray, q: float, target: int,
-            budget: int, ob: tuple, ways: tuple, arr: np.ndarray, alone: int = 0,
-            tight: bool = False
-            ) -> tuple[np.ndarray, np.ndarray, int]:
+                 Y: np.ndarray, tt: np.ndarray, hh: tuple, x0: float, y0: float, cs: float,
+                 ny: int, two_r: float, ends_goal: np.ndarray, q: float, target: int,
+                 budget: int, ob: tuple, ways: tuple, arr: np.ndarray, alone: int = 0,
+                 tight: bool = False) -> tuple[np.ndarray, np.ndarray, int]:
     """Robot i's earliest way to goal m arriving before ``target`` quanta (module
     docstring): its vertices and their times in quanta (empty when none), and the
     states expanded. Knight moves between lattice nodes (:data:`KNIGHT`) are taken when
@@ -139,22 +138,15 @@ def timed_search(i: int, m: int, gr: tuple, V: int, gv0: int, hs: tuple, X: np.n
     if not free < target * q:
         return none, none, 0
     dd, dn, wa0, wb0, wna, wnb = goal_views(m, hs)
-    cap = 1 << 12
-    sv = np.empty(cap, np.int64)
-    st = np.empty(cap, np.int64)
-    sp = np.empty(cap, np.int64)
-    hf = np.empty(cap)
-    ht = np.empty(cap, np.int64)
-    hi = np.empty(cap, np.int64)
-    seen = dict()
+    sv = np.empty(1 << 12, np.int64)
+    st, sp, ht, hi, hf = sv.copy(), sv.copy(), sv.copy(), sv.copy(), np.empty(1 << 12)
+    seen = dict()  # (vertex, time) key -> state
     seen[0] = 0
     del seen[0]
-    v0 = V + i
     div = q * (OCTILE_BOUND if tight else OCTILE)
-    sv[0], st[0], sp[0] = v0, 0, -1
+    sv[0], st[0], sp[0] = V + i, 0, -1
     n = 1
-    nh = 0
-    _push(hf, ht, hi, nh, 0.0, 0, 0)
+    _push(hf, ht, hi, 0, 0.0, 0, 0)
     nh = 1
     span_t = np.int64(target) + 1
     work = 0
