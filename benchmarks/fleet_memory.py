@@ -1,0 +1,151 @@
+"""Where a fleet run's memory goes: the process's resident memory beside the NumPy arrays
+that the project's objects hold, by the class that holds them, at the run's peak.
+
+Runs ``lamp run SCENE --schedule concurrent`` in this process; every ``--every`` events of
+the fleet schedule it reads the resident set (``/proc/self/statm``) and, when that is the
+highest so far by 5 %, takes an inventory: every live object of a ``lamp`` class, and each
+NumPy array reachable from its attributes (directly, or inside a dict, list or tuple held
+there) counted once, for the first class found holding it. A large array (over a lazily
+mapped buffer, ``distance_tiles.lazy_zeros``, or of 1 MB or more: NumPy's zeros are pages
+the system gives as they are written) counts only its pages holding a non-zero byte, so
+that an untouched page costs nothing, as it does the system (a page written with zeros
+only is missed). Dicts held by those objects are counted by ``sys.getsizeof`` of the dict and its
+items (the lattices' successor lists, the searches' tables). What no inventory finds is
+the rest: Python objects not reached this way, the libraries (PyTorch, MuJoCo, Numba,
+GEOS) and the allocator's slack.
+
+Printed: the peak resident set, and the inventory taken nearest to it, largest first.
+
+Run: ``python benchmarks/fleet_memory.py SCENE.yaml [--every 100] [-o OUT]``
+(the run's own files go to ``OUT``, a temporary folder by default).
+"""
+
+from __future__ import annotations
+
+import argparse
+import gc
+import mmap
+import sys
+import tempfile
+from collections import defaultdict
+from pathlib import Path
+
+import numpy as np
+
+PAGE = 4096
+#: arrays of at least this many bytes are counted by their written pages
+LAZY_FROM = 1 << 20
+
+
+def resident_bytes() -> int:
+    """The process's resident set now."""
+    with open("/proc/self/statm") as f:
+        return int(f.read().split()[1]) * PAGE
+
+
+def _root(a: np.ndarray) -> object:
+    """The object owning ``a``'s memory (its outermost base)."""
+    while isinstance(a, np.ndarray) and a.base is not None:
+        a = a.base
+    return a
+
+
+def _written_pages(flat: np.ndarray) -> int:
+    """Bytes of the pages of ``flat`` (uint8) holding a non-zero byte, the last part page
+    counted whole."""
+    n = len(flat) // PAGE
+    pages = np.count_nonzero(flat[: n * PAGE].reshape(n, PAGE).any(axis=1))
+    return int(pages + bool(flat[n * PAGE:].any())) * PAGE
+
+
+def _array_bytes(a: np.ndarray) -> int:
+    """``a``'s bytes; for a large array (a lazily mapped one, or one of at least
+    ``LAZY_FROM`` bytes: NumPy asks the system for zeroed pages, given as written), its
+    pages holding a non-zero byte only."""
+    owner = _root(a)
+    if isinstance(owner, mmap.mmap):
+        return _written_pages(np.frombuffer(owner, dtype=np.uint8))
+    if not isinstance(owner, np.ndarray):
+        return int(a.nbytes)
+    if owner.nbytes >= LAZY_FROM and owner.flags.c_contiguous:
+        return _written_pages(owner.reshape(-1).view(np.uint8))
+    return int(owner.nbytes)
+
+
+def _dict_bytes(d: dict) -> int:
+    size = sys.getsizeof(d)
+    for k, v in d.items():
+        size += sys.getsizeof(k) + sys.getsizeof(v)
+        if isinstance(v, list | tuple):
+            size += sum(sys.getsizeof(x) for x in v)
+    return size
+
+
+def inventory() -> dict[str, tuple[int, int, int]]:
+    """{class: (array bytes, dict bytes, instances)} over every live ``lamp`` object."""
+    seen: set[int] = set()
+    out: dict[str, list[int]] = defaultdict(lambda: [0, 0, 0])
+    for obj in gc.get_objects():
+        cls = type(obj)
+        module = getattr(cls, "__module__", None)
+        if not isinstance(module, str) or not module.startswith("lamp.") or not isinstance(
+                getattr(obj, "__dict__", None), dict):
+            continue
+        row = out[f"{module}.{cls.__qualname__}"]
+        row[2] += 1
+        for value in vars(obj).values():
+            items = (list(value.values()) if isinstance(value, dict) else
+                     list(value) if isinstance(value, list | tuple) else [value])
+            if isinstance(value, dict) and len(value) > 64:
+                row[1] += _dict_bytes(value)
+            for a in items:
+                if isinstance(a, np.ndarray):
+                    key = id(_root(a))
+                    if key not in seen:
+                        seen.add(key)
+                        row[0] += _array_bytes(a)
+    return {k: (v[0], v[1], v[2]) for k, v in out.items()}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("scene")
+    ap.add_argument("--every", type=int, default=100, help="events between RSS reads")
+    ap.add_argument("-o", "--out", default=None, help="the run's output folder")
+    args = ap.parse_args()
+
+    from lamp.cli import app
+    from lamp.fleet import coordinator
+
+    peak = {"rss": 0, "at": 0.0, "inv": {}}
+    advance = coordinator.Fleet._advance
+
+    def watched(self):
+        advance(self)
+        if self.events % args.every == 0:
+            rss = resident_bytes()
+            if rss > 1.05 * peak["rss"]:
+                peak.update(rss=rss, at=self.clock, inv=inventory())
+    coordinator.Fleet._advance = watched
+
+    out = args.out or tempfile.mkdtemp(prefix="fleet-memory-")
+    sys.argv = ["lamp", "run", args.scene, "--schedule", "concurrent", "-o", out, "-q"]
+    try:
+        app()
+    except SystemExit as e:
+        if e.code not in (0, None):
+            raise
+    mb = 2**20
+    inv = peak["inv"]
+    total = sum(a + d for a, d, _ in inv.values())
+    print(f"{Path(args.scene).name}: inventory at {peak['at']:.0f} s simulated, resident "
+          f"{peak['rss'] / mb:.0f} MB; arrays and dicts found {total / mb:.0f} MB")
+    print("| class | instances | arrays MB | dicts MB |")
+    print("|---|---|---|---|")
+    for name, (a, d, n) in sorted(inv.items(), key=lambda kv: -(kv[1][0] + kv[1][1])):
+        if a + d >= mb:
+            print(f"| {name} | {n} | {a / mb:.0f} | {d / mb:.0f} |")
+
+
+if __name__ == "__main__":
+    main()
