@@ -3,15 +3,12 @@
 Its object waits (``Fleet.plan_failed``) and plans again (:func:`wait_over`) at the
 first of:
 
-- when unplaced objects stood in the space it needs when its planner failed (the space is
-  :func:`blocked_space`: its way, its robots' approach, its last plan's claim): one of
-  them gone from that space (its body and the robots of its sub-team all out of it) or
-  placed there (it stands for good: the planner must go round it);
-- when none did: an object placed, or failed after it started (``Fleet.finished``);
-- :func:`patience` events, whatever blocked it (a robot of nobody's team, the obstacles,
-  a body that stays): ``BLOCKED_WAKE_EVENTS`` for each other object moving then, so that
-  a planner waits about as many of the others' segments in a fleet of 40 as of 2 (each
-  retry is a full search, and counts against its object's budgets).
+- an object placed, or failed after it started (``Fleet.finished``);
+- an object that stood in the space it needs when its planner failed gone from that space:
+  its body and the robots of its sub-team all out of it (the space is
+  :func:`blocked_space`: its way, its robots' approach, its last plan's claim);
+- ``BLOCKED_WAKE_EVENTS`` events, whatever blocked it (a robot of nobody's team, the
+  obstacles, a body that stays).
 
 Whether a noted object left is looked at once per event, not at every step of the others
 (a failed search is costly), and the objects' poses are read only then and once at each
@@ -29,10 +26,10 @@ from lamp.fleet.state import ObjectState
 from lamp.fleet.teams import needed_space
 from lamp.scene.model import Scene
 
-__all__ = ["BLOCKED_WAKE_EVENTS", "blocked_space", "looks_now", "patience", "wait_over"]
+__all__ = ["BLOCKED_WAKE_EVENTS", "blocked_space", "looks_now", "wait_over"]
 
 #: A planner that found no plan while others moved plans again after this many events
-#: (segments ending) for each other object moving then, at the latest (module docstring).
+#: (segments ending) at the latest (module docstring).
 BLOCKED_WAKE_EVENTS = 6
 
 
@@ -53,18 +50,10 @@ def looks_now(o: ObjectState, now: int) -> bool:
     return bool(o.blockers) and now > o.looked_at
 
 
-def patience(others_moving: int) -> int:
-    """The events after which a planner that found no plan while ``others_moving`` other
-    objects moved plans again at the latest: ``BLOCKED_WAKE_EVENTS`` for each (one at
-    least)."""
-    return BLOCKED_WAKE_EVENTS * max(1, others_moving)
-
-
 def wait_over(o: ObjectState, finished: int, now: int, left: bool) -> bool:
     """Whether the wait of ``o`` (its planner found no plan) is over at event ``now`` with
-    ``finished`` objects done: a noted object ``left`` its space (or was placed), or, with
-    none noted, one more object was done since; or :func:`patience` events passed."""
+    ``finished`` objects done: one more was done since, ``BLOCKED_WAKE_EVENTS`` events
+    passed, or a noted object ``left`` its space."""
     assert o.blocked_at is not None
     done_then, events_then = o.blocked_at
-    woken = left if o.blockers else finished > done_then
-    return woken or now - events_then >= patience(o.others_moving)
+    return finished > done_then or now - events_then >= BLOCKED_WAKE_EVENTS or left

@@ -125,10 +125,6 @@ class Board:
                            self.executor.robot_positions,
                            {p.index: p.team for p in self.objects if p.unplaced})
 
-    def unplaced_in(self, region: shapely.Geometry, poses: np.ndarray) -> frozenset[int]:
-        """The unplaced objects standing in ``region`` (:meth:`inside`)."""
-        return frozenset(j for j in self.inside(region, poses) if self.objects[j].unplaced)
-
     def needed_by_others(self, k: int) -> shapely.Geometry | None:
         """What the unplaced objects other than ``k`` still need (``parking``)."""
         return needed_by_others(self.scene, self.objects, self.executor.object_poses, k)

@@ -252,8 +252,8 @@ class Fleet(TeamChanges):
         """``o``'s planner found no plan with the objects at ``poses``: it waits from now
         on, and the objects standing in the space it needs are noted (``blocked``)."""
         o.blocked_in = blocked_space(self.scene, o, poses, self.executor.robot_positions)
-        o.blockers = self.unplaced_in(o.blocked_in, poses) - {o.index}
-        o.blocked_at, o.others_moving = (self.finished, self.events), self.moving() - 1
+        o.blockers = self.inside(o.blocked_in, poses) - {o.index}
+        o.blocked_at = (self.finished, self.events)
         o.looked_at = self.events
 
     def _wake_blocked(self) -> None:
@@ -267,7 +267,7 @@ class Fleet(TeamChanges):
             if looks_now(o, now):
                 o.looked_at = now
                 poses = self.executor.object_poses if poses is None else poses
-                left = not o.blockers <= self.unplaced_in(o.blocked_in, poses)
+                left = not o.blockers <= self.inside(o.blocked_in, poses)
             if wait_over(o, self.finished, now, left):
                 o.resume()
 

@@ -83,7 +83,6 @@ class ObjectState:
     #: objects standing in it then (their bodies or robots): one leaving wakes it
     blocked_in: shapely.Geometry | None = None
     blockers: frozenset[int] = frozenset()
-    others_moving: int = 1  # the other objects active when its planner failed
     looked_at: int = -1  # the event at which it last looked whether one left
     replan: bool = False  # the answer to ``plan_failed``: plan anew (True) or go on alone
     needs_team: bool = False  # its thread waits for robots (``wait_for_team``)
