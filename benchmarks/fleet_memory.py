@@ -5,16 +5,18 @@ Runs ``lamp run SCENE --schedule concurrent`` in this process; every ``--every``
 the fleet schedule it reads the resident set (``/proc/self/statm``) and, when that is the
 highest so far by 5 %, takes an inventory: every live object of a ``lamp`` class, and each
 NumPy array reachable from its attributes (directly, or inside a dict, list or tuple held
-there) counted once, for the first class found holding it. A large array (over a lazily
-mapped buffer, ``distance_tiles.lazy_zeros``, or of 1 MB or more: NumPy's zeros are pages
-the system gives as they are written) counts only its pages holding a non-zero byte, so
-that an untouched page costs nothing, as it does the system (a page written with zeros
-only is missed). Dicts held by those objects are counted by ``sys.getsizeof`` of the dict and its
-items (the lattices' successor lists, the searches' tables). What no inventory finds is
+there) counted once, for the first class found holding it: an array of 128 kB or more
+by its pages resident in memory (``mincore(2)``: a zero-filled array or
+``distance_tiles.lazy_zeros`` costs only the pages written so far), a smaller one (on
+the malloc heap) by its size. Dicts of more than 64 items held by those objects are
+counted by ``sys.getsizeof`` of the dict and its items (the lattices' successor lists,
+the searches' tables). What no inventory finds is
 the rest: Python objects not reached this way, the libraries (PyTorch, MuJoCo, Numba,
 GEOS) and the allocator's slack.
 
-Printed: the peak resident set, and the inventory taken nearest to it, largest first.
+Printed: the resident set before the inventory taken at the highest reading, and that
+inventory, largest first (taking one costs memory itself: read the process's peak with
+``/usr/bin/time -v lamp run`` instead).
 
 Run: ``python benchmarks/fleet_memory.py SCENE.yaml [--every 100] [-o OUT]``
 (the run's own files go to ``OUT``, a temporary folder by default).
@@ -23,6 +25,8 @@ Run: ``python benchmarks/fleet_memory.py SCENE.yaml [--every 100] [-o OUT]``
 from __future__ import annotations
 
 import argparse
+import ctypes
+import ctypes.util
 import gc
 import mmap
 import sys
@@ -32,9 +36,9 @@ from pathlib import Path
 
 import numpy as np
 
-PAGE = 4096
-#: arrays of at least this many bytes are counted by their written pages
-LAZY_FROM = 1 << 20
+PAGE = mmap.PAGESIZE
+#: arrays smaller than this live on the malloc heap (``fleet.turns.MMAP_THRESHOLD``)
+HEAP_BELOW = 128 * 1024
 
 
 def resident_bytes() -> int:
@@ -50,26 +54,33 @@ def _root(a: np.ndarray) -> object:
     return a
 
 
-def _written_pages(flat: np.ndarray) -> int:
-    """Bytes of the pages of ``flat`` (uint8) holding a non-zero byte, the last part page
-    counted whole."""
-    n = len(flat) // PAGE
-    pages = np.count_nonzero(flat[: n * PAGE].reshape(n, PAGE).any(axis=1))
-    return int(pages + bool(flat[n * PAGE:].any())) * PAGE
+_LIBC = ctypes.CDLL(ctypes.util.find_library("c"), use_errno=True)
+_LIBC.mincore.argtypes = [ctypes.c_void_p, ctypes.c_size_t, ctypes.c_void_p]
+
+
+def resident_in(address: int, size: int) -> int:
+    """Bytes of the pages of ``[address, address + size)`` that are resident now
+    (``mincore(2)``: nothing is read, so nothing is faulted in)."""
+    if size <= 0:
+        return 0
+    start = address - address % PAGE
+    pages = -(-(address + size - start) // PAGE)
+    vec = (ctypes.c_ubyte * pages)()
+    if _LIBC.mincore(ctypes.c_void_p(start), ctypes.c_size_t(pages * PAGE), vec) != 0:
+        raise OSError(ctypes.get_errno(), "mincore failed")
+    return int(np.count_nonzero(np.frombuffer(vec, dtype=np.uint8) & 1)) * PAGE
 
 
 def _array_bytes(a: np.ndarray) -> int:
-    """``a``'s bytes; for a large array (a lazily mapped one, or one of at least
-    ``LAZY_FROM`` bytes: NumPy asks the system for zeroed pages, given as written), its
-    pages holding a non-zero byte only."""
+    """The resident bytes of the memory ``a`` lives in (its outermost owner's)."""
     owner = _root(a)
     if isinstance(owner, mmap.mmap):
-        return _written_pages(np.frombuffer(owner, dtype=np.uint8))
+        owner = np.frombuffer(owner, dtype=np.uint8)
     if not isinstance(owner, np.ndarray):
-        return int(a.nbytes)
-    if owner.nbytes >= LAZY_FROM and owner.flags.c_contiguous:
-        return _written_pages(owner.reshape(-1).view(np.uint8))
-    return int(owner.nbytes)
+        owner = a
+    if owner.nbytes < HEAP_BELOW:  # on the malloc heap: resident
+        return int(owner.nbytes)
+    return resident_in(owner.ctypes.data, owner.nbytes)
 
 
 def _dict_bytes(d: dict) -> int:
