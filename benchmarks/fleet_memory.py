@@ -6,8 +6,8 @@ the fleet schedule it reads the resident set (``/proc/self/statm``) and, when th
 highest so far by 5 %, takes an inventory: every live object of a ``lamp`` class, and each
 NumPy array reachable from its attributes (directly, or inside a dict, list or tuple held
 there) counted once, for the first class found holding it: an array of 128 kB or more
-by its pages resident in memory (``mincore(2)``: a zero-filled array or
-``distance_tiles.lazy_zeros`` costs only the pages written so far), a smaller one (on
+by its pages resident in memory (``mincore(2)``: a zero-filled array mapped on its own,
+or ``distance_tiles.lazy_zeros``, costs only the pages written so far), a smaller one (on
 the malloc heap) by its size. Dicts of more than 64 items held by those objects are
 counted by ``sys.getsizeof`` of the dict and its items (the lattices' successor lists,
 the searches' tables). What no inventory finds is
