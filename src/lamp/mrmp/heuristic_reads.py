@@ -26,16 +26,7 @@ def read_settled(m: int, v: int, V: int, hs: tuple, dd: np.ndarray, dn: np.ndarr
     else -1; ``dd``/``dn``/``a0, b0, na, nbw``: goal m's window arrays and extent, read
     once by the caller (a :func:`hval` call per value costs about 0.3 us, forty times
     this; after one, the window may have grown: read them again)."""
-    if v < V:
-        a = hs[11][v] - a0
-        b = hs[12][v] - b0
-        if 0 <= a < na and 0 <= b < nbw:
-            j = (b + 1) * (na + 2) + a + 1
-            if dn[j]:
-                return dd[j]
-    elif hs[9][m, v - V]:
-        return hs[10][m, v - V]
-    return -1.0
+    return read_in(m, v, V, hs[11], hs[12], hs[9], hs[10], dd, dn, a0, b0, na, nbw)
 
 
 @nb.njit(cache=True, inline="always")
@@ -68,9 +59,7 @@ def goal_views(m: int, hs: tuple) -> tuple[np.ndarray, np.ndarray, int, int, int
 @nb.njit(cache=True, inline="always")
 def hval_fast(m: int, v: int, gr: tuple, V: int, gv0: int, hs: tuple) -> float:
     """:func:`hval`, compiled into its caller: a settled or memoised value read in place."""
-    w = hs[0]
-    h = read_settled(m, v, V, hs, hs[2][m], hs[3][m], w[m, 0], w[m, 1], w[m, 2], w[m, 3])
-    return h if h >= 0.0 else hval(m, v, gr, V, gv0, hs)
+    return hval_in(m, v, gr, V, gv0, hs, hs[0], hs[11], hs[12], hs[9], hs[10])
 
 
 @nb.njit(cache=True, inline="always")

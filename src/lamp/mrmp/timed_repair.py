@@ -18,9 +18,7 @@ each of them, latest first, every one to arrive before the same target, against 
 motion kept and every new way; all are kept or none. Failing that, the last robot
 exchanges goals with one of them (the :data:`TIMED_EXCHANGES` latest), both planned
 again the same way (the goals are interchangeable, so the exchange is returned with the
-rows). Robots tied with the last are tried in turn before the loop ends. At 800 robots on
-``random-64-64-20`` this took the latest arrival of 4 of 12 instances further down (one
-from 1.75 to 1.59 times the straight-line bound, one from 1.52 to 1.47).
+rows). Robots tied with the last are tried in turn before the loop ends.
 
 Search (:mod:`lamp.mrmp.timed_search`): A* over (vertex, time) of the plan's graph
 (lattice nodes, the robot's own start and goal vertices' links, other goals' vertices;
@@ -79,6 +77,8 @@ TIMED_ENTRIES = 1_000_000
 TIMED_GROUP = 8
 #: Goal exchanges tried for the last robot with the robots in its way (0: none).
 TIMED_EXCHANGES = 4
+
+
 @nb.njit(cache=True)
 def _add_way(i: int, pv: np.ndarray, pt: np.ndarray, coords: np.ndarray, q: float,
              WX: np.ndarray, WY: np.ndarray, WT: np.ndarray, wptr: np.ndarray,
@@ -326,7 +326,7 @@ def timed_repair(rows: np.ndarray, times: np.ndarray, gr: tuple, V: int, gv0: in
     X = np.ascontiguousarray(rows[:, :, 0].T)
     Y = np.ascontiguousarray(rows[:, :, 1].T)
     # a knight move is at most sqrt(5) / sqrt(2) times the longest lattice edge
-    longest = max(max_move, 1.6 * max_move, max_spacing)
+    longest = max(1.6 * max_move, max_spacing)
     cs = two_r + longest + 2.0 * max_spacing + 1e-6
     g = get_grid(geometry)
     W, H = workspace
