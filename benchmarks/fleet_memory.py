@@ -36,9 +36,9 @@ from pathlib import Path
 
 import numpy as np
 
+from lamp.fleet.turns import MMAP_THRESHOLD as HEAP_BELOW  # smaller blocks: on the heap
+
 PAGE = mmap.PAGESIZE
-#: arrays smaller than this live on the malloc heap (``fleet.turns.MMAP_THRESHOLD``)
-HEAP_BELOW = 128 * 1024
 
 
 def resident_bytes() -> int:
