@@ -14,7 +14,7 @@ import pytest
 from fleet_checker import check_fleet_plan
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from test_mrmp_timed_repair import _makespan, _pair_ok, _pos, _random_rows
+from test_mrmp_timed_repair import _blocked_by, _makespan, _pair_ok, _random_rows
 
 import lamp.mrmp.gspi as gspi
 from lamp.mrmp import plan_paths
@@ -27,18 +27,6 @@ MAPF = Path(__file__).resolve().parent / "data" / "mapf"
 R = 0.05
 SPACING = 0.02
 CS = 2 * R + 0.04 + 2 * SPACING + 1e-6
-
-
-def _blocked_by(k, a, b, t0, t1, X, Y, tt) -> bool:
-    """Whether the move a -> b over [t0, t1] comes closer to robot k's rows than the rule
-    allows, cut at every row time inside (no goal ends)."""
-    cuts = np.unique(np.concatenate([[t0, t1], tt[(tt > t0) & (tt < t1)]]))
-    for s0, s1 in zip(cuts[:-1], cuts[1:], strict=True):
-        p0 = a + (b - a) * (s0 - t0) / (t1 - t0)
-        p1 = a + (b - a) * (s1 - t0) / (t1 - t0)
-        if not _pair_ok(p0, p1, _pos(X, Y, tt, k, s0), _pos(X, Y, tt, k, s1)):
-            return True
-    return False
 
 
 def _move(rng, tt):

@@ -40,19 +40,23 @@ def _pos(X, Y, tt, k, t):
     return np.array([np.interp(t, tt, X[:, k]), np.interp(t, tt, Y[:, k])])
 
 
+def _blocked_by(k, a, b, t0, t1, X, Y, tt) -> bool:
+    """Whether the move a -> b over [t0, t1] comes closer to robot k's rows than the rule
+    allows, cut at every row time inside (no goal ends)."""
+    cuts = np.unique(np.concatenate([[t0, t1], tt[(tt > t0) & (tt < t1)]]))
+    for s0, s1 in zip(cuts[:-1], cuts[1:], strict=True):
+        p0 = a + (b - a) * (s0 - t0) / (t1 - t0)
+        p1 = a + (b - a) * (s1 - t0) / (t1 - t0)
+        if not _pair_ok(p0, p1, _pos(X, Y, tt, k, s0), _pos(X, Y, tt, k, s1)):
+            return True
+    return False
+
+
 def _reference(i, a, b, t0, t1, X, Y, tt) -> bool:
     """Robot i moving a -> b over [t0, t1] against every other robot's rows, cut at every
     row time inside (no goal ends)."""
-    cuts = np.unique(np.concatenate([[t0, t1], tt[(tt > t0) & (tt < t1)]]))
-    for k in range(X.shape[1]):
-        if k == i:
-            continue
-        for s0, s1 in zip(cuts[:-1], cuts[1:], strict=True):
-            p0 = a + (b - a) * (s0 - t0) / (t1 - t0)
-            p1 = a + (b - a) * (s1 - t0) / (t1 - t0)
-            if not _pair_ok(p0, p1, _pos(X, Y, tt, k, s0), _pos(X, Y, tt, k, s1)):
-                return False
-    return True
+    return not any(_blocked_by(k, a, b, t0, t1, X, Y, tt)
+                   for k in range(X.shape[1]) if k != i)
 
 
 def _random_rows(rng, n, rows, box=0.6):
