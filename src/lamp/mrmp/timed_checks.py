@@ -81,9 +81,10 @@ def _ways_clear(i: int, ax: float, ay: float, bx: float, by: float, t0: float, t
         p0 = wptr[w]
         p1 = wptr[w + 1]
         j = p0 + row_at(WT[p0:p1], t0)
+        before = t0 < WT[p0]  # a piece of its own: still at its first point until WT[p0]
         while j < p1:
-            e0 = WT[j] if j > p0 else -np.inf  # still at its first point before it
-            e1 = WT[j + 1] if j + 1 < p1 else np.inf
+            e0 = -np.inf if before else WT[j]
+            e1 = WT[j] if before else WT[j + 1] if j + 1 < p1 else np.inf
             s0 = max(t0, e0)
             s1 = min(t1, e1)
             if s1 > s0:
@@ -98,7 +99,10 @@ def _ways_clear(i: int, ax: float, ay: float, bx: float, by: float, t0: float, t
                     break
             if e1 >= t1:
                 break
-            j += 1
+            if before:
+                before = False
+            else:
+                j += 1
     return True
 
 
