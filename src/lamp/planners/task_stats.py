@@ -22,6 +22,9 @@ class TaskStats:
     #: machine: then no result depended on the clock).
     gspi_timeouts: int = 0
     cache_hits: int = 0
+    #: pushes LAMP-Lazy verified earlier in the same ``plan`` call, on a path that failed
+    #: further on, and took again instead of calling Verify (``lazy`` module docstring)
+    verify_reused: int = 0
     #: vertices LAMP-Lazy's D* Lite expanded (its budget: ``lazy_max_expansions``)
     search_expansions: int = 0
     #: the most of them in one LAMP-Lazy ``plan`` call (a maximum: ``add`` keeps the larger)
