@@ -23,9 +23,10 @@ With ``--tswap ADAPTER`` (``benchmarks/tswap/adapter.py``, which runs TSWAP's pu
 implementation built from its source outside this repository: see
 ``benchmarks/tswap/README.md``), the same instances are solved by TSWAP, first in its
 default mode (``app -s TSWAP`` without ``-m``: bottleneck, then least sum), which is the
-column our makespan is divided by, then in the modes of ``--tswap-modes`` after it. Its
-makespan and sum of path lengths are converted to metres at one cell (``--cell``) per time
-step; its time is its own ``comp_time``; the adapter checks each TSWAP plan on the grid.
+column our makespan and time are divided by (each as a median of per-instance ratios),
+then in the modes of ``--tswap-modes`` after it. Its makespan and sum of path lengths are
+converted to metres at one cell (``--cell``) per time step; its time is its own
+``comp_time``; the adapter checks each TSWAP plan on the grid.
 
 With ``--parts``, a second line per instance says where the makespan goes: the last
 robot to arrive, its arrival split into its path length, its waits (rows in which it does
@@ -213,7 +214,8 @@ def main() -> None:
     print("map | robots | seed | time s | steps | makespan m | slowest path m | sum m | "
           "Gspi B* m | LB m | makespan / LB | valid"
           + "".join(f" | TSWAP {m}: makespan m / sum m / ms" for m in modes)
-          + (" | TSWAP default makespan / LB | makespan / TSWAP default" if modes else ""))
+          + (" | TSWAP default makespan / LB | makespan / TSWAP default | time / TSWAP default"
+             if modes else ""))
     summary: list[tuple] = []
     for name in maps:
         path = a.map_dir / f"{name}.map"
@@ -265,6 +267,8 @@ def main() -> None:
                     d = ts["default"]
                     line += (f" | {d['makespan_m'] / lb:.2f} | {mk / d['makespan_m']:.2f}"
                              if d.get("solved") and d["makespan"] > 0 else " | - | -")
+                    line += (f" | {1e3 * dt / d['runtime_ms']:.2f}"
+                             if d.get("solved") and d.get("runtime_ms", 0) > 0 else " | -")
                 print(line, flush=True)
                 if a.parts and plan.success:
                     print("  " + parts_line(plan, space, S, G), flush=True)
@@ -276,7 +280,7 @@ def main() -> None:
             "| sum m")
     if modes:
         head += (" | TSWAP default: solved | time ms | makespan m | / LB | sum m "
-                 "| ours / TSWAP default"
+                 "| ours / TSWAP default | time / TSWAP default"
                  + "".join(f" | TSWAP {m}: makespan m / ms" for m in modes[1:]))
     print(head + " |")
     for name, n, rows in summary:
@@ -298,7 +302,9 @@ def main() -> None:
                          + (f"{np.median([r['ts'][mode]['sum_m'] for r in done]):.0f}"
                             if done else "-") + " | "
                          + _med([r["mk"] / r["ts"][mode]["makespan_m"] for r in done
-                                 if r["ts"][mode]["makespan"] > 0]))
+                                 if r["ts"][mode]["makespan"] > 0]) + " | "
+                         + _med([1e3 * r["dt"] / r["ts"][mode]["runtime_ms"] for r in done
+                                 if r["ts"][mode].get("runtime_ms", 0) > 0]))
             else:
                 line += (f" | {_med(mks)} / " + (f"{np.median(ms):.0f}" if ms else "-")
                          + ("" if len(done) == len(rows) else f" ({len(done)} solved)"))

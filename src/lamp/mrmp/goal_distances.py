@@ -298,6 +298,8 @@ def _settle(target: int, lim: float, k: int, dlen: np.ndarray, dist: np.ndarray,
     cap = bk.shape[1] - 8
     inv = 1.0 / step
     off = np.empty(8, dtype=np.int64)
+    buf = np.empty(8, dtype=np.int64)
+    bnd = np.empty(8)
     for e in range(8):
         off[e] = da[e] + db[e] * P
     left = 0
@@ -325,21 +327,28 @@ def _settle(target: int, lim: float, k: int, dlen: np.ndarray, dist: np.ndarray,
         done[j] = 1
         du = dist[j]
         msk = em[j]
+        # the eight relaxations are decided without branches (the ring and settled
+        # entries are read like any other), then the improved ones are queued in
+        # direction order: which neighbours improve is what a branch would mispredict
+        nb_ = 0
         for e in range(8):
-            if (msk >> e) & 1:
-                jw = j + off[e]
-                if done[jw]:
-                    continue
-                nd = du + dlen[e]
-                if nd < dist[jw]:
-                    dist[jw] = nd
-                    q = max(int(nd * inv), k) & mask
-                    cq = cnt[q] + 1
-                    bk[q, cq - 1] = jw
-                    cnt[q] = cq
-                    left += 1
-                    if cq > high:
-                        high = cq
+            jw = j + off[e]
+            nd = du + dlen[e]
+            ok = ((msk >> e) & 1) & (1 - done[jw]) & (nd < dist[jw])
+            buf[nb_] = jw
+            bnd[nb_] = nd
+            nb_ += ok
+        for t in range(nb_):
+            jw = buf[t]
+            nd = bnd[t]
+            dist[jw] = nd
+            q = max(int(nd * inv), k) & mask
+            cq = cnt[q] + 1
+            bk[q, cq - 1] = jw
+            cnt[q] = cq
+            left += 1
+            if cq > high:
+                high = cq
     return k, 0
 
 

@@ -1,0 +1,55 @@
+"""Gspi's lazy windowed goal searches (``lamp.mrmp.goal_distances``) against a plain
+heap Dijkstra over the whole lattice (``Lattice.field``, which shares no code with them):
+the settled values are the same floats, bit for bit, however the searches were grown."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from lamp.geometry.robot_space import RobotSpace
+from lamp.mrmp.distance_field import get_lattice
+from lamp.mrmp.goal_distances import EPS, GoalDistances, expand_to, lattice_h
+from lamp.mrmp.links import link_special_vertices
+from lamp.scene.mapf import load_grid_map, random_instance
+
+MAPF = Path(__file__).resolve().parent / "data" / "mapf"
+
+
+@settings(max_examples=20, deadline=None)
+@given(seed=st.integers(0, 10_000), bounds=st.lists(st.floats(0.0, 2.5), min_size=1,
+                                                    max_size=3),
+       queries=st.integers(0, 30))
+def test_settled_values_are_the_full_dijkstra_bit_for_bit(seed: int, bounds: list[float],
+                                                          queries: int) -> None:
+    """After expansions to growing bounds and point queries in any order (windows opened,
+    grown and resumed), every node closer to its goal than the largest bound is settled,
+    and every settled value equals the whole-lattice heap Dijkstra's float exactly (the
+    same sums of edge lengths: the assignment's costs and the plans depend on them)."""
+    gm = load_grid_map(MAPF / "random-32-32-20.map")
+    S, G = random_instance(gm, 6, seed % 40)
+    space = RobotSpace.from_scene(gm.scene)
+    lat = get_lattice(space, 0.03)
+    links = link_special_vertices(space, lat, S, G, space.clearance(S, exact=True),
+                                  space.clearance(G, exact=True), 0.045, {})
+    hs = GoalDistances.build(links.goal_links, G, lat, 12)
+    rng = np.random.default_rng(seed)
+    for b in sorted(bounds):
+        for m in range(len(G)):
+            expand_to(m, b, lat.nbr, lat.dlen, hs)
+        for v in rng.integers(0, lat.V, queries).tolist():  # point queries grow windows
+            lattice_h(int(rng.integers(0, len(G))), v, lat.nbr, lat.dlen, hs)
+    for m, (nodes, cost) in enumerate(links.goal_links):
+        ref = lat.field(nodes, cost + EPS) if len(nodes) else np.full(lat.V, np.inf)
+        a0, b0, na, nbw, _ = hs.win[m].tolist()
+        a, b = lat.va - a0, lat.vb - b0
+        inside = (a >= 0) & (a < na) & (b >= 0) & (b < nbw)
+        j = (b + 1) * (na + 2) + a + 1
+        settled = np.zeros(lat.V, bool)
+        settled[inside] = hs.done[m][j[inside]] == 1
+        assert settled[ref < max(bounds)].all()
+        got = hs.dist[m][j[settled]]
+        assert np.array_equal(got, ref[settled])  # same floats (inf only where ref is)
