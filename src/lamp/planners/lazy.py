@@ -269,7 +269,8 @@ class LazyPlanner:
             for nxt in path[1:]:  # line 13: each q_next on P_O
                 if self.lattice.is_node(curr) and curr in self.tree_eval:  # line 14: in Tree_eval, break
                     break
-                key = (curr, nxt, self.failures.get((curr, nxt), 0), q_R.tobytes())
+                attempt = self.failures.get((curr, nxt), 0)
+                key = (curr, nxt, attempt, q_R.tobytes())
                 trans = answers.get(key)  # departure: a push Tree_new held before line 19
                 if trans is not None:
                     stats.verify_reused += 1
@@ -278,7 +279,7 @@ class LazyPlanner:
                         PlanStatus.BUDGET_EXHAUSTED, self.penalised, verify_cap[1]))
                 else:  # line 16: Verify
                     trans = self.verifier.verify(self.lattice.pose(curr), self.lattice.pose(nxt),
-                                                 q_R, key[2])
+                                                 q_R, attempt)
                     if trans is not None:
                         answers[key] = trans
                 if trans is None:  # lines 17-20: no C_R, UpdateChange
