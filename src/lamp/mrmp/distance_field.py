@@ -264,6 +264,26 @@ class Lattice:
         srt = np.take_along_axis(ids, order, axis=1)
         return [srt[k, : n[k]] for k in range(len(points))]
 
+    def any_node_near(self, points: np.ndarray, radius: float) -> np.ndarray:
+        """(K,) bool: whether :meth:`nodes_near` of each of ``points`` (K, 2) is not empty
+        (the window and test of :meth:`nodes_near_all`, without the sort)."""
+        L = self.step
+        nb_, na = self.ids.shape
+        if nb_ == 0 or na == 0 or self.V == 0:
+            return np.zeros(len(points), dtype=bool)
+        oa, ob = self.offset
+        span = int(math.ceil(2 * radius / L)) + 2
+        a0 = np.floor((points[:, 0] - radius) / L).astype(np.int64) - oa
+        b0 = np.floor((points[:, 1] - radius) / L).astype(np.int64) - ob
+        db, da = np.divmod(np.arange(span * span), span)
+        A = a0[:, None] + da[None, :]
+        B = b0[:, None] + db[None, :]
+        inside = (A >= 0) & (na > A) & (B >= 0) & (nb_ > B)
+        ids = np.where(inside, self.ids[np.clip(B, 0, nb_ - 1), np.clip(A, 0, na - 1)], -1)
+        c = self.coords[np.maximum(ids, 0)]
+        d = np.hypot(c[..., 0] - points[:, None, 0], c[..., 1] - points[:, None, 1])
+        return ((ids >= 0) & (d <= radius + 1e-12)).any(axis=1)
+
     def links(
         self, points: np.ndarray, radius: float, thresholds: np.ndarray,
         point_clearance: np.ndarray | None = None,
