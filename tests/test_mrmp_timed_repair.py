@@ -17,7 +17,14 @@ from mrmp_checker import check_plan
 import lamp.mrmp.gspi as gspi
 from lamp.mrmp import plan_paths
 from lamp.mrmp.repair_hash import hash_rows
-from lamp.mrmp.timed_checks import arrivals, motion_clear, with_way
+from lamp.mrmp.timed_checks import (
+    arrivals,
+    gather_rows,
+    motion_clear,
+    motion_near,
+    row_at,
+    with_way,
+)
 from lamp.scene.mapf import load_grid_map, random_instance
 
 MAPF = Path(__file__).resolve().parent / "data" / "mapf"
@@ -103,6 +110,53 @@ def test_motion_clear_matches_a_brute_force_reference(seed, n, rows, as_way) -> 
     got = motion_clear(0, a[0], a[1], b[0], b[1], t0, t1, False, X, Y, tt, hh, -0.5, -0.5,
                        cs, ny, 2 * R, ends, ways)
     assert got == _reference(0, a, b, t0, t1, X, Y, tt)
+
+
+@settings(max_examples=400, deadline=None)
+@given(seed=st.integers(0, 10_000), n=st.integers(2, 14), rows=st.integers(2, 14),
+       as_way=st.booleans(), split=st.integers(0, 3))
+def test_motion_near_gives_motion_clears_answers(seed, n, rows, as_way, split) -> None:
+    """The timed search's check of a move against the robots gathered around its start
+    (``gather_rows``, ``motion_near``) gives ``motion_clear``'s answer over the hash, and
+    the brute-force reference's without goal ends: random crowded rows, moves no longer
+    than the hash's longest (waits too), random goal ends, another robot's rows as its
+    new way, the rows gathered at once or in parts (as successive moves need them)."""
+    rng = np.random.default_rng(seed)
+    X, Y, tt = _random_rows(rng, n, rows, box=0.35)
+    longest = 0.04
+    a = rng.uniform(0.1, 0.35, 2)
+    ang = rng.uniform(0, 2 * np.pi)
+    b = a + (rng.uniform(0, longest) * np.array([np.cos(ang), np.sin(ang)])
+             if rng.random() < 0.8 else 0.0)
+    t0 = float(rng.uniform(-0.01, tt[-1] + 0.02))
+    t1 = t0 + float(rng.uniform(0.005, 0.08))
+    cs = 2 * R + longest + 2 * SPACING + 1e-6
+    hh, ny = hash_rows(X, Y, -0.5, -0.5, 1.5, 1.5, cs, True)
+    goal_ends = rng.random() < 0.5
+    ends = rng.random(n) < 0.5 if goal_ends else np.zeros(n, np.bool_)
+    end_goal = goal_ends and bool(rng.random() < 0.5)
+    ways = _no_ways(n)
+    if as_way:
+        rep = np.zeros(n, np.bool_)
+        rep[1] = True
+        ways = (rep, X[:, 1].copy(), Y[:, 1].copy(), tt.copy(),
+                np.array([0, rows], np.int64), np.array([1], np.int64),
+                np.array([[X[:, 1].min(), X[:, 1].max(), Y[:, 1].min(), Y[:, 1].max()]]))
+    r0, r_end = row_at(tt, t0), row_at(tt, t1)
+    gk = np.empty(1, np.int64)
+    gptr = np.zeros(rows + 1, np.int64)
+    nrows = 0
+    for stop in sorted({min(r_end, r0 + split), r_end}):
+        gk, nrows = gather_rows(0, a[0], a[1], r0, nrows, stop, hh, -0.5, -0.5, cs, ny,
+                                ways[0], gk, gptr)
+    assert nrows == r_end - r0 + 1
+    got = motion_near(0, a[0], a[1], b[0], b[1], t0, t1, end_goal, X, Y, tt, 2 * R, ends,
+                      ways, gk, gptr, r0)
+    want = motion_clear(0, a[0], a[1], b[0], b[1], t0, t1, end_goal, X, Y, tt, hh, -0.5,
+                        -0.5, cs, ny, 2 * R, ends, ways)
+    assert got == want
+    if not goal_ends:
+        assert got == _reference(0, a, b, t0, t1, X, Y, tt)
 
 
 @settings(max_examples=40, deadline=None)

@@ -19,10 +19,11 @@ import numba as nb
 import numpy as np
 
 from lamp.mrmp.gspi_kernels import conflict
+from lamp.mrmp.neighbours import doubled
 from lamp.mrmp.repair_hash import cell, span
 
-__all__ = ["arrivals", "free_time", "motion_clear", "motion_hits", "position_at",
-           "rest_clear", "row_at", "with_way"]
+__all__ = ["arrivals", "free_time", "gather_rows", "motion_clear", "motion_hits",
+           "motion_near", "position_at", "rest_clear", "row_at", "with_way"]
 
 
 @nb.njit(cache=True)
@@ -195,6 +196,88 @@ def _motion(i: int, ax: float, ay: float, bx: float, by: float, t0: float, t1: f
                         if hit.shape[0] == 0:
                             return False
                         hit[k] = True
+        if before:
+            if tt[r] >= t1:
+                return True
+            s0 = tt[r]
+            continue
+        if r >= R - 1 or tt[r + 1] >= t1:
+            return True
+        r += 1
+        s0 = tt[r]
+
+
+@nb.njit(cache=True)
+def gather_rows(i: int, ax: float, ay: float, r0: int, nrows: int, r_end: int, hh: tuple,
+                x0: float, y0: float, cs: float, ny: int, rep: np.ndarray, gk: np.ndarray,
+                gptr: np.ndarray) -> tuple[np.ndarray, int]:
+    """The robots of rows ``r0 + nrows .. r_end`` in the nine cells around (ax, ay),
+    robot i and the robots planned again (``rep``) left out, appended to those of rows
+    ``r0 .. r0 + nrows - 1``: row r's are ``gk[gptr[r - r0] : gptr[r - r0 + 1]]``
+    (``gptr[0] = 0``, ``gptr`` at least ``r_end - r0 + 2`` long). Returns ``gk`` (grown
+    when full) and the rows now gathered.
+
+    Every robot whose motion in row r a motion of robot i starting at (ax, ay) does not
+    keep clear of is among them: a motion no longer than ``cs - 2r`` less the distance
+    a robot moves between rows (the hash's cells, :func:`lamp.mrmp.timed_repair`) comes
+    within 2r only of robots within ``cs`` of its start, which lie in these cells
+    (:func:`motion_near`)."""
+    so = hh[1]
+    kc = cell(ax, ay, x0, y0, cs, ny)
+    n = gptr[nrows]
+    for r in range(r0 + nrows, r_end + 1):
+        for dx in range(-1, 2):
+            p, q = span(r, kc + dx * ny - 1, hh)
+            while n + q - p > gk.shape[0]:
+                gk = doubled(gk, n)
+            for e in range(p, q):
+                k = so[r, e]
+                if k != i and not rep[k]:
+                    gk[n] = k
+                    n += 1
+        gptr[r - r0 + 1] = n
+    return gk, max(nrows, r_end - r0 + 1)
+
+
+@nb.njit(cache=True)
+def motion_near(i: int, ax: float, ay: float, bx: float, by: float, t0: float, t1: float,
+                end_goal: bool, X: np.ndarray, Y: np.ndarray, tt: np.ndarray,
+                two_r: float, ends_goal: np.ndarray, ways: tuple, gk: np.ndarray,
+                gptr: np.ndarray, r0: int) -> bool:
+    """:func:`motion_clear` of a motion starting at (ax, ay) at ``t0`` (row
+    ``r0 = row_at(tt, t0)``) against the robots :func:`gather_rows` gathered around
+    (ax, ay) for the rows up to ``row_at(tt, t1)`` (``gk, gptr``), instead of each
+    piece's cells of the hash: the same answer. Each robot is first measured against
+    the piece's start by a bound (the piece's and the robot's row move, summed as
+    |dx| + |dy|): farther, it cannot come within 2r in the piece."""
+    if not _ways_clear(i, ax, ay, bx, by, t0, t1, end_goal, ways, two_r, ends_goal,
+                       ends_goal[:0]):
+        return False
+    R = tt.shape[0]
+    r = r0
+    s0 = t0
+    while True:
+        before = s0 < tt[r]  # before the first row: every robot stands at it
+        s1 = min(t1, tt[r]) if before else t1 if r >= R - 1 else min(t1, tt[r + 1])
+        if s1 > s0:
+            px, py, qx, qy = _piece(ax, ay, bx, by, t0, t1, s0, s1)
+            at_end = end_goal and s1 >= t1
+            reach = two_r + abs(qx - px) + abs(qy - py) + 1e-7
+            still = before or r >= R - 1
+            for e in range(gptr[r - r0], gptr[r - r0 + 1]):
+                k = gk[e]
+                kx, ky = X[r, k], Y[r, k]
+                far = reach if still else (reach + abs(X[r + 1, k] - kx)
+                                           + abs(Y[r + 1, k] - ky))
+                ex, ey = px - kx, py - ky
+                if ex * ex + ey * ey > far * far:
+                    continue
+                ux, uy = position_at(X, Y, tt, r, k, s0)
+                wx, wy = position_at(X, Y, tt, r, k, s1)
+                both = (at_end and ends_goal[k] and wx == X[R - 1, k]
+                        and wy == Y[R - 1, k])
+                if conflict(px, py, qx, qy, ux, uy, wx, wy, two_r, both):
+                    return False
         if before:
             if tt[r] >= t1:
                 return True

@@ -330,10 +330,13 @@ def timed_repair(rows: np.ndarray, times: np.ndarray, gr: tuple, V: int, gv0: in
     cs = two_r + longest + 2.0 * max_spacing + 1e-6
     g = get_grid(geometry)
     W, H = workspace
+    # the knight moves' clearance answers, kept for every search of the call
     ob = (np.full(1, float(need)), geometry.circles, geometry.verts, geometry.ptr, float(W),
-          float(H), g.ptr, g.idx, g.box, g.nx, g.ny, g.cell)
+          float(H), g.ptr, g.idx, g.box, g.nx, g.ny, g.cell, np.zeros(8 * V, np.int8))
     X, Y, _, done, work, groups = _rounds(X, Y, np.asarray(times, np.float64), gr, V, gv0,
                                           hs, goal, float(two_r), float(quantum), cs,
                                           float(max_spacing), int(budget), int(rounds), ob,
                                           int(group), int(exchanges))
+    if done == 0:  # no way written: the rows as they were
+        return rows, goal, done, work, groups
     return np.ascontiguousarray(np.stack([X.T, Y.T], axis=2)), goal, done, work, groups

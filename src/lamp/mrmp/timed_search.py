@@ -11,7 +11,10 @@ time plus the exact lattice distance to the goal (in quanta, over :data:`OCTILE`
 :data:`OCTILE_BOUND` where that would prune the ways only knight moves make early
 enough) is not below the target. The goal is reached once the robot may stay there to
 the end. Every move and wait is checked with
-:func:`lamp.mrmp.timed_checks.motion_clear`.
+:func:`lamp.mrmp.timed_checks.motion_near` (:func:`~lamp.mrmp.timed_checks.motion_clear`'s
+answer), against the robots gathered once per expanded state around its vertex
+(:func:`~lamp.mrmp.timed_checks.gather_rows`) rather than looked up in the hash for each
+piece of each move.
 """
 
 from __future__ import annotations
@@ -25,7 +28,7 @@ from lamp.mrmp.goal_distances import hval
 from lamp.mrmp.heuristic_reads import goal_views, read_in
 from lamp.mrmp.neighbours import doubled
 from lamp.mrmp.obstacle_grid import grid_clear_segments
-from lamp.mrmp.timed_checks import free_time, motion_clear, rest_clear
+from lamp.mrmp.timed_checks import free_time, gather_rows, motion_near, rest_clear, row_at
 
 __all__ = ["KNIGHT", "OCTILE", "OCTILE_BOUND", "TIGHT_FROM", "TIMED_WAIT", "timed_search"]
 
@@ -89,25 +92,27 @@ def _pop(hf: np.ndarray, ht: np.ndarray, hi: np.ndarray, n: int) -> int:
 
 @nb.njit(cache=True)
 def _knight(v: int, k: int, va: np.ndarray, vb: np.ndarray, ids: np.ndarray,
-            coords: np.ndarray, kclear: dict, ob: tuple) -> int:
+            coords: np.ndarray, ob: tuple) -> int:
     """Lattice node v's knight neighbour k (0..7; :data:`KNIGHT`) when the segment to it
-    keeps the clearance ``ob[0]`` from the obstacles (exact; answers kept in
-    ``kclear``), else -1."""
+    keeps the clearance ``ob[0]`` from the obstacles (exact), else -1; the answers are
+    kept in ``ob[12]`` (entry ``v * 8 + k``: 0 not yet checked, 1 clear, 2 not) for every
+    search of the caller."""
     a = va[v] + KNIGHT[k, 0]
     b = vb[v] + KNIGHT[k, 1]
     if not (0 <= b < ids.shape[0] and 0 <= a < ids.shape[1]) or ids[b, a] < 0:
         return -1
     u = ids[b, a]
+    need, circles, verts, vptr, W, H, gptr, gidx, box, gnx, gny, gcell, known = ob
     kk = v * 8 + k
-    if kk not in kclear:
-        need, circles, verts, vptr, W, H, gptr, gidx, box, gnx, gny, gcell = ob
+    if known[kk] == 0:
         sa = np.empty((1, 2))
         sb = np.empty((1, 2))
         sa[0, 0], sa[0, 1] = coords[v, 0], coords[v, 1]
         sb[0, 0], sb[0, 1] = coords[u, 0], coords[u, 1]
-        kclear[kk] = grid_clear_segments(sa, sb, need, circles, verts, vptr, W, H, gptr,
-                                         gidx, box, gnx, gny, gcell)[0]
-    return u if kclear[kk] else -1
+        clear = grid_clear_segments(sa, sb, need, circles, verts, vptr, W, H, gptr, gidx,
+                                    box, gnx, gny, gcell)[0]
+        known[kk] = 1 if clear else 2
+    return u if known[kk] == 1 else -1
 
 
 @nb.njit(cache=True)
@@ -119,7 +124,8 @@ def timed_search(i: int, m: int, gr: tuple, V: int, gv0: int, hs: tuple, X: np.n
     """Robot i's earliest way to goal m arriving before ``target`` quanta (module
     docstring): its vertices and their times in quanta (empty when none), and the
     states expanded. Knight moves between lattice nodes (:data:`KNIGHT`) are taken when
-    their segment keeps the clearance ``ob[0]`` (exact; ``ob``: the obstacles' grid).
+    their segment keeps the clearance ``ob[0]`` (exact; ``ob``: the obstacles' grid, and
+    ``ob[12]`` the knight moves' answers kept, :func:`_knight`).
     ``alone``: 1, as if the others were only at their last positions from their
     arrivals ``arr`` on; 2, as if there were no other robot (the ways the group repair
     clears); there waiting never arrives earlier, so a vertex is kept at its earliest
@@ -127,9 +133,6 @@ def timed_search(i: int, m: int, gr: tuple, V: int, gv0: int, hs: tuple, X: np.n
     ``tight``: the lower-bound heuristic (:data:`OCTILE_BOUND`), else :data:`OCTILE`."""
     coords, nbr, _, xptr, xidx = gr
     va, vb, ids, sdone, sval = hs[11], hs[12], hs[13], hs[9], hs[10]
-    kclear = dict()  # knight moves checked: (v * 8 + k) -> clear
-    kclear[0] = True
-    del kclear[0]
     g = gv0 + m
     gx, gy = coords[g, 0], coords[g, 1]
     none = np.zeros(0, np.int64)
@@ -149,6 +152,10 @@ def timed_search(i: int, m: int, gr: tuple, V: int, gv0: int, hs: tuple, X: np.n
     _push(hf, ht, hi, 0, 0.0, 0, 0)
     nh = 1
     span_t = np.int64(target) + 1
+    # the robots near the state's vertex, row by row, gathered once for all its moves
+    gk = np.empty(64, np.int64)
+    gptr = np.zeros(tt.shape[0] + 1, np.int64)
+    rep = ways[0]
     work = 0
     found = -1
     while nh > 0 and work < budget:
@@ -161,6 +168,8 @@ def timed_search(i: int, m: int, gr: tuple, V: int, gv0: int, hs: tuple, X: np.n
             break
         work += 1
         ax, ay = coords[v, 0], coords[v, 1]
+        r0 = row_at(tt, t * q)
+        nrows = 0
         deg = 1 + (8 if v < V else 0) + (xptr[v + 1] - xptr[v])
         for e in range(deg + (8 if v < V else 0)):
             if e == 0:
@@ -168,7 +177,7 @@ def timed_search(i: int, m: int, gr: tuple, V: int, gv0: int, hs: tuple, X: np.n
             elif v < V and e <= 8:
                 u = nbr[v, e - 1]
             elif e >= deg:
-                u = _knight(v, e - deg, va, vb, ids, coords, kclear, ob)
+                u = _knight(v, e - deg, va, vb, ids, coords, ob)
             else:
                 u = xidx[xptr[v] + e - 1 - (8 if v < V else 0)]
                 if V <= u < gv0:
@@ -194,10 +203,14 @@ def timed_search(i: int, m: int, gr: tuple, V: int, gv0: int, hs: tuple, X: np.n
             if alone == 1 and not rest_clear(i, ax, ay, bx, by, t * q, t2 * q, X, Y, hh,
                                              x0, y0, cs, ny, two_r, arr):
                 continue
-            if alone == 0 and not motion_clear(i, ax, ay, bx, by, t * q, t2 * q, u == g, X,
-                                               Y, tt, hh, x0, y0, cs, ny, two_r, ends_goal,
-                                               ways):
-                continue
+            if alone == 0:
+                r_end = row_at(tt, t2 * q)
+                if r_end - r0 >= nrows:
+                    gk, nrows = gather_rows(i, ax, ay, r0, nrows, r_end, hh, x0, y0, cs, ny,
+                                            rep, gk, gptr)
+                if not motion_near(i, ax, ay, bx, by, t * q, t2 * q, u == g, X, Y, tt,
+                                   two_r, ends_goal, ways, gk, gptr, r0):
+                    continue
             seen[key] = n
             if n == sv.shape[0]:
                 sv, st, sp = doubled(sv, n), doubled(st, n), doubled(sp, n)
