@@ -20,9 +20,11 @@ from lamp.contract.model import MAX_ROBOTS
 from lamp.fleet.admission import CROSSING, crosses, meets_moving, meets_standing
 from lamp.fleet.config import CLAIM_NEAR
 from lamp.fleet.regions import (
+    CLAIM_BLOCK,
     OBJECT_MARGIN,
     ROBOT_MARGIN,
     STATIC_SLACK,
+    ClaimBlocks,
     claim,
     claims,
     footprints,
@@ -668,15 +670,50 @@ def _footprints_pair_by_pair(shape, poses, grow):
     return geom.buffer(grow) if grow > 0 else geom
 
 
+def _same_set(a, b, tol=1e-9) -> bool:
+    """Whether two geometries differ by less than ``tol`` of area (and tol m of reach)."""
+    return (shapely.area(shapely.symmetric_difference(a, b)) <= tol * max(1.0, a.area)
+            and shapely.hausdorff_distance(a, b) <= 1e-6)
+
+
 @settings(max_examples=60, deadline=None)
 @given(_SHAPES, st.integers(0, 2**31 - 1), st.integers(1, 6), st.sampled_from([0.0, 0.05]))
-def test_footprints_are_the_very_geometries_built_pose_by_pose(shape, seed, n, grow) -> None:
-    """``to_shapely_many`` builds each pose's ``to_shapely`` to the last bit, so the
-    footprints built in one call are those built pose by pose and pair by pair."""
+def test_footprints_are_the_bodies_and_step_hulls_pose_by_pose(shape, seed, n, grow) -> None:
+    """``to_shapely_many`` builds each pose's ``to_shapely`` to the last bit, and the
+    footprints (each step's hull, unioned) are the same set as every densified pose's body
+    and every step's hull unioned pair by pair."""
     rng = np.random.default_rng(seed)
     poses = np.cumsum(rng.uniform([-0.5, -0.5, -1.0], [0.5, 0.5, 1.0], (n, 3)), axis=0)
     for g, q in zip(to_shapely_many(shape, poses), poses, strict=True):
         assert np.array_equal(shapely.get_coordinates(g),
                               shapely.get_coordinates(to_shapely(shape, q)))
     new, old = footprints(shape, poses, grow), _footprints_pair_by_pair(shape, poses, grow)
-    assert np.array_equal(shapely.get_coordinates(new), shapely.get_coordinates(old))
+    assert _same_set(new, old)
+
+
+@settings(max_examples=40, deadline=None)
+@given(_SHAPES, st.integers(0, 2**31 - 1), st.integers(1, 70), st.data())
+def test_claim_blocks_give_the_claim_of_every_suffix(shape, seed, n, data) -> None:
+    """``ClaimBlocks.claim`` of the suffixes of one plan, in the order a plan is executed
+    (and of another plan's between them): like ``claim``, it holds the footprints along
+    the plan and its border lies ``grow`` from them, up to the accuracy of GEOS' growing
+    (arcs as chords, ``grow * (1 - cos(pi / 64))``; shallow dents within 1% of ``grow``
+    filled), and each block is built once."""
+    rng = np.random.default_rng(seed)
+    plan = np.cumsum(rng.uniform([-0.2, -0.2, -0.4], [0.2, 0.2, 0.4], (n, 3)), axis=0)
+    other = plan[::-1] + 1.0
+    blocks = ClaimBlocks()
+    grow = 2.0 * R + OBJECT_MARGIN
+    tol = grow * (1.0 - math.cos(math.pi / 64)) + 0.01 * grow + 1e-9
+    cuts = sorted(set(data.draw(st.lists(st.integers(0, n - 1), max_size=6))) | {0})
+    for i in cuts:
+        for poses in (plan[i:], other):
+            bodies = footprints(shape, poses)
+            want = claim(shape, poses, R)
+            got = blocks.claim(shape, poses, R)
+            assert got.buffer(1e-9).contains(bodies)
+            gap = shapely.distance(bodies, shapely.points(shapely.get_coordinates(got)))
+            assert np.all(np.abs(gap - grow) <= tol)
+            assert abs(got.area - want.area) <= tol * want.length
+    steps = len(plan) - 1
+    assert len(blocks._blocks) <= 2 * (steps // CLAIM_BLOCK) + 2

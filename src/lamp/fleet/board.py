@@ -23,6 +23,7 @@ from lamp.fleet.config import FleetConfig
 from lamp.fleet.desk import TaskDesk
 from lamp.fleet.parking import needed_by_others
 from lamp.fleet.precedence import goal_cuts
+from lamp.fleet.regions import ClaimBlocks
 from lamp.fleet.state import FREE, ObjectState, ObjectStatus
 from lamp.fleet.stats import FleetStats
 from lamp.fleet.tasks import TaskFeed
@@ -63,6 +64,7 @@ class Board:
         self.failed_at: dict[int, float] = {}
         #: answers of ``admission.passes_ahead`` by the plans they compared
         self.passing: dict = {}
+        self.claim_blocks = ClaimBlocks()  # the blocks the plans' claims are built of
 
     @property
     def events(self) -> int:

@@ -459,10 +459,10 @@ class Fleet(TeamChanges):
         o = self.objects[k]
         o.announced = np.asarray(segment, float)
         poses = np.concatenate([o.announced, np.asarray(rest, float).reshape(-1, 3)])
-        obj = self.scene.objects[k]
+        obj, cfg = self.scene.objects[k], self.config
         goal = obj.goal if o.detour is None else o.detour
         o.claim, o.near, o.way = claims(obj.shape, poses, goal, self.scene.robot_radius,
-                                        self.config.cross_near or self.config.cross_waiting)
+                                        cfg.cross_near or cfg.cross_waiting, self.claim_blocks)
         o.exempt = frozenset()  # a new plan's claim binds everyone
 
     def plan_failed(self, k: int) -> bool:

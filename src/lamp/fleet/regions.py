@@ -23,16 +23,19 @@ whatever their timing.
 
 from __future__ import annotations
 
+from collections import OrderedDict
+
 import numpy as np
 import shapely
 
 from lamp.fleet.config import CLAIM_NEAR
+from lamp.geometry.clearance_layers import lru_get, lru_put
 from lamp.geometry.se2 import interpolate, pose_distance
 from lamp.geometry.shapes import to_shapely, to_shapely_many
 from lamp.scene.model import Shape
 
-__all__ = ["OBJECT_MARGIN", "ROBOT_MARGIN", "STATIC_SLACK", "claim", "claims",
-           "footprints", "robot_disks", "standing", "standing_robots", "swept"]
+__all__ = ["CLAIM_BLOCK", "OBJECT_MARGIN", "ROBOT_MARGIN", "STATIC_SLACK", "ClaimBlocks",
+           "claim", "claims", "footprints", "robot_disks", "standing", "standing_robots", "swept"]
 
 #: Clearance (m) each moving robot keeps from another sub-team's space (half the gap).
 ROBOT_MARGIN = 0.01
@@ -47,6 +50,8 @@ TURN_STEP = 0.15
 #: Robot path rows are thinned to at most this many per robot (the path between two kept
 #: rows is a straight line, so nothing is lost: the buffer covers the segments).
 _MAX_PATH_POINTS = 400
+#: Steps (pose pairs) of a plan per cached block of its claim (:class:`ClaimBlocks`).
+CLAIM_BLOCK = 16
 
 
 def _densified(poses: np.ndarray) -> np.ndarray:
@@ -61,13 +66,17 @@ def _densified(poses: np.ndarray) -> np.ndarray:
 
 
 def footprints(shape: Shape, poses: np.ndarray, grow: float = 0.0) -> shapely.Geometry:
-    """Union of ``shape``'s footprints at ``poses`` (densified), grown by ``grow`` (m)."""
-    parts = to_shapely_many(shape, _densified(poses))
+    """Union of ``shape``'s footprints at ``poses`` (densified), grown by ``grow`` (m):
+    the union of each step's hull (the convex hull of the bodies at its two ends, which
+    holds both), the same set as the bodies' and the hulls' union together."""
+    q = _densified(poses)
+    parts = to_shapely_many(shape, q)
     if len(parts) == 1:
         geom = parts[0]
-    else:  # each step's hull, then all at once (the same geometry as pair by pair)
-        geom = shapely.union_all(np.concatenate([
-            parts, shapely.convex_hull(shapely.union(parts[:-1], parts[1:]))]))
+    else:  # every footprint has the shape's vertex count: each step's hull at once
+        ends = shapely.get_coordinates(parts).reshape(len(parts), -1, 2)
+        geom = shapely.union_all(shapely.convex_hull(shapely.multipoints(
+            np.concatenate([ends[:-1], ends[1:]], axis=1))))
     return geom.buffer(grow) if grow > 0 else geom
 
 
@@ -105,21 +114,57 @@ def claim(shape: Shape, poses: np.ndarray, robot_radius: float) -> shapely.Geome
     return footprints(shape, poses, 2.0 * robot_radius + OBJECT_MARGIN)
 
 
+class ClaimBlocks:
+    """Claims built from cached blocks, for the claims of one plan as it is executed (each
+    segment announces the rest of its plan, a suffix of the last): a plan's claim is the
+    union of the claims of its runs of ``CLAIM_BLOCK`` steps counted from its last pose
+    (each block holds the pose that joins it to the next), and of the few steps before
+    them, so the claims of one plan's suffixes build each block once. The same set as
+    :func:`claim` (growing distributes over the union) up to the accuracy of GEOS'
+    growing (arcs as chords; dents shallower than 1% of the growth filled, which the
+    whole plan's union may have where the blocks' do not). Keeps the ``size`` most
+    recently used blocks."""
+
+    def __init__(self, size: int = 1024) -> None:
+        self.size = size
+        self._blocks: OrderedDict[tuple, shapely.Geometry] = OrderedDict()
+
+    def claim(self, shape: Shape, poses: np.ndarray, robot_radius: float
+              ) -> shapely.Geometry | None:
+        """:func:`claim` of ``poses`` (P, 3), from blocks."""
+        poses = np.asarray(poses, float).reshape(-1, 3)
+        steps = len(poses) - 1
+        if steps <= CLAIM_BLOCK:
+            return claim(shape, poses, robot_radius)
+        head = steps % CLAIM_BLOCK
+        parts = [claim(shape, poses[:head + 1], robot_radius)] if head else []
+        for s in range(head, steps, CLAIM_BLOCK):
+            block = poses[s:s + CLAIM_BLOCK + 1]
+            key = (shape, float(robot_radius), block.tobytes())
+            geom = lru_get(self._blocks, key)
+            if geom is None:
+                geom = claim(shape, block, robot_radius)
+                lru_put(self._blocks, key, geom, self.size)
+            parts.append(geom)
+        return shapely.union_all(parts)
+
+
 def claims(shape: Shape, poses: np.ndarray, goal: np.ndarray, robot_radius: float,
-           near_reach: float = CLAIM_NEAR
+           near_reach: float = CLAIM_NEAR, blocks: ClaimBlocks | None = None
            ) -> tuple[shapely.Geometry | None, shapely.Geometry | None, shapely.Geometry | None]:
-    """What an object's plan ``poses`` (P, 3) claims, prepared: its :func:`claim`, the
-    near part (the claim of the poses within ``near_reach`` m of planned travel from the
-    first; the whole claim when the plan is no longer, or ``near_reach`` is 0) and its way
-    (the centre's path through the poses on to ``goal``, a line). (None, None, None)
-    without poses."""
+    """What an object's plan ``poses`` (P, 3) claims, prepared: its :func:`claim` (from
+    ``blocks`` when given), the near part (the claim of the poses within ``near_reach`` m
+    of planned travel from the first; the whole claim when the plan is no longer, or
+    ``near_reach`` is 0) and its way (the centre's path through the poses on to ``goal``,
+    a line). (None, None, None) without poses."""
     poses = np.asarray(poses, float).reshape(-1, 3)
     if len(poses) == 0:
         return None, None, None
     travel = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(poses[:, :2], axis=0).T))])
     n_near = (max(1, int(np.searchsorted(travel, near_reach, side="right")))
               if near_reach > 0 else len(poses))
-    full = claim(shape, poses, robot_radius)
+    full = (claim(shape, poses, robot_radius) if blocks is None else
+            blocks.claim(shape, poses, robot_radius))
     near = full if n_near >= len(poses) else claim(shape, poses[:n_near], robot_radius)
     way = shapely.LineString(np.vstack([poses[:, :2], np.asarray(goal, float)[None, :2]]))
     for g in {id(g): g for g in (full, near, way)}.values():

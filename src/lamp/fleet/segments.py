@@ -42,7 +42,8 @@ def on_grid(start: np.ndarray, paths: np.ndarray, row_step: float) -> np.ndarray
     speed`` seconds apart: (N, G, 2), G >= 1, the last row the paths' last. Rows in which
     no robot moves take no time (as in the simulator) and are dropped; each robot's
     position between two rows is interpolated linearly, so no step exceeds ``row_step``."""
-    way = np.concatenate([np.asarray(start, float)[:, None], np.asarray(paths, float)], axis=1)
+    paths = np.asarray(paths, float)
+    way = np.concatenate([np.asarray(start, float)[:, None], paths], axis=1)
     dur = np.hypot(*np.moveaxis(np.diff(way, axis=1), 2, 0)).max(axis=0)  # (T,) in metres
     keep = np.concatenate([[True], dur > 1e-12])
     way = way[:, keep]
@@ -53,7 +54,7 @@ def on_grid(start: np.ndarray, paths: np.ndarray, row_step: float) -> np.ndarray
     for i in range(way.shape[0]):
         for axis in (0, 1):
             out[i, :, axis] = np.interp(grid, tau, way[i, :, axis])
-    out[:, -1] = way[:, -1]
+    out[:, -1] = paths[:, -1]  # also after rows of moves below 1e-12 m, dropped
     return out
 
 
