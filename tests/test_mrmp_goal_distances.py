@@ -53,3 +53,52 @@ def test_settled_values_are_the_full_dijkstra_bit_for_bit(seed: int, bounds: lis
         assert settled[ref < max(bounds)].all()
         got = hs.dist[m][j[settled]]
         assert np.array_equal(got, ref[settled])  # same floats (inf only where ref is)
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 10_000), which=st.lists(st.integers(0, 19), max_size=4),
+       change=st.sampled_from(["strided", "readonly", "fortran", "float32", "same"]))
+def test_goal_distances_numba_type_is_the_tuple_rule(seed: int, which: list[int],
+                                                     change: str) -> None:
+    """The type kept for a GoalDistances by its fields' kinds is the one Numba's tuple
+    rule gives, for tables as built and with random fields made strided, read-only,
+    Fortran-ordered or of another dtype (any of which changes the type), typed in any
+    order; and compiled calls given it run."""
+    from numba.core.typing.typeof import Purpose, typeof, typeof_impl
+
+    gm = load_grid_map(MAPF / "random-32-32-20.map")
+    S, G = random_instance(gm, 4, seed % 40)
+    space = RobotSpace.from_scene(gm.scene)
+    lat = get_lattice(space, 0.03)
+    links = link_special_vertices(space, lat, S, G, space.clearance(S, exact=True),
+                                  space.clearance(G, exact=True), 0.045, {})
+    hs = GoalDistances.build(links.goal_links, G, lat, 8)
+    fields = list(hs)
+    for k in which:
+        x = fields[k]
+        if type(x) is not np.ndarray or change == "same":
+            continue
+        if change == "strided" and x.ndim >= 1 and x.shape[0] > 1:
+            x = np.repeat(x, 2, axis=0)[::2]
+        elif change == "readonly":
+            x = x.copy()
+            x.setflags(write=False)
+        elif change == "fortran" and x.ndim == 2:
+            x = np.asfortranarray(np.concatenate([x, x], axis=1))[:, ::2]
+        elif change == "float32" and x.dtype == np.float64:
+            x = x.astype(np.float32)
+        fields[k] = x
+    val = GoalDistances(*fields)
+    for _ in range(2):  # the second time from the kept types
+        for purpose in (Purpose.argument, Purpose.constant):
+            want = typeof_impl.dispatch(tuple)(val, _ctx(purpose))
+            assert typeof(val, purpose) == want
+    assert typeof(hs, Purpose.argument) == typeof_impl.dispatch(tuple)(hs, _ctx(
+        Purpose.argument))
+    expand_to(0, 0.3, lat.nbr, lat.dlen, hs)  # a compiled call given the tables
+
+
+def _ctx(purpose):
+    from numba.core.typing.typeof import _TypeofContext
+
+    return _TypeofContext(purpose)
