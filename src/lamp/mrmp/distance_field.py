@@ -266,23 +266,12 @@ class Lattice:
 
     def any_node_near(self, points: np.ndarray, radius: float) -> np.ndarray:
         """(K,) bool: whether :meth:`nodes_near` of each of ``points`` (K, 2) is not empty
-        (the window and test of :meth:`nodes_near_all`, without the sort)."""
-        L = self.step
-        nb_, na = self.ids.shape
-        if nb_ == 0 or na == 0 or self.V == 0:
-            return np.zeros(len(points), dtype=bool)
+        (the window and test of :meth:`nodes_near_all`, compiled, without the sort)."""
+        pts = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 2)
+        if self.ids.shape[0] == 0 or self.ids.shape[1] == 0 or self.V == 0:
+            return np.zeros(len(pts), dtype=bool)
         oa, ob = self.offset
-        span = int(math.ceil(2 * radius / L)) + 2
-        a0 = np.floor((points[:, 0] - radius) / L).astype(np.int64) - oa
-        b0 = np.floor((points[:, 1] - radius) / L).astype(np.int64) - ob
-        db, da = np.divmod(np.arange(span * span), span)
-        A = a0[:, None] + da[None, :]
-        B = b0[:, None] + db[None, :]
-        inside = (A >= 0) & (na > A) & (B >= 0) & (nb_ > B)
-        ids = np.where(inside, self.ids[np.clip(B, 0, nb_ - 1), np.clip(A, 0, na - 1)], -1)
-        c = self.coords[np.maximum(ids, 0)]
-        d = np.hypot(c[..., 0] - points[:, None, 0], c[..., 1] - points[:, None, 1])
-        return ((ids >= 0) & (d <= radius + 1e-12)).any(axis=1)
+        return _any_node_near(pts, float(radius), self.step, oa, ob, self.ids, self.coords)
 
     def links(
         self, points: np.ndarray, radius: float, thresholds: np.ndarray,
@@ -339,6 +328,36 @@ class Lattice:
             while len(self._fields) > _FIELD_CACHE_SIZE:
                 self._fields.popitem(last=False)
         return d
+
+
+@nb.njit(cache=True)
+def _any_node_near(pts: np.ndarray, radius: float, L: float, oa: int, ob: int,
+                   ids: np.ndarray, coords: np.ndarray) -> np.ndarray:
+    """:meth:`Lattice.any_node_near`: the window of ``Lattice.nodes_near_all`` (span x
+    span lattice indices from the floor of the point less the radius), a node within
+    ``radius + 1e-12`` found in it."""
+    nb_, na = ids.shape
+    span = int(math.ceil(2 * radius / L)) + 2
+    out = np.zeros(pts.shape[0], np.bool_)
+    for k in range(pts.shape[0]):
+        px, py = pts[k, 0], pts[k, 1]
+        a0 = int(math.floor((px - radius) / L)) - oa
+        b0 = int(math.floor((py - radius) / L)) - ob
+        for db in range(span):
+            b = b0 + db
+            if b < 0 or b >= nb_:
+                continue
+            for da in range(span):
+                a = a0 + da
+                if a < 0 or a >= na or ids[b, a] < 0:
+                    continue
+                v = ids[b, a]
+                if math.hypot(coords[v, 0] - px, coords[v, 1] - py) <= radius + 1e-12:
+                    out[k] = True
+                    break
+            if out[k]:
+                break
+    return out
 
 
 def clear_segments(geometry: Any, workspace: tuple[float, float], a: np.ndarray,
