@@ -223,3 +223,33 @@ def test_timed_repair_inside_plan_paths(seed: int) -> None:
     check_plan(gm.scene, S, G, plan)
     again = plan_paths(gm.scene, S, G, seed=seed, time_limit=600.0)
     assert np.array_equal(again.paths, plan.paths)
+
+
+@settings(max_examples=60, deadline=None)
+@given(keys=st.lists(st.integers(0, 1 << 40), max_size=400), small=st.booleans())
+def test_the_searchs_table_is_a_dict(keys, small) -> None:
+    """The timed search's open-addressing table (``_slot``, grown by ``_grown`` when half
+    full) finds every key put in it with its last value, and no other, like a dict;
+    from a table of 4 slots (many growths, long probes) or of the search's 4,096."""
+    from lamp.mrmp.timed_search import _grown, _slot
+
+    size = 4 if small else 1 << 12
+    tk, tv = np.full(size, -1, np.int64), np.empty(size, np.int64)
+    ref: dict[int, int] = {}
+    for n, key in enumerate(keys):
+        s = _slot(tk, key)
+        assert (tk[s] == key) == (key in ref)
+        if tk[s] != key:
+            if 2 * (len(ref) + 1) > len(tk):
+                tk, tv = _grown(tk, tv)
+                s = _slot(tk, key)
+            tk[s] = key
+        tv[s] = n
+        ref[key] = n
+    assert int((tk != -1).sum()) == len(ref)
+    for key, val in ref.items():
+        s = _slot(tk, key)
+        assert tk[s] == key and tv[s] == val
+    for key in (k + 1 for k in keys[:20]):
+        if key not in ref:
+            assert tk[_slot(tk, key)] == -1

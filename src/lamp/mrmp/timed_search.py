@@ -90,6 +90,31 @@ def _pop(hf: np.ndarray, ht: np.ndarray, hi: np.ndarray, n: int) -> int:
     return top
 
 
+@nb.njit(cache=True, inline="always")
+def _slot(tk: np.ndarray, key: int) -> int:
+    """The slot of ``key`` in the open-addressing table ``tk`` (length a power of two,
+    -1 where empty, linear probing): where it is, else the empty slot it would take."""
+    mask = tk.shape[0] - 1
+    h = (np.uint64(key) * np.uint64(0x9E3779B97F4A7C15)) >> np.uint64(32)
+    j = np.int64(h) & mask
+    while tk[j] != key and tk[j] != -1:
+        j = (j + 1) & mask
+    return j
+
+
+@nb.njit(cache=True)
+def _grown(tk: np.ndarray, tv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The table ``tk`` (keys) / ``tv`` (values) at twice the size, entries moved."""
+    nk = np.full(2 * tk.shape[0], -1, np.int64)
+    nv = np.empty(2 * tk.shape[0], np.int64)
+    for j in range(tk.shape[0]):
+        if tk[j] != -1:
+            s = _slot(nk, tk[j])
+            nk[s] = tk[j]
+            nv[s] = tv[j]
+    return nk, nv
+
+
 @nb.njit(cache=True)
 def _knight(v: int, k: int, va: np.ndarray, vb: np.ndarray, ids: np.ndarray,
             coords: np.ndarray, ob: tuple) -> int:
@@ -143,9 +168,10 @@ def timed_search(i: int, m: int, gr: tuple, V: int, gv0: int, hs: tuple, X: np.n
     dd, dn, wa0, wb0, wna, wnb = goal_views(m, hs)
     sv = np.empty(1 << 12, np.int64)
     st, sp, ht, hi, hf = sv.copy(), sv.copy(), sv.copy(), sv.copy(), np.empty(1 << 12)
-    seen = dict()  # (vertex, time) key -> state
-    seen[0] = 0
-    del seen[0]
+    # (vertex, time) key -> state: an open-addressing table (keys -1 where empty)
+    tk = np.full(1 << 12, -1, np.int64)
+    tv = np.empty(1 << 12, np.int64)
+    nseen = 0
     div = q * (OCTILE_BOUND if tight else OCTILE)
     sv[0], st[0], sp[0] = V + i, 0, -1
     n = 1
@@ -191,7 +217,8 @@ def timed_search(i: int, m: int, gr: tuple, V: int, gv0: int, hs: tuple, X: np.n
             if t2 >= target:
                 continue
             key = u if alone > 0 else u * span_t + t2  # alone: the earliest time only
-            if key in seen and (alone == 0 or st[seen[key]] <= t2):
+            slot = _slot(tk, key)
+            if tk[slot] == key and (alone == 0 or st[tv[slot]] <= t2):
                 continue
             hu = read_in(m, u, V, va, vb, sdone, sval, dd, dn, wa0, wb0, wna, wnb)
             if hu < 0.0:
@@ -211,7 +238,13 @@ def timed_search(i: int, m: int, gr: tuple, V: int, gv0: int, hs: tuple, X: np.n
                 if not motion_near(i, ax, ay, bx, by, t * q, t2 * q, u == g, X, Y, tt,
                                    two_r, ends_goal, ways, gk, gptr, r0):
                     continue
-            seen[key] = n
+            if tk[slot] != key:
+                nseen += 1
+                if 2 * nseen > tk.shape[0]:  # grown to keep the table at most half full
+                    tk, tv = _grown(tk, tv)
+                    slot = _slot(tk, key)
+                tk[slot] = key
+            tv[slot] = n
             if n == sv.shape[0]:
                 sv, st, sp = doubled(sv, n), doubled(st, n), doubled(sp, n)
             if nh == hf.shape[0]:
