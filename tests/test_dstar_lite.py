@@ -345,3 +345,31 @@ def test_open_lattice_ties_penalties_along_path(seed):
         ref = weighted_astar(CurrentCosts(lat, dstar), start, lat.goal_node)
         assert dstar.path_cost() == pytest.approx(ref.cost, rel=1e-9)
         check_path(dstar, path, start, lat.goal_node, ref.cost)
+
+
+@settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(seed=st.integers(0, 2**31 - 1), kept=st.integers(1, 64))
+def test_a_lattice_keeping_few_successor_lists_plans_the_same(seed, kept):
+    """``succ_kept`` bounds the successor lists a lattice keeps (memory, not results): a
+    lattice that drops them every ``kept`` nodes gives D* Lite the same successors, the
+    same paths and the same pose and motion checks as one that keeps them all."""
+    rng = np.random.default_rng(seed)
+    obstacles = [
+        Obstacle(Circle(float(rng.uniform(0.03, 0.12))), (*rng.uniform(0, 1.0, 2), 0.0))
+        for _ in range(int(rng.integers(0, 4)))
+    ]
+    goal = (*rng.uniform(0.2, 0.6, 2), float(rng.uniform(-math.pi, math.pi)))
+    starts = [(float(x), float(y), float(t)) for x, y, t in rng.uniform(
+        [0.1, 0.1, -math.pi], [0.9, 0.7, math.pi], (3, 3))]
+    runs = []
+    for keep in (kept, 10**9):
+        space = ObjectSpace(Rectangle((0.16, 0.08)), (1.0, 0.8), obstacles)
+        lat = ObjectLattice(space, goal, step=0.1, n_headings=8, max_rotation=0.8,
+                            succ_kept=keep)
+        dstar = DStarLite(lat)
+        dstar.initialize(lat.goal_node)
+        paths = [dstar.plan_shortest_path(s, lat.start_connections(s)) for s in starts]
+        assert len(lat._succ) <= keep
+        succ = [lat.successors(u) for u in range(0, lat.n_nodes, 7)]
+        runs.append((paths, succ, lat.n_pose_checks, lat.n_motion_checks))
+    assert runs[0] == runs[1]

@@ -31,7 +31,13 @@ from lamp.contract.events import SegmentEvent
 from lamp.contract.goals import goal_errors
 from lamp.contract.result import ObjectResult
 from lamp.contract.runner import LoopEnd, ObjectOutcome
-from lamp.fleet.config import MIN_SPACE_CACHE_MB, SPACE_CACHE_MB, FleetConfig
+from lamp.fleet.config import (
+    MIN_SPACE_CACHE_MB,
+    MIN_SUCCESSOR_CACHE_NODES,
+    SPACE_CACHE_MB,
+    SUCCESSOR_CACHE_NODES,
+    FleetConfig,
+)
 from lamp.fleet.makeway import with_goal
 from lamp.fleet.parking import park
 from lamp.fleet.stats import FleetStats
@@ -119,8 +125,11 @@ def object_main(runner: ClosedLoopRunner, observe: Callable[[SegmentEvent], None
         series = LoopSeries.of(scene, k, fleet.executor.object_poses[k], cfg, planning=True)
         near = settings.plan_near
         while True:
+            moving = max(1, fleet.moving())
             config = series.config(cfg).but(space_cache_mb=max(MIN_SPACE_CACHE_MB, min(
-                cfg.loop.space_cache_mb, SPACE_CACHE_MB / max(1, fleet.moving()))))
+                cfg.loop.space_cache_mb, SPACE_CACHE_MB / moving)), successor_cache_nodes=max(
+                MIN_SUCCESSOR_CACHE_NODES, min(cfg.loop.successor_cache_nodes,
+                                               SUCCESSOR_CACHE_NODES // moving)))
             while not fleet.team_of(k):  # its robots went to another object
                 fleet.wait_for_team(k)
             view = fleet.view(k)

@@ -90,6 +90,7 @@ def goal_lattice(task: ManipulationTask) -> ObjectLattice:
     return RefinedLattice(
         task.object_space, task.goal, step=cfg.lattice.lattice_step, n_headings=cfg.lattice.n_headings,
         landmark=task.object_poses[task.index][:2], exact=task.exact_space,
+        succ_kept=cfg.loop.successor_cache_nodes,
     )
 
 

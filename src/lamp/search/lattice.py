@@ -77,8 +77,9 @@ from lamp.search.metric import OCTILE_MINOR, TWO_PI, lattice_metric, motion_cost
 Node = int
 VirtualNode = tuple[float, float, float]
 
-#: Successor lists kept (they take ~1.5 kB a node; validity stays cached regardless).
-_SUCC_KEPT = 20_000
+#: Successor lists a lattice keeps by default (they take ~1.5 kB a node; validity stays
+#: cached regardless, so a dropped list is rebuilt the same).
+SUCC_KEPT = 20_000
 
 #: the manipulation model's trained range (object frame): |dx|, |dy| and |dtheta|
 MODEL_MAX_TRANSLATION = MOTION_RANGE[0]
@@ -112,6 +113,7 @@ class ObjectLattice:
         max_translation: float = MODEL_MAX_TRANSLATION,
         max_rotation: float = MODEL_MAX_ROTATION,
         landmark: ArrayLike | None = None,
+        succ_kept: int = SUCC_KEPT,
     ) -> None:
         anchor, w_rot, dtheta = check_lattice_args(space, anchor, step, n_headings, w_rot,
                                                    max_translation, max_rotation)
@@ -153,6 +155,7 @@ class ObjectLattice:
         self._edge_valid = np.zeros(edge_words(self.n_i, self.n_j, self.n_headings),
                                     dtype=np.uint64)
         self._succ: dict[Node, list[tuple[Node, float]]] = {}
+        self._succ_kept = max(1, int(succ_kept))
         self._tolerant: dict[float, ObjectSpace] = {}
         #: statistics: poses and motions checked so far
         self.n_pose_checks = 0
@@ -290,7 +293,7 @@ class ObjectLattice:
         cost = self._prim_cost_list
         ids = self._out_ids[:n].tolist()
         out = list(zip(ids, [cost[p] for p in self._out_prim[:n].tolist()], strict=True))
-        if len(self._succ) >= _SUCC_KEPT:
+        if len(self._succ) >= self._succ_kept:
             self._succ.clear()  # recomputing from the validity caches is cheap
         self._succ[u] = out
         return out
