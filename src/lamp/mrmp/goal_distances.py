@@ -140,10 +140,8 @@ def _kind(x: Any, c: Any) -> Any:
 @typeof_impl.register(GoalDistances)
 def _typeof_goal_distances(val: GoalDistances, c: Any) -> Any:
     """Numba's type of ``val`` as its tuple rule gives it, kept by the kinds of the
-    fields. A tuple holding typed lists has no fingerprint in Numba's dispatcher, so
-    every compiled call given one types it field by field in Python (about 0.14 ms for
-    the 20 fields, as much as a small team's step loop); with the kinds, about a quarter
-    of that."""
+    fields: a tuple of typed lists has no fingerprint in Numba's dispatcher, so each
+    compiled call typed its 20 fields in Python (0.14 ms; with the kinds 0.04 ms)."""
     key = (getattr(c, "purpose", None),) + tuple(_kind(x, c) for x in val)
     ty = _TYPES.get(key)
     if ty is None:

@@ -115,6 +115,38 @@ def _grown(tk: np.ndarray, tv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return nk, nv
 
 
+@nb.njit(cache=True, inline="always")
+def _remember(tk: np.ndarray, tv: np.ndarray, nseen: int, slot: int, key: int, s: int
+              ) -> tuple[np.ndarray, np.ndarray, int]:
+    """Key ``key`` (at ``slot``, from :func:`_slot`) now leads to state ``s``; the table
+    (``nseen`` keys) grows to stay at most half full. The table and its key count."""
+    if tk[slot] != key:
+        nseen += 1
+        if 2 * nseen > tk.shape[0]:
+            tk, tv = _grown(tk, tv)
+            slot = _slot(tk, key)
+        tk[slot] = key
+    tv[slot] = s
+    return tk, tv, nseen
+
+
+@nb.njit(cache=True, inline="always")
+def _move(e: int, v: int, V: int, gv0: int, deg: int, alone: int, nbr: np.ndarray,
+          xptr: np.ndarray, xidx: np.ndarray, va: np.ndarray, vb: np.ndarray,
+          ids: np.ndarray, coords: np.ndarray, ob: tuple) -> int:
+    """Where move ``e`` from vertex ``v`` leads (-1: nowhere): 0 a wait (none when
+    ``alone``: there a wait never arrives earlier), 1-8 the lattice neighbours, then the
+    vertex's links (none to another goal), then the knight moves (from ``deg`` on)."""
+    if e == 0:
+        return -1 if alone > 0 else v
+    if v < V and e <= 8:
+        return nbr[v, e - 1]
+    if e >= deg:
+        return _knight(v, e - deg, va, vb, ids, coords, ob)
+    u = xidx[xptr[v] + e - 1 - (8 if v < V else 0)]
+    return -1 if V <= u < gv0 else u
+
+
 @nb.njit(cache=True)
 def _knight(v: int, k: int, va: np.ndarray, vb: np.ndarray, ids: np.ndarray,
             coords: np.ndarray, ob: tuple) -> int:
@@ -198,21 +230,11 @@ def timed_search(i: int, m: int, gr: tuple, V: int, gv0: int, hs: tuple, X: np.n
         nrows = 0
         deg = 1 + (8 if v < V else 0) + (xptr[v + 1] - xptr[v])
         for e in range(deg + (8 if v < V else 0)):
-            if e == 0:
-                u = -1 if alone > 0 else v  # alone, a wait never arrives earlier
-            elif v < V and e <= 8:
-                u = nbr[v, e - 1]
-            elif e >= deg:
-                u = _knight(v, e - deg, va, vb, ids, coords, ob)
-            else:
-                u = xidx[xptr[v] + e - 1 - (8 if v < V else 0)]
-                if V <= u < gv0:
-                    u = -1
+            u = _move(e, v, V, gv0, deg, alone, nbr, xptr, xidx, va, vb, ids, coords, ob)
             if u < 0:
                 continue
             bx, by = coords[u, 0], coords[u, 1]
-            d = TIMED_WAIT if u == v else int(math.ceil(math.hypot(bx - ax, by - ay) / q
-                                                            - 1e-9))
+            d = TIMED_WAIT if u == v else int(math.ceil(math.hypot(bx - ax, by - ay) / q - 1e-9))
             t2 = t + d
             if t2 >= target:
                 continue
@@ -238,13 +260,7 @@ def timed_search(i: int, m: int, gr: tuple, V: int, gv0: int, hs: tuple, X: np.n
                 if not motion_near(i, ax, ay, bx, by, t * q, t2 * q, u == g, X, Y, tt,
                                    two_r, ends_goal, ways, gk, gptr, r0):
                     continue
-            if tk[slot] != key:
-                nseen += 1
-                if 2 * nseen > tk.shape[0]:  # grown to keep the table at most half full
-                    tk, tv = _grown(tk, tv)
-                    slot = _slot(tk, key)
-                tk[slot] = key
-            tv[slot] = n
+            tk, tv, nseen = _remember(tk, tv, nseen, slot, key, n)
             if n == sv.shape[0]:
                 sv, st, sp = doubled(sv, n), doubled(st, n), doubled(sp, n)
             if nh == hf.shape[0]:
