@@ -19,6 +19,18 @@ from lamp.scene.mapf import load_grid_map, random_instance
 MAPF = Path(__file__).resolve().parent / "data" / "mapf"
 
 
+def _tables(n: int, instance: int, slots: int):
+    """A random instance of ``n`` robots on random-32-32-20, its goals, 3 cm lattice, goal
+    links and goal-distance tables (``slots`` per goal)."""
+    gm = load_grid_map(MAPF / "random-32-32-20.map")
+    S, G = random_instance(gm, n, instance)
+    space = RobotSpace.from_scene(gm.scene)
+    lat = get_lattice(space, 0.03)
+    links = link_special_vertices(space, lat, S, G, space.clearance(S, exact=True),
+                                  space.clearance(G, exact=True), 0.045, {})
+    return G, lat, links, GoalDistances.build(links.goal_links, G, lat, slots)
+
+
 @settings(max_examples=20, deadline=None)
 @given(seed=st.integers(0, 10_000), bounds=st.lists(st.floats(0.0, 2.5), min_size=1,
                                                     max_size=3),
@@ -29,13 +41,7 @@ def test_settled_values_are_the_full_dijkstra_bit_for_bit(seed: int, bounds: lis
     grown and resumed), every node closer to its goal than the largest bound is settled,
     and every settled value equals the whole-lattice heap Dijkstra's float exactly (the
     same sums of edge lengths: the assignment's costs and the plans depend on them)."""
-    gm = load_grid_map(MAPF / "random-32-32-20.map")
-    S, G = random_instance(gm, 6, seed % 40)
-    space = RobotSpace.from_scene(gm.scene)
-    lat = get_lattice(space, 0.03)
-    links = link_special_vertices(space, lat, S, G, space.clearance(S, exact=True),
-                                  space.clearance(G, exact=True), 0.045, {})
-    hs = GoalDistances.build(links.goal_links, G, lat, 12)
+    G, lat, links, hs = _tables(6, seed % 40, 12)
     rng = np.random.default_rng(seed)
     for b in sorted(bounds):
         for m in range(len(G)):
@@ -66,13 +72,7 @@ def test_goal_distances_numba_type_is_the_tuple_rule(seed: int, which: list[int]
     order; and compiled calls given it run."""
     from numba.core.typing.typeof import Purpose, typeof, typeof_impl
 
-    gm = load_grid_map(MAPF / "random-32-32-20.map")
-    S, G = random_instance(gm, 4, seed % 40)
-    space = RobotSpace.from_scene(gm.scene)
-    lat = get_lattice(space, 0.03)
-    links = link_special_vertices(space, lat, S, G, space.clearance(S, exact=True),
-                                  space.clearance(G, exact=True), 0.045, {})
-    hs = GoalDistances.build(links.goal_links, G, lat, 8)
+    G, lat, links, hs = _tables(4, seed % 40, 8)
     fields = list(hs)
     for k in which:
         x = fields[k]

@@ -133,6 +133,28 @@ def _lerp(WX: np.ndarray, WY: np.ndarray, WT: np.ndarray, j: int, p1: int, t: fl
     return WX[j] + f * (WX[j + 1] - WX[j]), WY[j] + f * (WY[j + 1] - WY[j])
 
 
+@nb.njit(cache=True, inline="always")
+def _piece_end(r: int, s0: float, t1: float, tt: np.ndarray) -> tuple[bool, float]:
+    """For the piece of a motion (ending at ``t1``) from time ``s0`` in row ``r``: whether
+    it lies before the row's time (before the first row every robot stands at it), and
+    its end: that time, else the next row's time (none after the last), at most ``t1``."""
+    if s0 < tt[r]:
+        return True, min(t1, tt[r])
+    return False, t1 if r >= tt.shape[0] - 1 else min(t1, tt[r + 1])
+
+
+@nb.njit(cache=True, inline="always")
+def _next_piece(r: int, s0: float, before: bool, t1: float, tt: np.ndarray
+                ) -> tuple[bool, int, float]:
+    """After the piece from ``s0`` in row ``r`` (``before``: :func:`_piece_end`'s):
+    whether the motion ending at ``t1`` is done, else the next piece's row and start."""
+    if before:
+        return tt[r] >= t1, r, tt[r]
+    if r >= tt.shape[0] - 1 or tt[r + 1] >= t1:
+        return True, r, s0
+    return False, r + 1, tt[r + 1]
+
+
 @nb.njit(cache=True)
 def motion_clear(i: int, ax: float, ay: float, bx: float, by: float, t0: float, t1: float,
                  end_goal: bool, X: np.ndarray, Y: np.ndarray, tt: np.ndarray, hh: tuple,
@@ -176,8 +198,7 @@ def _motion(i: int, ax: float, ay: float, bx: float, by: float, t0: float, t1: f
     r = row_at(tt, t0)
     s0 = t0
     while True:
-        before = s0 < tt[r]  # before the first row: every robot stands at it
-        s1 = min(t1, tt[r]) if before else t1 if r >= R - 1 else min(t1, tt[r + 1])
+        before, s1 = _piece_end(r, s0, t1, tt)
         if s1 > s0:
             px, py, qx, qy = _piece(ax, ay, bx, by, t0, t1, s0, s1)
             at_end = end_goal and s1 >= t1
@@ -196,15 +217,9 @@ def _motion(i: int, ax: float, ay: float, bx: float, by: float, t0: float, t1: f
                         if hit.shape[0] == 0:
                             return False
                         hit[k] = True
-        if before:
-            if tt[r] >= t1:
-                return True
-            s0 = tt[r]
-            continue
-        if r >= R - 1 or tt[r + 1] >= t1:
+        done, r, s0 = _next_piece(r, s0, before, t1, tt)
+        if done:
             return True
-        r += 1
-        s0 = tt[r]
 
 
 @nb.njit(cache=True)
@@ -257,8 +272,7 @@ def motion_near(i: int, ax: float, ay: float, bx: float, by: float, t0: float, t
     r = r0
     s0 = t0
     while True:
-        before = s0 < tt[r]  # before the first row: every robot stands at it
-        s1 = min(t1, tt[r]) if before else t1 if r >= R - 1 else min(t1, tt[r + 1])
+        before, s1 = _piece_end(r, s0, t1, tt)
         if s1 > s0:
             px, py, qx, qy = _piece(ax, ay, bx, by, t0, t1, s0, s1)
             at_end = end_goal and s1 >= t1
@@ -278,15 +292,9 @@ def motion_near(i: int, ax: float, ay: float, bx: float, by: float, t0: float, t
                         and wy == Y[R - 1, k])
                 if conflict(px, py, qx, qy, ux, uy, wx, wy, two_r, both):
                     return False
-        if before:
-            if tt[r] >= t1:
-                return True
-            s0 = tt[r]
-            continue
-        if r >= R - 1 or tt[r + 1] >= t1:
+        done, r, s0 = _next_piece(r, s0, before, t1, tt)
+        if done:
             return True
-        r += 1
-        s0 = tt[r]
 
 
 @nb.njit(cache=True)
