@@ -114,6 +114,12 @@ def given_up(scene: Scene, k: int, pose: np.ndarray, why: str) -> ObjectOutcome:
         full_horizon_plan=False, failure_reason=why, replans=0, planning_time_s=0.0))
 
 
+def _share(own: float, total: float, least: float, moving: int) -> float:
+    """An object's part of a cache budget the ``moving`` objects share: ``total / moving``,
+    at most its own setting ``own``, at least ``least``."""
+    return max(least, min(own, total / moving))
+
+
 def object_main(runner: ClosedLoopRunner, observe: Callable[[SegmentEvent], None],
                 settings: FleetConfig) -> Callable[[LoopHost, int], ObjectOutcome]:
     """The function ``Fleet`` runs for each object (see the module docstring), with the
@@ -126,10 +132,12 @@ def object_main(runner: ClosedLoopRunner, observe: Callable[[SegmentEvent], None
         near = settings.plan_near
         while True:
             moving = max(1, fleet.moving())
-            config = series.config(cfg).but(space_cache_mb=max(MIN_SPACE_CACHE_MB, min(
-                cfg.loop.space_cache_mb, SPACE_CACHE_MB / moving)), successor_cache_nodes=max(
-                MIN_SUCCESSOR_CACHE_NODES, min(cfg.loop.successor_cache_nodes,
-                                               SUCCESSOR_CACHE_NODES // moving)))
+            config = series.config(cfg).but(
+                space_cache_mb=_share(cfg.loop.space_cache_mb, SPACE_CACHE_MB,
+                                      MIN_SPACE_CACHE_MB, moving),
+                successor_cache_nodes=int(_share(cfg.loop.successor_cache_nodes,
+                                                 SUCCESSOR_CACHE_NODES,
+                                                 MIN_SUCCESSOR_CACHE_NODES, moving)))
             while not fleet.team_of(k):  # its robots went to another object
                 fleet.wait_for_team(k)
             view = fleet.view(k)
