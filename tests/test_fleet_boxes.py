@@ -11,10 +11,17 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from lamp.fleet import admission, spacetime
-from lamp.fleet.admission import meets_moving, meets_standing, passes_ahead
+from lamp.fleet.admission import (
+    ends_box,
+    heeded_claims,
+    meets_moving,
+    meets_standing,
+    passes_ahead,
+)
 from lamp.fleet.regions import claims
 from lamp.fleet.segments import Segment
 from lamp.fleet.spacetime import apart, compatible, reach_box
+from lamp.fleet.state import ObjectState, ObjectStatus
 from lamp.scene import scene_from_dict
 from lamp.scene.model import Rectangle
 
@@ -84,3 +91,27 @@ def test_box_answers_are_the_full_tests_answers(monkeypatch, seed, gap) -> None:
     moving = {int(i) for i in rng.choice(9, size=int(rng.integers(0, 4)), replace=False)}
     args = (b, scene, poses, robots, [0, 1, 2], moving)
     assert meets_standing(*args) == _without_boxes(monkeypatch, meets_standing, *args)
+
+
+@settings(max_examples=80, deadline=None)
+@given(st.integers(0, 2**31 - 1), st.floats(0.0, 6.0), st.floats(0.5, 3.0))
+def test_claims_missing_the_segments_box_give_the_same_admission(seed, gap, margin) -> None:
+    """``heeded_claims(box=ends_box(seg))`` gives claims far from the segment whole
+    without asking ``passes_ahead``; ``meets_moving`` answers as with every claim's own
+    part (near where the segment's object passes ahead)."""
+    rng = np.random.default_rng(seed)
+    seg = _segment(rng, 1, (0.0, 0.0))
+    plan = np.array([[gap, 1.0, 0.0], [gap + 0.8, 1.2, 0.3], [gap + 1.5, 0.4, 0.5]])
+    full, near, way = claims(BOX, plan, [gap + 2.0, 0.0, 0.0], R)
+    claimer = ObjectState(0, status=ObjectStatus.ACTIVE, rank=0, claim=full, near=near,
+                          way=way)
+    mine = shapely.LineString(np.vstack([seg.poses[:, :2], [[gap + 3.0, -1.0]]]))
+    me = ObjectState(1, status=ObjectStatus.ACTIVE, rank=1, way=mine)
+    args = ([claimer, me], me, 0.0, 0.0, [0.3, 0.3], margin)
+    boxed = heeded_claims(*args, box=ends_box(seg))
+    plain = heeded_claims(*args)
+    assert meets_moving(seg, [], boxed, mine) == meets_moving(seg, [], plain, mine)
+    if apart(ends_box(seg), np.asarray(full.bounds, float), 0.0):
+        assert boxed == [(0, full, full)]
+    else:
+        assert boxed == plain

@@ -165,7 +165,8 @@ def standing_in(region: shapely.Geometry, scene: Scene, object_poses: np.ndarray
 
 def heeded_claims(objects: Sequence[ObjectState], me: ObjectState, cross_near: float,
                   cross_waiting: float, reach: Sequence[float] = (),
-                  pass_margin: float = math.inf, memo: dict | None = None
+                  pass_margin: float = math.inf, memo: dict | None = None,
+                  box: np.ndarray | None = None
                   ) -> list[tuple[int, shapely.Geometry, shapely.Geometry]]:
     """The claims of the ``objects`` ranked above ``me`` that bind it (not those that
     exempt it), as :func:`meets_moving` takes them: (index, claim, the part a plan that
@@ -177,12 +178,16 @@ def heeded_claims(objects: Sequence[ObjectState], me: ObjectState, cross_near: f
     ``pass_margin``) only the near part binds, for both: it may go through, never into
     the near part. ``memo`` (a dict the caller keeps) remembers
     :func:`passes_ahead`'s answers by the plans' geometries, which never change once
-    made: the same answers, each found once."""
+    made: the same answers, each found once. A claim whose box lies apart from ``box``
+    (a segment's :func:`ends_box`, by which :func:`meets_moving` then skips it) is given
+    whole, :func:`passes_ahead` not asked."""
     out = []
     for o in objects:
         if o.rank >= me.rank or o.claim is None or me.index in o.exempt:
             continue
-        if (math.isfinite(pass_margin) and me.way is not None and o.way is not None
+        if box is not None and apart(box, np.asarray(o.claim.bounds, float), 0.0):
+            out.append((o.index, o.claim, o.claim))
+        elif (math.isfinite(pass_margin) and me.way is not None and o.way is not None
                 and _passes(me.way, o.claim, o.way, reach[me.index] + reach[o.index],
                             pass_margin, memo)):
             out.append((o.index, o.near, o.near))
