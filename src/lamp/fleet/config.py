@@ -91,6 +91,10 @@ class FleetConfig:
                                "found no plan, its later loops plan around only the other "
                                "teams' robots within this distance (m) of its own (at most "
                                "plan_near); inf: as plan_near.", low=0.0, unbounded=True)
+    balance_teams: int = param(0, "Concurrent schedule: 1: the robots are matched to the "
+                               "objects starting together so that the latest arrival plus "
+                               "haul is least (teams.balanced_teams); 0: each object in "
+                               "priority order takes its nearest free robots.", low=0)
     rejoin_limit: int = param(0, "Concurrent schedule: a segment whose robots had to move "
                               "back to their rows this many times (held back by what they "
                               "push) ends, stopped; 0: never.", low=0)
@@ -101,6 +105,8 @@ class FleetConfig:
 
     def __post_init__(self) -> None:
         check_fields(self)
+        if self.balance_teams > 1:
+            raise InputError(f"fleet_balance_teams: 0 or 1, got {self.balance_teams}")
 
     def values(self) -> dict[str, Any]:
         """Every setting by its public name (``fleet_`` + field)."""

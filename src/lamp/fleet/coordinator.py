@@ -52,7 +52,7 @@ import numpy as np
 from lamp.contract.events import TRACE_EVERY, RunObserver
 from lamp.contract.runner import ObjectOutcome, WorldExecutor
 from lamp.fleet import tasks as T
-from lamp.fleet.admission import heeded_claims, meets_moving, meets_standing
+from lamp.fleet.admission import ends_box, heeded_claims, meets_moving, meets_standing
 from lamp.fleet.blocked import blocked_space, looks_now, wait_over
 from lamp.fleet.config import FleetConfig
 from lamp.fleet.makeway import make_way, with_goal
@@ -189,8 +189,9 @@ class Fleet(TeamChanges):
         moving = [o.index for o in self.objects if o.status == ObjectStatus.ACTIVE and o.team]
         order = start_order(self.scene, self.executor.object_poses,
                             [k for k in ready if k not in first], moving + first)
+        goals = np.array([o.goal for o in self.scene.objects]) if self.config.balance_teams else None
         teams = allocate(first + order, self.free(), self.executor.robot_positions,
-                         self.executor.object_poses, bool(moving))
+                         self.executor.object_poses, bool(moving), goals)
         for k, team in teams.items():
             self._give_team(k, team)
 
@@ -308,7 +309,7 @@ class Fleet(TeamChanges):
         running = [o.running for o in self.objects if o.running is not None and o is not me]
         why = meets_moving(seg, running, heeded_claims(
             self.objects, me, cfg.cross_near, cfg.cross_waiting, self.reach,
-            cfg.pass_margin, self.passing), me.way)
+            cfg.pass_margin, self.passing, ends_box(seg)), me.way)
         if why:
             self.stats.note(self.clock, "meets", seg.index, why)
         return why
@@ -388,8 +389,7 @@ class Fleet(TeamChanges):
     def _advance(self) -> None:
         """Run every admitted segment until the first ends (or a watch stops one)."""
         running = [o.running for o in self.objects if o.running is not None]
-        now = np.asarray(self.executor.robot_positions, float)
-        cfg = self.config
+        now, cfg = np.asarray(self.executor.robot_positions, float), self.config
         for s in running:  # robots nudged off their rows (``Segment.rejoin``) rejoin them
             s.rejoin(now[s.team], self.grid, cfg.rejoin_limit, cfg.rejoin_slack)
             self.stats.count("jammed", int(s.done))  # it spent its slack (or limit): it ends

@@ -23,15 +23,16 @@ from collections.abc import Mapping, Sequence, Set
 
 import numpy as np
 import shapely
+from scipy.optimize import linear_sum_assignment
 from scipy.sparse import csr_array
-from scipy.sparse.csgraph import connected_components
+from scipy.sparse.csgraph import connected_components, maximum_bipartite_matching
 
 from lamp.contract.model import MAX_ROBOTS
 from lamp.geometry.shapes import to_shapely
 from lamp.scene.model import Scene, Shape
 
-__all__ = ["GROW_REACH", "MIN_TEAM", "allocate", "chain_depths", "corridor", "goal_blocks",
-           "in_the_way", "least_conflict_order", "near_way", "nearest", "needed_space",
+__all__ = ["GROW_REACH", "MIN_TEAM", "allocate", "balanced_teams", "chain_depths", "corridor",
+           "goal_blocks", "in_the_way", "least_conflict_order", "near_way", "nearest", "needed_space",
            "planar_distance", "reinforce", "start_order"]
 
 #: The smallest sub-team an object starts with while other objects are moving.
@@ -54,7 +55,8 @@ def nearest(pool: Sequence[int], robot_positions: np.ndarray, centre: np.ndarray
 
 
 def allocate(ready: Sequence[int], free: Sequence[int], robot_positions: np.ndarray,
-             object_poses: np.ndarray, others_moving: bool) -> dict[int, list[int]]:
+             object_poses: np.ndarray, others_moving: bool,
+             goals: np.ndarray | None = None) -> dict[int, list[int]]:
     """Sub-teams for the ``ready`` objects (priority order) from the ``free`` robots.
 
     The free robots are shared equally among the ready objects: each gets ``share`` =
@@ -63,7 +65,10 @@ def allocate(ready: Sequence[int], free: Sequence[int], robot_positions: np.ndar
     ``MIN_TEAM`` (1 when nothing else moves and it is the first) waits, and so do those
     after it. Robots left over when no further object can start join the teams, each the
     team of the nearest object among those below ``MAX_ROBOTS`` (ties by priority).
-    Deterministic; returns object -> robots (ascending)."""
+    With ``goals`` (each object's goal pose, by object), the started objects keep those
+    team sizes but the robots are matched to them by :func:`balanced_teams` (the longest
+    haul first) instead of each taking its nearest in turn. Deterministic; returns
+    object -> robots (ascending)."""
     pool = list(free)
     teams: dict[int, list[int]] = {}
     if not ready:
@@ -78,9 +83,47 @@ def allocate(ready: Sequence[int], free: Sequence[int], robot_positions: np.ndar
         teams[k] = sorted(chosen)
         pool = [i for i in pool if i not in chosen]
         moving = True
+    if goals is not None and teams:
+        hauls = {k: planar_distance(object_poses[k], goals[k]) for k in teams}
+        teams = balanced_teams({k: len(t) for k, t in teams.items()}, list(free),
+                               robot_positions, object_poses, hauls)
+        pool = [i for i in free if all(i not in t for t in teams.values())]
     if len(teams) < len(ready):  # the next object cannot start: help the started ones
         teams = reinforce(pool, robot_positions, object_poses, teams)
     return teams
+
+
+def balanced_teams(sizes: Mapping[int, int], pool: Sequence[int], robot_positions: np.ndarray,
+                   object_poses: np.ndarray, hauls: Mapping[int, float]
+                   ) -> dict[int, list[int]]:
+    """Teams of ``sizes[k]`` robots from ``pool`` for the objects of ``sizes`` (in
+    priority order), matched so that the longest of ``d(i, k) + hauls[k]`` over the
+    pairs (robot ``i`` in object ``k``'s team; ``d`` the straight-line distance to the
+    object's centre, ``hauls[k]`` the way it has to go, m) is the least any matching
+    achieves (a bottleneck assignment: an object is placed no sooner than its farthest
+    robot arrives plus its haul), and among those matchings the sum of the squares of
+    those values is least (no object's team farther than it needs be). Needs
+    ``sum(sizes) <= len(pool)``. Deterministic; object -> robots (ascending)."""
+    objs = list(sizes)
+    slots = np.repeat(np.arange(len(objs)), [sizes[k] for k in objs])
+    xy = np.asarray(robot_positions, float)[list(pool), :2]
+    centres = np.asarray(object_poses, float)[objs, :2]
+    cost = (np.hypot(*(xy[:, None] - centres[None]).transpose(2, 0, 1))
+            + np.asarray([hauls[k] for k in objs])[None])[:, slots]
+    values = np.unique(cost)
+    lo, hi = int(np.searchsorted(values, cost.min(axis=0).max())), len(values) - 1
+    while lo < hi:  # the least threshold under which every slot still gets a robot
+        mid = (lo + hi) // 2
+        under = csr_array(cost <= values[mid])
+        if (maximum_bipartite_matching(under, perm_type="row") >= 0).sum() == len(slots):
+            hi = mid
+        else:
+            lo = mid + 1
+    rows, cols = linear_sum_assignment(np.where(cost <= values[lo], cost ** 2, np.inf))
+    teams: dict[int, list[int]] = {k: [] for k in objs}
+    for i, j in zip(rows.tolist(), cols.tolist(), strict=True):
+        teams[objs[slots[j]]].append(pool[i])
+    return {k: sorted(t) for k, t in teams.items()}
 
 
 def reinforce(pool: Sequence[int], robot_positions: np.ndarray, object_poses: np.ndarray,
