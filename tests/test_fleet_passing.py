@@ -117,3 +117,19 @@ def test_heeded_claims_gives_an_object_passing_ahead_the_near_part_only() -> Non
     me.way = across(2.0)
     assert heeded_claims([claimer, me], me, 0.0, 0.0, [0.25, 0.25], 1.0) == [
         (0, CLAIM, CLAIM)]
+
+
+@given(xs=st.lists(st.floats(0.5, 9.5), min_size=1, max_size=12),
+       margin=st.floats(0.0, 4.0))
+def test_heeded_claims_remembers_the_same_answers(xs, margin) -> None:
+    """With a memo kept across calls (the fleet's), ``heeded_claims`` answers every
+    crossing as it does without one: the remembered answers and ways' points are the
+    ones ``passes_ahead`` finds afresh."""
+    near = shapely.box(0.0, -0.5, 2.0, 0.5)
+    claimer = ObjectState(0, status=ObjectStatus.ACTIVE, rank=0, claim=CLAIM, near=near, way=CLAIMER)
+    memo: dict = {}
+    ways = [across(x) for x in xs]
+    for way in ways + ways:  # each way twice: the second time from the memo
+        me = ObjectState(1, status=ObjectStatus.ACTIVE, rank=1, way=way)
+        args = ([claimer, me], me, 0.0, 0.0, [0.25, 0.25], margin)
+        assert heeded_claims(*args, memo=memo) == heeded_claims(*args)

@@ -24,7 +24,7 @@ building or intersecting their geometry, which on a depot of 48 loads is most pa
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 import shapely
@@ -60,7 +60,7 @@ def crosses(way: shapely.Geometry, region: shapely.Geometry) -> bool:
 
 def passes_ahead(way: shapely.LineString, region: shapely.Geometry,
                  claimer_way: shapely.LineString, reach: float, margin: float,
-                 step: float = PASS_STEP) -> bool:
+                 step: float = PASS_STEP, along: Callable | None = None) -> bool:
     """Whether a plan whose ``way`` (its centre's path on to its goal) goes through a
     higher-ranked object's claim ``region`` passes it ahead of that object. Its goal lies
     outside the claim, its way does not run towards the claiming object (the point where
@@ -71,17 +71,19 @@ def passes_ahead(way: shapely.LineString, region: shapely.Geometry,
     the claiming object's pace, ``margin`` m of travel before that object's centre comes
     within ``reach`` of the point. Both ways are taken at points ``step`` m apart. False
     when the way does not go through the claim (its robots may still come in), ends
-    inside it, or ``margin`` is infinite."""
+    inside it, or ``margin`` is infinite. ``along(line, step)`` gives a way's points
+    (:func:`_along`, the default; a caller may keep them)."""
+    along = along or _along
     if not math.isfinite(margin) or apart(np.asarray(way.bounds, float),
                                           np.asarray(region.bounds, float), 0.0):
         return False  # (boxes apart: its end and every point of it lie outside the claim)
     if region.intersects(shapely.points(shapely.get_coordinates(way)[-1])):
         return False
-    s, points = _along(way, step)
+    s, points = along(way, step)
     inside = shapely.intersects(region, shapely.points(points))
     if not inside.any():
         return False  # it does not go through: its robots may still come in
-    a, theirs = _along(claimer_way, step)
+    a, theirs = along(claimer_way, step)
     near = np.hypot(*np.moveaxis(points[inside, None] - theirs[None], -1, 0)) <= reach
     comes = np.where(near.any(axis=1), a[np.argmax(near, axis=1)], np.inf)
     if comes[-1] < comes[0] - step:
@@ -201,7 +203,8 @@ def _passes(way: shapely.LineString, claim: shapely.Geometry, claimer_way: shape
             reach: float, margin: float, memo: dict | None) -> bool:
     """:func:`passes_ahead`, remembered in ``memo`` under the geometries' identities (the
     entry holds them, so no identity is reused while it stands; at most ``_MEMO_KEPT``
-    entries, the memo emptied when full)."""
+    entries, the memo emptied when full); so are the ways' points (:func:`_along`), which
+    every claim a way is weighed against reads again."""
     if memo is None:
         return passes_ahead(way, claim, claimer_way, reach, margin)
     key = (id(way), id(claim), id(claimer_way), reach, margin)
@@ -209,6 +212,19 @@ def _passes(way: shapely.LineString, claim: shapely.Geometry, claimer_way: shape
     if hit is None:
         if len(memo) >= _MEMO_KEPT:
             memo.clear()
-        hit = memo[key] = (passes_ahead(way, claim, claimer_way, reach, margin),
+        hit = memo[key] = (passes_ahead(way, claim, claimer_way, reach, margin,
+                                        along=lambda line, step: _kept_along(line, step, memo)),
                            way, claim, claimer_way)
     return hit[0]
+
+
+def _kept_along(line: shapely.LineString, step: float, memo: dict
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_along`, remembered in ``memo`` under the line's identity (as :func:`_passes`)."""
+    key = ("along", id(line), step)
+    hit = memo.get(key)
+    if hit is None:
+        if len(memo) >= _MEMO_KEPT:
+            memo.clear()
+        hit = memo[key] = (*_along(line, step), line)
+    return hit[0], hit[1]
