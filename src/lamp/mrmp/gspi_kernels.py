@@ -72,7 +72,8 @@ def conflict(
 ) -> bool:
     """Whether motion a->b of one robot and c->d of another (same time span, linear)
     come closer than allowed: min distance < min(2r, start distance[, end distance
-    when both end on goals])."""
+    when both end on goals]). Two goals are two points: motions ending at one point
+    never pass, goals or not."""
     d0x = ax - cx
     d0y = ay - cy
     d1x = bx - dx
@@ -83,7 +84,7 @@ def conflict(
         thr = d0
     if both_goal_end:
         d1 = math.sqrt(d1x * d1x + d1y * d1y)
-        if d1 < thr:
+        if 0.0 < d1 < thr:
             thr = d1
     # closest approach: distance of the origin to the relative-offset segment d0 -> d1
     return point_segment_distance(0.0, 0.0, d0x, d0y, d1x, d1y) < thr - 1e-9
