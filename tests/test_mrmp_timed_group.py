@@ -20,7 +20,7 @@ import lamp.mrmp.gspi as gspi
 from lamp.mrmp import plan_paths
 from lamp.mrmp.repair_hash import hash_rows
 from lamp.mrmp.timed_checks import arrivals, motion_hits, rest_clear
-from lamp.mrmp.timed_repair import timed_budget
+from lamp.mrmp.timed_repair import _near_holders, timed_budget
 from lamp.scene.mapf import load_grid_map, random_instance
 
 MAPF = Path(__file__).resolve().parent / "data" / "mapf"
@@ -94,8 +94,9 @@ def test_timed_budget_grows_with_the_square_of_the_fleet() -> None:
 
 @pytest.mark.parametrize(("seed", "exchange"), [(2, False), (5, True)])
 def test_groups_and_exchanges_inside_plan_paths(seed: int, exchange: bool) -> None:
-    """800 robots on ``random-64-64-20`` (seed 2: a group round; seed 5: a goal
-    exchange), the stage spied on: it planned robots together, the goals it returns are
+    """800 robots on ``random-64-64-20`` (seed 2: a group round; seed 5: goal
+    exchanges, with a robot in the way and with the holder of a goal near the last
+    robot's start), the stage spied on: it planned robots together, the goals it returns are
     a permutation of those it was given and the plan's own, the fleet checker accepts the
     plan (the general one takes minutes at this size), the last arrival is no later than
     the retiming's, and a second call gives the same plan."""
@@ -115,7 +116,7 @@ def test_groups_and_exchanges_inside_plan_paths(seed: int, exchange: bool) -> No
     assert plan.success and seen
     _, goal, done, _, groups = seen["out"]
     assert groups >= 1 and done >= 2
-    assert ((goal != seen["given"]).sum() == 2) == exchange
+    assert ((goal != seen["given"]).sum() >= 2) == exchange  # exchanges may chain
     assert np.array_equal(np.sort(goal), np.sort(seen["given"]))
     assert np.array_equal(plan.goal_of, goal)
     assert _makespan(plan.paths) <= seen["before"] + 1e-6
@@ -123,3 +124,36 @@ def test_groups_and_exchanges_inside_plan_paths(seed: int, exchange: bool) -> No
     again = plan_paths(gm.scene, S, G, seed=seed, time_limit=600.0)
     assert np.array_equal(again.paths, plan.paths)
     assert np.array_equal(again.goal_of, plan.goal_of)
+
+
+@settings(max_examples=200, deadline=None)
+@given(seed=st.integers(0, 10_000), n=st.integers(2, 30), k=st.integers(0, 6),
+       limit=st.floats(0.05, 1.5))
+def test_near_holders_matches_a_reference(seed, n, k, limit) -> None:
+    """The exchange partners offered to the last robot (after those in its way): robots
+    not tried, holding a goal, whose goal lies within ``limit`` of its start and whose
+    start within ``limit`` of its goal, the longer line shortest first, ties by index,
+    at most ``k``; against a plain sort over every robot."""
+    rng = np.random.default_rng(seed)
+    M = n + int(rng.integers(0, 3))  # goals, some held by nobody
+    V = 5
+    coords = np.round(rng.random((V + n + M, 2)), 1)  # rounded: ties happen
+    goal = np.full(n, -1, np.int64)
+    held = rng.permutation(M)[:n]
+    has = rng.random(n) < 0.85
+    goal[has] = held[has]
+    i = int(rng.integers(n))
+    if goal[i] < 0:
+        goal[i] = held[i]
+    tried = rng.random(n) < 0.2
+    gv0 = V + n
+    got = _near_holders(i, goal, coords, V, gv0, limit, tried, k)
+    s, g = coords[V + i], coords[gv0 + goal[i]]
+    want = []
+    for j in range(n):
+        if j == i or goal[j] < 0 or tried[j]:
+            continue
+        m = max(np.hypot(*(coords[gv0 + goal[j]] - s)), np.hypot(*(coords[V + j] - g)))
+        if m < limit:
+            want.append((m, j))
+    assert got.tolist() == [j for _, j in sorted(want)[:k]]

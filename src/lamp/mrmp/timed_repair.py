@@ -18,7 +18,10 @@ each of them, latest first, every one to arrive before the same target, against 
 motion kept and every new way; all are kept or none. Failing that, the last robot
 exchanges goals with one of them (the :data:`TIMED_EXCHANGES` latest), both planned
 again the same way (the goals are interchangeable, so the exchange is returned with the
-rows). Robots tied with the last are tried in turn before the loop ends.
+rows); then with the holders of the goals near its start whose own start lies near its
+goal (:func:`_near_holders`: the :data:`TIMED_EXCHANGES` whose longer straight line is
+shortest, below the target). Robots tied with the last are tried in turn before the
+loop ends.
 
 Search (:mod:`lamp.mrmp.timed_search`): A* over (vertex, time) of the plan's graph
 (lattice nodes, the robot's own start and goal vertices' links, other goals' vertices;
@@ -75,7 +78,8 @@ TIMED_ENTRIES = 1_000_000
 #: :data:`TIMED_BUDGET_ROBOTS` robots, where the plain search alone spends the budget
 #: in less time for as short plans, measured over 12 instances of 400 robots).
 TIMED_GROUP = 8
-#: Goal exchanges tried for the last robot with the robots in its way (0: none).
+#: Goal exchanges tried for the last robot with the robots in its way, and then with
+#: the holders of goals near its start (each; 0: none).
 TIMED_EXCHANGES = 4
 
 
@@ -172,9 +176,10 @@ def _one_round(i: int, target: int, gr: tuple, V: int, gv0: int, hs: tuple,
                exchanges: int) -> tuple:
     """Robot i planned again to arrive before ``target`` (:func:`_rounds`): alone, else
     (``group > 0``) alone with the lower-bound heuristic, with the robots in its way, or
-    exchanging goals with one of them; nothing more is tried when it has no such way even
-    with no other robot about. Returns the state, whether
-    it was planned, and the states expanded."""
+    exchanging goals with one of them, then with a holder of a goal near its start
+    (:func:`_near_holders`); nothing more is tried when it has no such way even with no
+    other robot about. Returns the state, whether it was planned, and the states
+    expanded."""
     ends_goal = goal >= 0
     rep, WX, WY, WT, wptr, wrob, box, nw = state
     ways = (rep, WX, WY, WT, wptr[: nw + 1], wrob[:nw], box[:nw])
@@ -196,6 +201,7 @@ def _one_round(i: int, target: int, gr: tuple, V: int, gv0: int, hs: tuple,
                                      arr, 0, True)
             work += w
     me = np.full(1, i, np.int64)
+    tried = np.zeros(goal.shape[0], np.bool_)  # exchange partners tried
     if pv.shape[0] > 0:
         state, ok, w = _plan_members(me, pv, pt, target, gr, V, gv0, hs, goal, X, Y, tt, hh,
                                      x0, y0, cs, ny, two_r, q, budget - work, ob, arr, state)
@@ -223,18 +229,65 @@ def _one_round(i: int, target: int, gr: tuple, V: int, gv0: int, hs: tuple,
             work += w
             if ok:
                 return state, True, work
-        for j in others[:exchanges]:
-            if work >= budget:
-                break
-            goal[i], goal[j] = goal[j], goal[i]
-            state, ok, w = _plan_members(np.array([i, j]), pv[:0], pt[:0], target, gr, V,
-                                         gv0, hs, goal, X, Y, tt, hh, x0, y0, cs, ny, two_r,
-                                         q, budget - work, ob, arr, state)
-            work += w
-            if ok:
-                return state, True, work
-            goal[i], goal[j] = goal[j], goal[i]
+        tried[others[:exchanges]] = True
+        state, ok, w = _exchange(i, others[:exchanges], target, gr, V, gv0, hs, goal, X, Y,
+                                 tt, hh, x0, y0, cs, ny, two_r, q, budget - work, ob, arr,
+                                 state)
+        work += w
+        if ok:
+            return state, True, work
+    if group > 0 and exchanges > 0 and work < budget:
+        near = _near_holders(i, goal, gr[0], V, gv0, target * q, tried, exchanges)
+        state, ok, w = _exchange(i, near, target, gr, V, gv0, hs, goal, X, Y, tt, hh, x0,
+                                 y0, cs, ny, two_r, q, budget - work, ob, arr, state)
+        return state, ok, work + w
     return state, False, work
+
+
+@nb.njit(cache=True)
+def _exchange(i: int, js: np.ndarray, target: int, gr: tuple, V: int, gv0: int, hs: tuple,
+              goal: np.ndarray, X: np.ndarray, Y: np.ndarray, tt: np.ndarray, hh: tuple,
+              x0: float, y0: float, cs: float, ny: int, two_r: float, q: float, budget: int,
+              ob: tuple, arr: np.ndarray, state: tuple) -> tuple:
+    """Robot i exchanges goals with each of ``js`` in turn, both planned again to arrive
+    before ``target`` (:func:`_plan_members`), until one exchange is kept (``goal``
+    updated in place). Returns the state, whether one was kept, and the states expanded."""
+    work = 0
+    for j in js:
+        if work >= budget:
+            break
+        goal[i], goal[j] = goal[j], goal[i]
+        state, ok, w = _plan_members(np.array([i, j]), np.zeros(0, np.int64),
+                                     np.zeros(0, np.int64), target, gr, V, gv0, hs, goal, X,
+                                     Y, tt, hh, x0, y0, cs, ny, two_r, q, budget - work, ob,
+                                     arr, state)
+        work += w
+        if ok:
+            return state, True, work
+        goal[i], goal[j] = goal[j], goal[i]
+    return state, False, work
+
+
+@nb.njit(cache=True)
+def _near_holders(i: int, goal: np.ndarray, coords: np.ndarray, V: int, gv0: int,
+                  limit: float, tried: np.ndarray, k: int) -> np.ndarray:
+    """Up to ``k`` robots j for a goal exchange with robot i, not ``tried`` and holding a
+    goal: those whose goal lies within ``limit`` of i's start and whose start lies within
+    ``limit`` of i's goal (straight lines: a pair farther apart cannot arrive within
+    ``limit`` at unit speed), the longer of the two lines shortest first, ties by index."""
+    N = goal.shape[0]
+    key = np.full(N, np.inf)
+    sx, sy = coords[V + i, 0], coords[V + i, 1]
+    gx, gy = coords[gv0 + goal[i], 0], coords[gv0 + goal[i], 1]
+    for j in range(N):
+        if j == i or goal[j] < 0 or tried[j]:
+            continue
+        a = math.hypot(coords[gv0 + goal[j], 0] - sx, coords[gv0 + goal[j], 1] - sy)
+        b = math.hypot(coords[V + j, 0] - gx, coords[V + j, 1] - gy)
+        if max(a, b) < limit:
+            key[j] = max(a, b)
+    order = np.argsort(key, kind="mergesort")[:k]
+    return order[np.isfinite(key[order])]
 
 
 @nb.njit(cache=True)
@@ -251,8 +304,9 @@ def _rounds(X: np.ndarray, Y: np.ndarray, tt: np.ndarray, gr: tuple, V: int, gv0
     would take without them (at most ``group``; first as if the others were only at
     their last positions from their arrivals on, then as if there were none) are
     planned again after it, each to arrive before the same target, all or none kept;
-    else it exchanges goals with one of them (the ``exchanges`` latest), both planned
-    again. Robots tied with the last are tried in turn before the loop ends."""
+    else it exchanges goals with one of them (the ``exchanges`` latest), or with one of
+    the ``exchanges`` holders of goals near its start, both planned again. Robots tied
+    with the last are tried in turn before the loop ends."""
     coords = gr[0]
     N = X.shape[1]
     x0, y0 = coords[:, 0].min(), coords[:, 1].min()
