@@ -10,7 +10,7 @@ import numpy as np
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from lamp.fleet.teams import allocate, balanced_teams, longest_first
+from lamp.fleet.teams import allocate, balanced_teams
 
 
 def _values(teams, robots, objects, hauls):
@@ -65,19 +65,3 @@ def test_allocate_with_goals_starts_the_same_teams_sizes_balanced(seed, n_obj, n
     if len(nearest) == n_obj:  # no leftovers joined: the bottleneck is no worse
         assert (max(_values(balanced, robots, objects, hauls), default=0.0)
                 <= max(_values(nearest, robots, objects, hauls), default=0.0) + 1e-9)
-
-
-@settings(max_examples=60, deadline=None)
-@given(st.integers(0, 2**31 - 1), st.integers(1, 6))
-def test_longest_first_orders_by_farthest_robot_plus_haul(seed, n_obj):
-    rng = np.random.default_rng(seed)
-    robots = rng.uniform(0, 10, (3 * n_obj, 2))
-    objects = np.c_[rng.uniform(0, 10, (n_obj, 2)), np.zeros(n_obj)]
-    goals = np.c_[rng.uniform(0, 10, (n_obj, 2)), np.zeros(n_obj)]
-    keys = rng.permutation(n_obj).tolist()  # the priority order
-    teams = {k: [3 * k, 3 * k + 1, 3 * k + 2][: int(rng.integers(1, 4))] for k in keys}
-    order = longest_first(teams, robots, objects, goals)
-    assert sorted(order) == sorted(keys)
-    est = [max(math.dist(robots[i], objects[k][:2]) for i in teams[k])
-           + math.dist(objects[k][:2], goals[k][:2]) for k in order]
-    assert all(a >= b - 1e-12 for a, b in zip(est[:-1], est[1:], strict=True))

@@ -95,9 +95,6 @@ class FleetConfig:
                                "objects starting together so that the latest arrival plus "
                                "haul is least (teams.balanced_teams); 0: each object in "
                                "priority order takes its nearest free robots.", low=0)
-    longest_first: int = param(0, "Concurrent schedule: 1: objects starting together rank "
-                               "by their farthest robot's distance plus their haul, longest "
-                               "first (teams.longest_first); 0: in start order.", low=0)
     rejoin_limit: int = param(0, "Concurrent schedule: a segment whose robots had to move "
                               "back to their rows this many times (held back by what they "
                               "push) ends, stopped; 0: never.", low=0)
@@ -108,9 +105,8 @@ class FleetConfig:
 
     def __post_init__(self) -> None:
         check_fields(self)
-        for name in ("balance_teams", "longest_first"):
-            if getattr(self, name) > 1:
-                raise InputError(f"fleet_{name}: 0 or 1, got {getattr(self, name)}")
+        if self.balance_teams > 1:
+            raise InputError(f"fleet_balance_teams: 0 or 1, got {self.balance_teams}")
 
     def values(self) -> dict[str, Any]:
         """Every setting by its public name (``fleet_`` + field)."""

@@ -61,7 +61,7 @@ from lamp.fleet.regions import claims
 from lamp.fleet.reteam import TeamChanges
 from lamp.fleet.segments import Segment, on_grid, run_together
 from lamp.fleet.state import FREE, ObjectState, ObjectStatus
-from lamp.fleet.teams import allocate, longest_first, near_way, start_order
+from lamp.fleet.teams import allocate, near_way, start_order
 from lamp.fleet.turns import Turns
 from lamp.fleet.view import FleetExecution, FleetView
 from lamp.scene.model import Scene
@@ -189,12 +189,11 @@ class Fleet(TeamChanges):
         moving = [o.index for o in self.objects if o.status == ObjectStatus.ACTIVE and o.team]
         order = start_order(self.scene, self.executor.object_poses,
                             [k for k in ready if k not in first], moving + first)
-        goals, pos = np.array([o.goal for o in self.scene.objects]), self.executor.robot_positions
-        teams = allocate(first + order, self.free(), pos, self.executor.object_poses,
-                         bool(moving), goals if self.config.balance_teams else None)
-        for k in (longest_first(teams, pos, self.executor.object_poses, goals)
-                  if self.config.longest_first else teams):
-            self._give_team(k, teams[k])
+        goals = np.array([o.goal for o in self.scene.objects]) if self.config.balance_teams else None
+        teams = allocate(first + order, self.free(), self.executor.robot_positions,
+                         self.executor.object_poses, bool(moving), goals)
+        for k, team in teams.items():
+            self._give_team(k, team)
 
     def _give_team(self, k: int, team: list[int]) -> None:
         """Object ``k`` (waiting to start, or for robots) gets ``team`` and goes on."""
@@ -219,7 +218,8 @@ class Fleet(TeamChanges):
         o.move_to(ObjectStatus.PLACED if o.outcome.result.success else ObjectStatus.FAILED)
         if o.status == ObjectStatus.PLACED and o.placed_at_s is None:
             o.placed_at_s = self.clock
-        o.claim, self.owner[o.team] = None, FREE
+        o.claim = None
+        self.owner[o.team] = FREE
         self.finished += 1
         for obs in self.observers:
             obs.object_finished(k, len(self.objects), o.outcome.result)

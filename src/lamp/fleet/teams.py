@@ -32,8 +32,8 @@ from lamp.geometry.shapes import to_shapely
 from lamp.scene.model import Scene, Shape
 
 __all__ = ["GROW_REACH", "MIN_TEAM", "allocate", "balanced_teams", "chain_depths", "corridor",
-           "goal_blocks", "in_the_way", "least_conflict_order", "longest_first", "near_way",
-           "nearest", "needed_space", "planar_distance", "reinforce", "start_order"]
+           "goal_blocks", "in_the_way", "least_conflict_order", "near_way", "nearest", "needed_space",
+           "planar_distance", "reinforce", "start_order"]
 
 #: The smallest sub-team an object starts with while other objects are moving.
 MIN_TEAM = 2
@@ -124,20 +124,6 @@ def balanced_teams(sizes: Mapping[int, int], pool: Sequence[int], robot_position
     for i, j in zip(rows.tolist(), cols.tolist(), strict=True):
         teams[objs[slots[j]]].append(pool[i])
     return {k: sorted(t) for k, t in teams.items()}
-
-
-def longest_first(teams: Mapping[int, Sequence[int]], robot_positions: np.ndarray,
-                  object_poses: np.ndarray, goals: np.ndarray) -> list[int]:
-    """The objects of ``teams`` (object -> robots, in priority order), the one whose
-    farthest robot's straight-line distance plus its own straight-line haul to its goal
-    is longest first (ties in the given order): the order in which they rank when they
-    start together, so the loads that take longest yield to none of them."""
-    def estimate(k: int) -> float:
-        far = max((planar_distance(robot_positions[i], object_poses[k]) for i in teams[k]),
-                  default=0.0)
-        return far + planar_distance(object_poses[k], goals[k])
-    keys = list(teams)
-    return sorted(keys, key=lambda k: (-estimate(k), keys.index(k)))
 
 
 def reinforce(pool: Sequence[int], robot_positions: np.ndarray, object_poses: np.ndarray,
