@@ -16,17 +16,23 @@ from lamp.mrmp.repair_hash import build_hash, clear_of, gather, move_ok
 TWO_R = 0.1
 
 
-def _reference(a, b, c, d, both: bool) -> bool:
-    """The rule by dense sampling of the relative motion (closest approach over 4,001
-    instants, the exact ends included): the distance may not fall below min(2r, start
-    distance[, end distance when both end on goals at two points])."""
+def _closest(a, b, c, d, both: bool) -> tuple[float, float]:
+    """The closest approach of the relative motion by dense sampling (4,001 instants, the
+    exact ends included) and the rule's threshold: min(2r, start distance[, end distance
+    when both end on goals at two points])."""
     s = np.linspace(0.0, 1.0, 4001)[:, None]
     rel = (np.asarray(a) - np.asarray(c)) * (1 - s) + (np.asarray(b) - np.asarray(d)) * s
     dist = np.hypot(rel[:, 0], rel[:, 1])
     thr = min(TWO_R, dist[0])
     if both and dist[-1] > 0.0:
         thr = min(thr, dist[-1])
-    return bool(dist.min() < thr - 1e-6)
+    return float(dist.min()), thr
+
+
+def _reference(a, b, c, d, both: bool) -> bool:
+    """The rule by sampling: the distance may not fall below the threshold."""
+    closest, thr = _closest(a, b, c, d, both)
+    return closest < thr - 1e-6
 
 
 _pt = st.tuples(st.floats(-0.3, 0.3), st.floats(-0.3, 0.3))
@@ -46,13 +52,8 @@ def test_conflict_matches_reference(a, b, c, d, both, same_end) -> None:
     if same_end:
         assert got
     # away from the threshold (sampling resolves the closest approach to ~1e-4 m)
-    s = np.linspace(0.0, 1.0, 4001)[:, None]
-    rel = (np.asarray(a) - np.asarray(c)) * (1 - s) + (np.asarray(b) - np.asarray(d)) * s
-    dist = np.hypot(rel[:, 0], rel[:, 1])
-    thr = min(TWO_R, dist[0])
-    if both and dist[-1] > 0.0:
-        thr = min(thr, dist[-1])
-    if abs(dist.min() - thr) > 1e-3:
+    closest, thr = _closest(a, b, c, d, both)
+    if abs(closest - thr) > 1e-3:
         assert got == _reference(a, b, c, d, both)
 
 
