@@ -7,9 +7,12 @@ import itertools
 import math
 
 import numpy as np
+import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
+from lamp.errors import InputError
+from lamp.fleet.config import FleetConfig
 from lamp.fleet.teams import allocate, balanced_teams
 
 
@@ -65,3 +68,9 @@ def test_allocate_with_goals_starts_the_same_teams_sizes_balanced(seed, n_obj, n
     if len(nearest) == n_obj:  # no leftovers joined: the bottleneck is no worse
         assert (max(_values(balanced, robots, objects, hauls), default=0.0)
                 <= max(_values(nearest, robots, objects, hauls), default=0.0) + 1e-9)
+
+
+def test_balance_teams_is_zero_or_one() -> None:
+    assert FleetConfig(balance_teams=1).balance_teams == 1
+    with pytest.raises(InputError, match="fleet_balance_teams: 0 or 1, got 2"):
+        FleetConfig(balance_teams=2)
