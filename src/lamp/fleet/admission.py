@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping, Sequence
+from typing import Any
 
 import numpy as np
 import shapely
@@ -143,14 +144,20 @@ def meets_moving(seg: Segment, running: Sequence[Segment],
 
 def ends_box(seg: Segment) -> np.ndarray:
     """(x0, y0, x1, y1): a box holding ``seg.ends()`` (its bodies before and after it),
-    found without building them."""
+    found without building them; kept in ``seg.bounds`` with the rows it came from (a
+    waiting segment is asked at every event)."""
+    cached = seg.bounds.get("ends")
+    if cached is not None and cached[0] is seg.rows:
+        return cached[1]
     rows = seg.rows[:, [0, -1]].reshape(-1, 2)
     grow = seg.robot_radius + ROBOT_MARGIN
     boxes = [np.concatenate([rows.min(axis=0) - grow, rows.max(axis=0) + grow]),
              np.asarray(object_space(seg, first=True).bounds, float),
              np.asarray(object_space(seg, final=True).bounds, float)]
     stack = np.stack(boxes)
-    return np.concatenate([stack[:, :2].min(axis=0), stack[:, 2:].max(axis=0)])
+    box = np.concatenate([stack[:, :2].min(axis=0), stack[:, 2:].max(axis=0)])
+    seg.bounds["ends"] = (seg.rows, box)
+    return box
 
 
 def standing_in(region: shapely.Geometry, scene: Scene, object_poses: np.ndarray,
@@ -207,24 +214,22 @@ def _passes(way: shapely.LineString, claim: shapely.Geometry, claimer_way: shape
     every claim a way is weighed against reads again."""
     if memo is None:
         return passes_ahead(way, claim, claimer_way, reach, margin)
-    key = (id(way), id(claim), id(claimer_way), reach, margin)
+
+    def points(line: shapely.LineString, step: float) -> tuple[np.ndarray, np.ndarray]:
+        return _kept(memo, ("along", id(line), step), (line,), lambda: _along(line, step))
+
+    return _kept(memo, (id(way), id(claim), id(claimer_way), reach, margin),
+                 (way, claim, claimer_way),
+                 lambda: passes_ahead(way, claim, claimer_way, reach, margin, along=points))
+
+
+def _kept(memo: dict, key: tuple, holds: tuple, make: Callable[[], Any]) -> Any:
+    """``make()``, remembered in ``memo`` under ``key`` (built from the identities of the
+    objects ``holds``, which the entry keeps so none is reused while it stands); at most
+    ``_MEMO_KEPT`` entries, the memo emptied when full."""
     hit = memo.get(key)
     if hit is None:
         if len(memo) >= _MEMO_KEPT:
             memo.clear()
-        hit = memo[key] = (passes_ahead(way, claim, claimer_way, reach, margin,
-                                        along=lambda line, step: _kept_along(line, step, memo)),
-                           way, claim, claimer_way)
+        hit = memo[key] = (make(), holds)
     return hit[0]
-
-
-def _kept_along(line: shapely.LineString, step: float, memo: dict
-                ) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`_along`, remembered in ``memo`` under the line's identity (as :func:`_passes`)."""
-    key = ("along", id(line), step)
-    hit = memo.get(key)
-    if hit is None:
-        if len(memo) >= _MEMO_KEPT:
-            memo.clear()
-        hit = memo[key] = (*_along(line, step), line)
-    return hit[0], hit[1]
