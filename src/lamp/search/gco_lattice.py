@@ -33,7 +33,7 @@ from lamp.geometry import se2
 from lamp.geometry.object_space import ObjectSpace
 from lamp.scene.model import Scene
 from lamp.search.astar import AStarResult, weighted_astar
-from lamp.search.lattice import FREE, Node, ObjectLattice
+from lamp.search.lattice import Node, ObjectLattice
 
 GCO_STEP = 0.1
 GCO_ROT_STEP = 0.1
@@ -86,8 +86,7 @@ class GCoLattice(ObjectLattice):
             return cached
         # the start is invalid for the inflated footprint: leave it without inflation
         idx, nbrs = self._neighbours(u)
-        self._ensure_nodes(nbrs)
-        ok = self._node_valid[nbrs] == FREE
+        ok = self._free_nodes(nbrs)
         idx, nbrs = idx[ok], nbrs[ok]
         pu = self.pose(u)
         free = self.exact_space.motions_free(np.broadcast_to(pu, (len(nbrs), 3)), self.poses(nbrs))

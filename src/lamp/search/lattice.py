@@ -10,12 +10,10 @@ and ``jj = j - j_min`` (cheap to hash and to store in arrays). Virtual nodes for
 continuous pose (the current, drifted pose of the object) are plain ``(x, y, theta)``
 tuples; :meth:`ObjectLattice.heuristic` accepts both.
 
-Motion primitives (26, ``PRIMITIVES``), as lattice offsets ``(di, dj, dk)``:
-
-* the 8 translations ``(di, dj) in {-1, 0, 1}^2 \\ {(0, 0)}`` (axis steps of ``step``,
-  diagonals of ``step * sqrt(2)``), each with a heading change ``dk in {-1, 0, +1}`` bins
-  (24 primitives);
-* the 2 pure rotations ``(0, 0, +-1)``.
+Motion primitives (26, ``PRIMITIVES``), as lattice offsets ``(di, dj, dk)``: the 8
+translations ``(di, dj) in {-1, 0, 1}^2 \\ {(0, 0)}`` (axis steps of ``step``, diagonals of
+``step * sqrt(2)``), each with a heading change ``dk in {-1, 0, +1}`` bins (24), and the 2
+pure rotations ``(0, 0, +-1)``.
 
 The same set is GCo's "8 neighbours or stay, times rotation {0, +-1}, minus stay". A
 primitive moves the object along ``se2.interpolate`` (translation and rotation blended
@@ -38,9 +36,10 @@ Lite stays consistent on the (cheaper) joining motions.
 
 A node is valid when its pose is free (``ObjectSpace.pose_free``); an edge is valid when
 both ends are valid and its swept motion is free (``ObjectSpace.motions_free``). Both are
-computed lazily, in batches of one node's 26 primitives, and cached (``int8`` arrays,
--1 = unknown). Edge validity is symmetric (the reverse motion sweeps the same set), so each
-motion is checked once, from the lower node id, and both directions are filled in.
+computed lazily, in batches of one node's 26 primitives, and cached in one packed store
+(:mod:`lamp.search.lattice_primitives`: 4 bytes hold a node's state and its edges').
+Edge validity is symmetric (the reverse motion sweeps the same set), so each motion is
+checked once, from the lower node id, and kept once.
 
 Continuous poses join the lattice through :meth:`start_connections` (one free straight
 motion to a node within the model's range, costed by :func:`motion_cost`); the goal node
@@ -65,10 +64,12 @@ from lamp.search.lattice_primitives import (
     BLOCKED,
     FREE,
     PRIMITIVES,
-    REVERSE,
+    SLOT,
+    STORE_DTYPE,
     UNKNOWN,
     check_lattice_args,
     edge_words,
+    node_words,
     primitive_costs,
     successor_kernel,
 )
@@ -146,14 +147,13 @@ class ObjectLattice:
 
         self._prim, self._prim_cost, self._prim_reach = primitive_costs(step, self.w_rot, dtheta)
         self._prim_cost_list = self._prim_cost.tolist()
-        self._rev = np.array(REVERSE, dtype=np.int64)
+        self._slot = np.array(SLOT, dtype=np.int64)
         self._out_ids = np.empty(len(PRIMITIVES), dtype=np.int64)
         self._out_prim = np.empty(len(PRIMITIVES), dtype=np.int64)
         # zero-filled (UNKNOWN): the pages of nodes never looked at stay untouched, so the
         # memory they take grows with the part of the map the search visits
-        self._node_valid = np.zeros(self.n_nodes, dtype=np.int8)
-        self._edge_valid = np.zeros(edge_words(self.n_i, self.n_j, self.n_headings),
-                                    dtype=np.uint64)
+        self._store = np.zeros(edge_words(self.n_i, self.n_j, self.n_headings),
+                               dtype=STORE_DTYPE)
         self._succ: dict[Node, list[tuple[Node, float]]] = {}
         self._succ_kept = max(1, int(succ_kept))
         self._tolerant: dict[float, ObjectSpace] = {}
@@ -245,22 +245,24 @@ class ObjectLattice:
         return float(u[0]), float(u[1]), float(u[2])
 
     # ------------------------------------------------------------ validity
-    def _ensure_nodes(self, nodes: np.ndarray) -> None:
-        unknown = nodes[self._node_valid[nodes] == UNKNOWN]
+    def _free_nodes(self, nodes: np.ndarray) -> np.ndarray:
+        """Which of the int64 node ids are free (checked where not known yet)."""
+        words = node_words(nodes, self.n_j, self.n_headings)
+        unknown = np.unique(nodes[self._store[words] & 3 == UNKNOWN])
         if len(unknown):
-            unknown = np.unique(unknown)
-            self._node_valid[unknown] = BLOCKED + self.space.pose_free(self.poses(unknown))
+            state = BLOCKED + self.space.pose_free(self.poses(unknown))
+            self._store[node_words(unknown, self.n_j, self.n_headings)] |= state.astype(
+                STORE_DTYPE)
             self.n_pose_checks += len(unknown)
+        return self._store[words] & 3 == FREE
 
     def node_valid(self, u: Node) -> bool:
         """Whether the node's pose is free (cached)."""
-        self._ensure_nodes(np.array([u], dtype=np.int64))
-        return bool(self._node_valid[u] == FREE)
+        return bool(self._free_nodes(np.array([u], dtype=np.int64))[0])
 
     def validate_all_nodes(self) -> np.ndarray:
         """Check every node at once (one batch) and return the (n_nodes,) validity mask."""
-        self._ensure_nodes(np.arange(self.n_nodes, dtype=np.int64))
-        return self._node_valid == FREE
+        return self._free_nodes(np.arange(self.n_nodes, dtype=np.int64))
 
     def _neighbours(self, u: Node) -> tuple[np.ndarray, np.ndarray]:
         """(primitive indices, neighbour ids) of the primitives from ``u`` that stay on the grid."""
@@ -283,9 +285,9 @@ class ObjectLattice:
             x, y, _ = self._xyt(u)
             self.space.prepare_point(x, y, self._prim_reach)
         n, n_pose, n_motion = successor_kernel(
-            int(u), self.n_j, self.n_headings, self.i_min, self.j_min,
+            int(u), self.n_i, self.n_j, self.n_headings, self.i_min, self.j_min,
             self.anchor[0], self.anchor[1], self.anchor[2], self.step, self.dtheta,
-            self._prim, self._rev, self._node_valid, self._edge_valid,
+            self._prim, self._slot, self._store,
             self._out_ids, self._out_prim, *self.space.kernel_args,
         )  # fmt: skip
         self.n_pose_checks += n_pose
@@ -418,8 +420,7 @@ class ObjectLattice:
         keep = d <= max_dist
         cand, d = cand[keep], d[keep]
         if valid_only and len(cand):
-            self._ensure_nodes(cand)
-            ok = self._node_valid[cand] == FREE
+            ok = self._free_nodes(cand)
             cand, d = cand[ok], d[ok]
         order = np.argsort(d, kind="stable")
         return [(int(cand[o]), float(d[o])) for o in order]
@@ -461,8 +462,7 @@ class ObjectLattice:
         cand, targets = cand[in_range], targets[in_range]
         if len(cand) == 0:
             return []
-        self._ensure_nodes(cand)
-        ok = self._node_valid[cand] == FREE
+        ok = self._free_nodes(cand)
         cand, targets = cand[ok], targets[ok]
         space = self.tolerant_space(tolerance)
         free = space.motions_free(np.broadcast_to(pose, targets.shape), targets)

@@ -9,13 +9,16 @@ whose arguments are malformed) with a ValueError naming the argument;
 (``UNKNOWN``/``BLOCKED``/``FREE``) only what is not known yet; each motion is checked once,
 from its lower-id end, and stored for both directions.
 
-Nodes' states are an ``int8`` array by node id. Edges' states are packed: a node's 26 take
-2 bits each of one ``uint64`` word, and the words lie in tiles of ``EDGE_TILE`` x
-``EDGE_TILE`` cells (every heading of a cell together; :func:`edge_words` sizes the
-zero-filled store). Node ids run y-fastest, so a search along the x axis visits cells
-``n_j`` ids apart: stored by node id (26 bytes a node, 416 a cell) each cell it visits
-touched a page of its own; tiled and packed a page holds four 4 x 4 tiles and the pages
-touched follow the area searched (tested: ``tests/test_lattice_edge_store.py``).
+A node's state and its edges' states share one ``uint32`` word of the *store*: the node's
+2 bits (bits 0-1), then 2 bits for each of the 13 primitives of ``HALF`` (one of each pair
+of mutually reverse primitives). The edge ``u -> v`` by primitive ``p`` is the edge
+``v -> u`` by ``REVERSE[p]``; its state is kept once, in the word of ``u`` when ``p`` is in
+``HALF`` and in the word of ``v`` otherwise (:data:`SLOT`). The words lie in tiles of ``EDGE_TILE`` x ``EDGE_TILE`` cells (every heading
+of a cell together; :func:`edge_words` sizes the zero-filled store). Node ids run
+y-fastest, so a search along the x axis visits cells ``n_j`` ids apart: stored by node
+id, each cell it visits would touch a page of its own; tiled, a page holds four 4 x 4
+tiles and the pages touched follow the area searched (tested:
+``tests/test_lattice_edge_store.py``). A node and its 26 edges take 4 bytes.
 """
 
 from __future__ import annotations
@@ -45,21 +48,30 @@ PRIMITIVES: tuple[tuple[int, int, int], ...] = tuple(
 )
 #: The index of each primitive's reverse (``PRIMITIVES[REVERSE[p]]`` undoes ``PRIMITIVES[p]``).
 REVERSE = tuple(PRIMITIVES.index((-di, -dj, -dk)) for di, dj, dk in PRIMITIVES)
-#: Side (cells) of the square tiles the edge states are stored in (module docstring).
+#: One primitive of each mutually reverse pair: the edges a node's word holds.
+HALF = tuple(p for p in range(len(PRIMITIVES)) if p < REVERSE[p])
+#: Where primitive ``p``'s edge is kept: ``SLOT[p] = s >= 0``, bits ``2 + 2 s`` of the word of
+#: the node it leaves (``p`` is ``HALF[s]``); ``s < 0``, bits ``2 + 2 (-1 - s)`` of the word of
+#: the node it reaches (``REVERSE[p]`` is ``HALF[-1 - s]``).
+SLOT = tuple(HALF.index(p) if p in HALF else -1 - HALF.index(REVERSE[p])
+             for p in range(len(PRIMITIVES)))
+#: The store's word: a node's state and its ``HALF`` of the edges' (module docstring).
+STORE_DTYPE = np.uint32
+#: Side (cells) of the square tiles the words are stored in (module docstring).
 EDGE_TILE = 4
-assert 2 * len(PRIMITIVES) <= 64  # a node's edge states fit one uint64 word
+assert 2 + 2 * len(HALF) <= 32  # a node's state and its half of the edges fit one uint32
 
 
 def edge_words(n_i: int, n_j: int, n_k: int) -> int:
-    """Words of the edge store of an ``n_i x n_j`` cell lattice with ``n_k`` headings
-    (whole tiles: up to ``EDGE_TILE - 1`` cells of padding on each axis)."""
+    """Words of the store of an ``n_i x n_j`` cell lattice with ``n_k`` headings (whole
+    tiles: up to ``EDGE_TILE - 1`` cells of padding on each axis)."""
     t = EDGE_TILE
     return -(-n_i // t) * -(-n_j // t) * t * t * n_k
 
 
 @numba.njit(cache=True, inline="always")
 def edge_word(ii: int, jj: int, k: int, n_j: int, n_k: int) -> int:
-    """The word of the edge store holding node ``(ii, jj, k)``'s edge states."""
+    """The word of the store holding node ``(ii, jj, k)``'s state (and half its edges')."""
     t = EDGE_TILE
     ti = ii // t
     tj = jj // t
@@ -67,10 +79,19 @@ def edge_word(ii: int, jj: int, k: int, n_j: int, n_k: int) -> int:
             * n_k + k)
 
 
+def node_words(u: np.ndarray, n_j: int, n_k: int) -> np.ndarray:
+    """:func:`edge_word` of int64 node ids (vectorised)."""
+    rest, k = np.divmod(np.asarray(u, dtype=np.int64), n_k)
+    ii, jj = np.divmod(rest, n_j)
+    t = EDGE_TILE
+    ti, tj = ii // t, jj // t
+    return (((ti * ((n_j + t - 1) // t) + tj) * t + (ii - ti * t)) * t + (jj - tj * t)) * n_k + k
+
+
 @numba.njit(cache=True, inline="always")
-def edge_state(store: np.ndarray, w: int, p: int) -> int:
-    """Edge ``p``'s state in word ``w`` of the edge store."""
-    return int((store[w] >> np.uint64(2 * p)) & np.uint64(3))
+def word_state(store: np.ndarray, w: int, shift: int) -> int:
+    """The 2-bit state at bit ``shift`` of word ``w`` (``shift`` 0: the node's)."""
+    return (int(store[w]) >> shift) & 3
 
 
 def check_lattice_args(
@@ -117,6 +138,7 @@ def primitive_costs(step: float, w_rot: float, dtheta: float
 @numba.njit(cache=True)
 def successor_kernel(
     u: int,
+    n_i: int,
     n_j: int,
     n_k: int,
     i_min: int,
@@ -127,9 +149,8 @@ def successor_kernel(
     step: float,
     dth: float,
     prim: np.ndarray,
-    rev: np.ndarray,
-    node_valid: np.ndarray,
-    edge_valid: np.ndarray,
+    slot: np.ndarray,
+    store: np.ndarray,
     out_ids: np.ndarray,
     out_prim: np.ndarray,
     margin: float,
@@ -141,11 +162,10 @@ def successor_kernel(
     fp: tuple,
     reach2: float,
 ) -> tuple[int, int, int]:
-    """Fill ``out_ids``/``out_prim`` with u's valid edges, checking (and caching in
-    ``node_valid`` and the edge store ``edge_valid``, module docstring) what is unknown. Returns (count, pose checks, motion
+    """Fill ``out_ids``/``out_prim`` with u's valid edges, checking (and caching in the
+    ``store``, module docstring) what is unknown. Returns (count, pose checks, motion
     checks). Poses are computed exactly as ``ObjectLattice.poses`` does; each motion is
-    checked from its lower-id end and stored for both directions."""
-    n_i = node_valid.shape[0] // (n_j * n_k)
+    checked from its lower-id end and stored once, where ``slot`` (:data:`SLOT`) says."""
     rest = u // n_k
     k = u - rest * n_k
     ii = rest // n_j
@@ -157,11 +177,11 @@ def successor_kernel(
     tu = (at + k * dth + math.pi) % two_pi - math.pi
     n_pose = 0
     n_motion = 0
-    if node_valid[u] == UNKNOWN:
-        node_valid[u] = BLOCKED + pose_free_kernel(xu, yu, tu, sd, res, width, height, fp,
-                                                   reach2)
+    if word_state(store, wu, 0) == UNKNOWN:
+        store[wu] |= np.uint32(BLOCKED + pose_free_kernel(xu, yu, tu, sd, res, width, height,
+                                                          fp, reach2))
         n_pose += 1
-    if node_valid[u] == BLOCKED:
+    if word_state(store, wu, 0) == BLOCKED:
         return 0, n_pose, n_motion
     n = 0
     for p in range(prim.shape[0]):
@@ -171,16 +191,20 @@ def successor_kernel(
             continue
         nk = (k + prim[p, 2]) % n_k
         v = (ni * n_j + nj) * n_k + nk
+        wv = edge_word(ni, nj, nk, n_j, n_k)
         xv = ax + (ni + i_min) * step
         yv = ay + (nj + j_min) * step
         tv = (at + nk * dth + math.pi) % two_pi - math.pi
-        if node_valid[v] == UNKNOWN:
-            node_valid[v] = BLOCKED + pose_free_kernel(xv, yv, tv, sd, res, width, height, fp,
-                                                       reach2)
+        if word_state(store, wv, 0) == UNKNOWN:
+            store[wv] |= np.uint32(BLOCKED + pose_free_kernel(xv, yv, tv, sd, res, width,
+                                                              height, fp, reach2))
             n_pose += 1
-        if node_valid[v] == BLOCKED:
+        if word_state(store, wv, 0) == BLOCKED:
             continue
-        if edge_state(edge_valid, wu, p) == UNKNOWN:
+        s = slot[p]
+        w = wu if s >= 0 else wv
+        shift = 2 + 2 * (s if s >= 0 else -1 - s)
+        if word_state(store, w, shift) == UNKNOWN:
             if u < v:
                 free = motion_free_kernel(
                     xu, yu, tu, xv, yv, tv, margin, reach, sd, res, width, height, fp, reach2
@@ -190,10 +214,8 @@ def successor_kernel(
                     xv, yv, tv, xu, yu, tu, margin, reach, sd, res, width, height, fp, reach2
                 )
             n_motion += 1
-            state = np.uint64(BLOCKED + free)
-            edge_valid[wu] |= state << np.uint64(2 * p)
-            edge_valid[edge_word(ni, nj, nk, n_j, n_k)] |= state << np.uint64(2 * rev[p])
-        if edge_state(edge_valid, wu, p) == FREE:
+            store[w] |= np.uint32((BLOCKED + free) << shift)
+        if word_state(store, w, shift) == FREE:
             out_ids[n] = v
             out_prim[n] = p
             n += 1

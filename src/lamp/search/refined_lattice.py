@@ -31,7 +31,7 @@ from scipy.spatial import cKDTree
 
 from lamp.geometry import se2
 from lamp.geometry.exact_space import ExactSpace
-from lamp.search.lattice import FREE, Node, ObjectLattice, VirtualNode
+from lamp.search.lattice import Node, ObjectLattice, VirtualNode
 from lamp.search.narrow import NarrowParams, narrow_poses
 
 #: Added to the metric cost of every edge that touches an extra vertex (m).
@@ -220,8 +220,7 @@ class RefinedLattice(ObjectLattice):
             extra_cost = TIGHT_LINK_COST if tight else 0.0
             if len(nodes):
                 nodes = nodes[np.asarray(self.in_model_range(q, super().poses(nodes)), bool)]
-                self._ensure_nodes(nodes)
-                nodes = nodes[self._node_valid[nodes] == FREE]
+                nodes = nodes[self._free_nodes(nodes)]
                 order = np.argsort(self.distance(q, super().poses(nodes)), kind="stable")
                 for v in self._free_links(q, [int(n) for n in nodes[order][:MAX_LATTICE_LINKS]]):
                     self._link(u, v, extra_cost)
