@@ -26,7 +26,12 @@ loop ends.
 Search (:mod:`lamp.mrmp.timed_search`): A* over (vertex, time) of the plan's graph
 (lattice nodes, the robot's own start and goal vertices' links, other goals' vertices;
 never another robot's start vertex) and knight moves between lattice nodes whose segment
-keeps the space's clearance, time in whole quanta ``q`` (the retiming's).
+keeps the space's clearance, time in whole quanta ``q`` (the retiming's). In fleets of
+more than :data:`TIMED_SIPP_FROM` robots the searches against the others' motion go over
+safe intervals instead (:mod:`lamp.mrmp.timed_sipp`: the same graph, moves and checks,
+waits of any length; a state per vertex and interval rather than per vertex and time);
+the searches as if the others were only at their last positions, or absent, stay over
+(vertex, time), where a vertex is kept at its earliest time only.
 
 Why the plan stays valid: the graph's edges are the obstacle-checked lattice edges and
 links; every move and wait of the new way is checked against the motion of every other
@@ -53,11 +58,14 @@ import numpy as np
 from lamp.mrmp.goal_distances import hval
 from lamp.mrmp.neighbours import doubled
 from lamp.mrmp.repair_hash import hash_rows
+from lamp.mrmp.safe_intervals import segment_index
 from lamp.mrmp.timed_checks import arrivals, motion_hits, with_way
 from lamp.mrmp.timed_search import TIGHT_FROM, timed_search
+from lamp.mrmp.timed_sipp import sipp_search
 
 __all__ = ["TIMED_BUDGET", "TIMED_BUDGET_MAX", "TIMED_BUDGET_ROBOTS", "TIMED_ENTRIES",
-           "TIMED_EXCHANGES", "TIMED_GROUP", "TIMED_ROUNDS", "timed_budget", "timed_repair"]
+           "TIMED_EXCHANGES", "TIMED_GROUP", "TIMED_ROUNDS", "TIMED_SIPP_FROM", "timed_budget",
+           "timed_repair"]
 
 #: States all the searches of one call may expand together (the work bound), for up to
 #: :data:`TIMED_BUDGET_ROBOTS` robots; beyond, it grows with the square of the robots
@@ -78,9 +86,32 @@ TIMED_ENTRIES = 1_000_000
 #: :data:`TIMED_BUDGET_ROBOTS` robots, where the plain search alone spends the budget
 #: in less time for as short plans, measured over 12 instances of 400 robots).
 TIMED_GROUP = 8
+#: Fleets of more robots than this search over safe intervals
+#: (:func:`lamp.mrmp.timed_sipp.sipp_search`) where the others move; smaller ones over
+#: (vertex, time) (:func:`lamp.mrmp.timed_search.timed_search`).
+TIMED_SIPP_FROM = 100
 #: Goal exchanges tried for the last robot with the robots in its way, and then with
 #: the holders of goals near its start (each; 0: none).
 TIMED_EXCHANGES = 4
+
+
+@nb.njit(cache=True)
+def _plain(segs: tuple, i: int, m: int, gr: tuple, V: int, gv0: int, hs: tuple,
+           X: np.ndarray, Y: np.ndarray, tt: np.ndarray, hh: tuple, x0: float, y0: float,
+           cs: float, ny: int, two_r: float, ends_goal: np.ndarray, q: float, target: int,
+           budget: int, ob: tuple, ways: tuple, arr: np.ndarray, tight: bool
+           ) -> tuple[np.ndarray, np.ndarray, int]:
+    """Robot i's way to goal m against the others' motion: over safe intervals with the
+    rows' segments ``segs`` (:func:`lamp.mrmp.safe_intervals.segment_index`), or over
+    (vertex, time) when ``segs`` has none; its vertices, their times and the states
+    expanded."""
+    if segs[0].shape[0] > 0:
+        pv, pt, work, _ = sipp_search(i, m, gr, V, gv0, hs, X, Y, tt, hh, x0, y0, cs, ny,
+                                      two_r, ends_goal, q, target, budget, ob, ways, segs,
+                                      tight)
+        return pv, pt, work
+    return timed_search(i, m, gr, V, gv0, hs, X, Y, tt, hh, x0, y0, cs, ny, two_r,
+                        ends_goal, q, target, budget, ob, ways, arr, 0, tight)
 
 
 @nb.njit(cache=True)
@@ -135,7 +166,7 @@ def _plan_members(members: np.ndarray, pv: np.ndarray, pt: np.ndarray, target: i
                   gr: tuple, V: int, gv0: int, hs: tuple, goal: np.ndarray, X: np.ndarray,
                   Y: np.ndarray, tt: np.ndarray, hh: tuple, x0: float, y0: float, cs: float,
                   ny: int, two_r: float, q: float, budget: int, ob: tuple, arr: np.ndarray,
-                  state: tuple) -> tuple:
+                  state: tuple, segs: tuple) -> tuple:
     """Plan the ``members`` again in turn, each to arrive before ``target``, the others'
     old motions ignored meanwhile (the first's way ``pv, pt`` when given); all or none
     are kept. ``state = (rep, WX, WY, WT, wptr, wrob, box, nw)``; returns it updated,
@@ -152,9 +183,9 @@ def _plan_members(members: np.ndarray, pv: np.ndarray, pt: np.ndarray, target: i
     for j in members:
         if pv.shape[0] == 0:
             ways = (rep, WX, WY, WT, wptr[: nw + 1], wrob[:nw], box[:nw])
-            pv, pt, w = timed_search(j, goal[j], gr, V, gv0, hs, X, Y, tt, hh, x0, y0, cs,
-                                     ny, two_r, ends_goal, q, target, budget - work, ob, ways,
-                                     arr, 0, members.shape[0] > 1)
+            pv, pt, w = _plain(segs, j, goal[j], gr, V, gv0, hs, X, Y, tt, hh, x0, y0, cs,
+                               ny, two_r, ends_goal, q, target, budget - work, ob, ways, arr,
+                               members.shape[0] > 1)
             work += w
             if pv.shape[0] == 0:
                 rep[:] = rep0
@@ -173,18 +204,18 @@ def _one_round(i: int, target: int, gr: tuple, V: int, gv0: int, hs: tuple,
                goal: np.ndarray, X: np.ndarray, Y: np.ndarray, tt: np.ndarray, hh: tuple,
                x0: float, y0: float, cs: float, ny: int, two_r: float, q: float,
                budget: int, ob: tuple, arr: np.ndarray, state: tuple, group: int,
-               exchanges: int) -> tuple:
+               exchanges: int, segs: tuple) -> tuple:
     """Robot i planned again to arrive before ``target`` (:func:`_rounds`): alone, else
     (``group > 0``) alone with the lower-bound heuristic, with the robots in its way, or
     exchanging goals with one of them, then with a holder of a goal near its start
     (:func:`_near_holders`); nothing more is tried when it has no such way even with no
-    other robot about. Returns the state, whether it was planned, and the states
-    expanded."""
+    other robot about; ``segs``: :func:`_plain`'s. Returns the state, whether it was
+    planned, and the states expanded."""
     ends_goal = goal >= 0
     rep, WX, WY, WT, wptr, wrob, box, nw = state
     ways = (rep, WX, WY, WT, wptr[: nw + 1], wrob[:nw], box[:nw])
-    pv, pt, work = timed_search(i, goal[i], gr, V, gv0, hs, X, Y, tt, hh, x0, y0, cs, ny,
-                                two_r, ends_goal, q, target, budget, ob, ways, arr)
+    pv, pt, work = _plain(segs, i, goal[i], gr, V, gv0, hs, X, Y, tt, hh, x0, y0, cs, ny,
+                          two_r, ends_goal, q, target, budget, ob, ways, arr, False)
     fv, ft = pv, pt
     if pv.shape[0] == 0 and group > 0:
         # no earlier way even with nobody about: neither alone nor in a group
@@ -196,15 +227,16 @@ def _one_round(i: int, target: int, gr: tuple, V: int, gv0: int, hs: tuple,
             return state, False, work
         # the plain heuristic prunes at once the ways only knight moves make early enough
         if hval(goal[i], V + i, gr, V, gv0, hs) >= TIGHT_FROM * target * q:
-            pv, pt, w = timed_search(i, goal[i], gr, V, gv0, hs, X, Y, tt, hh, x0, y0, cs,
-                                     ny, two_r, ends_goal, q, target, budget - work, ob, ways,
-                                     arr, 0, True)
+            pv, pt, w = _plain(segs, i, goal[i], gr, V, gv0, hs, X, Y, tt, hh, x0, y0, cs,
+                               ny, two_r, ends_goal, q, target, budget - work, ob, ways, arr,
+                               True)
             work += w
     me = np.full(1, i, np.int64)
     tried = np.zeros(goal.shape[0], np.bool_)  # exchange partners tried
     if pv.shape[0] > 0:
         state, ok, w = _plan_members(me, pv, pt, target, gr, V, gv0, hs, goal, X, Y, tt, hh,
-                                     x0, y0, cs, ny, two_r, q, budget - work, ob, arr, state)
+                                     x0, y0, cs, ny, two_r, q, budget - work, ob, arr, state,
+                                     segs)
         return state, ok, work + w
     for alone in range(1, 3 if group > 0 else 1):
         if work >= budget:
@@ -225,21 +257,21 @@ def _one_round(i: int, target: int, gr: tuple, V: int, gv0: int, hs: tuple,
         if others.shape[0] <= group:
             state, ok, w = _plan_members(np.concatenate((me, others)), pv[:0], pt[:0], target,
                                          gr, V, gv0, hs, goal, X, Y, tt, hh, x0, y0, cs, ny,
-                                         two_r, q, budget - work, ob, arr, state)
+                                         two_r, q, budget - work, ob, arr, state, segs)
             work += w
             if ok:
                 return state, True, work
         tried[others[:exchanges]] = True
         state, ok, w = _exchange(i, others[:exchanges], target, gr, V, gv0, hs, goal, X, Y,
                                  tt, hh, x0, y0, cs, ny, two_r, q, budget - work, ob, arr,
-                                 state)
+                                 state, segs)
         work += w
         if ok:
             return state, True, work
     if group > 0 and exchanges > 0 and work < budget:
         near = _near_holders(i, goal, gr[0], V, gv0, target * q, tried, exchanges)
         state, ok, w = _exchange(i, near, target, gr, V, gv0, hs, goal, X, Y, tt, hh, x0,
-                                 y0, cs, ny, two_r, q, budget - work, ob, arr, state)
+                                 y0, cs, ny, two_r, q, budget - work, ob, arr, state, segs)
         return state, ok, work + w
     return state, False, work
 
@@ -248,7 +280,7 @@ def _one_round(i: int, target: int, gr: tuple, V: int, gv0: int, hs: tuple,
 def _exchange(i: int, js: np.ndarray, target: int, gr: tuple, V: int, gv0: int, hs: tuple,
               goal: np.ndarray, X: np.ndarray, Y: np.ndarray, tt: np.ndarray, hh: tuple,
               x0: float, y0: float, cs: float, ny: int, two_r: float, q: float, budget: int,
-              ob: tuple, arr: np.ndarray, state: tuple) -> tuple:
+              ob: tuple, arr: np.ndarray, state: tuple, segs: tuple) -> tuple:
     """Robot i exchanges goals with each of ``js`` in turn, both planned again to arrive
     before ``target`` (:func:`_plan_members`), until one exchange is kept (``goal``
     updated in place). Returns the state, whether one was kept, and the states expanded."""
@@ -260,7 +292,7 @@ def _exchange(i: int, js: np.ndarray, target: int, gr: tuple, V: int, gv0: int, 
         state, ok, w = _plan_members(np.array([i, j]), np.zeros(0, np.int64),
                                      np.zeros(0, np.int64), target, gr, V, gv0, hs, goal, X,
                                      Y, tt, hh, x0, y0, cs, ny, two_r, q, budget - work, ob,
-                                     arr, state)
+                                     arr, state, segs)
         work += w
         if ok:
             return state, True, work
@@ -294,7 +326,8 @@ def _near_holders(i: int, goal: np.ndarray, coords: np.ndarray, V: int, gv0: int
 def _rounds(X: np.ndarray, Y: np.ndarray, tt: np.ndarray, gr: tuple, V: int, gv0: int,
             hs: tuple, goal: np.ndarray, two_r: float, q: float, cs: float,
             max_spacing: float, budget: int, rounds: int, ob: tuple, group: int,
-            exchanges: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, int, int, int]:
+            exchanges: int, sipp: bool
+            ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int, int, int]:
     """The loop of :func:`timed_repair` on the rows ``X, Y`` (times ``tt``, metres):
     (rows, times, ways found, states expanded, rounds that planned several robots
     together); ``goal`` is updated in place by goal
@@ -306,13 +339,17 @@ def _rounds(X: np.ndarray, Y: np.ndarray, tt: np.ndarray, gr: tuple, V: int, gv0
     planned again after it, each to arrive before the same target, all or none kept;
     else it exchanges goals with one of them (the ``exchanges`` latest), or with one of
     the ``exchanges`` holders of goals near its start, both planned again. Robots tied
-    with the last are tried in turn before the loop ends."""
+    with the last are tried in turn before the loop ends. ``sipp``: search over safe
+    intervals where the others move (:func:`_plain`)."""
     coords = gr[0]
     N = X.shape[1]
     x0, y0 = coords[:, 0].min(), coords[:, 1].min()
     x1, y1 = coords[:, 0].max(), coords[:, 1].max()
     arr = arrivals(X, Y, tt)
     hh, ny = hash_rows(X, Y, x0, y0, x1, y1, cs, True)
+    # the rows' segments for the safe intervals; none: the searches over (vertex, time)
+    segs = segment_index(X, Y, tt, two_r, x0, y0, x1, y1) if sipp else \
+        segment_index(X[:0], Y[:0], tt[:0], two_r, x0, y0, x1, y1)
     cap = rounds * (group + 2)
     state = (np.zeros(N, np.bool_), np.empty(256), np.empty(256), np.empty(256),
              np.zeros(cap + 1, np.int64), np.full(cap, -1, np.int64), np.empty((cap, 4)), 0)
@@ -329,7 +366,7 @@ def _rounds(X: np.ndarray, Y: np.ndarray, tt: np.ndarray, gr: tuple, V: int, gv0
         nw0 = state[7]
         state, ok, w = _one_round(i, target, gr, V, gv0, hs, goal, X, Y, tt, hh, x0, y0,
                                   cs, ny, two_r, q, budget - work, ob, arr, state, group,
-                                  exchanges)
+                                  exchanges, segs)
         work += w
         if ok:
             groups += state[7] - nw0 > 1
@@ -355,16 +392,18 @@ def timed_repair(rows: np.ndarray, times: np.ndarray, gr: tuple, V: int, gv0: in
                  hs: tuple, goal: np.ndarray, two_r: float, quantum: float,
                  max_move: float, max_spacing: float, geometry, workspace: tuple[float, float],
                  need: float, budget: int | None = None, rounds: int = TIMED_ROUNDS,
-                 group: int | None = None, exchanges: int = TIMED_EXCHANGES
-                 ) -> tuple[np.ndarray, np.ndarray, int, int, int]:
+                 group: int | None = None, exchanges: int = TIMED_EXCHANGES,
+                 sipp: bool | None = None) -> tuple[np.ndarray, np.ndarray, int, int, int]:
     """The retimed ``rows`` ((N, R, 2), at ``times``, metres at unit speed) with their
     last robots planned again in time (module docstring) over the graph ``gr`` (goal
     distances ``hs``, robot i's start vertex ``V + i``, goal m's ``gv0 + m``);
     ``quantum``: the time step of the new ways (metres), ``max_move``: the graph's
     longest edge; ``geometry``, ``workspace``, ``need``: the obstacles, the workspace and
     the clearance a knight move keeps (the space's threshold); ``budget``, ``group``:
-    None for the defaults by fleet size (:func:`timed_budget`, :data:`TIMED_GROUP`).
-    Plans of more than :data:`TIMED_ENTRIES` rows times robots are returned as they are. Returns the rows,
+    None for the defaults by fleet size (:func:`timed_budget`, :data:`TIMED_GROUP`);
+    ``sipp``: whether the searches against the others' motion go over safe intervals
+    (None: for more than :data:`TIMED_SIPP_FROM` robots). Plans of more than
+    :data:`TIMED_ENTRIES` rows times robots are returned as they are. Returns the rows,
     each robot's goal (``goal``, changed by the exchanges), the ways planned, the states
     expanded and the rounds that planned several robots together."""
     from lamp.mrmp.obstacle_grid import get_grid
@@ -375,6 +414,8 @@ def timed_repair(rows: np.ndarray, times: np.ndarray, gr: tuple, V: int, gv0: in
         budget = timed_budget(rows.shape[0])
     if group is None:
         group = TIMED_GROUP if rows.shape[0] > TIMED_BUDGET_ROBOTS else 0
+    if sipp is None:
+        sipp = rows.shape[0] > TIMED_SIPP_FROM
     if rows.shape[0] < 2 or rows.shape[1] < 2 or rows.shape[0] * rows.shape[1] > TIMED_ENTRIES:
         return rows, goal, 0, 0, 0
     X = np.ascontiguousarray(rows[:, :, 0].T)
@@ -390,7 +431,7 @@ def timed_repair(rows: np.ndarray, times: np.ndarray, gr: tuple, V: int, gv0: in
     X, Y, _, done, work, groups = _rounds(X, Y, np.asarray(times, np.float64), gr, V, gv0,
                                           hs, goal, float(two_r), float(quantum), cs,
                                           float(max_spacing), int(budget), int(rounds), ob,
-                                          int(group), int(exchanges))
+                                          int(group), int(exchanges), bool(sipp))
     if done == 0:  # no way written: the rows as they were
         return rows, goal, done, work, groups
     # filled in place: a third of np.stack's time (0.2 against 0.65 ms at 400 robots)

@@ -30,7 +30,8 @@ from lamp.mrmp.neighbours import doubled
 from lamp.mrmp.obstacle_grid import grid_clear_segments
 from lamp.mrmp.timed_checks import free_time, gather_rows, motion_near, rest_clear, row_at
 
-__all__ = ["KNIGHT", "OCTILE", "OCTILE_BOUND", "TIGHT_FROM", "TIMED_WAIT", "timed_search"]
+__all__ = ["KNIGHT", "OCTILE", "OCTILE_BOUND", "TIGHT_FROM", "TIMED_WAIT", "heap_pop",
+           "heap_push", "move_to", "timed_search"]
 
 #: Quanta of one wait action.
 TIMED_WAIT = 2
@@ -55,7 +56,7 @@ TIGHT_FROM = 0.95
 
 
 @nb.njit(cache=True, inline="always")
-def _push(hf: np.ndarray, ht: np.ndarray, hi: np.ndarray, n: int, f: float, t: int,
+def heap_push(hf: np.ndarray, ht: np.ndarray, hi: np.ndarray, n: int, f: float, t: int,
           idx: int) -> None:
     """Binary min-heap on (f, -t): the latest state first among equal f."""
     c = n
@@ -69,7 +70,7 @@ def _push(hf: np.ndarray, ht: np.ndarray, hi: np.ndarray, n: int, f: float, t: i
 
 
 @nb.njit(cache=True, inline="always")
-def _pop(hf: np.ndarray, ht: np.ndarray, hi: np.ndarray, n: int) -> int:
+def heap_pop(hf: np.ndarray, ht: np.ndarray, hi: np.ndarray, n: int) -> int:
     """Remove the heap's top (``n`` entries before); returns its state index."""
     top = hi[0]
     n -= 1
@@ -131,7 +132,7 @@ def _remember(tk: np.ndarray, tv: np.ndarray, nseen: int, slot: int, key: int, s
 
 
 @nb.njit(cache=True, inline="always")
-def _move(e: int, v: int, V: int, gv0: int, deg: int, alone: int, nbr: np.ndarray,
+def move_to(e: int, v: int, V: int, gv0: int, deg: int, alone: int, nbr: np.ndarray,
           xptr: np.ndarray, xidx: np.ndarray, va: np.ndarray, vb: np.ndarray,
           ids: np.ndarray, coords: np.ndarray, ob: tuple) -> int:
     """Where move ``e`` from vertex ``v`` leads (-1: nowhere): 0 a wait (none when
@@ -207,7 +208,7 @@ def timed_search(i: int, m: int, gr: tuple, V: int, gv0: int, hs: tuple, X: np.n
     div = q * (OCTILE_BOUND if tight else OCTILE)
     sv[0], st[0], sp[0] = V + i, 0, -1
     n = 1
-    _push(hf, ht, hi, 0, 0.0, 0, 0)
+    heap_push(hf, ht, hi, 0, 0.0, 0, 0)
     nh = 1
     span_t = np.int64(target) + 1
     # the robots near the state's vertex, row by row, gathered once for all its moves
@@ -217,7 +218,7 @@ def timed_search(i: int, m: int, gr: tuple, V: int, gv0: int, hs: tuple, X: np.n
     work = 0
     found = -1
     while nh > 0 and work < budget:
-        s = _pop(hf, ht, hi, nh)
+        s = heap_pop(hf, ht, hi, nh)
         nh -= 1
         v = sv[s]
         t = st[s]
@@ -230,7 +231,7 @@ def timed_search(i: int, m: int, gr: tuple, V: int, gv0: int, hs: tuple, X: np.n
         nrows = 0
         deg = 1 + (8 if v < V else 0) + (xptr[v + 1] - xptr[v])
         for e in range(deg + (8 if v < V else 0)):
-            u = _move(e, v, V, gv0, deg, alone, nbr, xptr, xidx, va, vb, ids, coords, ob)
+            u = move_to(e, v, V, gv0, deg, alone, nbr, xptr, xidx, va, vb, ids, coords, ob)
             if u < 0:
                 continue
             bx, by = coords[u, 0], coords[u, 1]
@@ -266,7 +267,7 @@ def timed_search(i: int, m: int, gr: tuple, V: int, gv0: int, hs: tuple, X: np.n
             if nh == hf.shape[0]:
                 hf, ht, hi = doubled(hf, nh), doubled(ht, nh), doubled(hi, nh)
             sv[n], st[n], sp[n] = u, t2, s
-            _push(hf, ht, hi, nh, f, t2, n)
+            heap_push(hf, ht, hi, nh, f, t2, n)
             nh += 1
             n += 1
     if found < 0:
