@@ -349,7 +349,7 @@ def _rounds(X: np.ndarray, Y: np.ndarray, tt: np.ndarray, gr: tuple, V: int, gv0
     hh, ny = hash_rows(X, Y, x0, y0, x1, y1, cs, True)
     # the rows' segments for the safe intervals; none: the searches over (vertex, time)
     segs = segment_index(X, Y, tt, two_r, x0, y0, x1, y1) if sipp else \
-        segment_index(X[:0], Y[:0], tt[:0], two_r, x0, y0, x1, y1)
+        segment_index(X[:0], Y[:0], tt[:0], two_r, x0, y0, x0, y0)
     cap = rounds * (group + 2)
     state = (np.zeros(N, np.bool_), np.empty(256), np.empty(256), np.empty(256),
              np.zeros(cap + 1, np.int64), np.full(cap, -1, np.int64), np.empty((cap, 4)), 0)
