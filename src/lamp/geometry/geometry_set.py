@@ -87,6 +87,24 @@ class GeometrySet:
         out.ptr = np.concatenate([a.ptr, b.ptr[1:] + a.ptr[-1]]).astype(np.int64)
         return out
 
+    def inserted(self, other: GeometrySet, circles_before: int, polygons_before: int
+                 ) -> GeometrySet:
+        """This set with ``other``'s circles placed after its first ``circles_before``
+        circles and ``other``'s polygons after its first ``polygons_before`` polygons:
+        ``GeometrySet(obs[:i] + new + obs[i:])`` from ``GeometrySet(obs)`` and
+        ``GeometrySet(new)``, array for array, given the circles and polygons in
+        ``obs[:i]``."""
+        c, p = circles_before, polygons_before
+        v = int(self.ptr[p])
+        out = GeometrySet(())
+        out.circles = np.ascontiguousarray(np.concatenate(
+            [self.circles[:c], other.circles, self.circles[c:]]))
+        out.verts = np.ascontiguousarray(np.concatenate(
+            [self.verts[:v], other.verts, self.verts[v:]]))
+        out.ptr = np.concatenate([self.ptr[:p + 1], other.ptr[1:] + v,
+                                  self.ptr[p + 1:] + len(other.verts)]).astype(np.int64)
+        return out
+
     @property
     def n_polygons(self) -> int:
         return len(self.ptr) - 1

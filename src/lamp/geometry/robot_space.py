@@ -65,7 +65,7 @@ from lamp.geometry.clearance_layers import (
     window_nodes,
 )
 from lamp.geometry.geometry_set import GeometrySet, as_obstacle, obstacle_from_dict
-from lamp.geometry.primitives import Obstacle
+from lamp.geometry.primitives import Circle, Obstacle
 from lamp.geometry.waiting_spots import nearest_free_spot
 
 if TYPE_CHECKING:  # the scene layer builds on geometry, not the other way round
@@ -242,6 +242,34 @@ class RobotSpace:
         lru_put(_SPACE_CACHE, key, space, _SPACE_CACHE_SIZE, _SPACE_CACHE_BYTES,
                  lambda sp: sp.nbytes)
         return space
+
+    def with_obstacle(self, obstacle: Obstacle, at: int) -> RobotSpace:
+        """This space with ``obstacle`` laid over it as overlay obstacle ``at``: the space
+        ``RobotSpace(workspace, base, radius, margin, overlay[:at] + (obstacle,) +
+        overlay[at:], resolution, cap, window)`` is, field value for value, geometry array
+        for array and with its key (``tests/test_robot_space_layers.py``), built from a
+        copy of this field (a node's value is the least over the obstacles, whatever their
+        order) instead of the static tiles and every overlay obstacle again."""
+        over = self.overlay_obstacles
+        if not 0 <= at <= len(over):
+            raise ValueError(f"at must be in [0, {len(over)}], got {at!r}")
+        out = object.__new__(RobotSpace)
+        out.__dict__.update(self.__dict__)
+        own = GeometrySet((obstacle,))
+        field = self.field.copy()
+        fill_field(field, self.resolution, self.cap, own.circles, own.verts, own.ptr,
+                   *self.origin)
+        field.setflags(write=False)
+        out.field = field
+        base_circles = len(self.geometry.circles) - sum(
+            isinstance(o.shape, Circle) for o in over)
+        circles = base_circles + sum(isinstance(o.shape, Circle) for o in over[:at])
+        out.geometry = self.geometry.inserted(own, circles, self.geometry.n_polygons - sum(
+            not isinstance(o.shape, Circle) for o in over[at:]))
+        out.overlay_obstacles = over[:at] + (obstacle,) + over[at:]
+        out.key = self.key[:2] + (out.overlay_obstacles,) + self.key[3:]
+        out.derived = Derived()
+        return out
 
     # ---- properties ---------------------------------------------------------------
 

@@ -32,7 +32,7 @@ from lamp.planners.config import PlannerConfig
 from lamp.planners.robot_routing import GspiRouter
 from lamp.planners.task_stats import TaskStats
 from lamp.planners.verifier import Verifier
-from lamp.scene.model import Scene, Shape
+from lamp.scene.model import Obstacle, Scene, Shape
 from lamp.search.landmark import route_length
 
 #: Margin (m) of a robot-space window around the object and the robots; more than the
@@ -80,6 +80,7 @@ class ManipulationTask:
         self.object_space = ObjectSpace.from_scene(self.scene, self.index, self.object_poses)
         self._exact_space: ExactSpace | None = None
         self._spaces: OrderedDict[tuple, RobotSpace] = OrderedDict()
+        self._layer: tuple[tuple, RobotSpace] | None = None  # _space_with_object's
         #: This object's ``Verifier``: the model, this task as its ``RobotValidity``, Gspi
         #: over this scene, and the config's Verify parameters. It owns the proposal cache
         #: and the counters (``stats``).
@@ -97,6 +98,7 @@ class ManipulationTask:
         a fleet's finished objects piled up so (``tests/test_verify.py``). ``stats``
         stays readable."""
         self._spaces.clear()
+        self._layer = None
         self._exact_space = None
         self.verifier.robots = None  # type: ignore[assignment]
 
@@ -181,8 +183,23 @@ class ManipulationTask:
         ``window`` (default: the whole map). Cached, bounded in entries and bytes."""
         key = (tuple(np.round(np.asarray(q_object, float), 4)),
                None if window is None else tuple(float(v) for v in window))
-        return self._cached(key, lambda: RobotSpace.from_scene(
-            self.scene, object_poses=self.poses_with(q_object), window=window))
+        return self._cached(key, lambda: self._space_with_object(q_object, window))
+
+    def _space_with_object(self, q_object: np.ndarray,
+                           window: tuple[float, float, float, float] | None) -> RobotSpace:
+        """:meth:`robot_space_at`'s space, built. Over a window: the space without the
+        object there (kept for the last window asked: a plan's Verify calls ask one window
+        after another) with the object laid over it, ``RobotSpace.with_obstacle``, the
+        space ``RobotSpace.from_scene`` builds with the object at ``q_object``."""
+        if window is None:
+            return RobotSpace.from_scene(self.scene, object_poses=self.poses_with(q_object))
+        if self._layer is None or self._layer[0] != window:
+            self._layer = (window, RobotSpace.from_scene(
+                self.scene, object_poses=self.object_poses, exclude_objects=(self.index,),
+                window=window))
+        at = len(self.scene.obstacles) - len(self.scene.fixed_obstacles) + self.index
+        pose = tuple(float(v) for v in np.asarray(q_object, float).reshape(3))
+        return self._layer[1].with_obstacle(Obstacle(self.shape, pose), at)
 
     def _cached(self, key: tuple, build: Callable[[], RobotSpace]) -> RobotSpace:
         """The robot space cached under ``key``, built by ``build`` on a miss; the least
