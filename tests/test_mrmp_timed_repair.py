@@ -32,6 +32,16 @@ R = 0.05
 SPACING = 0.02
 
 
+def _way_of_robot_1(X, Y, tt):
+    """The ways table of ``timed_checks`` with robot 1's rows as its one repaired way."""
+    rows, n = X.shape
+    rep = np.zeros(n, np.bool_)
+    rep[1] = True
+    return (rep, X[:, 1].copy(), Y[:, 1].copy(), tt.copy(),
+            np.array([0, rows], np.int64), np.array([1], np.int64),
+            np.array([[X[:, 1].min(), X[:, 1].max(), Y[:, 1].min(), Y[:, 1].max()]]))
+
+
 def _pair_ok(a, b, c, d, two_r=2 * R) -> bool:
     """Two robots moving a->b and c->d over the same span: their closest approach (closed
     form) is at least ``min(2r, distance at the span's start)``."""
@@ -135,13 +145,7 @@ def test_motion_near_gives_motion_clears_answers(seed, n, rows, as_way, split) -
     goal_ends = rng.random() < 0.5
     ends = rng.random(n) < 0.5 if goal_ends else np.zeros(n, np.bool_)
     end_goal = goal_ends and bool(rng.random() < 0.5)
-    ways = _no_ways(n)
-    if as_way:
-        rep = np.zeros(n, np.bool_)
-        rep[1] = True
-        ways = (rep, X[:, 1].copy(), Y[:, 1].copy(), tt.copy(),
-                np.array([0, rows], np.int64), np.array([1], np.int64),
-                np.array([[X[:, 1].min(), X[:, 1].max(), Y[:, 1].min(), Y[:, 1].max()]]))
+    ways = _way_of_robot_1(X, Y, tt) if as_way else _no_ways(n)
     r0, r_end = row_at(tt, t0), row_at(tt, t1)
     gk = np.empty(1, np.int64)
     gptr = np.zeros(rows + 1, np.int64)

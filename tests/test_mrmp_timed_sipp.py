@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import functools
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -17,7 +16,15 @@ from fleet_checker import check_fleet_plan
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from mrmp_checker import check_plan
-from test_mrmp_timed_repair import _blocked_by, _makespan, _random_rows
+from test_mrmp_timed_repair import (
+    MAPF,
+    SPACING,
+    R,
+    _blocked_by,
+    _makespan,
+    _random_rows,
+    _way_of_robot_1,
+)
 
 import lamp.mrmp.gspi as gspi
 from lamp.mrmp import plan_paths
@@ -36,9 +43,6 @@ from lamp.mrmp.timed_sipp import (
 )
 from lamp.scene.mapf import load_grid_map, random_instance
 
-MAPF = Path(__file__).resolve().parent / "data" / "mapf"
-R = 0.05
-SPACING = 0.02
 CS = 2 * R + 0.04 + 2 * SPACING + 1e-6
 
 
@@ -91,13 +95,7 @@ def test_blocked_waits_match_the_motion_check(seed, n, rows, as_way, t_lo) -> No
     q = float(rng.uniform(0.002, 0.01))
     T = int(tt[-1] / q) + 4 - t_lo
     hh, ny = hash_rows(X, Y, -0.5, -0.5, 1.5, 1.5, CS, True)
-    ways = _no_ways(n)
-    if as_way:
-        rep = np.zeros(n, np.bool_)
-        rep[1] = True
-        ways = (rep, X[:, 1].copy(), Y[:, 1].copy(), tt.copy(),
-                np.array([0, rows], np.int64), np.array([1], np.int64),
-                np.array([[X[:, 1].min(), X[:, 1].max(), Y[:, 1].min(), Y[:, 1].max()]]))
+    ways = _way_of_robot_1(X, Y, tt) if as_way else _no_ways(n)
     segs = segment_index(X, Y, tt, 2 * R, -0.5, -0.5, 1.5, 1.5)
     blk = np.zeros(max(T, 1), np.bool_)
     ins = np.zeros(max(T, 1), np.bool_)
