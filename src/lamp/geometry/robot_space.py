@@ -261,11 +261,10 @@ class RobotSpace:
                    *self.origin)
         field.setflags(write=False)
         out.field = field
-        base_circles = len(self.geometry.circles) - sum(
-            isinstance(o.shape, Circle) for o in over)
-        circles = base_circles + sum(isinstance(o.shape, Circle) for o in over[:at])
-        out.geometry = self.geometry.inserted(own, circles, self.geometry.n_polygons - sum(
-            not isinstance(o.shape, Circle) for o in over[at:]))
+        after = sum(isinstance(o.shape, Circle) for o in over[at:])  # circles after it
+        out.geometry = self.geometry.inserted(
+            own, len(self.geometry.circles) - after,
+            self.geometry.n_polygons - (len(over) - at - after))
         out.overlay_obstacles = over[:at] + (obstacle,) + over[at:]
         out.key = self.key[:2] + (out.overlay_obstacles,) + self.key[3:]
         out.derived = Derived()

@@ -57,7 +57,7 @@ TIGHT_FROM = 0.95
 
 @nb.njit(cache=True, inline="always")
 def heap_push(hf: np.ndarray, ht: np.ndarray, hi: np.ndarray, n: int, f: float, t: int,
-          idx: int) -> None:
+              idx: int) -> None:
     """Binary min-heap on (f, -t): the latest state first among equal f."""
     c = n
     while c > 0:
@@ -133,8 +133,8 @@ def _remember(tk: np.ndarray, tv: np.ndarray, nseen: int, slot: int, key: int, s
 
 @nb.njit(cache=True, inline="always")
 def move_to(e: int, v: int, V: int, gv0: int, deg: int, alone: int, nbr: np.ndarray,
-          xptr: np.ndarray, xidx: np.ndarray, va: np.ndarray, vb: np.ndarray,
-          ids: np.ndarray, coords: np.ndarray, ob: tuple) -> int:
+            xptr: np.ndarray, xidx: np.ndarray, va: np.ndarray, vb: np.ndarray,
+            ids: np.ndarray, coords: np.ndarray, ob: tuple) -> int:
     """Where move ``e`` from vertex ``v`` leads (-1: nowhere): 0 a wait (none when
     ``alone``: there a wait never arrives earlier), 1-8 the lattice neighbours, then the
     vertex's links (none to another goal), then the knight moves (from ``deg`` on)."""

@@ -7,18 +7,18 @@ whose arguments are malformed) with a ValueError naming the argument;
 :func:`primitive_costs` gives each primitive's cost and the farthest one's reach.
 :func:`successor_kernel` lists a node's valid edges, checking and caching
 (``UNKNOWN``/``BLOCKED``/``FREE``) only what is not known yet; each motion is checked once,
-from its lower-id end, and stored for both directions.
+from its lower-id end, and kept once.
 
 A node's state and its edges' states share one ``uint32`` word of the *store*: the node's
 2 bits (bits 0-1), then 2 bits for each of the 13 primitives of ``HALF`` (one of each pair
 of mutually reverse primitives). The edge ``u -> v`` by primitive ``p`` is the edge
 ``v -> u`` by ``REVERSE[p]``; its state is kept once, in the word of ``u`` when ``p`` is in
-``HALF`` and in the word of ``v`` otherwise (:data:`SLOT`). The words lie in tiles of ``EDGE_TILE`` x ``EDGE_TILE`` cells (every heading
-of a cell together; :func:`edge_words` sizes the zero-filled store). Node ids run
-y-fastest, so a search along the x axis visits cells ``n_j`` ids apart: stored by node
-id, each cell it visits would touch a page of its own; tiled, a page holds four 4 x 4
-tiles and the pages touched follow the area searched (tested:
-``tests/test_lattice_edge_store.py``). A node and its 26 edges take 4 bytes.
+``HALF`` and in the word of ``v`` otherwise (:data:`SLOT`). The words lie in tiles of
+``EDGE_TILE`` x ``EDGE_TILE`` cells (every heading of a cell together; :func:`edge_words`
+sizes the zero-filled store). Node ids run y-fastest, so a search along the x axis visits
+cells ``n_j`` ids apart: stored by node id, each cell it visits would touch a page of its
+own; tiled, a page holds four 4 x 4 tiles and the pages touched follow the area searched
+(tested: ``tests/test_lattice_edge_store.py``). A node and its 26 edges take 4 bytes.
 """
 
 from __future__ import annotations
@@ -69,9 +69,9 @@ def edge_words(n_i: int, n_j: int, n_k: int) -> int:
     return -(-n_i // t) * -(-n_j // t) * t * t * n_k
 
 
-@numba.njit(cache=True, inline="always")
-def edge_word(ii: int, jj: int, k: int, n_j: int, n_k: int) -> int:
-    """The word of the store holding node ``(ii, jj, k)``'s state (and half its edges')."""
+def _word(ii: ArrayLike, jj: ArrayLike, k: ArrayLike, n_j: int, n_k: int) -> ArrayLike:
+    """The word of the store holding node ``(ii, jj, k)``'s state (and half its edges'):
+    of ints, an int; of int64 arrays, an array."""
     t = EDGE_TILE
     ti = ii // t
     tj = jj // t
@@ -79,13 +79,15 @@ def edge_word(ii: int, jj: int, k: int, n_j: int, n_k: int) -> int:
             * n_k + k)
 
 
+#: :func:`_word` compiled, for the kernels.
+edge_word = numba.njit(cache=True, inline="always")(_word)
+
+
 def node_words(u: np.ndarray, n_j: int, n_k: int) -> np.ndarray:
     """:func:`edge_word` of int64 node ids (vectorised)."""
     rest, k = np.divmod(np.asarray(u, dtype=np.int64), n_k)
     ii, jj = np.divmod(rest, n_j)
-    t = EDGE_TILE
-    ti, tj = ii // t, jj // t
-    return (((ti * ((n_j + t - 1) // t) + tj) * t + (ii - ti * t)) * t + (jj - tj * t)) * n_k + k
+    return _word(ii, jj, k, n_j, n_k)
 
 
 @numba.njit(cache=True, inline="always")
