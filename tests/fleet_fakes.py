@@ -22,6 +22,7 @@ def fleet_at_starts(scene: Any, robot_positions: np.ndarray | None = None,
                       float)
     poses = np.array([o.start for o in scene.objects])
     executor = SimpleNamespace(object_poses=poses, true_object_poses=poses,
-                               robot_positions=robots, failed={}, disturbed=False)
+                               robot_positions=robots, failed={}, disturbed=False,
+                               pushes_tracked=True)
     return Fleet(scene, executor, lambda f, k: None, lambda *a: None,
                  config=FleetConfig(**settings))

@@ -31,7 +31,7 @@ from lamp.fleet.regions import (
     swept,
 )
 from lamp.fleet.segments import Segment, on_grid
-from lamp.fleet.spacetime import compatible
+from lamp.fleet.spacetime import PUSH_LEAD, PUSH_SPEEDUP, compatible
 from lamp.fleet.teams import (
     GROW_REACH,
     MIN_TEAM,
@@ -407,18 +407,27 @@ def _segment(index: int, start_xy, rows: np.ndarray, poses: np.ndarray, cursor: 
     return Segment(index, list(range(len(rows))), rows, poses, None, BOX, R, cursor=cursor)
 
 
-def _brute_force_clear(a: Segment, b: Segment) -> bool:
+def _brute_force_clear(a: Segment, b: Segment, seen: np.ndarray | None = None) -> bool:
     """Row by row: robots (holding their last row) at least 2R + 2*ROBOT_MARGIN apart, and
     each robot ROBOT_MARGIN clear of the other's object wherever it may be (its first
-    pose until a robot may touch it, the planned poses while its segment runs, the last
-    one after), and the two objects apart."""
+    pose until a robot may touch it, the planned poses while its segment runs, cut to
+    where it can get from ``seen`` when given, the last one after), and the two objects
+    apart."""
     n = max(a.remaining, b.remaining)
     def at(seg, t):
         return seg.rows[:, min(seg.cursor + t, seg.rows.shape[1] - 1)]
+    def reach(seg, t):  # PUSH_SPEEDUP x its farthest robot's way from the last row run
+        way = [np.max(np.linalg.norm(at(seg, u) - at(seg, u - 1), axis=1))
+               for u in range(1 - min(seg.cursor, 1), t + 1)]
+        return PUSH_SPEEDUP * sum(way) + PUSH_LEAD
     def obj(seg, t):  # at its first pose until touched, along its motion, at its last
         poses = (seg.poses[:1] if seg.cursor + t < seg.touch else
                  seg.poses if t < seg.remaining else seg.poses[-1:])
-        return footprints(seg.shape, poses, OBJECT_MARGIN)
+        region = footprints(seg.shape, poses, OBJECT_MARGIN)
+        if seen is None or not seg.cursor + t >= seg.touch or not t < seg.remaining:
+            return region
+        return region.intersection(to_shapely(seg.shape, seen[seg.index]).buffer(
+            reach(seg, t), quad_segs=64))
     for t in range(n + 1):
         if obj(a, t).intersects(obj(b, t)):
             return False
@@ -464,6 +473,75 @@ def test_compatible_segments_stay_clear_row_by_row(seed, apart) -> None:
     a.spaces.clear()
     b.spaces.clear()
     assert compatible(a, b) == warm  # the kept spaces are the ones it would compute now
+
+
+@settings(max_examples=150)
+@given(st.integers(0, 2**31 - 1), st.floats(0.0, 2.5), st.floats(0.0, 0.6))
+def test_segments_compatible_with_objects_seen_stay_clear_row_by_row(seed, apart, off) -> None:
+    """With the objects' poses read now (``seen``), a pushed object is cut to where it can
+    get from there: ``compatible`` then still keeps everything clear row by row (the
+    brute force cuts each motion phase to the reach), and it never refuses what it
+    allows without them."""
+    rng = np.random.default_rng(seed)
+    if seed % 2:  # a robot that approaches its box first, then pushes it
+        a = _approach_then_push(0, 0.0, int(rng.integers(2, 40)))
+        a.cursor = int(rng.integers(0, a.rows.shape[1]))
+    else:
+        a = _random_segment(rng, 0, (0.0, 0.0))
+    b = _random_segment(rng, 1, (apart, 0.3))
+    seen = np.array([seg.poses[0] + np.r_[rng.uniform(-off, off, 2), rng.uniform(-0.5, 0.5)]
+                     for seg in (a, b)])
+    cut = compatible(a, b, seen)
+    if cut:
+        assert _brute_force_clear(a, b, seen)
+    if compatible(a, b):
+        assert cut
+
+
+def test_a_crossing_of_a_pushs_far_end_waits_only_without_the_pose_seen() -> None:
+    """A's robot drives 0.8 m to its box in 40 rows, then pushes it 2 m along y = 1 in 100
+    more. B's robot crosses A's way at x = 3.1 in rows 40-60, while A's box is still near
+    x = 1: without where the box was seen, its whole way is taken and B must wait; with
+    it, B goes. Crossing at x = 2.2 then, or lingering on the far end until the box
+    comes, B must wait either way (the box may be 1.45 m on by row 40)."""
+    box = np.array([[1.0, 1.0, 0.0], [3.0, 1.0, 0.0]])
+    contact = 1.0 - BOX.size[0] / 2 - R
+    rows = np.concatenate([np.linspace([contact - 0.8, 1.0], [contact, 1.0], 41),
+                           np.linspace([contact, 1.0], [contact + 2.0, 1.0], 101)[1:]])[None]
+    a = _segment(0, None, rows, box)
+    seen = np.array([box[0], [5.0, 5.0, 0.0]])
+    def crossing(x, linger=0):
+        way = np.linspace([x, 0.2], [x, 1.8], 20)
+        way = np.concatenate([np.repeat(way[:1], 40, axis=0), way[:10],
+                              np.repeat(way[10:11], linger, axis=0), way[10:]])[None]
+        return _segment(1, None, way, np.array([[5.0, 5.0, 0.0]]))
+    assert 30 < a.touch <= 40
+    far = crossing(3.1)
+    assert not compatible(a, far)
+    assert compatible(a, far, seen) and _brute_force_clear(a, far, seen)
+    for b in (crossing(2.2), crossing(3.1, linger=100)):
+        assert not compatible(a, b, seen) and not _brute_force_clear(a, b, seen)
+
+
+def test_boxes_whose_ways_cross_go_together_only_if_one_cannot_come_in_time() -> None:
+    """A pushes its box 2 m along y = 1 in 100 rows, through (2, 1); B pushes its box up
+    along x = 2 from ``d`` m below that crossing. Without the poses seen both ways are
+    taken whole: B waits. With them, B's box, 4 m off, cannot come within A's way before
+    A's segment ends (3.1 m of reach by then): both go. From 3 m off it could (though its
+    robot keeps clear of A's robot, and A's of B's box): B waits."""
+    def pusher(index, start, goal, rows):
+        start, goal = np.asarray(start, float), np.asarray(goal, float)
+        way = (goal - start) / np.linalg.norm(goal - start)
+        back = start[:2] - way[:2] * (BOX.size[0] / 2 + R + 0.005)
+        robot = np.linspace(back, back + goal[:2] - start[:2], rows)[None]
+        return _segment(index, None, robot, np.array([start, goal]))
+    a = pusher(0, [1.0, 1.0, 0.0], [3.0, 1.0, 0.0], 101)
+    for d, together in ((4.0, True), (3.0, False)):
+        b = pusher(1, [2.0, 1.0 - d, np.pi / 2], [2.0, 6.0 - d, np.pi / 2], 251)
+        seen = np.array([a.poses[0], b.poses[0]])
+        assert a.touch == 0 and b.touch == 0 and not compatible(a, b)
+        assert compatible(a, b, seen) == together
+        assert _brute_force_clear(a, b, seen) == together
 
 
 def test_far_apart_segments_are_compatible_and_crossing_robots_are_not() -> None:

@@ -210,6 +210,7 @@ class FakeWorld:
         self.robot_positions = np.array(scene.robot_starts, float)
         self.failed: dict = {}
         self.disturbed = False
+        self.pushes_tracked = True
         self.time = 0.0
 
     def row_durations(self, paths: np.ndarray) -> np.ndarray:

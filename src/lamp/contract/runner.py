@@ -68,6 +68,10 @@ class WorldExecutor(Executor, Protocol):
     #: Whether the run may be disturbed (noisy readings, robots that fail): success is
     #: then judged on ``true_object_poses``, and a robot that fails ends its team's loop.
     disturbed: bool
+    #: Whether objects are read exactly and move only as their pushers drive them (no
+    #: sensing noise, actuation noise or knocks; failing robots merely stop): the fleet
+    #: then bounds how far a pushed object can get (``lamp.fleet.spacetime``).
+    pushes_tracked: bool
 
     @property
     def true_object_poses(self) -> np.ndarray:

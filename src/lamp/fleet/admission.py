@@ -122,13 +122,15 @@ def meets_standing(seg: Segment, scene: Scene, object_poses: np.ndarray,
 
 def meets_moving(seg: Segment, running: Sequence[Segment],
                  claims: Sequence[tuple[int, shapely.Geometry, shapely.Geometry]],
-                 way: shapely.Geometry | None = None) -> str | None:
+                 way: shapely.Geometry | None = None,
+                 seen: np.ndarray | None = None) -> str | None:
     """Why ``seg`` must wait: ``"running k"`` (it cannot run beside object k's running
-    segment) or ``"claim k"`` (it would end deeper in object k's claim, ``claims`` being
-    the higher-ranked objects' (index, claim, near part); only the near part when
-    ``seg``'s object's ``way`` crosses the claim); None when it need not."""
+    segment; ``seen``: the objects' poses read now, see ``spacetime.compatible``) or
+    ``"claim k"`` (it would end deeper in object k's claim, ``claims`` being the
+    higher-ranked objects' (index, claim, near part); only the near part when ``seg``'s
+    object's ``way`` crosses the claim); None when it need not."""
     for other in running:
-        if not compatible(other, seg):
+        if not compatible(other, seg, seen):
             return f"running {other.index}"
     ends, box = None, ends_box(seg)
     for k, full, near in claims:

@@ -305,11 +305,11 @@ class Fleet(TeamChanges):
 
     def _meets_moving(self, seg: Segment) -> str | None:
         """Why ``seg`` must wait (``admission.meets_moving``), None if it need not."""
-        me, cfg = self.objects[seg.index], self.config
+        me, cfg, ex = self.objects[seg.index], self.config, self.executor
         running = [o.running for o in self.objects if o.running is not None and o is not me]
         why = meets_moving(seg, running, heeded_claims(
-            self.objects, me, cfg.cross_near, cfg.cross_waiting, self.reach,
-            cfg.pass_margin, self.passing, ends_box(seg)), me.way)
+            self.objects, me, cfg.cross_near, cfg.cross_waiting, self.reach, cfg.pass_margin,
+            self.passing, ends_box(seg)), me.way, ex.object_poses if ex.pushes_tracked else None)
         if why:
             self.stats.note(self.clock, "meets", seg.index, why)
         return why

@@ -9,11 +9,21 @@ its planned motion until the segment ends, and is at its last planned pose after
 grown by ``OBJECT_MARGIN``: :func:`object_phases`). Objects and robots are checked against
 the other's object phase by phase.
 
+When the objects' poses as read now are given (``seen``), a pushed object is also known to
+stay near where it was seen: every point of it moves at most ``PUSH_SPEEDUP`` times as
+far as the farthest-moving robot of its segment, plus ``PUSH_LEAD`` (:func:`object_reach`;
+robots push it, nothing else does; ``lamp.record.push_reach`` measures the bound on
+recordings: ``benchmarks/push_reach.py``, and every concurrent run of the tests). A robot, or the
+other object, is then in the way of a moving object at a row only if it is near the
+object's planned motion *and* within that reach of the object seen: a segment may cross
+the far end of another's push long before the object comes.
+
 Guarantee (``tests/test_fleet_parts.py``, against a row-by-row brute force): when
 :func:`compatible` holds, at every row of the shared clock each robot of one segment is at
 least ``2 * ROBOT_MARGIN`` farther than a robot diameter from each robot of the other, each
-robot at least ``ROBOT_MARGIN`` clear of the other's object space at that row (its phase),
-and the two objects' spaces do not meet while both hold them.
+robot at least ``ROBOT_MARGIN`` clear of the other's object space at that row (its phase,
+cut to the object's reach from where it was seen when ``seen`` is given), and the two
+objects' spaces (so cut) do not meet while both hold them.
 
 Segments whose reach (:func:`reach_box`: every row left and every object phase) lie
 farther apart than the largest of those clearances are compatible without a row being
@@ -29,8 +39,21 @@ import shapely
 
 from lamp.fleet.regions import OBJECT_MARGIN, ROBOT_MARGIN, footprints
 from lamp.fleet.segments import Segment
+from lamp.geometry.shapes import to_shapely
 
-__all__ = ["compatible", "object_phases", "object_space", "reach_box"]
+__all__ = ["PUSH_LEAD", "PUSH_SPEEDUP", "compatible", "object_phases", "object_reach",
+           "object_space", "reach_box"]
+
+#: A pushed object's points move at most this many times as far as its segment's
+#: farthest-moving robot (a point away from the contact swings faster when it turns) ...
+PUSH_SPEEDUP = 1.5
+#: ... plus this (m): a slide after contact, the sensor's error in where it was seen, a
+#: robot off its row by up to ``segments.REJOIN_GAP``.
+PUSH_LEAD = 0.1
+
+#: A phase: (until row, space, and when the object is cut to its reach from where it was
+#: seen: (its body seen, (n,) reach at each row from now), else None).
+Phase = tuple[float, shapely.Geometry, "tuple[shapely.Geometry, np.ndarray] | None"]
 
 
 def object_space(seg: Segment, final: bool = False, first: bool = False) -> shapely.Geometry:
@@ -67,6 +90,42 @@ def object_phases(seg: Segment) -> list[tuple[float, shapely.Geometry]]:
     return out
 
 
+def object_reach(seg: Segment, n: int) -> np.ndarray:
+    """(n,): how far (m) any point of ``seg``'s object may be at each row from now (row 0:
+    ``seg.rows[:, cursor]``) from where it was seen now: ``PUSH_SPEEDUP`` times the
+    farthest any of its robots moves along its rows since the last row run (the first,
+    before a segment has run), plus ``PUSH_LEAD``; the rows past its last hold it."""
+    travel = _travel(seg)
+    last = travel.size - 1
+    rows = np.minimum(seg.cursor + np.arange(n), last)
+    return PUSH_SPEEDUP * (travel[rows] - travel[min(max(seg.cursor - 1, 0), last)]) + PUSH_LEAD
+
+
+def _travel(seg: Segment) -> np.ndarray:
+    """(G,): the farthest any robot of ``seg`` moves from row 0 to row g (the largest step
+    of each row added up); computed once for its rows (a rejoin replaces them)."""
+    cached = seg.bounds.get("travel")
+    if cached is not None and cached[0] is seg.rows:
+        return cached[1]
+    step = np.hypot(*np.moveaxis(np.diff(seg.rows, axis=1), -1, 0)).max(axis=0, initial=0.0)
+    travel = np.concatenate([[0.0], np.cumsum(step)])
+    seg.bounds["travel"] = (seg.rows, travel)
+    return travel
+
+
+def _phases(seg: Segment, n: int, seen: np.ndarray | None) -> list[Phase]:
+    """:func:`object_phases` with its motion phase cut to the object's reach from where
+    it was seen (``seen``: every object's pose read now; None: not cut)."""
+    phases = object_phases(seg)
+    if seen is None:
+        return [(until, space, None) for until, space in phases]
+    body = to_shapely(seg.shape, np.asarray(seen[seg.index], float))
+    shapely.prepare(body)
+    cut = (body, object_reach(seg, n))
+    motion = object_space(seg)
+    return [(until, space, cut if space is motion else None) for until, space in phases]
+
+
 def _rows(seg: Segment, n: int) -> np.ndarray:
     """(robots, n, 2): its rows from the cursor, holding the last one."""
     rows = seg.rows[:, seg.cursor:]
@@ -75,13 +134,13 @@ def _rows(seg: Segment, n: int) -> np.ndarray:
     return np.concatenate([rows, np.repeat(rows[:, -1:], n - rows.shape[1], axis=1)], axis=1)
 
 
-def _robots_clear(rows: np.ndarray, phases: list[tuple[float, shapely.Geometry]],
-                  clearance: float) -> bool:
-    """Robots along ``rows`` stay ``clearance`` from each phase's space in its rows."""
+def _robots_clear(rows: np.ndarray, phases: list[Phase], clearance: float) -> bool:
+    """Robots along ``rows`` stay ``clearance`` from each phase's space in its rows (cut to
+    the object's reach at each row where the phase is)."""
     begin = 0
-    for until, region in phases:
+    for until, region, cut in phases:
         end = int(min(until, rows.shape[1]))
-        part = rows[:, begin:end]
+        part, first = rows[:, begin:end], begin
         begin = max(begin, end)
         if part.size == 0:
             continue
@@ -93,22 +152,50 @@ def _robots_clear(rows: np.ndarray, phases: list[tuple[float, shapely.Geometry]]
             continue
         pts = shapely.points(xy[inside])
         near = shapely.dwithin(region, pts, clearance)  # a prepared test, then the few exactly
-        if near.any() and np.min(shapely.distance(region, pts[near])) < clearance:
+        if not near.any():
+            continue
+        hit = shapely.distance(region, pts[near]) < clearance
+        if hit.any() and cut is not None:  # ... and within the object's reach at that row
+            body, reach = cut
+            at = first + np.flatnonzero(inside)[near][hit] % part.shape[1]  # their rows
+            hit = shapely.distance(body, pts[near][hit]) < clearance + reach[at]
+        if hit.any():
             return False
     return True
 
 
-def _objects_clear(pa: list[tuple[float, shapely.Geometry]],
-                   pb: list[tuple[float, shapely.Geometry]]) -> bool:
-    """No two phases of the two objects that overlap in time meet in space."""
+def _objects_clear(pa: list[Phase], pb: list[Phase]) -> bool:
+    """No two phases of the two objects that overlap in time meet in space (each cut to
+    its object's reach where it is: :func:`_may_meet`)."""
     start_a = 0.0
-    for until_a, space_a in pa:
+    for until_a, space_a, cut_a in pa:
         start_b = 0.0
-        for until_b, space_b in pb:
-            if start_a < until_b and start_b < until_a and space_a.intersects(space_b):
+        for until_b, space_b, cut_b in pb:
+            if (start_a < until_b and start_b < until_a and space_a.intersects(space_b)
+                    and _may_meet(min(until_a, until_b), space_a, cut_a, space_b, cut_b)):
                 return False
             start_b = until_b
         start_a = until_a
+    return True
+
+
+def _may_meet(end: float, space_a: shapely.Geometry, cut_a, space_b: shapely.Geometry,
+              cut_b) -> bool:
+    """Whether two objects, each in its space (and within its reach of where it was seen
+    where it is cut) at a row before ``end``, may meet. Reaches only grow, so the last
+    row is the one to test: a point of a within ``reach_a`` of body a and in space b, and
+    the same for b, and the two bodies seen within both reaches."""
+    if cut_a is None and cut_b is None:
+        return True
+    def reach(cut) -> float:
+        row = min(end, cut[1].size) - 1
+        return float(cut[1][int(row)])
+    if cut_a is not None and shapely.distance(cut_a[0], space_b) > reach(cut_a):
+        return False
+    if cut_b is not None and shapely.distance(cut_b[0], space_a) > reach(cut_b):
+        return False
+    if cut_a is not None and cut_b is not None:
+        return bool(shapely.distance(cut_a[0], cut_b[0]) <= reach(cut_a) + reach(cut_b))
     return True
 
 
@@ -144,8 +231,9 @@ def apart(a: np.ndarray, b: np.ndarray, gap: float) -> bool:
                 or b[1] - a[3] > gap)
 
 
-def compatible(a: Segment, b: Segment) -> bool:
-    """Whether ``a`` and ``b`` may run together from now (see the module docstring)."""
+def compatible(a: Segment, b: Segment, seen: np.ndarray | None = None) -> bool:
+    """Whether ``a`` and ``b`` may run together from now (see the module docstring;
+    ``seen``: every object's pose read now, or None)."""
     r = a.robot_radius
     if apart(reach_box(a), reach_box(b), 2.0 * r + 2.0 * ROBOT_MARGIN):
         return True  # every test below holds: robots and spaces all farther apart
@@ -154,7 +242,7 @@ def compatible(a: Segment, b: Segment) -> bool:
     gap = np.hypot(*np.moveaxis(ra[:, None] - rb[None], -1, 0))  # (na, nb, n)
     if gap.size and gap.min() < 2.0 * r + 2.0 * ROBOT_MARGIN:
         return False
-    phases_a, phases_b = object_phases(a), object_phases(b)
+    phases_a, phases_b = _phases(a, n, seen), _phases(b, n, seen)
     if not _objects_clear(phases_a, phases_b):
         return False
     clear = r + ROBOT_MARGIN

@@ -49,6 +49,12 @@ class DisturbedExecutor:
         self.fired: dict[int, float] = {}
         self._pending = list(disturbances.robot_failures)
 
+    @property
+    def pushes_tracked(self) -> bool:
+        """Exact readings and pushes (``WorldExecutor``): robots may only fail."""
+        d = self.disturbances
+        return d.sensing_noise == 0.0 and d.actuation_noise == 0.0 and d.push_disturbance == 0.0
+
     # ------------------------------------------------------------------ observation
     @property
     def object_poses(self) -> np.ndarray:

@@ -221,6 +221,7 @@ class Simulator:
         return self.data.qpos[self._built.robot_qpos].copy()
 
     disturbed = False  # nothing disturbs a plain simulation (``WorldExecutor``)
+    pushes_tracked = True
 
     @property
     def true_object_poses(self) -> np.ndarray:
