@@ -87,3 +87,34 @@ def test_fleet_assignment_is_bottleneck_then_least_sum(seed: int, n: int, extra:
     assert np.array_equal(cost, got.cost[held])
     assert cost.max() == bstar and got.bound == bstar
     assert W[r, c].sum() - 1e-9 <= cost.sum() <= W[r, c].sum() + 1e-6 * (cost**2).sum() + 1e-9
+
+
+@settings(max_examples=8, deadline=None)
+@given(seed=st.integers(0, 10_000), n=st.integers(32, 60), growth=st.floats(1.01, 1.3),
+       ahead=st.integers(0, 6), room=st.floats(1.0, 1.6))
+def test_fleet_assignment_does_not_depend_on_its_rounds(seed: int, n: int, growth: float,
+                                                        ahead: int, room: float) -> None:
+    """The rounds of a fleet's assignment (the bound's growth, how far the first search
+    reaches ahead, the windows' room) change only how far the goals' searches go: any
+    schedule gives the default's assignment, costs and ``B*``, bit for bit."""
+    from unittest import mock
+
+    from lamp.mrmp import assignment
+
+    gm = load_grid_map(MAPF / "random-32-32-20.map")
+    S, G = random_instance(gm, n, seed)
+    space = RobotSpace.from_scene(gm.scene)
+    lat = get_lattice(space, 0.03)
+    N, M = len(S), len(G)
+    links = link_special_vertices(space, lat, S, G, space.clearance(S, exact=True),
+                                  space.clearance(G, exact=True), 0.045, {})
+    got = []
+    for rounds in (assignment.FLEET_ROUNDS, (growth, ahead, room)):
+        hs = GoalDistances.build(links.goal_links, G, lat, N + M)
+        with mock.patch.object(assignment, "FLEET_ROUNDS", rounds):
+            got.append(assign(links.graph, lat.V, hs, S, G, np.zeros(M, bool), "bottleneck",
+                              None, np.inf))
+    a, b = got
+    assert a.goal is not None and b.goal is not None
+    assert np.array_equal(a.goal, b.goal) and np.array_equal(a.cost, b.cost)
+    assert a.bound == b.bound

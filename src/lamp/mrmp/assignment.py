@@ -69,6 +69,10 @@ TIE = 1e-6
 #: Growth factor of the bound ``B`` between rounds (from the straight-line floor; each
 #: round evaluates the pairs not yet known to be below the bound).
 _GROWTH = 1.1
+#: Fleets' rounds (:func:`_least_bottleneck`'s ``schedule``): the bound's growth, the
+#: rounds the first search reaches ahead, and the room of each goal's window as a multiple
+#: of the first search's reach, so that later rounds resume it in place.
+FLEET_ROUNDS = (1.05, 4, 1.2)
 
 
 @dataclass(frozen=True)
@@ -303,8 +307,8 @@ def _bottleneck(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray, G: np.ndarr
     """Bottleneck, then sum, over the exact lattice distances."""
     N, M = len(S), len(G)
 
-    def below(pm: np.ndarray, pi: np.ndarray, bound: float) -> np.ndarray:
-        return hval_below(pm, V + pi, bound, gr, V, V + N, hs)
+    def below(pm: np.ndarray, pi: np.ndarray, bound: float, room: float) -> np.ndarray:
+        return hval_below(pm, V + pi, bound, gr, V, V + N, hs, room)
 
     def exhausted(has_pair: np.ndarray, bound: float) -> Assignment | None:
         # searches that are complete (whole lattice, queue empty) know all they can reach
@@ -317,11 +321,11 @@ def _bottleneck(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray, G: np.ndarr
                               "every goal (some goals are reachable only by the same robots)")
         return None
 
-    # fleets: the first search, while each window is in cache, reaches the bound of two
-    # rounds later; later ones, resumed with the windows out of cache, go no further
+    # fleets: the first search, while each window is in cache, reaches the bound of a
+    # few rounds later; later ones, resumed with the windows out of cache, go no further
     # than needed (smaller teams keep the searches they were tested bit for bit with)
-    ahead = (2, 0) if N >= ALL_PAIRS_BELOW else (0, 0)
-    return _least_bottleneck(E, floor, below, exhausted, deadline, 4.0 * hs.step, ahead)
+    rounds = FLEET_ROUNDS if N >= ALL_PAIRS_BELOW else (_GROWTH, 0, 1.0)
+    return _least_bottleneck(E, floor, below, exhausted, deadline, 4.0 * hs.step, rounds)
 
 
 def _coarse_bottleneck(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray,
@@ -345,7 +349,7 @@ def _coarse_bottleneck(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray,
     far = 3.0 * float(np.hypot(*(np.vstack([S, G]).max(axis=0)
                                  - np.vstack([S, G]).min(axis=0)))) + 1.0
 
-    def below(pm: np.ndarray, pi: np.ndarray, bound: float) -> np.ndarray:
+    def below(pm: np.ndarray, pi: np.ndarray, bound: float, room: float) -> np.ndarray:
         return coarse_below(pm, pi, bound, sblk, gblk, S, G, cg.rep, cg.nbr, cg.wlen,
                             cg.unit)
 
@@ -353,7 +357,8 @@ def _coarse_bottleneck(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray,
         return Assignment(None, np.zeros(N)) if bound > far else None
 
     # block searches start again each time: each reaches the bound of three rounds later
-    got = _least_bottleneck(E, floor, below, exhausted, deadline, 4.0 * hs.step, (3, 3))
+    got = _least_bottleneck(E, floor, below, exhausted, deadline, 4.0 * hs.step,
+                            (_GROWTH, 3, 1.0), ahead_later=3)
     if got.timed_out:
         return got
     if got.goal is None:
@@ -368,17 +373,21 @@ def _coarse_bottleneck(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray,
 
 
 def _least_bottleneck(E: NearPairs, floor: float, below: Callable, exhausted: Callable,
-                      deadline: float, least: float,
-                      ahead: tuple[int, int] = (0, 0)) -> Assignment:
-    """Bottleneck, then sum, over the distances ``below(pm, pi, bound)`` gives for pairs
-    (goal ``pm[k]``, robot ``pi[k]``) (inf at or above ``bound``; never below the straight
-    line); ``exhausted(has_pair, bound)``: an Assignment that ends the search when no
-    larger bound can give a perfect matching, else None; ``E``: the straight lines,
-    ``floor``: :func:`_straight_floor` of them. ``ahead``: the first search reaches the bound
-    of the round this many rounds later, and each later one that many (the second
-    number), so that the rounds up to there need none (the rounds, and so the result,
-    are the same; only the searches are fewer and wider)."""
+                      deadline: float, least: float, schedule: tuple[float, int, float],
+                      ahead_later: int = 0) -> Assignment:
+    """Bottleneck, then sum, over the distances ``below(pm, pi, bound, room)`` gives for
+    pairs (goal ``pm[k]``, robot ``pi[k]``) (inf at or above ``bound``; never below the
+    straight line; ``room``: how far a goal's search may later be resumed in place);
+    ``exhausted(has_pair, bound)``: an Assignment that ends the search when no larger
+    bound can give a perfect matching, else None; ``E``: the straight lines, ``floor``:
+    :func:`_straight_floor` of them. ``schedule = (growth, ahead, room)``: the bound grows
+    by ``growth`` a round; the first search reaches the bound of the round ``ahead``
+    rounds later (each later one ``ahead_later``), so that the rounds up to there need
+    none, with room for ``room`` times that. The result does not depend on the schedule:
+    ``B*`` is found among the exact distances below the first bound that admits a
+    perfect matching, and the sum is taken over all pairs within it."""
     M, N = E.M, E.N
+    growth, ahead, room = schedule
     # distances are at least the straight lines: no bound below theirs can do
     bound = max(floor * 1.02, least)
     lo = 0.0  # no perfect matching among the pairs with distance < lo
@@ -390,16 +399,16 @@ def _least_bottleneck(E: NearPairs, floor: float, below: Callable, exhausted: Ca
     searched = 0.0  # the pairs' distances are exact below it (inf: not below it)
     while True:
         if bound > searched:
-            rounds = ahead[0] if searched == 0.0 else ahead[1]
+            rounds = ahead if searched == 0.0 else ahead_later
             searched = bound
             for _ in range(rounds):  # as the bound will grow, to the same float
-                searched *= _GROWTH
+                searched *= growth
             gm, gi, _ = E.within(searched, strict=True)
             fresh = np.full(len(gm), np.inf)
             fresh[np.searchsorted(gm * N + gi, keys)] = known  # the bound only grows
             keys, known = gm * N + gi, fresh
             todo = np.flatnonzero(np.isinf(known))  # grouped by goal
-            known[todo] = below(gm[todo], gi[todo], searched)
+            known[todo] = below(gm[todo], gi[todo], searched, room * searched)
         ok = np.flatnonzero(bound > known)
         pm, pi, c = gm[ok], gi[ok], known[ok]
         ptr = np.searchsorted(pm, np.arange(M + 1))
@@ -415,7 +424,7 @@ def _least_bottleneck(E: NearPairs, floor: float, below: Callable, exhausted: Ca
             return end
         lo = bound
         base_g, base_r = mg.copy(), mr.copy()
-        bound *= _GROWTH
+        bound *= growth
     return _least_sum_within(M, N, ptr, pm, pi, c, lo, base_g if lo > 0.0 else None,
                              base_r if lo > 0.0 else None)
 

@@ -9,22 +9,24 @@ final, and a settle costs O(1) instead of a heap operation.
 Each search lives in a square *window* of lattice indices centred on its goal, of radius
 ``R``: the window holds every node within Euclidean distance ``R + 1.5 L`` of the goal
 point, and only buckets below ``R`` are processed. When a query needs more, the window
-grows (at least doubling for a query, by a quarter at least when the search is expanded
-to a bound, :func:`expand_to`), keeping what was settled and queued, and the settled nodes
-on its old border relax their edges into the new part.
+grows (at least doubling for a query, by a quarter at least, or to the room asked for,
+when the search is expanded to a bound, :func:`expand_to`), keeping what was settled and
+queued, and the settled nodes on its old border relax their edges into the new part.
 
 Guarantee (tested against a full Dijkstra on the whole lattice): every value returned by
 :func:`lattice_h`/:func:`hval` is the exact shortest lattice distance to the goal (inf when
-there is none), and :func:`lamp.mrmp.heuristic_reads.hval_below` is exact below its bound. Why the window does not
-change it: a node at distance ``d < R + 1.5 L`` has a shortest path of length ``d`` from
-the goal point, every point of which is within ``d`` of it, hence inside the window; the
-buckets processed (below ``R``) hold only nodes at distance ``< R + L``; a node outside
-the window is farther than ``R + 1.5 L`` and so never belongs in a processed bucket.
+there is none), and :func:`lamp.mrmp.heuristic_reads.hval_below` is exact below its
+bound. Why the window does not change it: a node at distance ``d < R + 1.5 L`` has a
+shortest path of length ``d`` from the goal point, every point of which is within ``d``
+of it, hence inside the window; the buckets processed (below ``R``) hold only nodes at
+distance ``< R + L``; a node outside the window is farther than ``R + 1.5 L`` and so
+never belongs in a processed bucket. A relaxation does not ask whether its neighbour is
+settled: one settled in bucket ``k`` or before is below ``(k + 1) L``, no more than the
+relaxed value, so it is never improved (the values are a heap Dijkstra's, bit for bit).
 
-Memory and time grow with the area the queries reach, not with the map: a 3-robot call
-near the object settles a few hundred nodes; 400 robots with goals about 1.5 m from
-their starts on a 9.6 m map settle about 3,300 nodes per goal on the 3 cm lattice, where
-whole-map tables would hold 58,000 per goal.
+Memory and time grow with the area the queries reach, not with the map: 400 robots with
+goals about 1.5 m from their starts on a 9.6 m map settle about 3,300 nodes per goal on
+the 3 cm lattice, where whole-map tables would hold 58,000 per goal.
 
 Vertices: ``0..V-1`` lattice nodes, ``V..V+N-1`` starts, ``V+N..`` goals (see
 :mod:`lamp.mrmp.gspi_kernels`); the special vertices' values are memoised in
@@ -98,8 +100,7 @@ class GoalDistances(NamedTuple):
         from lamp.mrmp.distance_field import DIRS
 
         M = len(goal_links)
-        counts = np.array([len(n) for n, _ in goal_links], dtype=np.int64)
-        sptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+        sptr = np.cumsum([0] + [len(n) for n, _ in goal_links]).astype(np.int64)
         snode = np.concatenate([np.zeros(0, np.int64)]
                                + [n.astype(np.int64) for n, _ in goal_links])
         scost = np.concatenate([np.zeros(0)] + [c.astype(float) + EPS for _, c in goal_links])
@@ -108,14 +109,12 @@ class GoalDistances(NamedTuple):
         slots = 4
         while slots < span + 4:
             slots *= 2
-        oa, ob = lat.offset
-        va, vb = lat.va, lat.vb
-        centre = np.asarray(goals, dtype=np.float64).reshape(-1, 2) / lat.step - [oa, ob]
+        centre = np.asarray(goals, dtype=np.float64).reshape(-1, 2) / lat.step - lat.offset
         dist, done, bucket, em = _new_lists(max(M, 1), slots)
         return GoalDistances(
             np.zeros((M, 5), dtype=np.int64), np.zeros(M), dist, done, bucket,
             np.zeros((M, slots), dtype=np.int64), sptr, snode, scost,
-            np.zeros((M, n_special), dtype=np.bool_), np.zeros((M, n_special)), va, vb,
+            np.zeros((M, n_special), dtype=np.bool_), np.zeros((M, n_special)), lat.va, lat.vb,
             lat.ids, DIRS[:, 0].copy(), DIRS[:, 1].copy(), np.ascontiguousarray(centre),
             float(lat.step), em, lat.edge_mask)
 
@@ -165,8 +164,8 @@ def _new_lists(M: int, slots: int) -> tuple[Any, Any, Any, Any]:
 
 # ---- one goal's bucket queue and window ----------------------------------------------
 # A window of na x nb lattice indices is stored with a ring of one entry around it
-# (row stride na + 2): ring entries count as settled and have no edges, so the search
-# needs no bounds checks; window entries hold their node's edge bits (``em``).
+# (row stride na + 2): ring entries count as settled, have no edges and hold -inf, so
+# the search needs no bounds checks; window entries hold their node's edge bits (``em``).
 
 
 @nb.njit(cache=True)
@@ -211,12 +210,13 @@ def _window_arrays(a0: int, b0: int, na: int, nb_: int,
     """Fresh (dist, done, edge bits) of a window with its ring."""
     P = na + 2
     n = P * (nb_ + 2)
-    d = np.full(n, np.inf)
+    d = np.full(n, -np.inf)  # the ring: below every distance, so never improved
     dn = np.ones(n, dtype=np.uint8)
     em = np.zeros(n, dtype=np.uint8)
     for b in range(nb_):
         r = (b + 1) * P + 1
         for a in range(na):
+            d[r + a] = np.inf
             dn[r + a] = 0
             em[r + a] = emask[b + b0, a + a0]
     return d, dn, em
@@ -324,11 +324,9 @@ def _settle(target: int, lim: float, k: int, dlen: np.ndarray, dist: np.ndarray,
     mask = slots - 1
     cap = bk.shape[1] - 8
     inv = 1.0 / step
-    off = np.empty(8, dtype=np.int64)
+    off = da + db * P
     buf = np.empty(8, dtype=np.int64)
     bnd = np.empty(8)
-    for e in range(8):
-        off[e] = da[e] + db[e] * P
     left = 0
     high = 0
     for q in range(slots):
@@ -354,14 +352,13 @@ def _settle(target: int, lim: float, k: int, dlen: np.ndarray, dist: np.ndarray,
         done[j] = 1
         du = dist[j]
         msk = em[j]
-        # the eight relaxations are decided without branches (the ring and settled
-        # entries are read like any other), then the improved ones are queued in
-        # direction order: which neighbours improve is what a branch would mispredict
+        # eight relaxations decided without branches (a settled neighbour or the ring is
+        # never improved: module docstring), the improved ones queued in direction order
         nb_ = 0
         for e in range(8):
             jw = j + off[e]
             nd = du + dlen[e]
-            ok = ((msk >> e) & 1) & (1 - done[jw]) & (nd < dist[jw])
+            ok = ((msk >> e) & 1) & (nd < dist[jw])
             buf[nb_] = jw
             bnd[nb_] = nd
             nb_ += ok
@@ -418,13 +415,16 @@ def lattice_h(m: int, v: int, nbr: np.ndarray, dlen: np.ndarray, hs: tuple) -> f
 
 
 @nb.njit(cache=True)
-def expand_to(m: int, bound: float, nbr: np.ndarray, dlen: np.ndarray, hs: tuple) -> None:
-    """Settle every node of goal m's search closer than ``bound`` (metres)."""
+def expand_to(m: int, bound: float, nbr: np.ndarray, dlen: np.ndarray, hs: tuple,
+              room: float = 0.0) -> None:
+    """Settle every node of goal m's search closer than ``bound`` (metres); a window
+    opened or grown for it reaches ``room`` at least (later bounds up to there resume
+    the search in place: growing a window copies all of it)."""
     rad, step = hs[1], hs[17]
     if rad[m] == 0.0:
-        _open_window(m, max(bound, _FIRST_RADIUS_STEPS * step), nbr, dlen, hs)
+        _open_window(m, max(bound, room, _FIRST_RADIUS_STEPS * step), nbr, dlen, hs)
     elif rad[m] < bound:
-        _open_window(m, max(bound, 1.25 * rad[m]), nbr, dlen, hs)
+        _open_window(m, max(bound, room, 1.25 * rad[m]), nbr, dlen, hs)
     _run_until(m, -1, bound, nbr, dlen, hs)
 
 

@@ -74,11 +74,12 @@ def hval_in(m: int, v: int, gr: tuple, V: int, gv0: int, hs: tuple, win: np.ndar
 
 @nb.njit(cache=True)
 def hval_below(pm: np.ndarray, pv: np.ndarray, bound: float, gr: tuple, V: int, gv0: int,
-               hs: tuple) -> np.ndarray:
+               hs: tuple, room: float = 0.0) -> np.ndarray:
     """For pairs (goal ``pm[k]``, special vertex ``pv[k]``): the exact distance when it is
-    below ``bound``, else inf (each goal's search is expanded to ``bound`` once; pairs are
-    best grouped by goal). A pair's value is its best link: the link's length plus its
-    lattice node's settled value (``+ EPS`` for a direct link to the goal)."""
+    below ``bound``, else inf (each goal's search is expanded to ``bound`` once, a window
+    opened for it reaching ``room``, :func:`expand_to`; pairs are best grouped by goal).
+    A pair's value is its best link: the link's length plus its lattice node's settled
+    value (``+ EPS`` for a direct link to the goal)."""
     coords, _, _, xptr, xidx = gr
     va, vb, sdone, sval = hs[11], hs[12], hs[9], hs[10]
     out = np.empty(pm.shape[0])
@@ -88,7 +89,7 @@ def hval_below(pm: np.ndarray, pv: np.ndarray, bound: float, gr: tuple, V: int, 
     for k in range(pm.shape[0]):
         m = pm[k]
         if m != last:
-            expand_to(m, bound, gr[1], gr[2], hs)
+            expand_to(m, bound, gr[1], gr[2], hs, room)
             last = m
             dd, dn, a0, b0, na, nbw = goal_views(m, hs)
         v = pv[k]
