@@ -70,7 +70,10 @@ def test_allocate_with_goals_starts_the_same_teams_sizes_balanced(seed, n_obj, n
                 <= max(_values(nearest, robots, objects, hauls), default=0.0) + 1e-9)
 
 
-def test_balance_teams_is_zero_or_one() -> None:
+def test_balance_teams_and_reach_cut_are_zero_or_one() -> None:
     assert FleetConfig(balance_teams=1).balance_teams == 1
+    assert FleetConfig(reach_cut=0).reach_cut == 0 and FleetConfig().reach_cut == 1
     with pytest.raises(InputError, match="fleet_balance_teams: 0 or 1, got 2"):
         FleetConfig(balance_teams=2)
+    with pytest.raises(InputError, match="fleet_reach_cut: 0 or 1, got 3"):
+        FleetConfig(reach_cut=3)

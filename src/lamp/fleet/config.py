@@ -95,6 +95,11 @@ class FleetConfig:
                                "objects starting together so that the latest arrival plus "
                                "haul is least (teams.balanced_teams); 0: each object in "
                                "priority order takes its nearest free robots.", low=0)
+    reach_cut: int = param(1, "Concurrent schedule: 1: admission cuts a pushed object's "
+                           "space to where it can get from where it is seen (its robots' "
+                           "way x 1.5 + 0.1 m; only where pushes are tracked exactly: no "
+                           "sensing or actuation noise, no knocks); 0: anywhere along its "
+                           "planned motion.", low=0)
     rejoin_limit: int = param(0, "Concurrent schedule: a segment whose robots had to move "
                               "back to their rows this many times (held back by what they "
                               "push) ends, stopped; 0: never.", low=0)
@@ -105,8 +110,9 @@ class FleetConfig:
 
     def __post_init__(self) -> None:
         check_fields(self)
-        if self.balance_teams > 1:
-            raise InputError(f"fleet_balance_teams: 0 or 1, got {self.balance_teams}")
+        for name in ("balance_teams", "reach_cut"):
+            if getattr(self, name) > 1:
+                raise InputError(f"fleet_{name}: 0 or 1, got {getattr(self, name)}")
 
     def values(self) -> dict[str, Any]:
         """Every setting by its public name (``fleet_`` + field)."""

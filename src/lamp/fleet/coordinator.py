@@ -177,9 +177,8 @@ class Fleet(TeamChanges):
         self._hand_over()
 
     def _start(self, ready: list[int]) -> None:
-        """Sub-teams for the ``ready`` objects: those waiting for robots first, then the
-        rest in ``teams.start_order`` (the moving objects' ways busy); the robots shared
-        among them (``teams.allocate``)."""
+        """Sub-teams for the ``ready`` objects (waiting for robots first, then the rest in
+        ``teams.start_order``), sharing the robots (``teams.allocate``)."""
         if self.serial:  # first come, first served: the earliest task, every robot
             k = min(ready, key=lambda j: (self.desk.current[j].release_s,  # type: ignore[union-attr]
                                           self.desk.current[j].id))  # type: ignore[union-attr]
@@ -306,10 +305,11 @@ class Fleet(TeamChanges):
     def _meets_moving(self, seg: Segment) -> str | None:
         """Why ``seg`` must wait (``admission.meets_moving``), None if it need not."""
         me, cfg, ex = self.objects[seg.index], self.config, self.executor
+        seen = ex.object_poses if cfg.reach_cut and ex.pushes_tracked else None
         running = [o.running for o in self.objects if o.running is not None and o is not me]
         why = meets_moving(seg, running, heeded_claims(
             self.objects, me, cfg.cross_near, cfg.cross_waiting, self.reach, cfg.pass_margin,
-            self.passing, ends_box(seg)), me.way, ex.object_poses if ex.pushes_tracked else None)
+            self.passing, ends_box(seg)), me.way, seen)
         if why:
             self.stats.note(self.clock, "meets", seg.index, why)
         return why
