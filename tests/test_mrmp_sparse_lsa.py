@@ -91,9 +91,10 @@ def test_fleet_assignment_is_bottleneck_then_least_sum(seed: int, n: int, extra:
 
 @settings(max_examples=8, deadline=None)
 @given(seed=st.integers(0, 10_000), n=st.integers(32, 60), growth=st.floats(1.01, 1.3),
-       ahead=st.integers(0, 6), room=st.floats(1.0, 1.6))
+       ahead=st.integers(0, 6), later=st.integers(0, 3), room=st.floats(1.0, 1.6))
 def test_fleet_assignment_does_not_depend_on_its_rounds(seed: int, n: int, growth: float,
-                                                        ahead: int, room: float) -> None:
+                                                        ahead: int, later: int,
+                                                        room: float) -> None:
     """The rounds of a fleet's assignment (the bound's growth, how far the first search
     reaches ahead, the windows' room) change only how far the goals' searches go: any
     schedule gives the default's assignment, costs and ``B*``, bit for bit."""
@@ -109,7 +110,7 @@ def test_fleet_assignment_does_not_depend_on_its_rounds(seed: int, n: int, growt
     links = link_special_vertices(space, lat, S, G, space.clearance(S, exact=True),
                                   space.clearance(G, exact=True), 0.045, {})
     got = []
-    for rounds in (assignment.FLEET_ROUNDS, (growth, ahead, room)):
+    for rounds in (assignment.FLEET_ROUNDS, (growth, ahead, later, room)):
         hs = GoalDistances.build(links.goal_links, G, lat, N + M)
         with mock.patch.object(assignment, "FLEET_ROUNDS", rounds):
             got.append(assign(links.graph, lat.V, hs, S, G, np.zeros(M, bool), "bottleneck",

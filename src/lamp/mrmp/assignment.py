@@ -69,10 +69,11 @@ TIE = 1e-6
 #: Growth factor of the bound ``B`` between rounds (from the straight-line floor; each
 #: round evaluates the pairs not yet known to be below the bound).
 _GROWTH = 1.1
-#: Fleets' rounds (:func:`_least_bottleneck`'s ``schedule``): the bound's growth, the
-#: rounds the first search reaches ahead, and the room of each goal's window as a multiple
-#: of the first search's reach, so that later rounds resume it in place.
-FLEET_ROUNDS = (1.05, 4, 1.2)
+#: Fleets' rounds (:func:`_least_bottleneck`'s ``schedule``): the bound grows by 5 % a
+#: round, the first search reaches four rounds ahead (1.24 times the straight-line floor),
+#: later ones none, and each goal's window has room for 1.2 times a search's reach, so
+#: that later rounds resume it in place (growing a window copies all of it).
+FLEET_ROUNDS = (1.05, 4, 0, 1.2)
 
 
 @dataclass(frozen=True)
@@ -324,7 +325,7 @@ def _bottleneck(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray, G: np.ndarr
     # fleets: the first search, while each window is in cache, reaches the bound of a
     # few rounds later; later ones, resumed with the windows out of cache, go no further
     # than needed (smaller teams keep the searches they were tested bit for bit with)
-    rounds = FLEET_ROUNDS if N >= ALL_PAIRS_BELOW else (_GROWTH, 0, 1.0)
+    rounds = FLEET_ROUNDS if N >= ALL_PAIRS_BELOW else (_GROWTH, 0, 0, 1.0)
     return _least_bottleneck(E, floor, below, exhausted, deadline, 4.0 * hs.step, rounds)
 
 
@@ -358,7 +359,7 @@ def _coarse_bottleneck(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray,
 
     # block searches start again each time: each reaches the bound of three rounds later
     got = _least_bottleneck(E, floor, below, exhausted, deadline, 4.0 * hs.step,
-                            (_GROWTH, 3, 1.0), ahead_later=3)
+                            (_GROWTH, 3, 3, 1.0))
     if got.timed_out:
         return got
     if got.goal is None:
@@ -373,21 +374,21 @@ def _coarse_bottleneck(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray,
 
 
 def _least_bottleneck(E: NearPairs, floor: float, below: Callable, exhausted: Callable,
-                      deadline: float, least: float, schedule: tuple[float, int, float],
-                      ahead_later: int = 0) -> Assignment:
+                      deadline: float, least: float,
+                      schedule: tuple[float, int, int, float]) -> Assignment:
     """Bottleneck, then sum, over the distances ``below(pm, pi, bound, room)`` gives for
     pairs (goal ``pm[k]``, robot ``pi[k]``) (inf at or above ``bound``; never below the
     straight line; ``room``: how far a goal's search may later be resumed in place);
     ``exhausted(has_pair, bound)``: an Assignment that ends the search when no larger
     bound can give a perfect matching, else None; ``E``: the straight lines, ``floor``:
-    :func:`_straight_floor` of them. ``schedule = (growth, ahead, room)``: the bound grows
-    by ``growth`` a round; the first search reaches the bound of the round ``ahead``
-    rounds later (each later one ``ahead_later``), so that the rounds up to there need
-    none, with room for ``room`` times that. The result does not depend on the schedule:
-    ``B*`` is found among the exact distances below the first bound that admits a
-    perfect matching, and the sum is taken over all pairs within it."""
+    :func:`_straight_floor` of them. ``schedule = (growth, ahead, ahead_later, room)``:
+    the bound grows by ``growth`` a round; the first search reaches the bound of the
+    round ``ahead`` rounds later (each later one ``ahead_later``), so that the rounds up
+    to there need none, with room for ``room`` times that. The result does not depend on
+    the schedule: ``B*`` is found among the exact distances below the first bound that
+    admits a perfect matching, and the sum is taken over all pairs within it."""
     M, N = E.M, E.N
-    growth, ahead, room = schedule
+    growth, ahead, ahead_later, room = schedule
     # distances are at least the straight lines: no bound below theirs can do
     bound = max(floor * 1.02, least)
     lo = 0.0  # no perfect matching among the pairs with distance < lo
