@@ -31,7 +31,7 @@ from lamp.fleet.regions import (
     swept,
 )
 from lamp.fleet.segments import Segment, on_grid
-from lamp.fleet.spacetime import PUSH_LEAD, PUSH_SPEEDUP, compatible
+from lamp.fleet.spacetime import PUSH_LEAD, PUSH_SPEEDUP, compatible, halted, halted_by
 from lamp.fleet.teams import (
     GROW_REACH,
     MIN_TEAM,
@@ -542,6 +542,65 @@ def test_boxes_whose_ways_cross_go_together_only_if_one_cannot_come_in_time() ->
         assert a.touch == 0 and b.touch == 0 and not compatible(a, b)
         assert compatible(a, b, seen) == together
         assert _brute_force_clear(a, b, seen) == together
+
+
+def _ended_push(index: int, y: float, pose: np.ndarray) -> Segment:
+    """A segment that pushed a box from (1, y) to (2, y) and has ended, its box read at
+    ``pose``."""
+    rows = np.linspace([1.0 - BOX.size[0] / 2 - R, y], [2.0 - BOX.size[0] / 2 - R, y], 50)[None]
+    seg = _segment(index, None, rows, np.array([[1.0, y, 0.0], [2.0, y, 0.0]]))
+    seg.cursor = seg.rows.shape[1]
+    return seg
+
+
+def test_segments_in_the_way_of_an_object_left_off_its_plan_stop() -> None:
+    """A's push ended with its box 0.5 m short of its last planned pose; B's robot will
+    cross x = 1.5 where the box stands: B stops. With the box where it was planned to
+    end, or B crossing farther on, nothing stops. C, whose robot crosses where B's box
+    now stands off its plan, stops too once B has (``halted``)."""
+    cross = np.linspace([1.5, 0.2], [1.5, 1.8], 40)[None]
+    b = _segment(1, None, cross, np.array([[4.0, 4.0, 0.0], [4.0, 4.0, 0.0]]))
+    short = np.array([1.5, 1.0, 0.0])
+    a = _ended_push(0, 1.0, short)
+    assert halted_by(a, [a, b], short) == [b]
+    assert halted_by(a, [a, b], np.array([2.0, 1.0, 0.0])) == []
+    assert halted_by(a, [a, _segment(1, None, cross + [2.5, 0.0], b.poses)], short) == []
+    # a robot passing 5.5 cm from the box's side (its centre) comes too near; 7 cm does not
+    for gap, stops in ((0.055, True), (0.07, False)):
+        by = _segment(1, None, cross + [BOX.size[0] / 2 + gap, 0.0], b.poses)
+        assert halted_by(a, [a, by], short) == ([by] if stops else [])
+    # B pushes its own box from (4, 4) to (4, 3); read 0.6 m short, it is in C's way
+    b = _segment(1, None, np.concatenate([cross, np.linspace([4.0, 4.3], [4.0, 3.3], 40)[None]],
+                                         axis=1), np.array([[4.0, 4.0, 0.0], [4.0, 3.0, 0.0]]))
+    c = _segment(2, None, np.linspace([3.5, 3.6], [4.5, 3.6], 40)[None],
+                 np.array([[6.0, 6.0, 0.0], [6.0, 6.0, 0.0]]))
+    poses = np.array([short, [4.0, 3.6, 0.0], [6.0, 6.0, 0.0]])
+    assert halted([a, b, c], poses) == [b, c]
+    assert halted([a, b, c], np.array([[2.0, 1.0, 0.0], *poses[1:]])) == []
+
+
+@settings(max_examples=100)
+@given(st.integers(0, 2**31 - 1), st.floats(0.0, 2.5), st.floats(0.0, 0.8))
+def test_a_segment_not_halted_keeps_clear_of_the_object_left_off_its_plan(seed, apart, off):
+    """Brute force: a running segment ``halted_by`` leaves running has no robot row left
+    within ``ROBOT_MARGIN`` of the ended segment's box where it stands, and no object
+    space meeting it; and none is halted while the box stands inside its last planned
+    pose grown by ``OBJECT_MARGIN``."""
+    rng = np.random.default_rng(seed)
+    pose = np.r_[rng.uniform(1.0, 2.0) + rng.uniform(-off, off), 1.0 + rng.uniform(-off, off),
+                 rng.uniform(-0.6, 0.6) * off]
+    a = _ended_push(0, 1.0, pose)
+    b = _random_segment(rng, 1, (1.5 + apart - 1.2, 1.2))
+    b.cursor = int(rng.integers(0, b.rows.shape[1]))
+    stop = halted_by(a, [a, b], pose)
+    body = to_shapely(BOX, pose)
+    if footprints(BOX, a.poses[-1:], OBJECT_MARGIN).contains(body):
+        assert stop == []
+    elif b not in stop:
+        rows = b.rows[:, b.cursor:].reshape(-1, 2)
+        assert all(body.distance(shapely.Point(p)) >= R + ROBOT_MARGIN for p in rows)
+        assert not any(footprints(BOX, q, OBJECT_MARGIN).intersects(body)
+                       for q in (b.poses[:1], b.poses, b.poses[-1:]))
 
 
 def test_far_apart_segments_are_compatible_and_crossing_robots_are_not() -> None:

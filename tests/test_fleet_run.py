@@ -96,6 +96,16 @@ def test_fleet_family_scenes_run_concurrently_and_safely(name: str) -> None:
     assert_safe(result)
 
 
+def test_the_reach_cut_runs_safely_end_to_end() -> None:
+    """``fleet_reach_cut`` = 1: admission cuts pushed objects to their reach from where
+    they are seen; the run places every object, passes the safety check, and every
+    pushed object stayed within that reach (``assert_safe``)."""
+    result = lamp.solve("fleet-13", "lazy", 0, params={"fleet_reach_cut": 1})
+    assert result.success, [o.failure_reason for o in result.objects]
+    assert result.to_dict()["params"]["fleet_reach_cut"] == 1
+    assert_safe(result)
+
+
 def test_schedule_is_refused_by_name_where_it_cannot_run(tmp_path: Path) -> None:
     scene = scene_from_dict(copy.deepcopy(ROOMS))
     with pytest.raises(InputError, match="schedule"):

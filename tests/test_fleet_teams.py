@@ -72,7 +72,7 @@ def test_allocate_with_goals_starts_the_same_teams_sizes_balanced(seed, n_obj, n
 
 def test_balance_teams_and_reach_cut_are_zero_or_one() -> None:
     assert FleetConfig(balance_teams=1).balance_teams == 1
-    assert FleetConfig(reach_cut=0).reach_cut == 0 and FleetConfig().reach_cut == 1
+    assert FleetConfig(reach_cut=1).reach_cut == 1 and FleetConfig().reach_cut == 0
     with pytest.raises(InputError, match="fleet_balance_teams: 0 or 1, got 2"):
         FleetConfig(balance_teams=2)
     with pytest.raises(InputError, match="fleet_reach_cut: 0 or 1, got 3"):

@@ -95,7 +95,7 @@ class FleetConfig:
                                "objects starting together so that the latest arrival plus "
                                "haul is least (teams.balanced_teams); 0: each object in "
                                "priority order takes its nearest free robots.", low=0)
-    reach_cut: int = param(1, "Concurrent schedule: 1: admission cuts a pushed object's "
+    reach_cut: int = param(0, "Concurrent schedule: 1: admission cuts a pushed object's "
                            "space to where it can get from where it is seen (its robots' "
                            "way x 1.5 + 0.1 m; only where pushes are tracked exactly: no "
                            "sensing or actuation noise, no knocks); 0: anywhere along its "

@@ -60,6 +60,7 @@ from lamp.fleet.objects import given_up
 from lamp.fleet.regions import claims
 from lamp.fleet.reteam import TeamChanges
 from lamp.fleet.segments import Segment, on_grid, run_together
+from lamp.fleet.spacetime import halted
 from lamp.fleet.state import FREE, ObjectState, ObjectStatus
 from lamp.fleet.teams import allocate, near_way, start_order
 from lamp.fleet.turns import Turns
@@ -78,8 +79,7 @@ class Fleet(TeamChanges):
     drives its closed loops on ``fleet.view(k)`` (``objects.LoopHost``: what a loop may
     ask). ``timeline(trace, sim_time, team)`` receives every stretch of the shared clock
     and the object whose sub-team each robot was in (-1: none; the recorder's
-    ``follow``).
-    """
+    ``follow``)."""
 
     def __init__(self, scene: Scene, executor: WorldExecutor,
                  object_main: Callable[[Fleet, int], ObjectOutcome],
@@ -90,8 +90,7 @@ class Fleet(TeamChanges):
         super().__init__(scene, executor, row_step, config or FleetConfig(),
                          T.ScheduledFeed(scene) if feed is None else feed, serial)
         self.observers = list(observers)
-        self.object_main, self.timeline = object_main, timeline
-        self.turns = Turns()
+        self.object_main, self.timeline, self.turns = object_main, timeline, Turns()
         self.outcomes: list[list[ObjectOutcome]] = [[] for _ in scene.objects]  # by task
         self._at_rest = False  # whether the world stood still through the last idle stretch
         self._take_tasks()  # those released at 0: the objects' own goals, first of all
@@ -257,8 +256,7 @@ class Fleet(TeamChanges):
         o.looked_at = self.events
 
     def _wake_blocked(self) -> None:
-        """The waiting planners whose wait is over (``blocked.wait_over``) plan again; the
-        objects' poses are read once, and only if one looks (``blocked.looks_now``)."""
+        """Waiting planners whose wait is over plan again (``blocked``: poses read once)."""
         now, poses = self.events, None
         for o in self.objects:
             if o.blocked_at is None:
@@ -411,8 +409,7 @@ class Fleet(TeamChanges):
         self._ended(running)
 
     def _clocked(self, out: Any, running: list[Segment], paths: np.ndarray) -> None:
-        """The shared clock ran ``out`` (``paths`` of every robot, ``running``'s teams
-        working): charged, recorded, shown to the feed, and the clock moves on."""
+        """The clock ran ``out`` (``paths``): charged, recorded, fed; time moves on."""
         self.stats.robot_time.charge([s.team for s in running], self.owner, paths,
                                      float(out.sim_time))
         self.timeline(out.trace, float(out.sim_time), np.maximum(self.owner, FREE))
@@ -420,7 +417,10 @@ class Fleet(TeamChanges):
         self.clock += float(out.sim_time)
 
     def _ended(self, running: list[Segment]) -> None:
-        """The loops of the ``running`` segments that are done go on, with their replies."""
+        """Done segments' loops go on; first, any an off-plan object blocks stop (``halted``)."""
+        for s in halted(running, self.executor.object_poses):
+            s.stopped_at = 0  # they plan anew around where it stands
+            self.stats.count("halted")
         for s in running:
             if s.done:
                 o = self.objects[s.index]

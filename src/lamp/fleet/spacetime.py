@@ -41,8 +41,8 @@ from lamp.fleet.regions import OBJECT_MARGIN, ROBOT_MARGIN, footprints
 from lamp.fleet.segments import Segment
 from lamp.geometry.shapes import to_shapely
 
-__all__ = ["PUSH_LEAD", "PUSH_SPEEDUP", "compatible", "object_phases", "object_reach",
-           "object_space", "reach_box"]
+__all__ = ["PUSH_LEAD", "PUSH_SPEEDUP", "compatible", "halted_by", "object_phases",
+           "object_reach", "object_space", "reach_box"]
 
 #: A pushed object's points move at most this many times as far as its segment's
 #: farthest-moving robot (a point away from the contact swings faster when it turns) ...
@@ -247,3 +247,43 @@ def compatible(a: Segment, b: Segment, seen: np.ndarray | None = None) -> bool:
         return False
     clear = r + ROBOT_MARGIN
     return _robots_clear(rb, phases_a, clear) and _robots_clear(ra, phases_b, clear)
+
+
+def halted(running: list[Segment], poses: np.ndarray) -> list[Segment]:
+    """The ``running`` segments to stop now (every segment that runs on after the shared
+    clock stopped, ``poses`` every object's pose read now), in the order found: those an
+    ended segment's object stands in the way of (:func:`halted_by`), then those a halted
+    one's object stands in the way of, and so on."""
+    out: list[Segment] = []
+    todo = [s for s in running if s.done]
+    while todo:
+        ended = todo.pop(0)
+        for seg in halted_by(ended, [s for s in running if s not in out], poses[ended.index]):
+            out.append(seg)
+            todo.append(seg)
+    return out
+
+
+def halted_by(ended: Segment, running: list[Segment], pose: np.ndarray) -> list[Segment]:
+    """The ``running`` segments (not done) that must stop now because ``ended``'s object
+    stands (``pose``, read now) outside the space its segment was taken to leave it in
+    (its last planned pose grown by ``OBJECT_MARGIN``: a push that drifted further, or
+    stopped short) and in their way: a robot row they have left comes nearer than
+    ``ROBOT_MARGIN`` to it, or one of their object's spaces (:func:`object_phases`)
+    meets it. They were admitted against that space, not against the body where it
+    stands; stopped, their loops plan anew around it. None while the object stands
+    inside that space (tested against a brute force, ``tests/test_fleet_parts.py``)."""
+    body = to_shapely(ended.shape, np.asarray(pose, float))
+    if object_space(ended, final=True).contains(body):
+        return []
+    box = np.asarray(body.bounds, float)
+    out = []
+    for seg in running:
+        clear = seg.robot_radius + ROBOT_MARGIN
+        if seg is ended or seg.done or apart(reach_box(seg), box, clear):
+            continue
+        rows = seg.rows[:, seg.cursor:].reshape(-1, 2)
+        if (np.min(shapely.distance(body, shapely.points(rows)), initial=np.inf) < clear
+                or any(space.intersects(body) for _, space in object_phases(seg))):
+            out.append(seg)
+    return out
