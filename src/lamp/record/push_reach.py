@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from lamp.record.safety import _shape_body, recorded_teams
+from lamp.record.safety import recorded_teams, shape_body
 from lamp.scene.model import Scene
 
 __all__ = ["ReachReport", "push_reach", "push_reach_run_dir"]
@@ -78,7 +78,7 @@ def push_reach(scene: Scene, robots: np.ndarray, objects: np.ndarray, robot_team
     best = (-np.inf, -1, 0, 0)
     pairs = 0
     for k, obj in enumerate(scene.objects):
-        body = _shape_body(obj.shape)
+        body = shape_body(obj.shape)
         verts = None if body.radius is not None else body.verts
         mine = team == k
         # runs of rows with the same sub-team: pairs are compared within one run only

@@ -161,7 +161,7 @@ def _polygon(points: np.ndarray) -> _Body:
                  ring=ring, verts=verts)
 
 
-def _shape_body(shape: Shape) -> _Body:
+def shape_body(shape: Shape) -> _Body:
     """A scene shape in its own frame."""
     if isinstance(shape, Circle):
         return _disk(shape.radius)
@@ -175,7 +175,7 @@ def _obstacle_body(obstacle: Obstacle) -> tuple[_Body, np.ndarray]:
     """A static obstacle as a body and its pose; polygons are re-centred on their bounding
     box so that ``bound`` is tight (world polygons come with the identity pose)."""
     pose = np.asarray(obstacle.pose, dtype=float)
-    body = _shape_body(obstacle.shape)
+    body = shape_body(obstacle.shape)
     if body.radius is not None:
         return body, np.array([pose[0], pose[1], 0.0])
     world = _to_world(pose[None], body.verts)[0]
@@ -368,7 +368,7 @@ def check_recording(scene: Scene, times, robot_positions, object_poses, *,
                          f"{s} times, got {robots.shape} and {objects.shape}")
     r = float(scene.robot_radius)
     robot = _disk(r)
-    bodies = [_shape_body(o.shape) for o in scene.objects]
+    bodies = [shape_body(o.shape) for o in scene.objects]
     statics = [_obstacle_body(o) for o in scene.obstacles]
     bounds = np.array([b.bound for b in bodies])
     times_x, robots_x, objects_x = _states(times, robots, objects, bounds, r / 2)
@@ -432,4 +432,4 @@ def recorded_teams(rec) -> np.ndarray:
 
 
 __all__ = ["DEFAULT_TOL", "KINDS", "SAMPLE_SPACING", "SafetyReport", "Violation",
-           "check_recording", "check_run_dir", "recorded_teams"]
+           "check_recording", "check_run_dir", "recorded_teams", "shape_body"]
