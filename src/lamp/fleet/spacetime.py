@@ -13,10 +13,11 @@ When the objects' poses as read now are given (``seen``), a pushed object is als
 stay near where it was seen: every point of it moves at most ``PUSH_SPEEDUP`` times as
 far as the farthest-moving robot of its segment, plus ``PUSH_LEAD`` (:func:`object_reach`;
 robots push it, nothing else does; ``lamp.record.push_reach`` measures the bound on
-recordings: ``benchmarks/push_reach.py``, and every concurrent run of the tests). A robot, or the
-other object, is then in the way of a moving object at a row only if it is near the
-object's planned motion *and* within that reach of the object seen: a segment may cross
-the far end of another's push long before the object comes.
+recordings: ``benchmarks/push_reach.py``, and every concurrent run of the tests). A
+robot, or the other object, is then in the way of a moving object at a row only if it
+is near the object's planned motion *and* within that reach of the object seen: a
+segment may cross the far end of another's push long before the object comes (the
+fleet's opt-in ``reach_cut``).
 
 Guarantee (``tests/test_fleet_parts.py``, against a row-by-row brute force): when
 :func:`compatible` holds, at every row of the shared clock each robot of one segment is at
@@ -28,6 +29,10 @@ objects' spaces (so cut) do not meet while both hold them.
 Segments whose reach (:func:`reach_box`: every row left and every object phase) lie
 farther apart than the largest of those clearances are compatible without a row being
 compared: the same answer, found from two boxes (tested against the full test).
+
+A segment that ends with its object outside its last planned pose (grown by
+``OBJECT_MARGIN``) breaks what the running segments were admitted on: :func:`halted`
+names those that come too near it, to be stopped.
 """
 
 from __future__ import annotations
