@@ -287,8 +287,7 @@ def halted_by(ended: Segment, running: list[Segment], pose: np.ndarray) -> list[
         clear = seg.robot_radius + ROBOT_MARGIN
         if seg is ended or seg.done or apart(reach_box(seg), box, clear):
             continue
-        rows = seg.rows[:, seg.cursor:].reshape(-1, 2)
-        if (np.min(shapely.distance(body, shapely.points(rows)), initial=np.inf) < clear
+        if (not _robots_clear(seg.rows[:, seg.cursor:], [(math.inf, body, None)], clear)
                 or any(space.intersects(body) for _, space in object_phases(seg))):
             out.append(seg)
     return out
