@@ -492,3 +492,62 @@ def _fleet_settings(monkeypatch, params: dict, *names: str) -> tuple:
         lamp.solve(scene_from_dict(_two_boxes(5.0, (1.2, 2.2), 4.2)), "lazy", 0, params=params)
     assert len(seen) == 1
     return seen[0]
+
+
+def test_lamp_check_passes_the_runs_and_fails_a_shove(rooms_runs, tmp_path: Path) -> None:
+    """``lamp check``: the recorded runs pass; the same concurrent run with an object
+    knocked 0.3 m aside in one row fails on its push lead (exit 1, naming the object),
+    which is not judged once the run says pushes knocked objects; a sequential run's lead
+    is measured, not judged; bad paths and recordings exit 2."""
+    import dataclasses
+
+    import numpy as np
+    from run_safety import BOUND
+
+    from lamp.fleet.spacetime import PUSH_LEAD
+    from lamp.record.audit import audit_recording
+    from lamp.record.format import save_recording
+
+    concurrent, _, sequential = rooms_runs
+    save_recording(concurrent.recording, tmp_path / "runs" / "con")
+    save_recording(sequential.recording, tmp_path / "runs" / "seq")
+    res = CliRunner().invoke(app, ["check", str(tmp_path / "runs")])
+    assert res.exit_code == 0, res.output
+    assert res.output.count("PASS") == 2 and "not judged: sequential run" in res.output
+    assert "2 of 2 run(s) passed" in res.output
+    res = CliRunner().invoke(app, ["check", str(tmp_path / "runs"), "--json"])
+    rows = [json.loads(line) for line in res.stdout.splitlines()]
+    assert res.exit_code == 0 and [r["ok"] for r in rows] == [True, True]
+    assert [r["push_lead_judged"] for r in rows] == [True, False]
+    assert rows[0]["violations"] == [] and rows[0]["push_lead_m"] <= PUSH_LEAD
+
+    rec = concurrent.recording
+    objects = np.array(rec.arrays["objects"])
+    row = len(objects) // 2
+    objects[row:, 1, 1] += 0.3  # object 1 jumps sideways in one row, the rest follow
+    shoved = dataclasses.replace(rec, arrays={**rec.arrays, "objects": objects})
+    audit = audit_recording(shoved, BOUND)
+    assert not audit.lead_ok and not audit.ok
+    assert audit.reach.object == 1 and audit.reach.lead > 0.3 - 0.05 - PUSH_LEAD
+    assert audit.reach.until_s == pytest.approx(rec.arrays["times"][row])
+    save_recording(shoved, tmp_path / "shoved")
+    res = CliRunner().invoke(app, ["check", str(tmp_path / "shoved"), "--no-reach"])
+    assert "push lead not measured" in res.output
+    res = CliRunner().invoke(app, ["check", str(tmp_path / "shoved")])
+    assert res.exit_code == 1 and "FAIL" in res.output and "VIOLATION" in res.output
+    assert "object 1" in res.output
+    knocked = dataclasses.replace(shoved, result={
+        **rec.result, "disturbances": {**rec.result["disturbances"], "push_disturbance": 0.5}})
+    audit = audit_recording(knocked, BOUND)
+    assert audit.lead_ok and audit.not_judged == "disturbed by push_disturbance"
+    assert audit.ok == audit.safety.ok
+
+    res = CliRunner().invoke(app, ["check", str(tmp_path / "nowhere")])
+    assert res.exit_code == 2 and "nowhere" in res.output
+    (tmp_path / "empty").mkdir()
+    res = CliRunner().invoke(app, ["check", str(tmp_path / "empty")])
+    assert res.exit_code == 2 and "no recording" in res.output
+    (tmp_path / "runs" / "broken").mkdir()
+    (tmp_path / "runs" / "broken" / "recording.json").write_text("{")
+    res = CliRunner().invoke(app, ["check", str(tmp_path / "runs")])
+    assert res.exit_code == 2 and "broken" in res.output and res.output.count("PASS") == 2

@@ -71,3 +71,45 @@ def test_the_lead_is_how_far_the_object_outran_its_pushers() -> None:
     rep = push_reach(_scene(Circle(0.2)), robots[:51], objects[:51], team[:51], times[:51],
                      1.0, 60)
     assert rep.lead == pytest.approx(0.0, abs=1e-9)
+
+
+def _brute_lead(scene, robots, objects, team, speedup, horizon) -> float:
+    """The largest lead over every pair of rows (reference: no pair left out)."""
+    path = np.concatenate([[np.zeros(robots.shape[1])], np.cumsum(
+        np.linalg.norm(np.diff(robots, axis=0), axis=2), axis=0)])
+    best = -np.inf
+    for k, obj in enumerate(scene.objects):
+        disk = isinstance(obj.shape, Circle)
+        hx, hy = (0.0, 0.0) if disk else (0.5 * obj.shape.size[0], 0.5 * obj.shape.size[1])
+        verts = None if disk else np.array([[-hx, -hy], [hx, -hy], [hx, hy], [-hx, hy]])
+        radius = obj.shape.radius if disk else 0.0
+        for i in range(len(robots)):
+            for j in range(i + 1, min(len(robots), i + horizon + 1)):
+                if any((team[r] == k).tolist() != (team[i] == k).tolist()
+                       for r in range(i, j + 1)):
+                    break
+                drove = max([path[j, n] - path[i, n] for n in range(robots.shape[1])
+                             if team[i, n] == k], default=0.0)
+                moved = _moved(verts, radius, objects[i:i + 1, k], objects[j:j + 1, k])[0]
+                best = max(best, moved - speedup * drove)
+    return best
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.integers(2, 30), st.integers(1, 12),
+       st.floats(0.5, 2.0), st.booleans())
+def test_the_lead_is_that_of_every_pair_of_rows(seed, s, horizon, speedup, disk) -> None:
+    """Random recordings whose objects stand still in most steps and whose teams change:
+    the lead is the largest over every pair of rows, none left out."""
+    rng = np.random.default_rng(seed)
+    shape = Circle(0.2) if disk else Rectangle((0.4, 0.3))
+    scene = Scene("open", (10.0, 10.0), ((0.5, 0.5), (0.5, 1.0), (1.0, 1.0)),
+                  (SceneObject(shape, (5.0, 5.0, 0.0), (6.0, 5.0, 0.0)),
+                   SceneObject(shape, (3.0, 3.0, 0.0), (6.0, 3.0, 0.0))), (), 0.05)
+    robots = np.cumsum(rng.normal(0, 0.05, (s, 3, 2)) * (rng.random((s, 3, 1)) < 0.6), axis=0)
+    objects = np.cumsum(rng.normal(0, 0.05, (s, 2, 3)) * (rng.random((s, 2, 1)) < 0.3), axis=0)
+    team = np.repeat(rng.integers(-1, 2, (max(1, s // 4), 3)), 4, axis=0)[:s]
+    team = np.concatenate([team, np.full((s - len(team), 3), -1)]).astype(int)
+    rep = push_reach(scene, robots, objects, team, np.arange(s) * 0.08, speedup, horizon)
+    assert rep.lead == pytest.approx(_brute_lead(scene, robots, objects, team, speedup,
+                                                 horizon), abs=1e-12)

@@ -6,6 +6,7 @@ runs it too) and wires them together:
 
 - :mod:`lamp.cli.run`: ``lamp run``, ``lamp demo``, ``lamp warmup``;
 - :mod:`lamp.cli.draw`: ``lamp show``, ``lamp render``, ``lamp timeline``;
+- :mod:`lamp.cli.check`: ``lamp check``;
 - :mod:`lamp.cli.scene`: ``lamp validate``, ``lamp schema``;
 - :mod:`lamp.cli.serve`: ``lamp serve``;
 - :mod:`lamp.cli.bench`: ``lamp bench``, ``lamp report`` (options: :mod:`lamp.cli.bench_options`);
@@ -14,7 +15,8 @@ runs it too) and wires them together:
 - :mod:`lamp.cli.support`: what they share: the one exit-2 handler, input checks, the
   progress display, the run summary.
 
-Exit status: 0 when a command finished (``lamp run --check`` exits 1 when the task failed),
+Exit status: 0 when a command finished (``lamp run --check`` exits 1 when the task failed,
+``lamp check`` when a run failed a check),
 2 for bad input (checked before any planning or writing), 1 for an internal error.
 """
 
@@ -22,7 +24,7 @@ from __future__ import annotations
 
 import typer
 
-from lamp.cli import bench, draw, model, rl, run, scene, serve, suite
+from lamp.cli import bench, check, draw, model, rl, run, scene, serve, suite
 from lamp.cli.support import lamp_typer, version_callback
 
 __all__ = ["app", "main"]
@@ -49,6 +51,7 @@ app.command("demo")(run.demo)
 app.command("warmup")(run.warmup)
 app.command("render")(draw.render_command)
 app.command("timeline")(draw.timeline_command)
+app.command("check")(check.check_command)
 app.command("validate")(scene.validate_command)
 app.command("schema")(scene.schema_command)
 app.command("bench")(bench.bench_command)

@@ -4,7 +4,9 @@
 - ``save_recording(recording, run_dir)`` / ``load_recording(run_dir)``: the two files
   ``recording.npz`` + ``recording.json`` (``docs/recording-format.md``);
 - ``check_recording`` / ``check_run_dir`` (``lamp.record.safety``, Shapely, loaded on first
-  use): an independent re-check that nothing collided in a recorded run.
+  use): an independent re-check that nothing collided in a recorded run;
+- ``audit_recording`` / ``audit_run_dir`` (``lamp.record.audit``, as ``lamp check``): that
+  check and how far pushed objects ran ahead of their pushers (``lamp.record.push_reach``).
 
 Rendering a recording (GIF, MP4, PNG, HTML) is ``lamp.viz.replay``.
 """
@@ -25,11 +27,13 @@ from lamp.record.format import (
 from lamp.record.recorder import Recorder
 
 if TYPE_CHECKING:
+    from lamp.record.audit import ReachBound, RunAudit, audit_recording, audit_run_dir
     from lamp.record.safety import SafetyReport, Violation, check_recording, check_run_dir
 
 #: The safety check's names, imported when first asked for (it loads Shapely).
 _LAZY = dict.fromkeys(("SafetyReport", "Violation", "check_recording", "check_run_dir"),
-                      "lamp.record.safety")
+                      "lamp.record.safety") | dict.fromkeys(
+    ("ReachBound", "RunAudit", "audit_recording", "audit_run_dir"), "lamp.record.audit")
 __getattr__ = lazy_getattr("lamp.record", _LAZY, globals())
 
 __all__ = [
@@ -39,9 +43,13 @@ __all__ = [
     "OUTCOMES",
     "Recorder",
     "Recording",
+    "ReachBound",
     "RecordingError",
+    "RunAudit",
     "SafetyReport",
     "Violation",
+    "audit_recording",
+    "audit_run_dir",
     "check_recording",
     "check_run_dir",
     "load_recording",

@@ -15,6 +15,13 @@ stay put), it compares
   the recorded rows (straight between rows: never longer than what it drove);
 
 and reports the largest ``moved - speedup * drove`` (the lead the run needed) and where.
+
+Pairs over which the object stands still in their first (or last) step are not compared:
+with the same sub-team throughout, the pair one row shorter moves the object as far and
+its robots no farther, so its lead is at least as large (by induction down to pairs of
+consecutive rows, all compared). The largest lead is that of every pair; on the 36-robot
+depot's recording (6,865 rows, objects still in about 80 % of the steps) 14 % of the
+pairs are compared.
 """
 
 from __future__ import annotations
@@ -84,8 +91,14 @@ def push_reach(scene: Scene, robots: np.ndarray, objects: np.ndarray, robot_team
         # runs of rows with the same sub-team: pairs are compared within one run only
         change = np.concatenate([[True], np.any(mine[1:] != mine[:-1], axis=1)])
         run = np.cumsum(change)
+        step = np.any(objects[1:, k] != objects[:-1, k], axis=1)  # (S-1,) it moved i -> i+1
+        starts = np.flatnonzero(step)
         for w in range(1, min(horizon, s - 1) + 1):
-            i = np.flatnonzero(run[:-w] == run[w:])
+            if w == 1:  # every pair of consecutive rows
+                i = np.flatnonzero(run[:-1] == run[1:])
+            else:  # only pairs whose object moves in their first and their last step
+                i = starts[starts + w < s]
+                i = i[step[i + w - 1] & (run[i] == run[i + w])]
             if i.size == 0:
                 continue
             drove = np.where(mine[i], path[i + w] - path[i], 0.0).max(axis=1)

@@ -122,10 +122,10 @@ class SafetyReport:
         verdict = "OK" if self.ok else f"{len(self.violations)} violation(s)"
         lines = [f"safety: {self.rows_checked} rows ({self.states_checked} states checked), "
                  f"{self.n_robots} robots, {self.n_objects} objects: {verdict}",
-                 f"  {'kind':<16}{'deepest':>10}{'tol':>9}{'violations':>12}"]
+                 f"  {'kind':<20}{'deepest':>10}{'tol':>9}{'violations':>12}"]
         for kind in KINDS:
             n = sum(v.kind == kind for v in self.violations)
-            lines.append(f"  {kind:<16}{1000 * self.worst_depth.get(kind, 0.0):>7.3f} mm"
+            lines.append(f"  {kind:<20}{1000 * self.worst_depth.get(kind, 0.0):>7.3f} mm"
                          f"{1000 * self.tol[kind]:>6.1f} mm{n:>12}")
         lines += ["  " + v.describe() for v in self.violations]
         return "\n".join(lines)
