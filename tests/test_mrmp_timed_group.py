@@ -92,11 +92,11 @@ def test_timed_budget_grows_with_the_square_of_the_fleet() -> None:
     assert timed_budget(1600) == 40_000
 
 
-@pytest.mark.parametrize(("seed", "exchange"), [(2, False), (5, True)])
+@pytest.mark.parametrize(("seed", "exchange"), [(2, True), (5, True)])
 def test_groups_and_exchanges_inside_plan_paths(seed: int, exchange: bool) -> None:
-    """800 robots on ``random-64-64-20`` (seed 2: a group round; seed 5: goal
-    exchanges, with a robot in the way and with the holder of a goal near the last
-    robot's start), the stage spied on: it planned robots together, the goals it returns are
+    """800 robots on ``random-64-64-20`` (seed 2: group rounds, one restarted, and an
+    exchange; seed 5: goal exchanges, with a robot in the way and with the holder of a
+    goal near the last robot's start), the stage spied on: it planned robots together, the goals it returns are
     a permutation of those it was given and the plan's own, the fleet checker accepts the
     plan (the general one takes minutes at this size), the last arrival is no later than
     the retiming's, and a second call gives the same plan."""
@@ -124,6 +124,35 @@ def test_groups_and_exchanges_inside_plan_paths(seed: int, exchange: bool) -> No
     again = plan_paths(gm.scene, S, G, seed=seed, time_limit=600.0)
     assert np.array_equal(again.paths, plan.paths)
     assert np.array_equal(again.goal_of, plan.goal_of)
+
+
+def test_group_restarts_inside_plan_paths() -> None:
+    """800 robots on ``random-64-64-20``, seed 13: a group whose member planned after the
+    last robot finds no way is planned again with that member first. The stage's input
+    repaired with and without restarts: both arrive no later than the retiming, the
+    restarts strictly earlier (1.19 m against 1.47 m), with more ways planned; the fleet
+    checker accepts the plan with them, and a second call gives the same rows."""
+    gm = load_grid_map(MAPF / "random-64-64-20.map")
+    S, G = random_instance(gm, 800, 13)
+    seen = {}
+    real = gspi.timed_repair
+
+    def spy(*args, **kw):
+        seen.update(args=args, kw=kw)
+        return real(*args, **kw)
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(gspi, "timed_repair", spy)
+        plan = plan_paths(gm.scene, S, G, seed=13, time_limit=600.0)
+    assert plan.success and seen
+    before = _makespan(seen["args"][0])
+    none = real(*seen["args"], **seen["kw"], restarts=0)
+    again = real(*seen["args"], **seen["kw"])
+    assert np.array_equal(again[0], plan.paths)
+    assert again[2] > none[2]
+    assert _makespan(none[0]) <= before + 1e-6
+    assert _makespan(plan.paths) < _makespan(none[0]) - 0.1
+    assert check_fleet_plan(gm.scene.to_dict(), S, G, plan, R) == []
 
 
 @settings(max_examples=200, deadline=None)

@@ -15,13 +15,18 @@ at their last positions from their arrivals on (then, failing that, as if there 
 other robot) names the robots whose motion that way would cross (at most
 :data:`TIMED_GROUP`); their motions are set aside, the last robot is planned again, then
 each of them, latest first, every one to arrive before the same target, against every
-motion kept and every new way; all are kept or none. Failing that, the last robot
+motion kept and every new way; all are kept or none. When one of them finds no way, all
+are planned again with it first (prioritised planning's restart on failure: a way found
+early for the last robot may cross where a member must pass; up to
+:data:`TIMED_RESTARTS` times). Failing that, the last robot
 exchanges goals with one of them (the :data:`TIMED_EXCHANGES` latest), both planned
 again the same way (the goals are interchangeable, so the exchange is returned with the
 rows); then with the holders of the goals near its start whose own start lies near its
 goal (:func:`_near_holders`: the :data:`TIMED_EXCHANGES` whose longer straight line is
 shortest, below the target). Robots tied with the last are tried in turn before the
-loop ends.
+loop ends. Without groups (up to :data:`TIMED_BUDGET_ROBOTS` robots), a last robot with
+no earlier way whose lattice distance is near the target is searched again with the
+lower-bound heuristic, as in a group round.
 
 Search (:mod:`lamp.mrmp.timed_search`): A* over (vertex, time) of the plan's graph
 (lattice nodes, the robot's own start and goal vertices' links, other goals' vertices;
@@ -64,8 +69,8 @@ from lamp.mrmp.timed_search import TIGHT_FROM, timed_search
 from lamp.mrmp.timed_sipp import sipp_search
 
 __all__ = ["TIMED_BUDGET", "TIMED_BUDGET_MAX", "TIMED_BUDGET_ROBOTS", "TIMED_ENTRIES",
-           "TIMED_EXCHANGES", "TIMED_GROUP", "TIMED_ROUNDS", "TIMED_SIPP_FROM", "timed_budget",
-           "timed_repair"]
+           "TIMED_EXCHANGES", "TIMED_GROUP", "TIMED_RESTARTS", "TIMED_ROUNDS",
+           "TIMED_SIPP_FROM", "timed_budget", "timed_repair"]
 
 #: States all the searches of one call may expand together (the work bound), for up to
 #: :data:`TIMED_BUDGET_ROBOTS` robots; beyond, it grows with the square of the robots
@@ -90,6 +95,9 @@ TIMED_GROUP = 8
 #: (:func:`lamp.mrmp.timed_sipp.sipp_search`) where the others move; smaller ones over
 #: (vertex, time) (:func:`lamp.mrmp.timed_search.timed_search`).
 TIMED_SIPP_FROM = 100
+#: Restarts of a group of robots planned again together (:func:`_plan_members`): each
+#: time one of them finds no way, all are planned again with it first (0: none).
+TIMED_RESTARTS = 4
 #: Goal exchanges tried for the last robot with the robots in its way, and then with
 #: the holders of goals near its start (each; 0: none).
 TIMED_EXCHANGES = 4
@@ -166,11 +174,43 @@ def _plan_members(members: np.ndarray, pv: np.ndarray, pt: np.ndarray, target: i
                   gr: tuple, V: int, gv0: int, hs: tuple, goal: np.ndarray, X: np.ndarray,
                   Y: np.ndarray, tt: np.ndarray, hh: tuple, x0: float, y0: float, cs: float,
                   ny: int, two_r: float, q: float, budget: int, ob: tuple, arr: np.ndarray,
-                  state: tuple, segs: tuple) -> tuple:
+                  state: tuple, segs: tuple, restarts: int) -> tuple:
     """Plan the ``members`` again in turn, each to arrive before ``target``, the others'
     old motions ignored meanwhile (the first's way ``pv, pt`` when given); all or none
-    are kept. ``state = (rep, WX, WY, WT, wptr, wrob, box, nw)``; returns it updated,
-    with whether they were kept and the states expanded."""
+    are kept. When one of them finds no way, they are planned again with it first (the
+    others in their order), not when it was first already (it met only the motions kept; ``restarts``: at most, default
+    :data:`TIMED_RESTARTS`). ``state = (rep, WX, WY, WT, wptr, wrob,
+    box, nw)``; returns it updated, with whether they were kept and the states
+    expanded."""
+    order = members.copy()
+    work = 0
+    for attempt in range(restarts + 1):
+        state, j, w = _plan_order(order, pv if attempt == 0 else pv[:0],
+                                  pt if attempt == 0 else pt[:0], target, gr, V, gv0, hs,
+                                  goal, X, Y, tt, hh, x0, y0, cs, ny, two_r, q, budget - work,
+                                  ob, arr, state, segs)
+        work += w
+        if j < 0:
+            return state, True, work
+        if order[0] == j or work >= budget:
+            break
+        k = 0
+        while order[k] != j:
+            k += 1
+        order[1: k + 1] = order[:k].copy()
+        order[0] = j
+    return state, False, work
+
+
+@nb.njit(cache=True)
+def _plan_order(members: np.ndarray, pv: np.ndarray, pt: np.ndarray, target: int,
+                gr: tuple, V: int, gv0: int, hs: tuple, goal: np.ndarray, X: np.ndarray,
+                Y: np.ndarray, tt: np.ndarray, hh: tuple, x0: float, y0: float, cs: float,
+                ny: int, two_r: float, q: float, budget: int, ob: tuple, arr: np.ndarray,
+                state: tuple, segs: tuple) -> tuple:
+    """One try of :func:`_plan_members` in the order ``members``: the state (unchanged
+    unless all were planned), the member that found no way (-1: none) and the states
+    expanded."""
     rep, WX, WY, WT, wptr, wrob, box, nw = state
     ends_goal = goal >= 0
     nw0, rep0, wrob0, arr0 = nw, rep.copy(), wrob[:nw].copy(), arr.copy()
@@ -191,12 +231,12 @@ def _plan_members(members: np.ndarray, pv: np.ndarray, pt: np.ndarray, target: i
                 rep[:] = rep0
                 wrob[:nw0] = wrob0
                 arr[:] = arr0
-                return (rep, WX, WY, WT, wptr, wrob, box, nw0), False, work
+                return (rep, WX, WY, WT, wptr, wrob, box, nw0), j, work
         WX, WY, WT = _add_way(j, pv, pt, gr[0], q, WX, WY, WT, wptr, wrob, box, nw)
         arr[j] = WT[wptr[nw + 1] - 1]
         nw += 1
         pv = pv[:0]
-    return (rep, WX, WY, WT, wptr, wrob, box, nw), True, work
+    return (rep, WX, WY, WT, wptr, wrob, box, nw), -1, work
 
 
 @nb.njit(cache=True)
@@ -204,9 +244,10 @@ def _one_round(i: int, target: int, gr: tuple, V: int, gv0: int, hs: tuple,
                goal: np.ndarray, X: np.ndarray, Y: np.ndarray, tt: np.ndarray, hh: tuple,
                x0: float, y0: float, cs: float, ny: int, two_r: float, q: float,
                budget: int, ob: tuple, arr: np.ndarray, state: tuple, group: int,
-               exchanges: int, segs: tuple) -> tuple:
-    """Robot i planned again to arrive before ``target`` (:func:`_rounds`): alone, else
-    (``group > 0``) alone with the lower-bound heuristic, with the robots in its way, or
+               exchanges: int, segs: tuple, restarts: int) -> tuple:
+    """Robot i planned again to arrive before ``target`` (:func:`_rounds`): alone, then
+    alone with the lower-bound heuristic where its lattice distance is near the target,
+    else (``group > 0``) with the robots in its way, or
     exchanging goals with one of them, then with a holder of a goal near its start
     (:func:`_near_holders`); nothing more is tried when it has no such way even with no
     other robot about; ``segs``: :func:`_plain`'s. Returns the state, whether it was
@@ -231,12 +272,16 @@ def _one_round(i: int, target: int, gr: tuple, V: int, gv0: int, hs: tuple,
                                ny, two_r, ends_goal, q, target, budget - work, ob, ways, arr,
                                True)
             work += w
+    elif pv.shape[0] == 0 and hval(goal[i], V + i, gr, V, gv0, hs) >= TIGHT_FROM * target * q:
+        pv, pt, w = _plain(segs, i, goal[i], gr, V, gv0, hs, X, Y, tt, hh, x0, y0, cs, ny,
+                           two_r, ends_goal, q, target, budget - work, ob, ways, arr, True)
+        work += w
     me = np.full(1, i, np.int64)
     tried = np.zeros(goal.shape[0], np.bool_)  # exchange partners tried
     if pv.shape[0] > 0:
         state, ok, w = _plan_members(me, pv, pt, target, gr, V, gv0, hs, goal, X, Y, tt, hh,
                                      x0, y0, cs, ny, two_r, q, budget - work, ob, arr, state,
-                                     segs)
+                                     segs, restarts)
         return state, ok, work + w
     for alone in range(1, 3 if group > 0 else 1):
         if work >= budget:
@@ -257,21 +302,23 @@ def _one_round(i: int, target: int, gr: tuple, V: int, gv0: int, hs: tuple,
         if others.shape[0] <= group:
             state, ok, w = _plan_members(np.concatenate((me, others)), pv[:0], pt[:0], target,
                                          gr, V, gv0, hs, goal, X, Y, tt, hh, x0, y0, cs, ny,
-                                         two_r, q, budget - work, ob, arr, state, segs)
+                                         two_r, q, budget - work, ob, arr, state, segs,
+                                         restarts)
             work += w
             if ok:
                 return state, True, work
         tried[others[:exchanges]] = True
         state, ok, w = _exchange(i, others[:exchanges], target, gr, V, gv0, hs, goal, X, Y,
                                  tt, hh, x0, y0, cs, ny, two_r, q, budget - work, ob, arr,
-                                 state, segs)
+                                 state, segs, restarts)
         work += w
         if ok:
             return state, True, work
     if group > 0 and exchanges > 0 and work < budget:
         near = _near_holders(i, goal, gr[0], V, gv0, target * q, tried, exchanges)
         state, ok, w = _exchange(i, near, target, gr, V, gv0, hs, goal, X, Y, tt, hh, x0,
-                                 y0, cs, ny, two_r, q, budget - work, ob, arr, state, segs)
+                                 y0, cs, ny, two_r, q, budget - work, ob, arr, state, segs,
+                                 restarts)
         return state, ok, work + w
     return state, False, work
 
@@ -280,7 +327,8 @@ def _one_round(i: int, target: int, gr: tuple, V: int, gv0: int, hs: tuple,
 def _exchange(i: int, js: np.ndarray, target: int, gr: tuple, V: int, gv0: int, hs: tuple,
               goal: np.ndarray, X: np.ndarray, Y: np.ndarray, tt: np.ndarray, hh: tuple,
               x0: float, y0: float, cs: float, ny: int, two_r: float, q: float, budget: int,
-              ob: tuple, arr: np.ndarray, state: tuple, segs: tuple) -> tuple:
+              ob: tuple, arr: np.ndarray, state: tuple, segs: tuple, restarts: int
+              ) -> tuple:
     """Robot i exchanges goals with each of ``js`` in turn, both planned again to arrive
     before ``target`` (:func:`_plan_members`), until one exchange is kept (``goal``
     updated in place). Returns the state, whether one was kept, and the states expanded."""
@@ -292,7 +340,7 @@ def _exchange(i: int, js: np.ndarray, target: int, gr: tuple, V: int, gv0: int, 
         state, ok, w = _plan_members(np.array([i, j]), np.zeros(0, np.int64),
                                      np.zeros(0, np.int64), target, gr, V, gv0, hs, goal, X,
                                      Y, tt, hh, x0, y0, cs, ny, two_r, q, budget - work, ob,
-                                     arr, state, segs)
+                                     arr, state, segs, restarts)
         work += w
         if ok:
             return state, True, work
@@ -326,7 +374,7 @@ def _near_holders(i: int, goal: np.ndarray, coords: np.ndarray, V: int, gv0: int
 def _rounds(X: np.ndarray, Y: np.ndarray, tt: np.ndarray, gr: tuple, V: int, gv0: int,
             hs: tuple, goal: np.ndarray, two_r: float, q: float, cs: float,
             max_spacing: float, budget: int, rounds: int, ob: tuple, group: int,
-            exchanges: int, sipp: bool
+            exchanges: int, sipp: bool, restarts: int
             ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int, int, int]:
     """The loop of :func:`timed_repair` on the rows ``X, Y`` (times ``tt``, metres):
     (rows, times, ways found, states expanded, rounds that planned several robots
@@ -340,7 +388,8 @@ def _rounds(X: np.ndarray, Y: np.ndarray, tt: np.ndarray, gr: tuple, V: int, gv0
     else it exchanges goals with one of them (the ``exchanges`` latest), or with one of
     the ``exchanges`` holders of goals near its start, both planned again. Robots tied
     with the last are tried in turn before the loop ends. ``sipp``: search over safe
-    intervals where the others move (:func:`_plain`)."""
+    intervals where the others move (:func:`_plain`); ``restarts``:
+    :func:`_plan_members`'."""
     coords = gr[0]
     N = X.shape[1]
     x0, y0 = coords[:, 0].min(), coords[:, 1].min()
@@ -366,7 +415,7 @@ def _rounds(X: np.ndarray, Y: np.ndarray, tt: np.ndarray, gr: tuple, V: int, gv0
         nw0 = state[7]
         state, ok, w = _one_round(i, target, gr, V, gv0, hs, goal, X, Y, tt, hh, x0, y0,
                                   cs, ny, two_r, q, budget - work, ob, arr, state, group,
-                                  exchanges, segs)
+                                  exchanges, segs, restarts)
         work += w
         if ok:
             groups += state[7] - nw0 > 1
@@ -393,7 +442,8 @@ def timed_repair(rows: np.ndarray, times: np.ndarray, gr: tuple, V: int, gv0: in
                  max_move: float, max_spacing: float, geometry, workspace: tuple[float, float],
                  need: float, budget: int | None = None, rounds: int = TIMED_ROUNDS,
                  group: int | None = None, exchanges: int = TIMED_EXCHANGES,
-                 sipp: bool | None = None) -> tuple[np.ndarray, np.ndarray, int, int, int]:
+                 sipp: bool | None = None, restarts: int = TIMED_RESTARTS
+                 ) -> tuple[np.ndarray, np.ndarray, int, int, int]:
     """The retimed ``rows`` ((N, R, 2), at ``times``, metres at unit speed) with their
     last robots planned again in time (module docstring) over the graph ``gr`` (goal
     distances ``hs``, robot i's start vertex ``V + i``, goal m's ``gv0 + m``);
@@ -402,7 +452,8 @@ def timed_repair(rows: np.ndarray, times: np.ndarray, gr: tuple, V: int, gv0: in
     the clearance a knight move keeps (the space's threshold); ``budget``, ``group``:
     None for the defaults by fleet size (:func:`timed_budget`, :data:`TIMED_GROUP`);
     ``sipp``: whether the searches against the others' motion go over safe intervals
-    (None: for more than :data:`TIMED_SIPP_FROM` robots). Plans of more than
+    (None: for more than :data:`TIMED_SIPP_FROM` robots); ``restarts``: of a group planned
+    again together (:data:`TIMED_RESTARTS`). Plans of more than
     :data:`TIMED_ENTRIES` rows times robots are returned as they are. Returns the rows,
     each robot's goal (``goal``, changed by the exchanges), the ways planned, the states
     expanded and the rounds that planned several robots together."""
@@ -431,7 +482,8 @@ def timed_repair(rows: np.ndarray, times: np.ndarray, gr: tuple, V: int, gv0: in
     X, Y, _, done, work, groups = _rounds(X, Y, np.asarray(times, np.float64), gr, V, gv0,
                                           hs, goal, float(two_r), float(quantum), cs,
                                           float(max_spacing), int(budget), int(rounds), ob,
-                                          int(group), int(exchanges), bool(sipp))
+                                          int(group), int(exchanges), bool(sipp),
+                                          int(restarts))
     if done == 0:  # no way written: the rows as they were
         return rows, goal, done, work, groups
     # filled in place: a third of np.stack's time (0.2 against 0.65 ms at 400 robots)
