@@ -254,7 +254,8 @@ def test_same_seed_same_recording(scene, proposer, solved):
 
 def test_bench_job_saves_its_recording(scene, tmp_path):
     """``lamp bench --record``: a job with ``recording_to`` leaves a loadable recording of
-    exactly the run its result line describes."""
+    exactly the run its result line describes, and the line says what ``lamp check`` finds
+    in it."""
     from lamp.bench.jobs import Job
     from lamp.bench.provenance import canonical_command
     from lamp.bench.runner import solve_job
@@ -264,7 +265,11 @@ def test_bench_job_saves_its_recording(scene, tmp_path):
     result = solve_job(job)
     rec = load_recording(tmp_path / "r")
     assert "recording_error" not in result
+    audit = result.pop("audit")
     assert rec.result == result and rec.n_segments == result["segments"]
+    assert audit == {"ok": True, "collisions": 0, "push_lead_m": audit["push_lead_m"],
+                     "push_lead_judged": False}  # sequential: measured, not judged
+    assert 0.0 <= audit["push_lead_m"] < 0.1
     cmd = canonical_command(["t"], ["lazy"], seeds=1, workers=1, out=tmp_path, time_cap=9,
                             planning_limit=9, model="geometric", backend="local", scenes=None,
                             render_iros=False, job_fn="lamp.bench.runner:solve_job",
@@ -284,3 +289,32 @@ def test_bench_record_option_gives_every_job_its_folder(tmp_path):
     assert res.exit_code == 0, res.output
     for planner in ("lazy", "gco-var"):
         assert f"records into {out / 'recordings' / 'random'}/random-01-{planner}-s0" in res.output
+
+
+def test_report_counts_the_recordings_rechecked():
+    """The report's re-check table: per planner the audited runs (the newest line per job),
+    those that failed, their collisions, the largest judged push lead (a lead that was
+    not judged is left out) and the checks that could not run."""
+    from lamp.bench.report import audit_markdown
+    from lamp.bench.tables import audit_table
+
+    def line(scene, planner, audit):
+        return {"suite": "fleet", "scene": scene, "planner": planner, "seed": 0,
+                "status": "ok", **({"audit": audit} if audit else {})}
+
+    ok = {"ok": True, "collisions": 0, "push_lead_m": 0.03, "push_lead_judged": True}
+    records = [
+        line("a", "lazy", {**ok, "ok": False, "collisions": 5}),  # replaced by the next line
+        line("a", "lazy", {**ok, "ok": False, "collisions": 2, "push_lead_m": 0.01}),
+        line("b", "lazy", ok),
+        line("c", "lazy", {**ok, "push_lead_m": 0.5, "push_lead_judged": False}),
+        line("a", "gco-var", {"error": "ValueError: x"}),
+        line("b", "gco-var", None),
+    ]
+    table = audit_table(records)
+    assert table == {"lazy": {"runs": 3, "failed": 1, "collisions": 2, "lead": 0.03,
+                              "errors": 0},
+                     "gco-var": {"runs": 1, "failed": 0, "collisions": 0, "lead": None,
+                                 "errors": 1}}
+    md = audit_markdown(table)
+    assert "| LAMP-Lazy | 3 | 1 | 2 | 0.030 | 0 |" in md and "| 1 | 0 | 0 | - | 1 |" in md

@@ -47,6 +47,7 @@ from lamp.bench.tables import (  # noqa: F401 - re-exported: the report's number
     IrosRun,
     PathCost,
     Rate,
+    audit_table,
     failure_line,
     failure_reasons,
     families,
@@ -144,6 +145,28 @@ def path_cost_markdown(costs: dict[str, PathCost]) -> str:
             str(pc.dnf_baseline), str(pc.dnf_reference), str(pc.both_failed)])
     return _table(["comparison", "n (both solved)", "mean cost ratio", "median cost ratio",
                    "DNF baseline only", "DNF LAMP-Lazy only", "both failed"], rows)
+
+
+def audit_markdown(audits: dict[str, dict[str, Any]]) -> str:
+    """The re-checked recordings, a row per planner."""
+    rows = [[label(p), str(a["runs"]), str(a["failed"]), str(a["collisions"]),
+             "-" if a["lead"] is None else f"{a['lead']:.3f}", str(a["errors"])]
+            for p, a in sorted(audits.items(), key=lambda kv: rank(kv[0]))]
+    return _table(["method", "runs", "failed a check", "collisions", "largest judged push "
+                   "lead (m)", "checks that could not run"], rows)
+
+
+def _audit_section(records: Sequence[dict[str, Any]]) -> list[str]:
+    """The report's lines on the re-checked recordings (none when nothing was recorded)."""
+    audits = audit_table(records)
+    if not audits:
+        return []
+    return ["## Recordings re-checked", "",
+            "Every recorded run (`--record`) re-checked without the planner, as `lamp check` "
+            "does: collisions between robots, objects, obstacles and the border beyond "
+            "contact tolerance, and, for concurrent runs without noise or knocks, pushed "
+            "objects ahead of their pushers by more than the reach admission assumes.", "",
+            audit_markdown(audits), ""]
 
 
 def iros_markdown(runs: Sequence[IrosRun], run_dir: Path) -> str:
@@ -328,6 +351,7 @@ def build_report(run_dir: str | Path) -> Path:
             rows = [[label(p), "; ".join(f"{k}: {v}" for k, v in c.most_common())]
                     for p, c in sorted(reasons.items(), key=lambda kv: rank(kv[0]))]
             md += ["## Failure reasons", "", _table(["method", "reasons (runs)"], rows), ""]
+    md += _audit_section(records)
     runs = iros_summary(records)
     n_obj = max((len(r.objects) for r in runs), default=9)
     md += [f"## IROS case study ({n_obj} objects)", "", iros_markdown(runs, run_dir), ""]

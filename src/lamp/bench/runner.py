@@ -48,7 +48,8 @@ THREAD_ENV = ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS", "NUM
 
 def solve_job(job: Job) -> dict[str, Any]:
     """Run one job with the real planners; write ``job.render_to`` when rendering is asked
-    and save the recording into ``job.recording_to`` when recording is.
+    and save the recording into ``job.recording_to`` when recording is, with the
+    recording's re-check (:func:`audit_summary`) in the result's ``audit`` key.
 
     A failure to write the animation (recording) is reported on stderr (kept in the job's
     log) and in the result's ``render_error`` (``recording_error``) key; it never costs the
@@ -83,7 +84,25 @@ def solve_job(job: Job) -> dict[str, Any]:
         except Exception as exc:  # as for the animation: the result stands
             traceback.print_exc()
             result["recording_error"] = f"{type(exc).__name__}: {exc}"
+        result["audit"] = audit_summary(recording)
     return result
+
+
+def audit_summary(recording) -> dict[str, Any]:
+    """A recorded run re-checked as ``lamp check`` does (``lamp.record.audit``): its
+    collisions, whether its push lead was judged, the lead and the verdict; ``error``
+    instead when the check itself failed (the run's result stands)."""
+    from lamp.fleet.spacetime import PUSH_LEAD, PUSH_SPEEDUP
+    from lamp.record.audit import ReachBound, audit_recording
+
+    try:
+        audit = audit_recording(recording, ReachBound(PUSH_SPEEDUP, PUSH_LEAD))
+    except Exception as exc:
+        traceback.print_exc()
+        return {"error": f"{type(exc).__name__}: {exc}"}
+    lead = audit.reach.lead if audit.reach is not None and audit.reach.object >= 0 else None
+    return {"ok": audit.ok, "collisions": len(audit.safety.violations),
+            "push_lead_m": lead, "push_lead_judged": not audit.not_judged}
 
 
 def warm_up_solver() -> None:

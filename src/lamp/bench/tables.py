@@ -199,6 +199,29 @@ def makespan_bound_table(records: Sequence[dict[str, Any]]
     return _median_table(records, lambda r: r.get("makespan_over_bound"))
 
 
+def audit_table(records: Sequence[dict[str, Any]]) -> dict[str, dict[str, Any]]:
+    """The recorded runs re-checked (``audit``, ``lamp check``'s verdict) per planner: how
+    many, how many failed, their collisions, the largest judged push lead and the checks
+    that could not run; empty when no run was recorded."""
+    out: dict[str, dict[str, Any]] = {}
+    for r in latest_by_key(records).values():
+        a = r.get("audit")
+        if not a:
+            continue
+        row = out.setdefault(r["planner"], {"runs": 0, "failed": 0, "collisions": 0,
+                                            "lead": None, "errors": 0})
+        row["runs"] += 1
+        if "error" in a:
+            row["errors"] += 1
+            continue
+        row["failed"] += not a["ok"]
+        row["collisions"] += a["collisions"]
+        if a["push_lead_judged"] and a["push_lead_m"] is not None:
+            row["lead"] = max(a["push_lead_m"], row["lead"] if row["lead"] is not None
+                              else -math.inf)
+    return out
+
+
 def lifelong_tables(records: Sequence[dict[str, Any]]
                     ) -> dict[str, dict[str, dict[str, tuple[float | None, int]]]]:
     """A lifelong run's figures (``result.json``'s ``lifelong``): figure -> planner ->
