@@ -155,6 +155,35 @@ def test_group_restarts_inside_plan_paths() -> None:
     assert check_fleet_plan(gm.scene.to_dict(), S, G, plan, R) == []
 
 
+def test_exchange_when_no_way_even_alone() -> None:
+    """800 robots on ``random-64-64-20``, seed 47: the goal of the robot that arrives
+    last is farther, on the lattice, than any way before the last arrival, even with no
+    other robot about; it exchanges goals with the holder of a goal near its start
+    (before: the stage stopped there, at 1.19 m), the last arrival at most 1.0 m, the
+    goals a permutation of those given, and the fleet checker accepts the plan."""
+    gm = load_grid_map(MAPF / "random-64-64-20.map")
+    S, G = random_instance(gm, 800, 47)
+    seen = {}
+    real = gspi.timed_repair
+
+    def spy(rows, times, gr, V, gv0, hs, goal, *args, **kw):
+        out = real(rows, times, gr, V, gv0, hs, goal, *args, **kw)
+        X, Y = np.ascontiguousarray(rows[:, :, 0].T), np.ascontiguousarray(rows[:, :, 1].T)
+        last = int(np.argmax(arrivals(X, Y, np.asarray(times, np.float64))))
+        seen.update(before=_makespan(rows), given=np.array(goal), out=out, last=last)
+        return out
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(gspi, "timed_repair", spy)
+        plan = plan_paths(gm.scene, S, G, seed=47, time_limit=600.0)
+    assert plan.success and seen
+    goal = seen["out"][1]
+    assert seen["before"] > 1.19 and _makespan(plan.paths) <= 1.0
+    assert goal[seen["last"]] != seen["given"][seen["last"]]
+    assert np.array_equal(np.sort(goal), np.sort(seen["given"]))
+    assert check_fleet_plan(gm.scene.to_dict(), S, G, plan, R) == []
+
+
 @settings(max_examples=200, deadline=None)
 @given(seed=st.integers(0, 10_000), n=st.integers(2, 30), k=st.integers(0, 6),
        limit=st.floats(0.05, 1.5))

@@ -23,8 +23,9 @@ exchanges goals with one of them (the :data:`TIMED_EXCHANGES` latest), both plan
 again the same way (the goals are interchangeable, so the exchange is returned with the
 rows); then with the holders of the goals near its start whose own start lies near its
 goal (:func:`_near_holders`: the :data:`TIMED_EXCHANGES` whose longer straight line is
-shortest, below the target). Robots tied with the last are tried in turn before the
-loop ends. Without groups (up to :data:`TIMED_BUDGET_ROBOTS` robots), a last robot with
+shortest, below the target); when it has no earlier way even with no other robot
+about, only these exchanges are tried. Robots tied with the last are tried in turn
+before the loop ends. Without groups (up to :data:`TIMED_BUDGET_ROBOTS` robots), a last robot with
 no earlier way whose lattice distance is near the target is searched again with the
 lower-bound heuristic, as in a group round.
 
@@ -249,8 +250,8 @@ def _one_round(i: int, target: int, gr: tuple, V: int, gv0: int, hs: tuple,
     alone with the lower-bound heuristic where its lattice distance is near the target,
     else (``group > 0``) with the robots in its way, or
     exchanging goals with one of them, then with a holder of a goal near its start
-    (:func:`_near_holders`); nothing more is tried when it has no such way even with no
-    other robot about; ``segs``: :func:`_plain`'s. Returns the state, whether it was
+    (:func:`_near_holders`); only the last when it has no such way even with no other
+    robot about; ``segs``: :func:`_plain`'s. Returns the state, whether it was
     planned, and the states expanded."""
     ends_goal = goal >= 0
     rep, WX, WY, WT, wptr, wrob, box, nw = state
@@ -259,15 +260,15 @@ def _one_round(i: int, target: int, gr: tuple, V: int, gv0: int, hs: tuple,
                           two_r, ends_goal, q, target, budget, ob, ways, arr, False)
     fv, ft = pv, pt
     if pv.shape[0] == 0 and group > 0:
-        # no earlier way even with nobody about: neither alone nor in a group
+        # no earlier way even with nobody about (fv empty): neither alone nor in a group,
+        # only with another goal
         fv, ft, w = timed_search(i, goal[i], gr, V, gv0, hs, X, Y, tt, hh, x0, y0, cs, ny,
                                  two_r, ends_goal, q, target, budget - work, ob, ways, arr, 2,
                                  True)
         work += w
-        if fv.shape[0] == 0:
-            return state, False, work
         # the plain heuristic prunes at once the ways only knight moves make early enough
-        if hval(goal[i], V + i, gr, V, gv0, hs) >= TIGHT_FROM * target * q:
+        if fv.shape[0] > 0 and hval(goal[i], V + i, gr, V, gv0, hs) >= \
+                TIGHT_FROM * target * q:
             pv, pt, w = _plain(segs, i, goal[i], gr, V, gv0, hs, X, Y, tt, hh, x0, y0, cs,
                                ny, two_r, ends_goal, q, target, budget - work, ob, ways, arr,
                                True)
@@ -283,7 +284,7 @@ def _one_round(i: int, target: int, gr: tuple, V: int, gv0: int, hs: tuple,
                                      x0, y0, cs, ny, two_r, q, budget - work, ob, arr, state,
                                      segs, restarts)
         return state, ok, work + w
-    for alone in range(1, 3 if group > 0 else 1):
+    for alone in range(1, 3 if group > 0 and fv.shape[0] > 0 else 1):
         if work >= budget:
             break
         pv, pt = fv, ft
