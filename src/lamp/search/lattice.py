@@ -57,6 +57,7 @@ from numpy.typing import ArrayLike
 
 from lamp.contract.model import MOTION_RANGE
 from lamp.geometry import se2
+from lamp.geometry.distance_tiles import lazy_zeros
 from lamp.geometry.object_space import ObjectSpace
 from lamp.scene.model import Scene
 from lamp.search.landmark import LandmarkPotential
@@ -150,10 +151,10 @@ class ObjectLattice:
         self._slot = np.array(SLOT, dtype=np.int64)
         self._out_ids = np.empty(len(PRIMITIVES), dtype=np.int64)
         self._out_prim = np.empty(len(PRIMITIVES), dtype=np.int64)
-        # zero-filled (UNKNOWN): the pages of nodes never looked at stay untouched, so the
-        # memory they take grows with the part of the map the search visits
-        self._store = np.zeros(edge_words(self.n_i, self.n_j, self.n_headings),
-                               dtype=STORE_DTYPE)
+        # zero-filled (UNKNOWN) in small pages: memory grows with the part of the map the
+        # search visits (``np.zeros`` asks for huge pages: a node looked at, 2 MB resident)
+        self._store = lazy_zeros((edge_words(self.n_i, self.n_j, self.n_headings),),
+                                 STORE_DTYPE)
         self._succ: dict[Node, list[tuple[Node, float]]] = {}
         self._succ_kept = max(1, int(succ_kept))
         self._tolerant: dict[float, ObjectSpace] = {}
