@@ -179,13 +179,15 @@ def _plan_members(members: np.ndarray, pv: np.ndarray, pt: np.ndarray, target: i
     """Plan the ``members`` again in turn, each to arrive before ``target``, the others'
     old motions ignored meanwhile (the first's way ``pv, pt`` when given); all or none
     are kept. When one of them finds no way, they are planned again with it first (the
-    others in their order), not when it was first already (it met only the motions kept; ``restarts``: at most, default
-    :data:`TIMED_RESTARTS`). ``state = (rep, WX, WY, WT, wptr, wrob,
-    box, nw)``; returns it updated, with whether they were kept and the states
-    expanded."""
+    others in their order), up to ``restarts`` times (:data:`TIMED_RESTARTS`), and not
+    when it was first in a try already (it met only the motions kept then; a pair is
+    thus tried in both orders, no more). ``state = (rep, WX, WY, WT, wptr, wrob, box,
+    nw)``; returns it updated, with whether they were kept and the states expanded."""
     order = members.copy()
+    first = np.zeros(goal.shape[0], np.bool_)  # robots planned first in a try
     work = 0
     for attempt in range(restarts + 1):
+        first[order[0]] = True
         state, j, w = _plan_order(order, pv if attempt == 0 else pv[:0],
                                   pt if attempt == 0 else pt[:0], target, gr, V, gv0, hs,
                                   goal, X, Y, tt, hh, x0, y0, cs, ny, two_r, q, budget - work,
@@ -193,7 +195,7 @@ def _plan_members(members: np.ndarray, pv: np.ndarray, pt: np.ndarray, target: i
         work += w
         if j < 0:
             return state, True, work
-        if order[0] == j or work >= budget:
+        if first[j] or work >= budget:
             break
         k = 0
         while order[k] != j:
@@ -226,7 +228,8 @@ def _plan_order(members: np.ndarray, pv: np.ndarray, pt: np.ndarray, target: int
             ways = (rep, WX, WY, WT, wptr[: nw + 1], wrob[:nw], box[:nw])
             pv, pt, w = _plain(segs, j, goal[j], gr, V, gv0, hs, X, Y, tt, hh, x0, y0, cs,
                                ny, two_r, ends_goal, q, target, budget - work, ob, ways, arr,
-                               members.shape[0] > 1)
+                               members.shape[0] > 1 and hval(goal[j], V + j, gr, V, gv0, hs)
+                               >= TIGHT_FROM * target * q)
             work += w
             if pv.shape[0] == 0:
                 rep[:] = rep0
