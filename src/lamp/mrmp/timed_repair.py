@@ -25,9 +25,9 @@ rows); then with the holders of the goals near its start whose own start lies ne
 goal (:func:`_near_holders`: the :data:`TIMED_EXCHANGES` whose longer straight line is
 shortest, below the target); when it has no earlier way even with no other robot
 about, only these exchanges are tried. Robots tied with the last are tried in turn
-before the loop ends. Without groups (up to :data:`TIMED_BUDGET_ROBOTS` robots), a last robot with
-no earlier way whose lattice distance is near the target is searched again with the
-lower-bound heuristic, as in a group round.
+before the loop ends. Without groups (up to :data:`TIMED_BUDGET_ROBOTS` robots), over safe
+intervals, a last robot with no earlier way whose lattice distance is near the target is
+searched again with the lower-bound heuristic, as in a group round.
 
 Search (:mod:`lamp.mrmp.timed_search`): A* over (vertex, time) of the plan's graph
 (lattice nodes, the robot's own start and goal vertices' links, other goals' vertices;
@@ -250,8 +250,8 @@ def _one_round(i: int, target: int, gr: tuple, V: int, gv0: int, hs: tuple,
                budget: int, ob: tuple, arr: np.ndarray, state: tuple, group: int,
                exchanges: int, segs: tuple, restarts: int) -> tuple:
     """Robot i planned again to arrive before ``target`` (:func:`_rounds`): alone, then
-    alone with the lower-bound heuristic where its lattice distance is near the target,
-    else (``group > 0``) with the robots in its way, or
+    alone with the lower-bound heuristic where its lattice distance is near the target
+    (with groups, or over safe intervals), else (``group > 0``) with the robots in its way, or
     exchanging goals with one of them, then with a holder of a goal near its start
     (:func:`_near_holders`); only the last when it has no such way even with no other
     robot about; ``segs``: :func:`_plain`'s. Returns the state, whether it was
@@ -276,7 +276,8 @@ def _one_round(i: int, target: int, gr: tuple, V: int, gv0: int, hs: tuple,
                                ny, two_r, ends_goal, q, target, budget - work, ob, ways, arr,
                                True)
             work += w
-    elif pv.shape[0] == 0 and hval(goal[i], V + i, gr, V, gv0, hs) >= TIGHT_FROM * target * q:
+    elif pv.shape[0] == 0 and segs[0].shape[0] > 0 and \
+            hval(goal[i], V + i, gr, V, gv0, hs) >= TIGHT_FROM * target * q:
         pv, pt, w = _plain(segs, i, goal[i], gr, V, gv0, hs, X, Y, tt, hh, x0, y0, cs, ny,
                            two_r, ends_goal, q, target, budget - work, ob, ways, arr, True)
         work += w
