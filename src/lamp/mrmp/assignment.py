@@ -311,13 +311,13 @@ def _bottleneck(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray, G: np.ndarr
     def below(pm: np.ndarray, pi: np.ndarray, bound: float, room: float) -> np.ndarray:
         return hval_below(pm, V + pi, bound, gr, V, V + N, hs, room)
 
-    def exhausted(has_pair: np.ndarray, bound: float) -> Assignment | None:
+    def exhausted(has_pair: np.ndarray, bound: float, settled: bool) -> Assignment | None:
         # searches that are complete (whole lattice, queue empty) know all they can reach
         complete = np.isinf(hs.rad) & (hs.bcnt.sum(axis=1) == 0)
         if (complete & ~has_pair).any():
             return Assignment(None, np.zeros(N), unreached_reason(G, np.zeros(M, bool),
                                                             complete & ~has_pair))
-        if complete.all():
+        if complete.all() and settled:
             return Assignment(None, np.zeros(N), "no assignment of robots to goals reaches "
                               "every goal (some goals are reachable only by the same robots)")
         return None
@@ -354,7 +354,7 @@ def _coarse_bottleneck(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray,
         return coarse_below(pm, pi, bound, sblk, gblk, S, G, cg.rep, cg.nbr, cg.wlen,
                             cg.unit)
 
-    def exhausted(has_pair: np.ndarray, bound: float) -> Assignment | None:
+    def exhausted(has_pair: np.ndarray, bound: float, settled: bool) -> Assignment | None:
         return Assignment(None, np.zeros(N)) if bound > far else None
 
     # block searches start again each time: each reaches the bound of three rounds later
@@ -379,8 +379,10 @@ def _least_bottleneck(E: NearPairs, floor: float, below: Callable, exhausted: Ca
     """Bottleneck, then sum, over the distances ``below(pm, pi, bound, room)`` gives for
     pairs (goal ``pm[k]``, robot ``pi[k]``) (inf at or above ``bound``; never below the
     straight line; ``room``: how far a goal's search may later be resumed in place);
-    ``exhausted(has_pair, bound)``: an Assignment that ends the search when no larger
-    bound can give a perfect matching, else None; ``E``: the straight lines, ``floor``:
+    ``exhausted(has_pair, bound, settled)``: an Assignment that ends the search when no
+    larger bound can give a perfect matching, else None (``has_pair``: the goals with a
+    finite distance known, ``settled``: every pair's distance known and below the
+    bound); ``E``: the straight lines, ``floor``:
     :func:`_straight_floor` of them. ``schedule = (growth, ahead, ahead_later, room)``:
     the bound grows by ``growth`` a round; the first search reaches the bound of the
     round ``ahead`` rounds later (each later one ``ahead_later``), so that the rounds up
@@ -418,9 +420,13 @@ def _least_bottleneck(E: NearPairs, floor: float, below: Callable, exhausted: Ca
             break
         if time.perf_counter() > deadline:
             return Assignment(None, np.zeros(N), timed_out=True)
+        # goals some robot reaches, as far as known (a search may reach past the bound)
         has_pair = np.zeros(M, bool)
-        has_pair[pm] = True
-        end = exhausted(has_pair, bound)
+        fin = np.isfinite(known)
+        has_pair[gm[fin]] = True
+        # every pair known and within the bound: a larger one adds none
+        settled = len(keys) == M * N and bool((bound > known[fin]).all())
+        end = exhausted(has_pair, bound, settled)
         if end is not None:
             return end
         lo = bound
