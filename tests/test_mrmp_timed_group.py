@@ -130,7 +130,7 @@ def test_group_restarts_inside_plan_paths() -> None:
     """800 robots on ``random-64-64-20``, seed 13: a group whose member planned after the
     last robot finds no way is planned again with that member first. The stage's input
     repaired with and without restarts: both arrive no later than the retiming, the
-    restarts strictly earlier (1.19 m against 1.47 m), with more ways planned; the fleet
+    restarts strictly earlier (1.14 m against 1.47 m), with more ways planned; the fleet
     checker accepts the plan with them, and a second call gives the same rows."""
     gm = load_grid_map(MAPF / "random-64-64-20.map")
     S, G = random_instance(gm, 800, 13)

@@ -101,7 +101,7 @@ TIMED_SIPP_FROM = 100
 TIMED_RESTARTS = 4
 #: Goal exchanges tried for the last robot with the robots in its way, and then with
 #: the holders of goals near its start (each; 0: none).
-TIMED_EXCHANGES = 4
+TIMED_EXCHANGES = 8
 
 
 @nb.njit(cache=True)
