@@ -310,3 +310,36 @@ def test_a_robot_and_a_thin_object_passing_through_each_other_between_rows_are_c
     assert [(v.kind, v.a, v.b) for v in report.violations] == [("robot-object", 0, 0)]
     assert report.violations[0].depth_m >= R / 2
     assert report.states_checked == 13  # 0.3 m in 12 steps of r / 2
+
+
+@given(st.integers(0, 2**32 - 1), st.integers(2, 7), st.integers(1, 12))
+def test_robot_pairs_against_a_brute_force(seed, n, rows) -> None:
+    """Several robots wandering in small steps (no state interpolated): every pair closer
+    than 2r - tol is one violation with its first time, its depth and the time of it, as
+    a plain double loop over the pairs finds them."""
+    rng = np.random.default_rng(seed)
+    start = rng.uniform([0.5, 0.5], [0.9, 0.9], (n, 2))
+    steps = rng.uniform(-0.02, 0.02, (rows, n, 2))
+    steps[0] = 0.0
+    robots = start + np.cumsum(steps, axis=0)
+    times = DT * np.arange(rows)
+    scene = make_scene(robots=[tuple(p) for p in start])
+    report = check_recording(scene, times, robots, np.zeros((rows, 0, 3)))
+    tol = DEFAULT_TOL["robot-robot"]
+    want = []
+    for i in range(n):
+        for j in range(i + 1, n):
+            depth = [max(2 * R - math.dist(robots[t, i], robots[t, j]), 0.0)
+                     for t in range(rows)]
+            over = [t for t in range(rows) if depth[t] > tol]
+            if over:
+                deepest = int(np.argmax(depth))
+                want.append((times[over[0]], i, j, depth[deepest], times[deepest]))
+    got = [(v.time_s, v.a, v.b, v.depth_m, v.worst_time_s) for v in report.violations]
+    got, want = sorted(got), sorted(want)
+    assert [(a, b) for _, a, b, _, _ in got] == [(a, b) for _, a, b, _, _ in want]
+    assert np.allclose([[t, d, w] for t, _, _, d, w in got],
+                       [[t, d, w] for t, _, _, d, w in want]) if want else got == []
+    assert report.worst_depth["robot-robot"] == pytest.approx(
+        max([0.0] + [max(2 * R - math.dist(robots[t, i], robots[t, j]), 0.0)
+                     for t in range(rows) for i in range(n) for j in range(i + 1, n)]))

@@ -375,10 +375,9 @@ def check_recording(scene: Scene, times, robot_positions, object_poses, *,
     out = _Collector(times_x, tols)
     rpose = np.concatenate([robots_x, np.zeros(robots_x.shape[:-1] + (1,))], axis=-1)
 
-    iu, ju = np.triu_indices(n, 1)
-    gap = np.linalg.norm(robots_x[:, iu] - robots_x[:, ju], axis=-1)
-    out.add("robot-robot", np.maximum(2 * r - gap, 0.0),
-            list(zip(iu.tolist(), ju.tolist(), strict=True)))
+    for i in range(n - 1):  # robot i against every later one: memory (T, N), not (T, N^2)
+        gap = np.linalg.norm(robots_x[:, i + 1:] - robots_x[:, i:i + 1], axis=-1)
+        out.add("robot-robot", np.maximum(2 * r - gap, 0.0), [(i, j) for j in range(i + 1, n)])
     out.add("robot-border", _border_depth(robot, rpose, scene.workspace),
             [(i, -1) for i in range(n)])
     for m, (body, pose) in enumerate(statics):
