@@ -319,12 +319,13 @@ def test_robot_pairs_against_a_brute_force(seed, n, rows) -> None:
     a plain double loop over the pairs finds them."""
     rng = np.random.default_rng(seed)
     start = rng.uniform([0.5, 0.5], [0.9, 0.9], (n, 2))
-    steps = rng.uniform(-0.02, 0.02, (rows, n, 2))
+    steps = rng.uniform(-0.017, 0.017, (rows, n, 2))  # at most 0.024 m < r / 2 a row
     steps[0] = 0.0
     robots = start + np.cumsum(steps, axis=0)
     times = DT * np.arange(rows)
     scene = make_scene(robots=[tuple(p) for p in start])
     report = check_recording(scene, times, robots, np.zeros((rows, 0, 3)))
+    assert report.states_checked == rows
     tol = DEFAULT_TOL["robot-robot"]
     want = []
     for i in range(n):
