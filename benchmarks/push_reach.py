@@ -18,6 +18,7 @@ import sys
 from pathlib import Path
 
 from lamp.fleet.spacetime import PUSH_LEAD, PUSH_SPEEDUP
+from lamp.record.audit import run_dirs
 from lamp.record.push_reach import push_reach_run_dir
 
 
@@ -26,9 +27,7 @@ def main() -> int:
     ap.add_argument("runs", nargs="+", type=Path)
     ap.add_argument("--horizon", type=int, default=400, help="rows apart at most")
     args = ap.parse_args()
-    dirs = sorted({p.parent for r in args.runs for p in
-                   ([r / "recording.npz"] if (r / "recording.npz").exists()
-                    else r.rglob("recording.npz"))})
+    dirs = sorted({d for r in args.runs for d in run_dirs(r)})
     worst = -float("inf")
     print(f"bound: {PUSH_SPEEDUP} x the pushers' way + {PUSH_LEAD} m; horizon {args.horizon} rows")
     print(f"{'run':40s} {'lead':>8s} {'lead@1x':>8s} {'object':>6s} {'from s':>8s} "

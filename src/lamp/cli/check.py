@@ -29,8 +29,10 @@ def check_command(
     from lamp.record import RecordingError
     from lamp.record.audit import ReachBound, audit_run_dir, run_dirs
 
-    if horizon < 1:
-        fail_input(f"--horizon: a whole number of rows >= 1, got {horizon}")
+    try:
+        bound = ReachBound(PUSH_SPEEDUP, PUSH_LEAD, horizon)
+    except ValueError as exc:  # "horizon: problem" -> "--horizon: problem"
+        fail_input(f"--{exc}")
     found: list[Path] = []
     for path in runs:
         if not path.exists():
@@ -40,7 +42,6 @@ def check_command(
             fail_input(f"{path}: no recording here or below (`lamp run` writes one; "
                        "`lamp bench` with --record)")
         found += here
-    bound = ReachBound(PUSH_SPEEDUP, PUSH_LEAD, horizon)
     status = StatusLine()
     failed, unreadable = 0, []
     for n, run_dir in enumerate(found, 1):

@@ -10,7 +10,8 @@ reported, not judged. The bound (speedup, lead) is the caller's: ``lamp check`` 
 the fleet's own (``lamp.fleet.spacetime.PUSH_SPEEDUP`` and ``PUSH_LEAD``).
 
 Guarantee: :attr:`RunAudit.ok` is false exactly when the safety report has a violation or
-the judged lead exceeds the bound (``tests/test_record_audit.py``).
+the judged lead exceeds the bound (``tests/test_fleet_run.py``: a clean run, the same run
+with an object shoved, knocked, and a sequential run).
 """
 
 from __future__ import annotations
