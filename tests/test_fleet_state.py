@@ -103,3 +103,20 @@ def test_waits_count_every_meets_note_by_object_and_reason(notes) -> None:
     assert [Counter(w) for w in waits] == expect
     for w in waits:
         assert list(w.values()) == sorted(w.values(), reverse=True)
+
+
+def test_every_count_the_schedule_makes_is_one_it_reports() -> None:
+    """Each ``stats.count("name")`` in ``lamp.fleet`` names one of ``COUNTS`` (a name not
+    there raises ``KeyError`` in the middle of a run, on the first event that counts it)."""
+    from lamp.fleet.stats import COUNTS
+
+    named = set()
+    for path in (SRC / "fleet").glob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute)
+                    and node.func.attr == "count" and node.args
+                    and isinstance(node.args[0], ast.Constant)
+                    and isinstance(node.args[0].value, str)):
+                named.add((path.name, node.args[0].value))
+    assert {"halted", "jammed", "blocked"} <= {n for _, n in named}  # the walk finds them
+    assert {(f, n) for f, n in named if n not in COUNTS} == set()
