@@ -40,6 +40,7 @@ from lamp.fleet.teams import (
     least_conflict_order,
     near_way,
     reinforce,
+    stands_in_way,
     start_order,
 )
 from lamp.fleet.turns import Turns
@@ -363,16 +364,68 @@ def test_the_head_of_the_longest_chain_starts_first():
 
 def test_loads_into_a_dead_end_aisle_start_deepest_first():
     """Three boxes go into an aisle closed at x = 0, their goals at x = 1, 2, 3, from
-    starts beyond its mouth; in whatever file order, the deepest goal starts first."""
+    starts side by side beyond its mouth (x = 8); in whatever file order, the deepest goal
+    starts first."""
     walls = (Obstacle(Rectangle((8.0, 0.1)), (4.0, 0.45, 0.0)),
              Obstacle(Rectangle((8.0, 0.1)), (4.0, 1.55, 0.0)))
     for goals_x in ((3.0, 1.0, 2.0), (1.0, 2.0, 3.0), (2.0, 3.0, 1.0)):
-        objects = tuple(SceneObject(BOX, (5.0 + k, 1.0, 0.0), (gx, 1.0, 0.0))
+        objects = tuple(SceneObject(BOX, (9.3, 0.3 + 0.7 * k, 0.0), (gx, 1.0, 0.0))
                         for k, gx in enumerate(goals_x))
-        scene = Scene("aisle", (9.0, 2.0), ((8.5, 0.3), (8.5, 1.7)), objects, walls, 0.05)
+        scene = Scene("aisle", (10.0, 2.0), ((9.8, 0.3), (9.8, 1.7)), objects, walls, 0.05)
         poses = np.array([o.start for o in objects])
         order = start_order(scene, poses, [0, 1, 2], [])
         assert [goals_x[k] for k in order] == [1.0, 2.0, 3.0]
+
+
+def test_a_line_of_loads_leaving_an_aisle_starts_nearest_the_exit_first():
+    """Three boxes stand in a line in an aisle open only at its east end (x = 8) and go to
+    drop spots beyond it, north and south of the aisle's mouth, in whatever file order:
+    the one nearest the exit starts first, then the next; each stands in the way of those
+    behind it, none in the way of those ahead."""
+    walls = (Obstacle(Rectangle((8.0, 0.1)), (4.0, 1.45, 0.0)),
+             Obstacle(Rectangle((8.0, 0.1)), (4.0, 2.55, 0.0)),
+             Obstacle(Rectangle((0.1, 1.0)), (0.05, 2.0, 0.0)))
+    drops = ((9.5, 0.5, 0.0), (9.5, 3.5, 0.0), (9.5, 2.0, 0.0))
+    for xs in ((1.5, 3.0, 4.5), (4.5, 1.5, 3.0), (3.0, 4.5, 1.5)):
+        objects = tuple(SceneObject(BOX, (x, 2.0, 0.0), goal) for x, goal in zip(xs, drops,
+                                                                                  strict=True))
+        scene = Scene("exit", (10.0, 4.0), ((9.5, 2.0), (9.0, 2.0)), objects, walls, R)
+        poses = np.array([o.start for o in objects])
+        ahead = stands_in_way(scene, poses, [0, 1, 2])
+        assert ahead == {k: {j for j in range(3) if xs[j] > xs[k]} for k in range(3)}
+        order = start_order(scene, poses, [0, 1, 2], [])
+        assert [xs[k] for k in order] == [4.5, 3.0, 1.5]
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(0, 2**31 - 1))
+def test_stands_in_way_in_the_open_is_the_band_along_the_straight_way(seed):
+    """With no obstacles an object's way is the straight line to its goal: another object
+    stands in it exactly when a point of its outline lies within (circumradius + robot
+    diameter) of that line, beside it (not behind its start nor beyond its goal), brute
+    force over outline points 1 mm apart; near the band's edge either answer is taken."""
+    rng = np.random.default_rng(seed)
+    objects = tuple(SceneObject(Rectangle(tuple(rng.uniform(0.2, 0.6, 2))),
+                                (*rng.uniform(0.5, 9.5, 2), rng.uniform(-3, 3)),
+                                (*rng.uniform(0.5, 9.5, 2), 0.0)) for _ in range(4))
+    scene = Scene("open", (10.0, 10.0), ((0.2, 0.2),), objects, (), R)
+    poses = np.array([o.start for o in objects])
+    got = stands_in_way(scene, poses, [0, 1, 2, 3])
+    for j, o in enumerate(objects):
+        a, b = np.asarray(o.start[:2]), np.asarray(o.goal[:2])
+        length = float(np.linalg.norm(b - a))
+        u = (b - a) / length
+        reach = max(np.hypot(*np.asarray(shapely.get_coordinates(to_shapely(o.shape, (0, 0, 0)))).T)
+                    ) + 2 * R
+        for k in range(4):
+            if k == j:
+                continue
+            ring = to_shapely(objects[k].shape, poses[k]).exterior
+            pts = shapely.get_coordinates(shapely.segmentize(ring, 0.001)) - a
+            along, side = pts @ u, np.abs(pts @ np.array([-u[1], u[0]]))
+            margin = np.minimum.reduce([reach - side, along, length - along])
+            if np.all(np.abs(margin) > 2e-3):  # clear of the edge
+                assert (k in got[j]) == bool(np.any(margin > 0)), (j, k)
 
 
 @settings(max_examples=60)

@@ -137,3 +137,30 @@ def test_on_random_rooms_with_detours_it_stays_below_every_disk_path() -> None:
         assert math.dist(a, b) - 1e-9 <= got <= ref + 1e-9
         assert got >= ref / 1.2 - 0.2  # and not far below it: it is a tight bound
     assert checked >= 15 and detours >= 5, (checked, detours)
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.tuples(st.floats(0.5, 3.3), st.floats(0.4, 2.4), st.floats(0.1, 0.8),
+                          st.floats(0.1, 0.8)), min_size=1, max_size=4),
+       st.floats(0.0, 0.15), st.tuples(st.floats(0.2, 3.8), st.floats(0.2, 2.8)),
+       st.tuples(st.floats(0.2, 3.8), st.floats(0.2, 2.8)))
+def test_the_path_runs_from_a_to_b_clear_and_is_as_long_as_the_distance(boxes, rho, a, b
+                                                                        ) -> None:
+    """``path`` starts at ``a`` and ends at ``b``; its legs keep the disk clear of the
+    obstacles as outlined (grazing allowed: legs may touch a grown outline); its length is
+    ``distance``; None exactly when ``distance`` is inf."""
+    geoms = [shapely.box(x, y, x + w, y + h) for x, y, w, h in boxes]
+    g = GrownObstacles(geoms, rho, (W, H))
+    grown = shapely.union_all([b_.buffer(rho, quad_segs=2).buffer(-1e-6) for b_ in geoms])
+    for p in (a, b):
+        if grown.intersects(shapely.Point(p)):
+            return
+    d, pts = g.distance(a, b), g.path(a, b)
+    if not math.isfinite(d):
+        assert pts is None
+        return
+    assert pts is not None
+    assert np.allclose(pts[0], a) and np.allclose(pts[-1], b)
+    assert float(np.hypot(*np.diff(pts, axis=0).T).sum()) == pytest.approx(d, rel=1e-9,
+                                                                            abs=1e-9)
+    assert not grown.intersects(shapely.LineString(pts))

@@ -29,11 +29,13 @@ from scipy.sparse.csgraph import connected_components, maximum_bipartite_matchin
 
 from lamp.contract.model import MAX_ROBOTS
 from lamp.geometry.shapes import to_shapely
+from lamp.scene.bounds import object_way
 from lamp.scene.model import Scene, Shape
 
 __all__ = ["GROW_REACH", "MIN_TEAM", "allocate", "balanced_teams", "chain_depths", "corridor",
-           "goal_blocks", "in_the_way", "least_conflict_order", "near_way", "nearest", "needed_space",
-           "planar_distance", "reinforce", "start_order"]
+           "goal_blocks", "in_the_way", "in_way_of", "least_conflict_order", "near_way",
+           "nearest", "needed_space", "planar_distance", "reinforce", "stands_in_way",
+           "start_order"]
 
 #: The smallest sub-team an object starts with while other objects are moving.
 MIN_TEAM = 2
@@ -213,6 +215,30 @@ def in_the_way(corridors: Mapping[int, shapely.Geometry],
             for k in goals}
 
 
+def stands_in_way(scene: Scene, poses: np.ndarray, candidates: Sequence[int]
+                  ) -> dict[int, set[int]]:
+    """For each of ``candidates`` (objects of ``scene`` at ``poses``) ``j``: the others
+    that stand in its way (:func:`in_way_of`). Until they move, ``j`` goes round them or
+    waits: a line of loads leaving an aisle is led by the one nearest the exit."""
+    return {j: in_way_of(scene, poses, j, [k for k in candidates if k != j])
+            for j in candidates}
+
+
+def in_way_of(scene: Scene, poses: np.ndarray, j: int, others: Sequence[int]) -> set[int]:
+    """Those of ``others`` (objects of ``scene`` at ``poses``) whose footprint meets the
+    band object ``j``'s body and robots sweep along its shortest way to its goal round
+    the obstacles (``scene.bounds.object_way``; the band is as wide as its circumscribed
+    circle plus a robot diameter each side, and starts at its reference point)."""
+    pts = object_way(scene, j, poses[j])
+    if pts is None or not others or math.dist(pts[0], pts[-1]) == 0.0:
+        return set()
+    objs = scene.objects
+    reach = objs[j].shape.bounding_radius + 2 * float(scene.robot_radius)
+    band = shapely.LineString(pts).buffer(reach, cap_style="flat")
+    return {k for k in others
+            if band.intersects(to_shapely(objs[k].shape, np.asarray(poses[k], float)))}
+
+
 def corridor(shape: Shape, pose: np.ndarray, goal: np.ndarray, robot_radius: float
              ) -> shapely.Geometry:
     """An object's way from ``pose`` to ``goal``: the convex hull of its footprints at
@@ -241,8 +267,10 @@ def start_order(scene: Scene, poses: np.ndarray, candidates: Sequence[int],
     candidates (:func:`goal_blocks`)."""
     objs, r = scene.objects, scene.robot_radius
     ways, blocks = goal_blocks(scene, poses, candidates)
+    standing = stands_in_way(scene, poses, candidates)
+    after = {k: blocks.get(k, set()) | standing[k] for k in candidates}
     busy = [corridor(objs[k].shape, poses[k], objs[k].goal, r) for k in moving]
-    return least_conflict_order(candidates, ways, busy, blocks)
+    return least_conflict_order(candidates, ways, busy, after)
 
 
 def near_way(scene: Scene, k: int, pose: np.ndarray, pool: Sequence[int],

@@ -34,7 +34,9 @@ of the test scenes is shorter.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 import shapely
@@ -44,7 +46,8 @@ from lamp.geometry.shapes import obstacle_geometry, to_shapely
 from lamp.scene.geodesic import GrownObstacles
 from lamp.scene.model import Circle, Obstacle, Scene, SceneObject, Shape
 
-__all__ = ["MakespanBound", "inscribed_radius", "makespan_lower_bound"]
+__all__ = ["MakespanBound", "grown_obstacles", "inscribed_radius", "makespan_lower_bound",
+           "object_way", "travel_radius"]
 
 
 @dataclass(frozen=True)
@@ -79,16 +82,36 @@ def _outline(obstacle: Obstacle) -> shapely.Geometry:
     return obstacle_geometry(obstacle)
 
 
-def _travel(scene: Scene, o: SceneObject, grown: dict[float, GrownObstacles]) -> float:
+def travel_radius(shape: Shape) -> float:
+    """The disk radius an object's travel is sought for: its :func:`inscribed_radius`
+    rounded down to a rung of ``RHO_STEP`` (a smaller disk only weakens the bound, and
+    objects of similar size share one visibility graph)."""
+    return math.floor(inscribed_radius(shape) / RHO_STEP + 1e-9) * RHO_STEP
+
+
+@lru_cache(maxsize=8)
+def grown_obstacles(obstacles: tuple[Obstacle, ...], workspace: tuple[float, float],
+                    rho: float) -> GrownObstacles:
+    """The scene's ``obstacles`` and the outside of its ``workspace`` grown by ``rho``
+    (built once per scene and radius: callers share it)."""
+    return GrownObstacles([_outline(b) for b in obstacles], rho, workspace)
+
+
+def object_way(scene: Scene, k: int, pose: Sequence[float]) -> np.ndarray | None:
+    """The points of the shortest way of object ``k``'s reference point from ``pose`` to
+    its goal round the obstacles (the travel of the module docstring, as a path; the
+    straight line where that is clear); None when the obstacles separate them."""
+    o = scene.objects[k]
+    space = grown_obstacles(tuple(scene.obstacles), tuple(scene.workspace),
+                            travel_radius(o.shape))
+    return space.path(pose, o.goal)
+
+
+def _travel(scene: Scene, o: SceneObject) -> float:
     """``travel_k`` of the module docstring for object ``o``."""
     straight = math.dist(o.goal[:2], o.start[:2])
-    # the radius rounded down to a rung of RHO_STEP: a smaller disk only weakens the bound,
-    # and objects of similar size share one visibility graph
-    rho = math.floor(inscribed_radius(o.shape) / RHO_STEP + 1e-9) * RHO_STEP
-    if rho not in grown:
-        grown[rho] = GrownObstacles([_outline(b) for b in scene.obstacles], rho,
-                                    scene.workspace)
-    space = grown[rho]
+    space = grown_obstacles(tuple(scene.obstacles), tuple(scene.workspace),
+                            travel_radius(o.shape))
     tol_disk = shapely.Point(o.goal[0], o.goal[1]).buffer(SUCCESS_POSITION_TOL)
     if space.blocks(tol_disk):
         return max(0.0, straight - SUCCESS_POSITION_TOL)
@@ -100,7 +123,6 @@ def makespan_lower_bound(scene: Scene, straight_line: bool = False) -> MakespanB
     starts = np.asarray(scene.robot_starts_array, float)
     robots = shapely.points(starts)
     speed = float(scene.physics.robot_speed)
-    grown: dict[float, GrownObstacles] = {}
     per = []
     for o in scene.objects:
         if isinstance(o.shape, Circle):  # exact (a Shapely circle is an inscribed polygon)
@@ -110,7 +132,7 @@ def makespan_lower_bound(scene: Scene, straight_line: bool = False) -> MakespanB
         gap = d - scene.robot_radius
         reach = max(0.0, float(np.min(gap)))
         travel = (max(0.0, math.dist(o.goal[:2], o.start[:2]) - SUCCESS_POSITION_TOL)
-                  if straight_line else _travel(scene, o, grown))
+                  if straight_line else _travel(scene, o))
         per.append((reach + travel) / speed)
     k = int(np.argmax(per))
     return MakespanBound(float(per[k]), k, tuple(float(t) for t in per))

@@ -110,6 +110,18 @@ class GrownObstacles:
         """Whether ``region`` meets the (shrunk) grown obstacles."""
         return len(self._tree.query(region, predicate="intersects")) > 0
 
+    def _graph(self, a: np.ndarray, b: np.ndarray) -> csr_array:
+        """The visibility graph with ``a`` as node ``V`` and ``b`` as node ``V + 1``."""
+        V = len(self.vertices)
+        vi, vj, vd = self._edges
+        _, aj, ad = self._visible_pairs(np.array([a]), self.vertices)  # node V: a
+        _, bj, bd = self._visible_pairs(np.array([b]), self.vertices)  # node V + 1: b
+        rows = np.concatenate([vi, vj, np.full(len(aj), V), aj, np.full(len(bj), V + 1), bj])
+        cols = np.concatenate([vj, vi, aj, np.full(len(aj), V), bj, np.full(len(bj), V + 1)])
+        # a zero length (a point on a vertex) would read as no edge: a hair longer
+        w = np.maximum(np.concatenate([vd, vd, ad, ad, bd, bd]), 1e-12)
+        return csr_array((w, (rows, cols)), shape=(V + 2, V + 2))
+
     def distance(self, a: Sequence[float], b: Sequence[float]) -> float:
         """The shortest path's length from ``a`` to ``b`` (x, y) around the grown
         obstacles (module docstring); the straight line when that is clear; ``inf`` when
@@ -119,13 +131,24 @@ class GrownObstacles:
         if self._clear(a[None], b[None])[0]:
             return straight
         V = len(self.vertices)
-        vi, vj, vd = self._edges
-        _, aj, ad = self._visible_pairs(np.array([a]), self.vertices)  # node V: a
-        _, bj, bd = self._visible_pairs(np.array([b]), self.vertices)  # node V + 1: b
-        rows = np.concatenate([vi, vj, np.full(len(aj), V), aj, np.full(len(bj), V + 1), bj])
-        cols = np.concatenate([vj, vi, aj, np.full(len(aj), V), bj, np.full(len(bj), V + 1)])
-        # a zero length (a point on a vertex) would read as no edge: a hair longer
-        w = np.maximum(np.concatenate([vd, vd, ad, ad, bd, bd]), 1e-12)
-        graph = csr_array((w, (rows, cols)), shape=(V + 2, V + 2))
-        d = dijkstra(graph, directed=False, indices=V)[V + 1]
+        d = dijkstra(self._graph(a, b), directed=False, indices=V)[V + 1]
         return max(straight, float(d))
+
+    def path(self, a: Sequence[float], b: Sequence[float]) -> np.ndarray | None:
+        """The shortest path's points from ``a`` to ``b`` (x, y), ends included, whose
+        length is :meth:`distance` (up to rounding); ``[a, b]`` when the straight line is
+        clear; None when the grown obstacles separate them."""
+        a, b = np.asarray(a, float)[:2], np.asarray(b, float)[:2]
+        if self._clear(a[None], b[None])[0]:
+            return np.array([a, b])
+        V = len(self.vertices)
+        d, pred = dijkstra(self._graph(a, b), directed=False, indices=V,
+                           return_predecessors=True)
+        if not math.isfinite(d[V + 1]):
+            return None
+        nodes, n = [], V + 1
+        while n >= 0:
+            nodes.append(n)
+            n = int(pred[n])
+        pts = np.vstack([self.vertices, a, b])
+        return pts[nodes[::-1]]
