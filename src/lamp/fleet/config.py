@@ -100,6 +100,11 @@ class FleetConfig:
                            "way x 1.5 + 0.1 m; only where pushes are tracked exactly: no "
                            "sensing or actuation noise, no knocks); 0: anywhere along its "
                            "planned motion.", low=0)
+    follow: int = param(0, "Concurrent schedule: 1: an object's loop plans as if the "
+                        "higher-ranked moving objects standing in its way ahead of it "
+                        "(not head-on) were at their goals, and its segments wait for "
+                        "them to move on (a line of loads leaves an aisle together); 0: "
+                        "it plans round them where they stand.", low=0)
     rejoin_limit: int = param(0, "Concurrent schedule: a segment whose robots had to move "
                               "back to their rows this many times (held back by what they "
                               "push) ends, stopped; 0: never.", low=0)
@@ -110,7 +115,7 @@ class FleetConfig:
 
     def __post_init__(self) -> None:
         check_fields(self)
-        for name in ("balance_teams", "reach_cut"):
+        for name in ("balance_teams", "reach_cut", "follow"):
             if getattr(self, name) > 1:
                 raise InputError(f"fleet_{name}: 0 or 1, got {getattr(self, name)}")
 

@@ -23,8 +23,9 @@ simulator. Design (``docs/fleet.md``):
   no body standing still (else the world changed since the plan: it is declined and the
   loop plans anew, ``WORLD_CHANGED``; not before the first event after its loop took its
   world, ``world_taken``: that plan saw the world as it is, and would be made again).
-  Otherwise it waits for the next event. A planner that finds no plan while other
-  objects still move waits for a change too (``fleet.blocked``).
+  Otherwise it waits for the next event, as does one that meets a leader standing
+  (``fleet.follow``). A planner that finds no plan while other objects still move
+  waits for a change too (``fleet.blocked``).
 - **Clock.** Admitted segments are re-timed on a common row grid (``segments.on_grid``),
   with rows appended in which their robots hold for the simulator's settle time, and run
   together until the first ends (or a push watch stops one, or its robots, held back,
@@ -49,16 +50,16 @@ from typing import Any
 
 import numpy as np
 
-from lamp.contract.events import TRACE_EVERY, RunObserver
+from lamp.contract.events import RunObserver
 from lamp.contract.runner import ObjectOutcome, WorldExecutor
 from lamp.fleet import tasks as T
 from lamp.fleet.admission import ends_box, heeded_claims, meets_moving, meets_standing
 from lamp.fleet.blocked import blocked_space, looks_now, wait_over
 from lamp.fleet.config import FleetConfig
+from lamp.fleet.follow import Following
 from lamp.fleet.makeway import make_way, with_goal
 from lamp.fleet.objects import given_up
 from lamp.fleet.regions import claims
-from lamp.fleet.reteam import TeamChanges
 from lamp.fleet.segments import Segment, on_grid, run_together
 from lamp.fleet.spacetime import halted
 from lamp.fleet.state import FREE, ObjectState, ObjectStatus
@@ -70,7 +71,7 @@ from lamp.scene.model import Scene
 __all__ = ["Fleet"]
 
 
-class Fleet(TeamChanges):
+class Fleet(Following):
     """Moves a scene's objects concurrently on ``executor`` (see the module docstring): a
     ``Simulator`` or an executor wrapping one. The one writer of the schedule's state
     (``board.Board``): the rules return decisions, and it applies them.
@@ -143,13 +144,8 @@ class Fleet(TeamChanges):
     def _idle(self, until: float) -> None:
         """Nothing to do before simulated time ``until``: the robots hold still (module
         docstring of ``fleet.tasks``: simulated till the world rests, then skipped)."""
-        now, hold = np.asarray(self.executor.robot_positions, float), until - self.clock
-        if self._at_rest and not self.executor.disturbed:
-            out = T.rest_until(now, self.executor.true_object_poses, max(hold, 0.0))
-        else:
-            out = self.executor.execute(now[:, None], record_every=TRACE_EVERY,
-                                        settle_time=min(max(hold, 1e-9), T.IDLE_STRETCH_S))
-            self._at_rest = T.at_rest(out.trace)
+        now = np.asarray(self.executor.robot_positions, float)
+        out, self._at_rest = T.hold_still(self.executor, self._at_rest, until - self.clock)
         self._clocked(out, [], now[:, None])
 
     def _release(self) -> None:
@@ -277,6 +273,10 @@ class Fleet(TeamChanges):
         for o in self.ranked():
             seg = o.request
             if seg is None:
+                continue
+            if self.held_for_leader(seg, force):  # ``fleet.follow``
+                if force:
+                    return
                 continue
             # a plan made in the world as it stands cannot have been overtaken by it
             hit_standing = o.world_at < self.events and self._meets_standing(seg)

@@ -21,7 +21,7 @@ of robot-space cache. What the loops ask of the fleet is :class:`LoopHost`.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Collection
 from typing import Protocol
 
 import numpy as np
@@ -88,18 +88,23 @@ class LoopHost(SharedWorld, Protocol):
         """What the other unplaced objects still need (``parking.needed_by_others``)."""
         ...
 
+    def following(self, k: int) -> dict[int, np.ndarray]:
+        """The objects object ``k``'s new loop plans at other poses (``fleet.follow``)."""
+        ...
+
 
 def sub_scene(scene: Scene, team: list[int], robot_positions: np.ndarray,
-              near: float = math.inf) -> Scene:
+              near: float = math.inf, skip: Collection[int] = ()) -> Scene:
     """``scene`` as ``team`` plans in it (``team.team_scene``): its robots only, where
-    they stand now, and every other robot within ``near`` (m) of one of them a disk
-    obstacle where it stands."""
+    they stand now, and every other robot within ``near`` (m) of one of them, but those
+    of ``skip``, a disk obstacle where it stands."""
     pos = np.asarray(robot_positions, float)
     mine = pos[list(team)]
     reach = (np.full(len(pos), True) if not math.isfinite(near) or not len(mine) else
              np.hypot(*np.moveaxis(pos[:, None, :2] - mine[None, :, :2], -1, 0)).min(axis=1)
              <= near)
-    others = {i: pos[i] for i in range(scene.n_robots) if i not in team and reach[i]}
+    others = {i: pos[i] for i in range(scene.n_robots)
+              if i not in team and reach[i] and i not in skip}
     return team_scene(scene, list(team), others, mine)
 
 
@@ -151,12 +156,15 @@ def object_main(runner: ClosedLoopRunner, observe: Callable[[SegmentEvent], None
             if view.team_changed:  # a robot failed or joined during transit
                 continue
             detour = fleet.detour_of(k)
-            mine = world(near=near)  # farther robots move before it comes
+            view.ghosts = fleet.following(k)
+            mine = sub_scene(scene, view.team, fleet.executor.robot_positions, near,
+                             skip={i for j in view.ghosts for i in fleet.team_of(j)})
             scene_k = mine if detour is None else with_goal(mine, k, detour)
             fleet.world_taken(k)
             if detour is not None:  # a place to stand aside: any heading will do
                 config = config.but(stop_orientation=math.pi)
             last = series.add(runner.loop(scene_k, k, view, config, observe, view.hooks))
+            view.ghosts = {}  # (parking plans in the world as it is)
             if last.result.failure_reason == NO_PLAN_YET:  # from now on: only those near
                 near = min(near, settings.replan_near)
             ended = last.end not in (LoopEnd.WORLD_CHANGED, LoopEnd.TEAM_CHANGED)

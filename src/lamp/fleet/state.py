@@ -90,6 +90,10 @@ class ObjectState:
     #: (``fleet.makeway``); None: none
     detour: np.ndarray | None = None
     lent_by: int | None = None  # the object whose robots it has for its detour
+    #: the moving objects its loop plans as if at their goals (``fleet.follow``), and
+    #: whether its next loop plans round them instead (a segment of its was declined)
+    leaders: frozenset[int] = frozenset()
+    follow_off: bool = False
     rank: int = 1 << 30  # its priority: the order in which objects started (lower first)
     world_at: int = -1  # the event after which its loop took its world (``Fleet.world_taken``)
     outcome: ObjectOutcome | None = None

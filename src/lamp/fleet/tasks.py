@@ -26,13 +26,14 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from lamp.contract.events import TRACE_EVERY
 from lamp.contract.runner import ObjectOutcome
 from lamp.scene.model import Scene
 from lamp.scene.tasks import numbered, served_order
 
 __all__ = ["IDLE_STRETCH_S", "REST_M", "TASK_MOVES", "ScheduledFeed", "TaskFeed",
-           "TaskRecord", "TaskStatus", "at_rest", "lifelong_figures", "merged_tasks",
-           "rest_until"]
+           "TaskRecord", "TaskStatus", "at_rest", "hold_still", "lifelong_figures",
+           "merged_tasks", "rest_until"]
 
 #: The longest stretch (simulated s) the fleet idles at once, simulated, waiting for a
 #: release; the feed is asked again after each (a live one may have a task by then).
@@ -60,6 +61,19 @@ def rest_until(robots: np.ndarray, objects: np.ndarray, seconds: float) -> Any:
                   np.stack([objects, objects]))
     return ExecutionResult(objects, robots, False, np.zeros(len(objects), bool),
                            float(seconds), 0, np.zeros(len(robots)), trace)
+
+
+def hold_still(executor: Any, resting: bool, seconds: float) -> tuple[Any, bool]:
+    """``executor``'s robots hold still for ``seconds`` of simulated time: the result
+    (without physics when the world was ``resting`` and nothing disturbs it, else a
+    stretch of at most ``IDLE_STRETCH_S`` simulated) and whether the world is at rest
+    after it."""
+    now = np.asarray(executor.robot_positions, float)
+    if resting and not executor.disturbed:
+        return rest_until(now, executor.true_object_poses, max(seconds, 0.0)), True
+    out = executor.execute(now[:, None], record_every=TRACE_EVERY,
+                           settle_time=min(max(seconds, 1e-9), IDLE_STRETCH_S))
+    return out, at_rest(out.trace)
 
 
 class TaskStatus(StrEnum):

@@ -70,6 +70,20 @@ class FleetView(TeamView):
         super().__init__(fleet.executor, fleet.team_of(k))
         self.fleet = fleet
         self.k = k
+        #: objects its loop plans at other poses than theirs (object -> pose:
+        #: ``fleet.follow``'s leaders at their goals); its own object is never one
+        self.ghosts: dict[int, np.ndarray] = {}
+
+    @property
+    def object_poses(self) -> np.ndarray:
+        """The objects' poses as read now, each of ``ghosts`` at its pose there."""
+        poses = self.executor.object_poses
+        if not self.ghosts:
+            return poses
+        poses = np.array(poses, float)
+        for j, pose in self.ghosts.items():
+            poses[j] = pose
+        return poses
 
     @property
     def team_changed(self) -> bool:
