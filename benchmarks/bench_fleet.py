@@ -40,14 +40,16 @@ assignment's at the start (goal swaps change it).
 
 With ``--phases``, a line per instance gives the call's time by phase (``MRMPPlan.stats``,
 milliseconds): the failed attempts on coarser lattices, then on the lattice that solved
-the links, the assignment (its goal searches within), the steps, the repair, the straight
+the links, the assignment (its goal searches within), its descent over any-angle
+estimates (``lamp.mrmp.anyangle``), the steps, the repair, the straight
 lines, the retiming, the timed repair and the rest (input checks, set-up, output); medians
 per map and robot count at the end. ``--repeat K`` plans each instance K times and keeps
 the fastest call (plans are deterministic: every call gives the same plan), for times on a
 busy machine.
 
 Run: ``python benchmarks/bench_fleet.py [--maps random-64-64-20] [--robots 100,200,400,800]
-[--seeds 3] [--parts] [--tswap benchmarks/tswap/adapter.py --tswap-bin BUILD/app]``;
+[--seeds 3 | --seed-list 8,13,46] [--parts] [--tswap benchmarks/tswap/adapter.py
+--tswap-bin BUILD/app]``;
 ``--quick``: random-32-32-20 and random-64-64-20 at 100 and 400 robots, one seed.
 """
 
@@ -186,7 +188,8 @@ def parts_line(plan, space: RobotSpace, S: np.ndarray, G: np.ndarray) -> str:
             f"lattice distance {np.nanmax(short):.2f} (B* {plan.stats['assignment_bound']:.2f})")
 
 
-PHASES = ("links", "assignment", "steps", "repair", "shortcut", "retime", "timed_repair")
+PHASES = ("links", "assignment", "descent", "steps", "repair", "shortcut", "retime",
+          "timed_repair")
 
 
 def phase_times(plan, dt: float) -> dict[str, float]:
@@ -211,7 +214,9 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--maps", default="random-32-32-20,random-64-64-20,empty-64-64,den520d")
     ap.add_argument("--robots", default="100,200,400,800")
-    ap.add_argument("--seeds", type=int, default=3)
+    ap.add_argument("--seeds", type=int, default=3, help="seeds 0 .. SEEDS-1")
+    ap.add_argument("--seed-list", default=None,
+                    help="these seeds instead (comma-separated, e.g. 8,13,46)")
     ap.add_argument("--cell", type=float, default=0.15)
     ap.add_argument("--map-dir", type=Path, default=MAP_DIR, help="folder of the .map files")
     ap.add_argument("--time-limit", type=float, default=60.0)
@@ -232,9 +237,10 @@ def main() -> None:
     a = ap.parse_args()
     maps = a.maps.split(",")
     robots = [int(v) for v in a.robots.split(",")]
-    seeds = a.seeds
+    seeds = (list(range(a.seeds)) if a.seed_list is None
+             else [int(v) for v in a.seed_list.split(",")])
     if a.quick:
-        maps, robots, seeds = ["random-32-32-20", "random-64-64-20"], [100, 400], 1
+        maps, robots, seeds = ["random-32-32-20", "random-64-64-20"], [100, 400], [0]
     modes = ["default"] + [m for m in a.tswap_modes.split(",") if m and m != "default"]
     if not a.tswap:
         modes = []
@@ -262,7 +268,7 @@ def main() -> None:
             if n > free:
                 continue
             rows = []
-            for seed in range(seeds):
+            for seed in seeds:
                 S, G = random_instance(gm, n, seed)
                 dt = np.inf
                 for _ in range(max(1, a.repeat)):

@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numba as nb
 import numpy as np
@@ -80,13 +80,15 @@ FLEET_ROUNDS = (1.05, 4, 0, 1.2)
 class Assignment:
     """``goal[i]``: robot i's goal (-1 none), ``cost[i]``: its heuristic distance (0
     without a goal), ``why``: the reason when no assignment reaches every goal (then
-    ``goal`` is None), ``timed_out``: the deadline passed first; ``bound``: ``B*``."""
+    ``goal`` is None), ``timed_out``: the deadline passed first; ``bound``: ``B*``;
+    ``floor``: a lower bound on the straight-line bottleneck (fleets; else 0)."""
 
     goal: np.ndarray | None
     cost: np.ndarray
     why: str = ""
     timed_out: bool = False
     bound: float = 0.0
+    floor: float = 0.0
 
 
 @nb.njit(cache=True)
@@ -218,8 +220,8 @@ def assign(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray, G: np.ndarray,
     if coarse is not None and M * np.pi * floor**2 / hs.step**2 > COARSE_NODES:
         got = _coarse_bottleneck(gr, V, hs, S, G, E, floor, coarse, deadline)
         if got is not None:
-            return got
-    return _bottleneck(gr, V, hs, S, G, E, floor, deadline)
+            return replace(got, floor=floor)
+    return replace(_bottleneck(gr, V, hs, S, G, E, floor, deadline), floor=floor)
 
 
 def _costs(gr: Graph, V: int, hs: GoalDistances, N: int, M: int,

@@ -80,6 +80,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from lamp.geometry.robot_space import RobotSpace
+from lamp.mrmp.anyangle import lower_assignment, warm_descent
 from lamp.mrmp.assignment import assign, unreached_reason
 from lamp.mrmp.coarse import coarse_below, get_coarse
 from lamp.mrmp.distance_field import FEW, Lattice, clear_segments, get_lattice
@@ -127,6 +128,7 @@ def warmup() -> None:
     sp.is_free(np.array([[0.2, 0.2]]))
     sp.clearance(np.array([[0.2, 0.2]]))
     sp.nearest_free(np.array([0.3, 0.3]))
+    warm_descent(sp)  # the fleets' descent over any-angle estimates (lamp.mrmp.anyangle)
     plan_paths(sc, sc.robot_starts_array, np.array([[0.5, 0.5], [0.1, 0.3]]), time_limit=1e6)
     # a team of 36: the lazy bottleneck assignment and the spatial hash (large teams)
     grid = np.stack(np.meshgrid(np.arange(6), np.arange(6)), -1).reshape(-1, 2) * 0.3 + 0.2
@@ -434,9 +436,9 @@ def _attempt(space: RobotSpace, S: np.ndarray, G: np.ndarray, c_start: np.ndarra
                        "heuristic distances", GspiStatus.TIME_LIMIT)
     if asg.goal is None:
         return failure(asg.why, GspiStatus.UNREACHABLE, retry=True)
-    goal = asg.goal
     stats["assignment_bound"] = asg.bound
-    prio = _priorities(asg.cost, goal, opts.seed)
+    goal, cost = lower_assignment(asg, links.graph, V, hs, S, G, space, stats)
+    prio = _priorities(cost, goal, opts.seed)
 
     n_side = lat.ids.shape[0] + lat.ids.shape[1]
     max_steps = int(20 * n_side + 50 * N) if opts.max_steps is None else opts.max_steps
