@@ -37,7 +37,8 @@ buckets, memory and time growing with the area reached, not the map). Initial as
 (:mod:`lamp.mrmp.assignment`): least longest distance first, then least sum (TSWAP's
 bottleneck-then-sum), over distances computed only for the pairs that can matter (for
 fleets whose exact searches would be very large, over a coarse block graph, each chosen
-pair then costed exactly);
+pair then costed exactly), for fleets over 100 robots then lowered over any-angle path
+estimates where its bottleneck is far above the straight lines (:mod:`lamp.mrmp.anyangle`);
 ``assignment="sum"`` gives the least-sum assignment of earlier versions (with it the plans
 are bit for bit those of the all-pairs implementation on teams below 32 robots). A goal no
 robot can reach is reported at once. Robot-robot checks and goal swaps use neighbour
