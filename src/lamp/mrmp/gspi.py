@@ -85,6 +85,7 @@ from lamp.mrmp.anyangle import lower_assignment, warm_descent
 from lamp.mrmp.assignment import assign, unreached_reason
 from lamp.mrmp.coarse import coarse_below, get_coarse
 from lamp.mrmp.distance_field import FEW, Lattice, clear_segments, get_lattice
+from lamp.mrmp.effort import timed_effort
 from lamp.mrmp.endpoints import DENSE_POINTS, exact_clearance
 from lamp.mrmp.goal_distances import GoalDistances
 from lamp.mrmp.gspi_inputs import PlanInputs, check_inputs
@@ -471,15 +472,15 @@ def _attempt(space: RobotSpace, S: np.ndarray, G: np.ndarray, c_start: np.ndarra
                                               space.threshold)
         stats["time_shortcut"] = time.perf_counter() - clock
         clock = time.perf_counter()
-        paths, _, times = retime(P, 2.0 * space.radius, L / RETIME_QUANTA,
-                                 opts.max_spacing, times=True)
+        paths, span, times = retime(P, 2.0 * space.radius, L / RETIME_QUANTA,
+                                    opts.max_spacing, times=True)
         stats["time_retime"] = time.perf_counter() - clock
         clock = time.perf_counter()
         (paths, goal, stats["timed_repairs"], stats["timed_states"],
          stats["timed_groups"]) = timed_repair(
             paths, times, links.graph, V, gv0, hs, goal, 2.0 * space.radius,
             L / RETIME_QUANTA, links.max_move, opts.max_spacing, space.geometry,
-            space.workspace, space.threshold)
+            space.workspace, space.threshold, **timed_effort(N, span, asg.floor))
         stats["time_timed_repair"] = time.perf_counter() - clock
     else:
         paths = densify(links.graph.coords[VX], opts.max_spacing)
