@@ -4,7 +4,8 @@
 sub-team each robot is in (``owner``), the shared clock, the robots that failed, and the
 counters (``stats.FleetStats``), and the tasks (``desk.TaskDesk``). Its methods only
 read; ``coordinator.Fleet``, built on it (through ``reteam.TeamChanges``, its team
-changes, and ``follow.Following``, the leaders its objects follow), is the one writer. The rules of the schedule (``admission``, ``blocked``,
+changes, ``follow.Following``, the leaders its objects follow, and ``knocked.Knocks``,
+placed objects placed again), is the one writer. The rules of the schedule (``admission``, ``blocked``,
 ``makeway``, ``teams``, ``handover``) take what they need from here and return decisions.
 """
 

@@ -37,10 +37,9 @@ simulator. Design (``docs/fleet.md``):
   a blocked one's way moves aside or takes its robots (``fleet.makeway``); else planners
   waiting on a change plan in the world as it is (as sequentially), claims dropped, or the
   highest-priority waiting segment is admitted against standing bodies only (``forced``).
-- **Teams.** Allocated by ``lamp.fleet.teams``. A robot that fails (``executor.failed``)
-  leaves its sub-team for good (``FAILED_ROBOT``), replaced by the nearest free robot if any;
-  far robots hand over to free ones nearer (``lamp.fleet.handover``). The team's loop
-  ends after its segment (``team_changed``) and plans anew.
+- **Teams.** Allocated by ``lamp.fleet.teams``. A failed robot (``executor.failed``) leaves
+  its team for good, replaced by the nearest free robot if any; far robots hand over to
+  free ones nearer (``fleet.handover``); the loop then plans anew (``team_changed``).
 """
 
 from __future__ import annotations
@@ -56,7 +55,7 @@ from lamp.fleet import tasks as T
 from lamp.fleet.admission import ends_box, heeded_claims, meets_moving, meets_standing
 from lamp.fleet.blocked import blocked_space, looks_now, wait_over
 from lamp.fleet.config import FleetConfig
-from lamp.fleet.follow import Following
+from lamp.fleet.knocked import Knocks
 from lamp.fleet.makeway import make_way, with_goal
 from lamp.fleet.objects import given_up
 from lamp.fleet.regions import claims
@@ -71,7 +70,7 @@ from lamp.scene.model import Scene
 __all__ = ["Fleet"]
 
 
-class Fleet(Following):
+class Fleet(Knocks):
     """Moves a scene's objects concurrently on ``executor`` (see the module docstring): a
     ``Simulator`` or an executor wrapping one. The one writer of the schedule's state
     (``board.Board``): the rules return decisions, and it applies them.
@@ -131,9 +130,10 @@ class Fleet(Following):
             for o in self.objects]
 
     def _take_tasks(self) -> None:
-        """The released tasks queue at their objects (``desk.TaskDesk``); an object with
-        none takes its next: it waits to start again, its goal the task's."""
+        """Released tasks (and knocked objects' again, ``fleet.knocked``) queue at their
+        objects; one with none takes its next: it waits to start again, to its goal."""
         self.desk.take(self.clock)
+        self.reopen_knocked()
         for o in self.objects:
             task = self.desk.next_for(o.index)
             if task is not None and o.status.done:

@@ -27,7 +27,7 @@ STATES = ("working", "moving", "waiting", "idle")
 #: clock run).
 COUNTS = ("admitted", "declined", "waited", "forced", "blocked", "merged", "grown",
           "reinforced", "replaced", "handed_over", "events", "transit_hops", "parking_moves",
-          "made_way", "jammed", "halted")
+          "made_way", "jammed", "halted", "knocked")
 
 
 class RobotTime:

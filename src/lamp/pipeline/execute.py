@@ -10,17 +10,24 @@ from __future__ import annotations
 
 import time
 from collections.abc import Sequence
+from dataclasses import replace
 from typing import Any
+
+import numpy as np
 
 from lamp.contract.events import RunObserver
 from lamp.contract.result import RunResult
-from lamp.contract.runner import ObjectRunner
+from lamp.contract.runner import ObjectOutcome, ObjectRunner
 from lamp.pipeline.request import RunRequest
 from lamp.pipeline.schedule import run_concurrently, run_in_order
+from lamp.planners.series import judged
 from lamp.scene.bounds import makespan_lower_bound
 from lamp.scene.model import Scene
 
-__all__ = ["execute", "object_runner"]
+__all__ = ["KNOCKED", "execute", "object_runner", "still_placed"]
+
+#: The failure reason of an object placed and later pushed off its goal.
+KNOCKED = "pushed off its goal after it was placed"
 
 
 def object_runner(request: RunRequest) -> ObjectRunner:
@@ -70,6 +77,8 @@ def execute(request: RunRequest, observers: Sequence[RunObserver] = (),
             serial=scene.schedule == "sequential")
     else:
         outcomes = run_in_order(scene, executor, runner, [recorder, *observers])
+    if not lifelong:
+        outcomes = still_placed(scene, outcomes, executor.true_object_poses)
     result = RunResult(scene=scene.name, planner=request.planner, seed=int(request.seed))
     unexecuted = 0.0
     for o in outcomes:
@@ -94,6 +103,22 @@ def execute(request: RunRequest, observers: Sequence[RunObserver] = (),
             [k, round(t, 4)] for k, t in sorted(executor.fired.items())]
     result.recording = recorder.finish(request.planner, int(request.seed), result.to_dict())
     return result
+
+
+def still_placed(scene: Scene, outcomes: Sequence[ObjectOutcome], poses: Any
+                 ) -> list[ObjectOutcome]:
+    """``outcomes`` judged on the final object poses ``poses`` (the true poses when the run
+    ends; the paper's success criterion is the final pose): an object that reached its
+    goal and was later pushed off it (by another object or robot) fails, with its pose at
+    the end and the reason; every other outcome is kept as it is."""
+    out = []
+    for k, o in enumerate(outcomes):
+        if o.result.success:
+            end = judged(o, np.asarray(poses[k], float), np.asarray(scene.objects[k].goal, float))
+            if not end.result.success:
+                o = replace(end, result=replace(end.result, failure_reason=KNOCKED))
+        out.append(o)
+    return out
 
 
 def _lifelong(result: RunResult, scene: Scene, first: Sequence[float], records: list[Any],
