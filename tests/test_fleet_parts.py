@@ -397,13 +397,29 @@ def test_a_line_of_loads_leaving_an_aisle_starts_nearest_the_exit_first():
         assert [xs[k] for k in order] == [4.5, 3.0, 1.5]
 
 
+def test_a_load_in_the_way_whose_goal_is_in_the_way_too_goes_after():
+    """Object 0 stands in object 1's way and its goal lies further along that way: it must
+    be placed after object 1 whatever happens, so object 1 starts first (round it), in
+    either file order."""
+    walls = ()
+    for swap in (False, True):
+        a = SceneObject(BOX, (3.0, 1.0, 0.0), (4.2, 1.0, 0.0))  # in the way, goal too
+        b = SceneObject(BOX, (1.0, 1.0, 0.0), (6.0, 1.0, 0.0))
+        objects = (b, a) if swap else (a, b)
+        scene = Scene("line", (7.0, 2.0), ((0.3, 0.3),), objects, walls, R)
+        poses = np.array([o.start for o in objects])
+        first = 0 if swap else 1  # object b's index
+        assert stands_in_way(scene, poses, [0, 1])[first] == {1 - first}
+        assert start_order(scene, poses, [0, 1], [])[0] == first
+
+
 @settings(max_examples=60, deadline=None)
 @given(st.integers(0, 2**31 - 1))
 def test_stands_in_way_in_the_open_is_the_band_along_the_straight_way(seed):
-    """With no obstacles an object's way is the straight line to its goal: another object
-    stands in it exactly when a point of its outline lies within (circumradius + robot
-    diameter) of that line, beside it (not behind its start nor beyond its goal), brute
-    force over outline points 1 mm apart; near the band's edge either answer is taken."""
+    """With no obstacles an object's way is the straight segment to its goal: another
+    object stands in it exactly when a point of its outline lies within (circumradius +
+    robot diameter) of that segment, brute force over outline points 1 mm apart; near the
+    band's edge either answer is taken."""
     rng = np.random.default_rng(seed)
     objects = tuple(SceneObject(Rectangle(tuple(rng.uniform(0.2, 0.6, 2))),
                                 (*rng.uniform(0.5, 9.5, 2), rng.uniform(-3, 3)),
@@ -422,8 +438,8 @@ def test_stands_in_way_in_the_open_is_the_band_along_the_straight_way(seed):
                 continue
             ring = to_shapely(objects[k].shape, poses[k]).exterior
             pts = shapely.get_coordinates(shapely.segmentize(ring, 0.001)) - a
-            along, side = pts @ u, np.abs(pts @ np.array([-u[1], u[0]]))
-            margin = np.minimum.reduce([reach - side, along, length - along])
+            along = np.clip(pts @ u, 0.0, length)
+            margin = reach - np.hypot(*(pts - along[:, None] * u).T)
             if np.all(np.abs(margin) > 2e-3):  # clear of the edge
                 assert (k in got[j]) == bool(np.any(margin > 0)), (j, k)
 

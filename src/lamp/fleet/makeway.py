@@ -45,6 +45,7 @@ import numpy as np
 import shapely
 
 from lamp.fleet.state import ObjectState, ObjectStatus
+from lamp.fleet.teams import in_way_of
 from lamp.geometry.object_space import ObjectSpace
 from lamp.geometry.primitives import Obstacle
 from lamp.geometry.shapes import obstacle_geometry, to_shapely
@@ -86,12 +87,10 @@ def way_of(scene: Scene, k: int, pose: np.ndarray, step: float = BUFFER_STEP
 def standing_in_way(scene: Scene, k: int, way: shapely.LineString, poses: np.ndarray,
                     candidates: list[int]) -> int | None:
     """The first along ``way`` (object ``k``'s, :func:`way_of`) of ``candidates`` (objects,
-    at ``poses``) whose footprint comes within ``k``'s bounding radius and a robot
-    diameter of it (where ``k`` and its robots pass); None if none does."""
-    reach = float(scene.objects[k].shape.bounding_radius) + 2.0 * float(scene.robot_radius)
-    hits = [(way.project(shapely.Point(poses[j][:2])), j) for j in candidates if j != k
-            and shapely.dwithin(way, to_shapely(scene.objects[j].shape, poses[j]), reach)]
-    return min(hits)[1] if hits else None
+    at ``poses``) that stand in it (``teams.in_way_of``: their footprint meets the band
+    ``k`` and its robots sweep along it); None if none does."""
+    hits = in_way_of(scene, poses, k, [j for j in candidates if j != k], way)
+    return min(hits, key=lambda j: (way.project(shapely.Point(poses[j][:2])), j), default=None)
 
 
 def buffer_pose(scene: Scene, j: int, poses: np.ndarray, robot_positions: np.ndarray,

@@ -224,19 +224,21 @@ def stands_in_way(scene: Scene, poses: np.ndarray, candidates: Sequence[int]
             for j in candidates}
 
 
-def in_way_of(scene: Scene, poses: np.ndarray, j: int, others: Sequence[int]) -> set[int]:
-    """Those of ``others`` (objects of ``scene`` at ``poses``) whose footprint meets the
-    band object ``j``'s body and robots sweep along its shortest way to its goal round
-    the obstacles (``scene.bounds.object_way``; the band is as wide as its circumscribed
-    circle plus a robot diameter each side, and starts at its reference point)."""
-    pts = object_way(scene, j, poses[j])
-    if pts is None or not others or math.dist(pts[0], pts[-1]) == 0.0:
+def in_way_of(scene: Scene, poses: np.ndarray, j: int, others: Sequence[int],
+              way: shapely.LineString | None = None) -> set[int]:
+    """Those of ``others`` (objects of ``scene`` at ``poses``) whose footprint comes within
+    ``j``'s circumscribed radius plus a robot diameter of ``way`` (a line from its pose
+    on; default its shortest way to its goal round the obstacles,
+    ``scene.bounds.object_way``): where ``j`` and its robots pass, and push it from."""
+    if way is None:
+        pts = object_way(scene, j, poses[j])
+        way = None if pts is None else shapely.LineString(pts)
+    if way is None or not others or way.length == 0.0:
         return set()
     objs = scene.objects
     reach = objs[j].shape.bounding_radius + 2 * float(scene.robot_radius)
-    band = shapely.LineString(pts).buffer(reach, cap_style="flat")
     return {k for k in others
-            if band.intersects(to_shapely(objs[k].shape, np.asarray(poses[k], float)))}
+            if shapely.dwithin(way, to_shapely(objs[k].shape, np.asarray(poses[k], float)), reach)}
 
 
 def corridor(shape: Shape, pose: np.ndarray, goal: np.ndarray, robot_radius: float
@@ -268,7 +270,10 @@ def start_order(scene: Scene, poses: np.ndarray, candidates: Sequence[int],
     objs, r = scene.objects, scene.robot_radius
     ways, blocks = goal_blocks(scene, poses, candidates)
     standing = stands_in_way(scene, poses, candidates)
-    after = {k: blocks.get(k, set()) | standing[k] for k in candidates}
+    # one standing in k's way whose goal lies in it is placed after k whatever happens:
+    # k goes first (round it, or it makes way), as the goal says
+    after = {k: blocks.get(k, set()) | {j for j in standing[k] if k not in blocks.get(j, ())}
+             for k in candidates}
     busy = [corridor(objs[k].shape, poses[k], objs[k].goal, r) for k in moving]
     return least_conflict_order(candidates, ways, busy, after)
 
