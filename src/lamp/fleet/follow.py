@@ -6,8 +6,8 @@ queued behind another in a narrow aisle has no way out (or a detour round it) un
 one ahead has gone, and its team holds. With it, object ``k``'s loop plans as if its
 *leaders* were already at their goals: the objects that move (active, with a team, not
 on a detour, not waiting on a change), rank above ``k``, stand in its way
-(``teams.in_way_of``: they meet the band its body and robots sweep along its shortest way
-to its goal) and in whose way ``k`` does not stand (not head-on). Their robots are left
+(``teams.in_way_of``: within reach of its body and robots along its shortest way to its
+goal) and in whose way ``k`` does not stand (not head-on). Their robots are left
 out of its world too (they move with them). Its plan then runs through where a leader
 stands; admission holds each segment that meets a leader's standing body or robots until
 the leader has moved on (it waits, not declined: the leader moves away), and running

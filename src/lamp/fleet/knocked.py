@@ -35,14 +35,14 @@ class Knocks(Following):
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
-        self.replaced = [0] * len(self.objects)  # times each object was placed again
+        self.knocks = [0] * len(self.objects)  # times each object was placed again
         self._looked = -1  # the stretch of the clock last looked after
 
     def reopen_knocked(self) -> list[int]:
         """Give every placed object sensed off its goal its task again (module docstring),
         once per stretch of the clock run; the objects reopened."""
         placed = [o for o in self.objects if o.status == ObjectStatus.PLACED
-                  and self.replaced[o.index] < MAX_REPLACES]
+                  and self.knocks[o.index] < MAX_REPLACES]
         if (self._looked == self.events or not placed or self.scene.tasks
                 or not isinstance(self.desk.feed, ScheduledFeed)):
             return []
@@ -57,7 +57,7 @@ class Knocks(Following):
                               tuple(float(v) for v in goal), self.clock)  # type: ignore[arg-type]
             self.desk.records.append(task)
             self.desk.queues[o.index].append(task)
-            self.replaced[o.index] += 1
+            self.knocks[o.index] += 1
             self.stats.count("knocked")
             self.stats.note(self.clock, "knocked", o.index,
                             f"off its goal at {np.round(poses[o.index], 3).tolist()}")
