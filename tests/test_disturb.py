@@ -334,7 +334,10 @@ class _SpySensor(DisturbedExecutor):
     watch is handed must be a sensor reading, not the true state; and the true poses may be
     read only where an object's final success is judged."""
 
-    JUDGES = {"lamp.planners.runner.run_object", "lamp.fleet.objects.main"}
+    #: each object's judgement when its loops end, and every object's again when the run
+    #: ends (``pipeline.execute.still_placed``)
+    JUDGES = {"lamp.planners.runner.run_object", "lamp.fleet.objects.main",
+              "lamp.pipeline.execute.execute"}
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)

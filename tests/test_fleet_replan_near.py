@@ -66,6 +66,9 @@ class Host:
 
     def world_taken(self, k: int) -> None: ...
 
+    def following(self, k: int) -> dict:
+        return {}
+
     def mark_placed(self, k: int) -> bool:
         return False
 
