@@ -77,3 +77,12 @@ def test_balance_teams_and_reach_cut_are_zero_or_one() -> None:
         FleetConfig(balance_teams=2)
     with pytest.raises(InputError, match="fleet_reach_cut: 0 or 1, got 3"):
         FleetConfig(reach_cut=3)
+
+
+def test_order_in_way_and_follow_are_zero_or_one_and_off_by_default() -> None:
+    assert FleetConfig().order_in_way == 0 and FleetConfig().follow == 0
+    assert FleetConfig(order_in_way=1).order_in_way == 1 and FleetConfig(follow=1).follow == 1
+    with pytest.raises(InputError, match="fleet_order_in_way: 0 or 1, got 2"):
+        FleetConfig(order_in_way=2)
+    with pytest.raises(InputError, match="fleet_follow: 0 or 1, got 2"):
+        FleetConfig(follow=2)

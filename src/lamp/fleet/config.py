@@ -100,6 +100,11 @@ class FleetConfig:
                            "way x 1.5 + 0.1 m; only where pushes are tracked exactly: no "
                            "sensing or actuation noise, no knocks); 0: anywhere along its "
                            "planned motion.", low=0)
+    order_in_way: int = param(0, "Concurrent schedule: 1: an object also starts after the "
+                              "ready objects standing in its way round the obstacles "
+                              "(teams.stands_in_way; a line of loads leaves an aisle front "
+                              "first); 0: only after those whose way its goal lies in.",
+                              low=0)
     follow: int = param(0, "Concurrent schedule: 1: an object's loop plans as if the "
                         "higher-ranked moving objects standing in its way ahead of it "
                         "(not head-on) were at their goals, and its segments wait for "
@@ -115,7 +120,7 @@ class FleetConfig:
 
     def __post_init__(self) -> None:
         check_fields(self)
-        for name in ("balance_teams", "reach_cut", "follow"):
+        for name in ("balance_teams", "reach_cut", "follow", "order_in_way"):
             if getattr(self, name) > 1:
                 raise InputError(f"fleet_{name}: 0 or 1, got {getattr(self, name)}")
 

@@ -181,8 +181,8 @@ class Fleet(Knocks):
             return
         first = [k for k in ready if self.objects[k].status == ObjectStatus.ACTIVE]
         moving = [o.index for o in self.objects if o.status == ObjectStatus.ACTIVE and o.team]
-        order = start_order(self.scene, self.executor.object_poses,
-                            [k for k in ready if k not in first], moving + first)
+        order = start_order(self.scene, self.executor.object_poses, [k for k in ready if k
+                            not in first], moving + first, bool(self.config.order_in_way))
         goals = np.array([o.goal for o in self.scene.objects]) if self.config.balance_teams else None
         teams = allocate(first + order, self.free(), self.executor.robot_positions,
                          self.executor.object_poses, bool(moving), goals)

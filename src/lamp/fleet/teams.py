@@ -263,13 +263,14 @@ def goal_blocks(scene: Scene, poses: np.ndarray, candidates: Sequence[int]
 
 
 def start_order(scene: Scene, poses: np.ndarray, candidates: Sequence[int],
-                moving: Sequence[int]) -> list[int]:
+                moving: Sequence[int], in_way: bool = True) -> list[int]:
     """``candidates`` (objects of ``scene`` at ``poses``) in :func:`least_conflict_order`,
     the corridors of the ``moving`` objects busy and :func:`in_the_way` taken among the
-    candidates (:func:`goal_blocks`)."""
+    candidates (:func:`goal_blocks`), and with ``in_way`` :func:`stands_in_way` too."""
     objs, r = scene.objects, scene.robot_radius
     ways, blocks = goal_blocks(scene, poses, candidates)
-    standing = stands_in_way(scene, poses, candidates)
+    standing = (stands_in_way(scene, poses, candidates) if in_way
+                else {k: set() for k in candidates})
     # one standing in k's way whose goal lies in it is placed after k whatever happens:
     # k goes first (round it, or it makes way), as the goal says
     after = {k: blocks.get(k, set()) | {j for j in standing[k] if k not in blocks.get(j, ())}
