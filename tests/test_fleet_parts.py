@@ -373,8 +373,9 @@ def test_loads_into_a_dead_end_aisle_start_deepest_first():
                         for k, gx in enumerate(goals_x))
         scene = Scene("aisle", (10.0, 2.0), ((9.8, 0.3), (9.8, 1.7)), objects, walls, 0.05)
         poses = np.array([o.start for o in objects])
-        order = start_order(scene, poses, [0, 1, 2], [])
-        assert [goals_x[k] for k in order] == [1.0, 2.0, 3.0]
+        for in_way in (False, True):  # (``fleet_order_in_way`` either way)
+            order = start_order(scene, poses, [0, 1, 2], [], in_way)
+            assert [goals_x[k] for k in order] == [1.0, 2.0, 3.0]
 
 
 def test_a_line_of_loads_leaving_an_aisle_starts_nearest_the_exit_first():
@@ -393,7 +394,7 @@ def test_a_line_of_loads_leaving_an_aisle_starts_nearest_the_exit_first():
         poses = np.array([o.start for o in objects])
         ahead = stands_in_way(scene, poses, [0, 1, 2])
         assert ahead == {k: {j for j in range(3) if xs[j] > xs[k]} for k in range(3)}
-        order = start_order(scene, poses, [0, 1, 2], [])
+        order = start_order(scene, poses, [0, 1, 2], [], in_way=True)
         assert [xs[k] for k in order] == [4.5, 3.0, 1.5]
 
 
@@ -410,7 +411,7 @@ def test_a_load_in_the_way_whose_goal_is_in_the_way_too_goes_after():
         poses = np.array([o.start for o in objects])
         first = 0 if swap else 1  # object b's index
         assert stands_in_way(scene, poses, [0, 1])[first] == {1 - first}
-        assert start_order(scene, poses, [0, 1], [])[0] == first
+        assert start_order(scene, poses, [0, 1], [], in_way=True)[0] == first
 
 
 @settings(max_examples=60, deadline=None)

@@ -263,7 +263,7 @@ def goal_blocks(scene: Scene, poses: np.ndarray, candidates: Sequence[int]
 
 
 def start_order(scene: Scene, poses: np.ndarray, candidates: Sequence[int],
-                moving: Sequence[int], in_way: bool = True) -> list[int]:
+                moving: Sequence[int], in_way: bool = False) -> list[int]:
     """``candidates`` (objects of ``scene`` at ``poses``) in :func:`least_conflict_order`,
     the corridors of the ``moving`` objects busy and :func:`in_the_way` taken among the
     candidates (:func:`goal_blocks`), and with ``in_way`` :func:`stands_in_way` too."""
