@@ -145,7 +145,7 @@ class Fleet(Knocks):
         """Nothing to do before simulated time ``until``: the robots hold still (module
         docstring of ``fleet.tasks``: simulated till the world rests, then skipped)."""
         now = np.asarray(self.executor.robot_positions, float)
-        out, self._at_rest = T.hold_still(self.executor, self._at_rest, until - self.clock)
+        out, self._at_rest = T.hold_still(self.executor, now, self._at_rest, until - self.clock)
         self._clocked(out, [], now[:, None])
 
     def _release(self) -> None:

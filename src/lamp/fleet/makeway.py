@@ -87,8 +87,8 @@ def way_of(scene: Scene, k: int, pose: np.ndarray, step: float = BUFFER_STEP
 def standing_in_way(scene: Scene, k: int, way: shapely.LineString, poses: np.ndarray,
                     candidates: list[int]) -> int | None:
     """The first along ``way`` (object ``k``'s, :func:`way_of`) of ``candidates`` (objects,
-    at ``poses``) that stand in it (``teams.in_way_of``: their footprint meets the band
-    ``k`` and its robots sweep along it); None if none does."""
+    at ``poses``) that stand in it (``teams.in_way_of``: their footprint comes within
+    ``k``'s circumscribed radius plus a robot diameter of it); None if none does."""
     hits = in_way_of(scene, poses, k, [j for j in candidates if j != k], way)
     return min(hits, key=lambda j: (way.project(shapely.Point(poses[j][:2])), j), default=None)
 

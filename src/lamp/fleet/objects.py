@@ -147,8 +147,9 @@ def object_main(runner: ClosedLoopRunner, observe: Callable[[SegmentEvent], None
                 fleet.wait_for_team(k)
             view = fleet.view(k)
 
-            def world(team: list[int] = view.team, near: float = math.inf) -> Scene:
-                return sub_scene(scene, team, fleet.executor.robot_positions, near)
+            def world(team: list[int] = view.team, near: float = math.inf,
+                      skip: Collection[int] = ()) -> Scene:
+                return sub_scene(scene, team, fleet.executor.robot_positions, near, skip)
 
             hops, planning = transit(view, world, k, seed)
             fleet.stats.count("transit_hops", hops)
@@ -156,9 +157,8 @@ def object_main(runner: ClosedLoopRunner, observe: Callable[[SegmentEvent], None
             if view.team_changed:  # a robot failed or joined during transit
                 continue
             detour = fleet.detour_of(k)
-            view.ghosts = fleet.following(k)
-            mine = sub_scene(scene, view.team, fleet.executor.robot_positions, near,
-                             skip={i for j in view.ghosts for i in fleet.team_of(j)})
+            view.ghosts = fleet.following(k)  # (its leaders' robots move with them)
+            mine = world(near=near, skip={i for j in view.ghosts for i in fleet.team_of(j)})
             scene_k = mine if detour is None else with_goal(mine, k, detour)
             fleet.world_taken(k)
             if detour is not None:  # a place to stand aside: any heading will do

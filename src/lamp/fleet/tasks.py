@@ -63,12 +63,12 @@ def rest_until(robots: np.ndarray, objects: np.ndarray, seconds: float) -> Any:
                            float(seconds), 0, np.zeros(len(robots)), trace)
 
 
-def hold_still(executor: Any, resting: bool, seconds: float) -> tuple[Any, bool]:
-    """``executor``'s robots hold still for ``seconds`` of simulated time: the result
-    (without physics when the world was ``resting`` and nothing disturbs it, else a
-    stretch of at most ``IDLE_STRETCH_S`` simulated) and whether the world is at rest
-    after it."""
-    now = np.asarray(executor.robot_positions, float)
+def hold_still(executor: Any, now: np.ndarray, resting: bool, seconds: float
+               ) -> tuple[Any, bool]:
+    """``executor``'s robots hold still at ``now`` (their positions, (N, 2)) for
+    ``seconds`` of simulated time: the result (without physics when the world was
+    ``resting`` and nothing disturbs it, else a stretch of at most ``IDLE_STRETCH_S``
+    simulated) and whether the world is at rest after it."""
     if resting and not executor.disturbed:
         return rest_until(now, executor.true_object_poses, max(seconds, 0.0)), True
     out = executor.execute(now[:, None], record_every=TRACE_EVERY,
