@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from fleet_checker import check_fleet_plan
+from fleet_plans import row_makespan
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from mrmp_checker import check_plan
@@ -31,10 +32,6 @@ def _map(name: str = "random-32-32-20"):
 def _check_both(gm, S, G, plan) -> None:
     assert check_fleet_plan(gm.scene.to_dict(), S, G, plan, R) == []
     check_plan(gm.scene, S, G, plan)
-
-
-def _makespan(paths: np.ndarray) -> float:
-    return float(np.hypot(*np.diff(paths, axis=1).transpose(2, 0, 1)).max(axis=0).sum())
 
 
 @settings(max_examples=6, deadline=None)
@@ -102,7 +99,7 @@ def test_retime_keeps_each_path_and_every_clearance(seed, n, lazy, quanta) -> No
     step = np.hypot(*np.diff(P, axis=0).transpose(2, 0, 1)).max(axis=1)
     bound = float((np.ceil(step / q - 1e-9) * q).sum())
     assert mk <= bound + 1e-9
-    assert _makespan(rows) <= mk + 1e-9
+    assert row_makespan(rows) <= mk + 1e-9
 
 
 def test_retime_lets_a_robot_on_an_axis_go_at_full_speed() -> None:
