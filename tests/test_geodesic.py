@@ -164,3 +164,23 @@ def test_the_path_runs_from_a_to_b_clear_and_is_as_long_as_the_distance(boxes, r
     assert float(np.hypot(*np.diff(pts, axis=0).T).sum()) == pytest.approx(d, rel=1e-9,
                                                                             abs=1e-9)
     assert not grown.intersects(shapely.LineString(pts))
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.tuples(st.floats(0.5, 3.3), st.floats(0.4, 2.4), st.floats(0.1, 0.8),
+                          st.floats(0.1, 0.8)), min_size=1, max_size=4),
+       st.floats(0.0, 0.15), st.tuples(st.floats(0.2, 3.8), st.floats(0.2, 2.8)),
+       st.lists(st.tuples(st.floats(0.2, 3.8), st.floats(0.2, 2.8)), min_size=1, max_size=6),
+       st.floats(0.5, 6.0))
+def test_distances_to_many_targets_are_the_distances_to_each(boxes, rho, a, targets, below
+                                                             ) -> None:
+    """``distances`` gives each target's ``distance``; with ``below``, those shorter than
+    it exactly and the others as at least ``below`` (and never above their own)."""
+    g = GrownObstacles([shapely.box(x, y, x + w, y + h) for x, y, w, h in boxes], rho, (W, H))
+    t = np.asarray(targets, float)
+    want = np.array([g.distance(a, p) for p in t])
+    assert g.distances(a, t) == pytest.approx(want, rel=1e-12, abs=1e-12)
+    cut = g.distances(a, t, below)
+    short = want < below
+    assert cut[short] == pytest.approx(want[short], rel=1e-12, abs=1e-12)
+    assert np.all(cut[~short] >= below - 1e-12) and np.all(cut <= want + 1e-12)

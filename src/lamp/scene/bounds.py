@@ -6,9 +6,16 @@ pushes it, and no robot drives faster than the scene's ``robots.speed`` ``v``. S
 
     ``T_k = (reach_k + travel_k) / v``
 
-- ``reach_k``: the nearest robot's straight-line drive until it touches the object at its
-  start: ``min_i max(0, d(c_i, F_k) - r)``, with ``c_i`` robot ``i``'s start, ``F_k`` the
-  object's start footprint and ``r`` the robot radius;
+- ``reach_k``: the nearest robot's drive until it touches the object at its start:
+  ``min_i max(0, d(c_i, F_k) - r, g(c_i, p_k) - r - R_k)``, with ``c_i`` robot ``i``'s
+  start, ``F_k`` the object's start footprint, ``r`` the robot radius, ``p_k`` the
+  object's reference point, ``R_k`` its footprint's farthest point from ``p_k`` and ``g``
+  the shortest path round the obstacles themselves, not grown (``lamp.scene.geodesic``).
+  The second term holds for footprints that are convex and contain ``p_k`` (circles,
+  rectangles, such polygons; others get the first only): a robot whose centre drove ``L``
+  to touch the object at ``q`` gives a path round the obstacles from ``c_i`` to ``p_k``
+  of ``L + r + |q - p_k|`` (on to ``q`` inside its own disk, on to ``p_k`` inside the
+  footprint), so ``g(c_i, p_k) <= L + r + R_k``;
 - ``travel_k``: how far its reference point must travel to count as placed: the shortest
   path from its start to its goal around the obstacles and inside the workspace, for a
   disk of the object's inscribed radius about its reference point (``rho_k``: every
@@ -19,16 +26,17 @@ pushes it, and no robot drives faster than the scene's ``robots.speed`` ``v``. S
   ``geo_k`` (a point of the disk may lie beyond an obstacle from the goal).
 
 ``makespan_lower_bound(scene) = max_k T_k`` (seconds of simulated time). It ignores the
-robots' own detours, headings, team sizes and that objects share robots, so real
+robots' detours beyond what ``g`` sees, headings, team sizes and that objects share robots, so real
 makespans lie above it, by how much says how much time a plan spends on approaches,
 turns, repositioning, waiting and sharing. The one assumption beyond the two facts: an
 object is not carried along faster than ``v`` (a robot catching up after being blocked,
 or an object coasting after a push, could briefly exceed it; the planners never plan
-either). ``straight_line=True`` gives the bound with straight-line travel only.
+either). ``straight_line=True`` gives the bound with straight-line reach and travel only.
 
 Guarantee (``tests/test_bounds.py``): without obstacles, equals a brute force over robots
-and objects; with them, lies between that and the travel on a fine grid; no recorded run
-of the test scenes is shorter.
+and objects; with them, each reach lies between the straight-line one and a robot's drive
+to touch the object on a fine grid, and the bound between the straight-line one and the
+travel on a fine grid; no recorded run of the test scenes is shorter.
 """
 
 from __future__ import annotations
@@ -107,6 +115,41 @@ def object_way(scene: Scene, k: int, pose: Sequence[float]) -> np.ndarray | None
     return space.path(pose, o.goal)
 
 
+def _star_radius(shape: Shape) -> float | None:
+    """``R_k`` of the module docstring: the farthest point of ``shape``'s footprint from
+    its reference point, or None when the footprint is not convex with the point inside
+    (the reach's geodesic term does not hold for it)."""
+    if isinstance(shape, Circle):
+        return float(shape.radius)
+    foot = to_shapely(shape, (0.0, 0.0, 0.0))
+    hull = foot.convex_hull
+    if hull.area - foot.area > 1e-9 * max(hull.area, 1.0) or not foot.covers(shapely.Point(0, 0)):
+        return None
+    return float(np.max(np.hypot(*shapely.get_coordinates(foot).T)))
+
+
+def _reach(scene: Scene, o: SceneObject, starts: np.ndarray, straight_line: bool) -> float:
+    """``reach_k`` of the module docstring for object ``o``, the robots at ``starts``."""
+    if isinstance(o.shape, Circle):  # exact (a Shapely circle is an inscribed polygon)
+        d = np.hypot(*(starts - np.asarray(o.start[:2])).T) - o.shape.radius
+    else:
+        d = shapely.distance(shapely.points(starts), to_shapely(o.shape, o.start))
+    gap = d - scene.robot_radius
+    star = None if straight_line else _star_radius(o.shape)
+    if star is None or not scene.obstacles:
+        return max(0.0, float(np.min(gap)))
+    space = grown_obstacles(tuple(scene.obstacles), tuple(scene.workspace), 0.0)
+
+    def longer(i: np.ndarray, below: float = math.inf) -> np.ndarray:  # robots i's terms
+        round_ = space.distances(o.start[:2], starts[i], below + scene.robot_radius + star)
+        round_ -= scene.robot_radius + star
+        return np.maximum(gap[i], np.where(np.isfinite(round_), round_, gap[i]))  # walled off
+
+    first = longer(np.array([int(np.argmin(gap))]))[0]  # only robots nearer can do better
+    rest = np.flatnonzero(gap < first)
+    return max(0.0, min(first, float(np.min(longer(rest, first))) if len(rest) else first))
+
+
 def _travel(scene: Scene, o: SceneObject) -> float:
     """``travel_k`` of the module docstring for object ``o``."""
     straight = math.dist(o.goal[:2], o.start[:2])
@@ -121,16 +164,10 @@ def _travel(scene: Scene, o: SceneObject) -> float:
 def makespan_lower_bound(scene: Scene, straight_line: bool = False) -> MakespanBound:
     """The lower bound of the module docstring for ``scene``."""
     starts = np.asarray(scene.robot_starts_array, float)
-    robots = shapely.points(starts)
     speed = float(scene.physics.robot_speed)
     per = []
     for o in scene.objects:
-        if isinstance(o.shape, Circle):  # exact (a Shapely circle is an inscribed polygon)
-            d = np.hypot(*(starts - np.asarray(o.start[:2])).T) - o.shape.radius
-        else:
-            d = shapely.distance(robots, to_shapely(o.shape, o.start))
-        gap = d - scene.robot_radius
-        reach = max(0.0, float(np.min(gap)))
+        reach = _reach(scene, o, starts, straight_line)
         travel = (max(0.0, math.dist(o.goal[:2], o.start[:2]) - SUCCESS_POSITION_TOL)
                   if straight_line else _travel(scene, o))
         per.append((reach + travel) / speed)

@@ -10,8 +10,9 @@ Guarantee, what makes it a lower bound (``tests/test_geodesic.py``): the result 
 exceeds the length of any path of the disk's centre that keeps the disk clear of the
 obstacles, because every approximation errs on the short side: Shapely's round buffer
 is a polygon inscribed in the true grown outline (its vertices on the offset curve), the
-grown obstacles are shrunk by ``SHRINK`` before segments are tested against them (a path
-may graze them). With a ``workspace`` (W, H), the outside of ``[0, W] x [0, H]`` is an
+grown obstacles, merged where they meet, are shrunk by ``SHRINK`` before segments are
+tested against them (a path may graze them; it never slips between two that share an
+edge). With a ``workspace`` (W, H), the outside of ``[0, W] x [0, H]`` is an
 obstacle too (a disk that must stay inside it). It is at least the straight-line
 distance, and equals it when the straight segment is clear. Deterministic.
 """
@@ -51,7 +52,9 @@ class GrownObstacles:
             parts += [shapely.box(-m, -m, 0, h + m), shapely.box(w, -m, w + m, h + m),
                       shapely.box(-m, -m, w + m, 0), shapely.box(-m, h, w + m, h + m)]
         grown = [g.buffer(self.rho, quad_segs=QUAD_SEGS) if self.rho > 0 else g for g in parts]
-        self._pieces = [g.buffer(-SHRINK) for g in grown]
+        # merged first: two outlines that share an edge leave no gap when shrunk
+        merged = shapely.get_parts(shapely.union_all(grown)) if grown else []
+        self._pieces = [g.buffer(-SHRINK) for g in merged]
         self._pieces = [g for g in self._pieces if not g.is_empty]
         self._tree = shapely.STRtree(self._pieces)
         rings = [np.asarray(shapely.get_coordinates(shapely.get_exterior_ring(g)))[:-1]
@@ -90,10 +93,13 @@ class GrownObstacles:
         cn = d[:, 0] * f[:, 1] - d[:, 1] * f[:, 0]
         return cp * cn >= 0
 
-    def _visible_pairs(self, p: np.ndarray, q: np.ndarray, same: bool = False
+    def _visible_pairs(self, p: np.ndarray, q: np.ndarray, same: bool = False,
+                       offset: np.ndarray | None = None, below: float = math.inf
                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(i, j, length) of the clear segments from ``p[i]`` to vertex ``q[j]`` that are
-        tangent at their vertex ends (``same``: the pairs i < j of the vertices)."""
+        tangent at their vertex ends (``same``: the pairs i < j of the vertices); with
+        ``offset``, only those with ``offset[j] + length < below`` (the others are not
+        tested for clearance)."""
         if same:
             i, j = np.triu_indices(len(p), k=1)
             t = self._tangent(i, p[j]) & self._tangent(j, p[i])
@@ -102,25 +108,31 @@ class GrownObstacles:
                                                   indexing="ij"))
             t = self._tangent(j, p[i])
         i, j = i[t], j[t]
+        length = np.hypot(*(p[i] - q[j]).T)
+        if offset is not None:
+            near = offset[j] + length < below
+            i, j, length = i[near], j[near], length[near]
         ok = self._clear(p[i], q[j])
-        i, j = i[ok], j[ok]
-        return i, j, np.hypot(*(p[i] - q[j]).T)
+        return i[ok], j[ok], length[ok]
 
     def blocks(self, region: shapely.Geometry) -> bool:
         """Whether ``region`` meets the (shrunk) grown obstacles."""
         return len(self._tree.query(region, predicate="intersects")) > 0
 
-    def _graph(self, a: np.ndarray, b: np.ndarray) -> csr_array:
-        """The visibility graph with ``a`` as node ``V`` and ``b`` as node ``V + 1``."""
+    def _graph(self, *ends: np.ndarray) -> csr_array:
+        """The visibility graph with ``ends[e]`` as node ``V + e``."""
         V = len(self.vertices)
         vi, vj, vd = self._edges
-        _, aj, ad = self._visible_pairs(np.array([a]), self.vertices)  # node V: a
-        _, bj, bd = self._visible_pairs(np.array([b]), self.vertices)  # node V + 1: b
-        rows = np.concatenate([vi, vj, np.full(len(aj), V), aj, np.full(len(bj), V + 1), bj])
-        cols = np.concatenate([vj, vi, aj, np.full(len(aj), V), bj, np.full(len(bj), V + 1)])
+        rows, cols, w = [vi, vj], [vj, vi], [vd, vd]
+        for e, p in enumerate(ends):
+            _, pj, pd = self._visible_pairs(np.array([p]), self.vertices)
+            rows += [np.full(len(pj), V + e), pj]
+            cols += [pj, np.full(len(pj), V + e)]
+            w += [pd, pd]
         # a zero length (a point on a vertex) would read as no edge: a hair longer
-        w = np.maximum(np.concatenate([vd, vd, ad, ad, bd, bd]), 1e-12)
-        return csr_array((w, (rows, cols)), shape=(V + 2, V + 2))
+        weights = np.maximum(np.concatenate(w), 1e-12)
+        n = V + len(ends)
+        return csr_array((weights, (np.concatenate(rows), np.concatenate(cols))), shape=(n, n))
 
     def distance(self, a: Sequence[float], b: Sequence[float]) -> float:
         """The shortest path's length from ``a`` to ``b`` (x, y) around the grown
@@ -133,6 +145,26 @@ class GrownObstacles:
         V = len(self.vertices)
         d = dijkstra(self._graph(a, b), directed=False, indices=V)[V + 1]
         return max(straight, float(d))
+
+    def distances(self, a: Sequence[float], targets: np.ndarray, below: float = math.inf
+                  ) -> np.ndarray:
+        """:meth:`distance` from ``a`` to each of ``targets`` (n, 2), with one search from
+        ``a``: each target's is the straight line when that is clear, else the least over
+        the vertices it sees tangentially of their distance from ``a`` plus the segment.
+        A distance of at least ``below`` may be given as ``below`` instead (fewer segments
+        are tested)."""
+        a = np.asarray(a, float)[:2]
+        t = np.asarray(targets, float).reshape(-1, 2)
+        straight = np.hypot(*(t - a).T)
+        clear = self._clear(np.broadcast_to(a, t.shape), t)
+        out = np.where(clear, straight, np.inf)
+        if clear.all():
+            return out
+        V = len(self.vertices)
+        d = dijkstra(self._graph(a), directed=False, indices=V)[:V]
+        i, j, length = self._visible_pairs(t, self.vertices, offset=d, below=below)
+        np.minimum.at(out, i, d[j] + length)
+        return np.maximum(np.minimum(out, max(below, 0.0)), straight)
 
     def path(self, a: Sequence[float], b: Sequence[float]) -> np.ndarray | None:
         """The shortest path's points from ``a`` to ``b`` (x, y), ends included, whose
