@@ -62,6 +62,37 @@ def test_settled_values_are_the_full_dijkstra_bit_for_bit(seed: int, bounds: lis
         assert np.array_equal(got, ref[settled])  # same floats (inf only where ref is)
 
 
+@settings(max_examples=20, deadline=None)
+@given(seed=st.integers(0, 10_000), bounds=st.lists(st.floats(0.0, 2.5), min_size=1,
+                                                    max_size=3),
+       room=st.sampled_from([0.0, 1.0, 1.2, 2.0]))
+def test_windows_hold_the_lattice_edges_inside_a_settled_ring(seed: int,
+                                                              bounds: list[float],
+                                                              room: float) -> None:
+    """Every window, opened and grown to random bounds, is laid out as the searches
+    assume: inside, each entry's edge bits are the lattice's at its index, its value
+    never -inf, and finite where settled; the ring of one entry around it is
+    settled, holds -inf and has no edges (a plain loop over the window as reference)."""
+    G, lat, links, hs = _tables(6, seed % 40, 12)
+    emask = lat.edge_mask
+    for b in sorted(bounds):
+        for m in range(len(G)):
+            expand_to(m, b, lat.nbr, lat.dlen, hs, room * b)
+    for m in range(len(G)):
+        a0, b0, na, nbw, _ = hs.win[m].tolist()
+        P = na + 2
+        d, dn, em = hs.dist[m], hs.done[m], hs.em[m]
+        assert len(d) == len(dn) == len(em) == P * (nbw + 2)
+        for j in range(len(d)):
+            b, a = divmod(j, P)
+            if 1 <= a <= na and 1 <= b <= nbw:
+                assert em[j] == emask[b - 1 + b0, a - 1 + a0]
+                assert dn[j] in (0, 1) and d[j] > -np.inf
+                assert dn[j] == 0 or d[j] < np.inf  # settled: reached, so finite
+            else:
+                assert dn[j] == 1 and em[j] == 0 and d[j] == -np.inf
+
+
 @settings(max_examples=25, deadline=None)
 @given(seed=st.integers(0, 10_000), which=st.lists(st.integers(0, 19), max_size=4),
        change=st.sampled_from(["strided", "readonly", "fortran", "float32", "same"]))

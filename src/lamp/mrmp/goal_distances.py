@@ -207,7 +207,8 @@ def _grow_buckets(m: int, bucket_l: Any) -> None:
 @nb.njit(cache=True)
 def _window_arrays(a0: int, b0: int, na: int, nb_: int,
                    emask: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Fresh (dist, done, edge bits) of a window with its ring."""
+    """Fresh (dist, done, edge bits) of a window with its ring (row slices: compiled to
+    vector stores, half the time of an entry-by-entry loop)."""
     P = na + 2
     n = P * (nb_ + 2)
     d = np.full(n, -np.inf)  # the ring: below every distance, so never improved
@@ -215,10 +216,9 @@ def _window_arrays(a0: int, b0: int, na: int, nb_: int,
     em = np.zeros(n, dtype=np.uint8)
     for b in range(nb_):
         r = (b + 1) * P + 1
-        for a in range(na):
-            d[r + a] = np.inf
-            dn[r + a] = 0
-            em[r + a] = emask[b + b0, a + a0]
+        d[r:r + na] = np.inf
+        dn[r:r + na] = 0
+        em[r:r + na] = emask[b + b0, a0:a0 + na]
     return d, dn, em
 
 
@@ -275,12 +275,11 @@ def _open_window(m: int, radius: float, nbr: np.ndarray, dlen: np.ndarray,
                     _push(m, j, scost[s], hs)
         return
     # carry the old window over (it lies inside the new one)
-    for ob in range(onb):
-        for oa in range(ona):
-            oj = (ob + 1) * oP + oa + 1
-            j = (ob + ob0 - b0 + 1) * P + (oa + oa0 - a0 + 1)
-            d[j] = old_d[oj]
-            dn[j] = old_dn[oj]
+    for ob in range(onb):  # row by row (slices: vector copies)
+        oj = (ob + 1) * oP + 1
+        j = (ob + ob0 - b0 + 1) * P + (oa0 - a0 + 1)
+        d[j:j + ona] = old_d[oj:oj + ona]
+        dn[j:j + ona] = old_dn[oj:oj + ona]
     for s in range(slots):
         for c in range(old_cnt[s]):
             oj = old_bk[s, c]
