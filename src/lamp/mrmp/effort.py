@@ -1,4 +1,5 @@
-"""How hard the timed repair works on a fleet's plan (:mod:`lamp.mrmp.timed_repair`).
+"""How hard the timed repair works on a fleet's plan (:mod:`lamp.mrmp.timed_repair`),
+and how long a fleet's steps go on without progress (:func:`stall_limit`).
 
 By default by fleet size: fleets of up to :data:`~lamp.mrmp.timed_repair.
 TIMED_BUDGET_ROBOTS` robots plan the last robot again alone, within
@@ -21,7 +22,8 @@ from lamp.mrmp.timed_repair import (
     timed_budget,
 )
 
-__all__ = ["ESCALATE", "ESCALATE_ABOVE", "ESCALATE_STATES", "timed_effort"]
+__all__ = ["ESCALATE", "ESCALATE_ABOVE", "ESCALATE_STATES", "STALL_ABOVE", "STALL_STEPS",
+           "stall_limit", "timed_effort"]
 
 #: A retimed makespan above this times the straight-line floor gets the harder repair.
 ESCALATE = 1.45
@@ -42,3 +44,20 @@ def timed_effort(n_robots: int, makespan: float, floor: float) -> dict:
         return {}
     return {"budget": min(TIMED_BUDGET_MAX, ESCALATE_STATES * timed_budget(n_robots)),
             "group": TIMED_GROUP}
+
+
+#: Fleets of more robots than this declare a stall after at most :data:`STALL_STEPS`.
+STALL_ABOVE = 100
+#: Steps without a new least summed heuristic after which such a fleet has stalled: its
+#: solved plans never go more than 28 (random-64-64-20, 100-800 robots, seeds 0-47;
+#: random-32-32-20 and den520d fewer), where ``2 * side + 10 N`` let a stalled 800-robot
+#: fleet take 9,000 steps (about 9 s) before the next lattice was tried.
+STALL_STEPS = 256
+
+
+def stall_limit(side: int, n_robots: int) -> int:
+    """Steps without a new least summed heuristic after which the steps have stalled:
+    ``2 * side + 10 * n_robots`` (``side``: the lattice's rows plus columns), and at
+    most :data:`STALL_STEPS` for fleets of more than :data:`STALL_ABOVE` robots."""
+    steps = int(2 * side + 10 * n_robots)
+    return min(steps, STALL_STEPS) if n_robots > STALL_ABOVE else steps

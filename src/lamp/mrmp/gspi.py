@@ -85,11 +85,12 @@ from lamp.mrmp.anyangle import lower_assignment, warm_descent
 from lamp.mrmp.assignment import assign, unreached_reason
 from lamp.mrmp.coarse import coarse_below, get_coarse
 from lamp.mrmp.distance_field import FEW, Lattice, clear_segments, get_lattice
-from lamp.mrmp.effort import timed_effort
+from lamp.mrmp.effort import stall_limit, timed_effort
 from lamp.mrmp.endpoints import DENSE_POINTS, exact_clearance
 from lamp.mrmp.goal_distances import GoalDistances
 from lamp.mrmp.gspi_inputs import PlanInputs, check_inputs
-from lamp.mrmp.gspi_kernels import ALL_PAIRS_BELOW, Graph, run_steps
+from lamp.mrmp.gspi_kernels import ALL_PAIRS_BELOW
+from lamp.mrmp.gspi_loop import SearchOptions, search_with_restarts
 from lamp.mrmp.links import Links, link_special_vertices
 from lamp.mrmp.repair import (
     REPAIR_BUDGET,
@@ -215,7 +216,9 @@ def plan_paths(
     start_tolerance: the same for starts (robots left in contact after a push); motions
         out of such a start never reduce the clearance or robot distance further.
     max_steps, stall_steps: step budget, and failure after this many steps without a
-        new best summed heuristic (defaults scale with the lattice).
+        new best summed heuristic (defaults scale with the lattice; the stall at most
+        256 steps for fleets of more than 100 robots, :func:`~lamp.mrmp.effort.
+        stall_limit`).
     initial_goal_of: (N,) initial goal per robot (-1 none) instead of the optimal
         assignment (tests and experiments).
     assignment: the initial assignment's objective (:mod:`lamp.mrmp.assignment`):
@@ -250,13 +253,13 @@ def plan_paths(
     if len(inp.goals) == 0:
         return MRMPPlan(True, S[:, None, :].copy(), np.full(N, -1, np.int64), "", 0,
                         time.perf_counter() - t_begin, {})
-    opts = _Options(link_radius, goal_swapping, float(max_spacing), max_steps, stall_steps,
+    opts = SearchOptions(link_radius, goal_swapping, float(max_spacing), max_steps, stall_steps,
                     seed, t_begin + float(time_limit), float(time_limit), assignment,
                     swap_radius)
     return _try_lattices(inp, opts, t_begin)
 
 
-def _try_lattices(inp: PlanInputs, opts: _Options, t_begin: float) -> MRMPPlan:
+def _try_lattices(inp: PlanInputs, opts: SearchOptions, t_begin: float) -> MRMPPlan:
     """Attempt each lattice step in turn until one succeeds, fails in a way a finer
     lattice cannot fix, or time runs out; the plan reports every attempt."""
     stats: dict[str, Any] = {"attempts": []}
@@ -283,22 +286,6 @@ def _try_lattices(inp: PlanInputs, opts: _Options, t_begin: float) -> MRMPPlan:
                     time.perf_counter() - t_begin, stats, out.status)
 
 
-@dataclass(frozen=True)
-class _Options:
-    """The search settings of :func:`plan_paths` that every lattice attempt shares."""
-
-    link_radius: float | None
-    goal_swapping: bool
-    max_spacing: float
-    max_steps: int | None
-    stall_steps: int | None
-    seed: int
-    deadline: float  # time.perf_counter() seconds
-    time_limit: float  # for messages
-    assignment: str
-    swap_radius: float | None
-
-
 @dataclass
 class _Attempt:
     success: bool
@@ -311,94 +298,9 @@ class _Attempt:
     status: GspiStatus
 
 
-def _priorities(cost: np.ndarray, goal: np.ndarray, seed: int) -> np.ndarray:
-    """Initial priorities: farther robots first (PIBT's eps_i), ties by seeded noise;
-    robots without a goal last."""
-    N = len(goal)
-    rng = np.random.default_rng(seed)
-    h0 = np.where(goal >= 0, cost, 0.0)
-    h0 = np.where(np.isfinite(h0), h0, 1e3)
-    prio = 0.5 * h0 / (h0.max() + 1.0) + 0.4 * rng.random(N) / (N + 1) + 0.05
-    return np.where(goal >= 0, prio, 0.01 * rng.random(N))
-
-
-@dataclass
-class _Search:
-    """Gspi's step loop state: ``hist[k]`` the vertices after step k (``hist[0]`` the
-    starts), ``t`` steps taken, ``done`` when every goal is held."""
-
-    hist: np.ndarray
-    t: int = 0
-    done: bool = False
-    reason: str = ""
-    retry: bool = False
-    status: GspiStatus = GspiStatus.SOLVED
-
-
-def _run(graph: Graph, V: int, gv0: int, hs: GoalDistances, goal: np.ndarray,
-         prio: np.ndarray, two_r: float, links: Links, max_steps: int,
-         stall_steps: int, opts: _Options) -> _Search:
-    """Gspi steps in compiled chunks until every goal is held, the step budget is spent,
-    the summed heuristic stalls for ``stall_steps`` or the deadline passes."""
-    N = len(goal)
-    cur = np.arange(V, V + N, dtype=np.int64)
-    cap = min(max_steps, 512) + 1  # history rows, doubled as needed
-    out = _Search(np.empty((cap, N), dtype=np.int64))
-    out.hist[0] = cur
-    hsum = np.zeros(cap)
-    near = two_r + 2.0 * links.max_move + 1e-9
-    stuck = np.zeros((2, N), dtype=np.int64)  # deadlock detection (gspi_kernels.run_steps)
-    besth = np.full(N, np.inf)
-    swap_r = 2.0 * near if opts.swap_radius is None else float(opts.swap_radius)
-    best_h = np.inf
-    best_t = 0
-    # steps per compiled call, adapted to the clock; a call costs about 0.05 ms before it
-    # starts (Numba types its arguments on every call: goal_distances._typeof_goal_distances)
-    chunk = max(1, min(64, 8192 // N))
-    seed_i = int(opts.seed) & 0x7FFFFFFF
-    while True:
-        t_chunk = time.perf_counter()
-        t_prev = out.t
-        # never past the step where a stall would be declared: where the search stops
-        # then depends on the steps alone, not on how the clock cut them into chunks
-        t1 = min(out.t + chunk, max_steps, best_t + stall_steps + 1)
-        if t1 + 1 > len(hsum):
-            cap = min(max_steps + 1, max(2 * len(hsum), t1 + 1))
-            out.hist = np.concatenate([out.hist, np.empty((cap - len(hsum), N), np.int64)])
-            hsum = np.concatenate([hsum, np.zeros(cap - len(hsum))])
-        t_new, out.done = run_steps(graph, V, gv0, hs, cur, goal, prio, two_r, seed_i,
-                                    opts.goal_swapping, out.hist, hsum, out.t, t1,
-                                    links.max_candidates, near, swap_r, stuck, besth,
-                                    N >= ALL_PAIRS_BELOW)
-        for k in range(out.t + 1, t_new + 1):
-            if hsum[k] < best_h - 1e-9:
-                best_h = hsum[k]
-                best_t = k
-        out.t = t_new
-        if out.done:
-            return out
-        if out.t >= max_steps:
-            out.reason, out.retry = f"step budget of {max_steps} Gspi steps exhausted", True
-            out.status = GspiStatus.STEP_BUDGET
-            return out
-        if out.t - best_t > stall_steps:
-            out.reason = f"no progress for {stall_steps} steps (deadlock or livelock)"
-            out.retry, out.status = True, GspiStatus.STALLED
-            return out
-        now = time.perf_counter()
-        if now > opts.deadline:
-            out.reason = f"time limit of {opts.time_limit:g} s reached after {out.t} steps"
-            out.status = GspiStatus.TIME_LIMIT
-            return out
-        # next chunk: at most ~20 ms of work, so the time limit is kept closely
-        per_step = (now - t_chunk) / max(1, out.t - t_prev)
-        chunk = int(max(1, min(256, 2 * chunk, 0.02 / max(per_step, 1e-7),
-                               (opts.deadline - now) / max(per_step, 1e-7) + 1)))
-
-
 def _attempt(space: RobotSpace, S: np.ndarray, G: np.ndarray, c_start: np.ndarray,
              c_goal: np.ndarray, lattice_step: float, goal0: np.ndarray | None,
-             opts: _Options) -> _Attempt:
+             opts: SearchOptions) -> _Attempt:
     """Gspi on one lattice."""
     N, M = len(S), len(G)
     lat: Lattice = get_lattice(space, lattice_step)
@@ -440,14 +342,14 @@ def _attempt(space: RobotSpace, S: np.ndarray, G: np.ndarray, c_start: np.ndarra
         return failure(asg.why, GspiStatus.UNREACHABLE, retry=True)
     stats["assignment_bound"] = asg.bound
     goal, cost = lower_assignment(asg, links.graph, V, hs, S, G, space, stats)
-    prio = _priorities(cost, goal, opts.seed)
 
     n_side = lat.ids.shape[0] + lat.ids.shape[1]
     max_steps = int(20 * n_side + 50 * N) if opts.max_steps is None else opts.max_steps
-    stall = int(2 * n_side + 10 * N) if opts.stall_steps is None else opts.stall_steps
+    stall = stall_limit(n_side, N) if opts.stall_steps is None else opts.stall_steps
     clock = time.perf_counter()
-    run = _run(links.graph, V, gv0, hs, goal, prio, 2.0 * space.radius, links,
-               max_steps, stall, opts)
+    run, goal, stats["stall_restarts"] = search_with_restarts(
+        links.graph, V, gv0, hs, goal, cost, 2.0 * space.radius, links, max_steps, stall,
+        opts)
     stats["time_steps"] = time.perf_counter() - clock
 
     # Output: drop all-wait steps; for a fleet, the last robots planned again and every
