@@ -91,3 +91,47 @@ def test_spaces_of_one_map_share_one_base_and_hold_only_their_changes() -> None:
     gc.collect()
     fresh = shared_tiles(ws, static, 0.004, cap)
     assert int((fresh.table != -1).sum()) == 0
+
+
+@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(static=st.lists(object_obstacles(), min_size=1, max_size=5),
+       owns=st.lists(st.lists(object_obstacles(), min_size=0, max_size=2), min_size=1,
+                     max_size=3),
+       kept=st.integers(1, 5), seed=st.integers(0, 2**31 - 1))
+def test_a_base_over_its_budget_hands_tiles_back_and_reads_the_same(static, owns, kept,
+                                                                      seed) -> None:
+    """A base keeping ``kept`` tiles, several grids over it queried in turn, by ``ensure``
+    and ``ensure_point``: every read right after its ``ensure`` equals a grid of all the
+    obstacles with no budget; the base holds at most ``kept`` tiles or those of the
+    largest single call, and hands back the others' pages (they read as zeros)."""
+    static = tuple(static)
+    base = DistanceTiles(WS, static, 0.004, cap=0.15, full_grid_cells=0, slotted=True)
+    base.keep(kept * TILE * TILE * 4)
+    grids = [DistanceTiles(WS, tuple(own), 0.004, cap=0.15, full_grid_cells=0, base=base)
+             for own in owns]
+    refs = [DistanceTiles(WS, static + tuple(own), 0.004, cap=0.15, full_grid_cells=0)
+            for own in owns]
+    rng = np.random.default_rng(seed)
+    ny, nx = refs[0].shape
+    largest, singles = 0, []
+    for _ in range(16):
+        k = int(rng.integers(len(grids)))
+        centre = rng.uniform(0.0, 2.0, size=2)
+        p = centre + rng.uniform(-0.3, 0.3, size=(int(rng.integers(1, 40)), 2))
+        p = np.clip(p, 0.0, 1.999)
+        if singles and rng.random() < 0.3:  # a point asked for before (it may be handed back)
+            k, p = singles[int(rng.integers(len(singles)))]
+        if len(p) == 1 or rng.random() < 0.3:
+            p = p[:1]
+            singles.append((k, p))
+            grids[k].ensure_point(float(p[0, 0]), float(p[0, 1]), 0.05)
+        else:
+            grids[k].ensure(p, 0.05)
+        refs[k].ensure(p, 0.05)
+        rows = np.minimum((p[:, 1] / 0.004).astype(int), ny - 1)
+        cols = np.minimum((p[:, 0] / 0.004).astype(int), nx - 1)
+        np.testing.assert_array_equal(grids[k].values(rows, cols), refs[k].values(rows, cols))
+        largest = max(largest, int((base._used == base._tick).sum()))
+        assert base._n <= max(kept, largest) and base._n == int((base.table >= 0).sum())
+    for flat in np.flatnonzero(base.table.ravel() == -1):
+        assert not base._store[flat].any()

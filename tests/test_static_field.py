@@ -88,3 +88,35 @@ def test_team_scenes_keep_the_maps_obstacles_as_their_fixed_part() -> None:
     np.testing.assert_array_equal(got.field, flat.field)
     a, b = ObjectSpace.from_scene(team, 0), ObjectSpace.from_scene(again, 0)
     assert a.grid._base is not None and a.grid._base is b.grid._base
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(seed=st.integers(0, 2**31 - 1), kept=st.integers(1, 6), windows=st.integers(2, 8))
+def test_a_field_over_its_budget_drops_tiles_and_gives_the_same_windows(seed, kept, windows
+                                                                        ) -> None:
+    """With room for ``kept`` tiles, every window is still bit for bit the window computed
+    alone, tiles beyond the budget are handed back (at most ``kept``, or as many as the
+    widest window so far reads, stay filled) and a dropped tile reads as zeros until
+    filled again."""
+    rng = np.random.default_rng(seed)
+    h, cap = 0.01, 0.3
+    ws = (float(rng.uniform(2.6, 4.0)), float(rng.uniform(2.6, 4.0)))  # 2-3 tiles a side
+    obs = tuple(o for o in _random_obstacles(rng, 8)
+                if o.pose[0] < ws[0] and o.pose[1] < ws[1])
+    field = StaticField(ws, obs, h, cap, grid_nodes(ws, h), budget=kept * TILE * TILE * 8)
+    geo = GeometrySet(obs)
+    widest = 0
+    for _ in range(windows):
+        x0, y0 = rng.uniform(0.0, ws[0]), rng.uniform(0.0, ws[1])
+        w = (x0, y0, x0 + rng.uniform(0.0, 2.0), y0 + rng.uniform(0.0, 2.0))
+        nodes = window_nodes(ws, h, w)
+        np.testing.assert_array_equal(field.window(nodes), window_base(ws, obs, geo, h, cap,
+                                                                        nodes))
+        i0, j0, i1, j1 = nodes
+        widest = max(widest, (j1 // TILE - j0 // TILE + 1) * (i1 // TILE - i0 // TILE + 1))
+        assert int(field.filled.sum()) <= max(kept, widest)
+        assert field.filled[j0 // TILE:j1 // TILE + 1, i0 // TILE:i1 // TILE + 1].all()
+    ntx = field.filled.shape[1]
+    for flat in np.flatnonzero(~field.filled.ravel()):
+        assert not field._store[flat].any()  # handed back (or never filled): zeros
+    assert ntx >= 2

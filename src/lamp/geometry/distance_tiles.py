@@ -24,6 +24,13 @@ read as "not free", so a missing tile can never make a colliding pose free).
   so the same values), and the grid points to the base's tile instead of a copy: a
   grid holds only the tiles its own obstacles change. The table tells: ``t >= 0`` the
   grid's tile ``t``, ``-1`` not filled, ``t <= -2`` the base's tile ``-2 - t``.
+* **A base keeps at most ``SHARED_KEPT_BYTES``** of tiles: filling one more hands back
+  the tile whose last :meth:`DistanceTiles.ensure` (by any grid over it) is oldest, and
+  every grid over it that pointed there reads it as not filled again, so its next
+  ``ensure`` fills it again, the same. A tile some part of the ``ensure`` under way asked
+  for is never handed back (that call's reads follow it), so a call that needs more
+  tiles than the budget still gets them all. Memory follows what the searches touch
+  lately, not the map.
 """
 
 from __future__ import annotations
@@ -42,8 +49,9 @@ from scipy import ndimage
 from lamp.geometry.primitives import Obstacle
 from lamp.geometry.shapes import obstacle_geometry
 
-__all__ = ["DistanceTiles", "TILE", "FULL_GRID_CELLS", "DEFAULT_GRID_CAP", "obstacle_box",
-           "lazy_zeros", "obstacle_cells", "shared_tiles"]
+__all__ = ["DistanceTiles", "TILE", "FULL_GRID_CELLS", "DEFAULT_GRID_CAP", "SHARED_KEPT_BYTES",
+           "obstacle_box",
+           "drop_tile", "lazy_zeros", "obstacle_cells", "shared_tiles"]
 
 #: Cells per tile side.
 TILE = 128
@@ -54,6 +62,8 @@ FULL_GRID_CELLS = 2**22
 DEFAULT_GRID_CAP = 0.15
 #: Tiles filled on demand are stored in blocks of this many.
 _GROW = 64
+#: Bytes of tiles a shared base keeps (module doc): 1,536 tiles of float32.
+SHARED_KEPT_BYTES = 96 * 2**20
 
 
 def grid_shape(workspace: tuple[float, float], resolution: float) -> tuple[int, int]:
@@ -157,12 +167,54 @@ class DistanceTiles:
         boxes = [(ob, obstacle_box(ob, self.workspace, self.resolution)) for ob in obstacles]
         own = np.array([b[1:] for _, b in boxes if b is not None], dtype=np.int64).reshape(-1, 4)
         self._base, self._own_boxes = base, own
+        #: with a budget (``keep``): the tiles kept, each tile's last ``ensure`` (``_tick``)
+        self.kept: int | None = None
+        self._used = np.zeros(self.table.shape, dtype=np.int64)
+        self._tick = 0
+        self._over: weakref.WeakSet[DistanceTiles] = weakref.WeakSet()  # grids over it
+        if base is not None:
+            base._over.add(self)
         self._obstacles = ([] if base is None else base._obstacles) + [
             ob for ob, b in boxes if b is not None]
         self._boxes = own if base is None else np.concatenate([base._boxes, own])
         if not self.capped:
             self._fill_whole()
         self._refresh()
+
+    def keep(self, budget: int) -> None:
+        """Keep at most ``budget`` bytes of tiles from now on (a slotted grid: module doc)."""
+        if not self.slotted:
+            raise ValueError("only a slotted grid keeps a budget")
+        self.kept = max(1, int(budget) // (TILE * TILE * self._store.itemsize))
+
+    def _begin(self, flat: np.ndarray) -> None:
+        """An ``ensure`` starts that reads the tiles ``flat`` (table indices): those of the
+        base it reads are marked as used by the call now under way."""
+        base = self._base
+        if base is None or base.kept is None:
+            return
+        base._tick += 1
+        shared = flat[self.table.ravel()[flat] <= -2]
+        base._used.ravel()[shared] = base._tick
+
+    def _make_room(self) -> None:
+        """Hand back the tile used least recently (module doc) while ``kept`` are filled,
+        never one the ``ensure`` under way reads; the grids over this one that pointed
+        there forget it."""
+        while self._n >= self.kept:
+            stamps = np.where(self.table.ravel() >= 0, self._used.ravel(),
+                              np.iinfo(np.int64).max)
+            flat = int(np.argmin(stamps))
+            if stamps[flat] >= self._tick:
+                return
+            self.table.flat[flat] = -1
+            self._n -= 1
+            drop_tile(self._store, flat)
+            for grid in list(self._over):
+                if grid.table.flat[flat] == -2 - flat:
+                    grid.table.flat[flat] = -1
+                    grid._ready.clear()
+            self._ready.clear()
 
     def _refresh(self) -> None:
         """``args`` for the tiles filled so far."""
@@ -221,8 +273,11 @@ class DistanceTiles:
         if base is not None and not _meets(self._own_boxes, R0, C0, R1, C1).any():
             if base.table[tr, tc] == -1:  # the same occupancy: the base's tile
                 base._fill_tile(tr, tc)
+            base._used[tr, tc] = base._tick
             self.table[tr, tc] = -2 - base.table[tr, tc]
             return
+        if self.kept is not None:
+            self._make_room()
         occ = self._occupancy(R0, C0, R1, C1)
         slot = tr * self.table.shape[1] + tc if self.slotted else self._n
         self._reserve(self._n + 1)
@@ -248,6 +303,8 @@ class DistanceTiles:
         if key in self._ready:
             return
         table = self.table
+        self._begin(np.array([tr * ntx + tc for tr in range(ty0, ty1 + 1)
+                              for tc in range(tx0, tx1 + 1)], dtype=np.int64))
         todo = [(tr, tc) for tr in range(ty0, ty1 + 1) for tc in range(tx0, tx1 + 1)
                 if table[tr, tc] == -1]
         for tr, tc in todo:
@@ -277,6 +334,7 @@ class DistanceTiles:
                 ok = (tx <= hi[:, 0]) & (ty <= hi[:, 1])
                 ids.append(ty[ok] * ntx + tx[ok])
         flat = np.unique(np.concatenate(ids)) if ids else np.zeros(0, np.int64)
+        self._begin(flat)
         missing = flat[self.table.ravel()[flat] == -1]
         need = [(int(f // ntx), int(f % ntx)) for f in missing]
         if not need:
@@ -312,6 +370,20 @@ def lazy_zeros(shape: tuple[int, ...], dtype: type) -> np.ndarray:
                          count=int(np.prod(shape))).reshape(shape)
 
 
+def drop_tile(store: np.ndarray, index: int) -> None:
+    """Hand the pages of ``store[index]`` back to the system (``store`` from
+    :func:`lazy_zeros`, whose tiles are whole pages): they read as zeros again and take no
+    memory until written."""
+    owner = store.base
+    while isinstance(owner, np.ndarray):
+        owner = owner.base
+    size = store[0].nbytes
+    if isinstance(owner, mmap.mmap) and size % mmap.PAGESIZE == 0:
+        owner.madvise(mmap.MADV_DONTNEED, index * size, size)
+    else:  # (not page-aligned tiles: written over, not handed back)
+        store[index] = 0
+
+
 def _meets(boxes: np.ndarray, r0: int, c0: int, r1: int, c1: int) -> np.ndarray:
     """Which (row0, col0, row1, col1) ``boxes`` meet rows r0..r1 and columns c0..c1."""
     return (boxes[:, 0] <= r1) & (boxes[:, 2] >= r0) & (boxes[:, 1] <= c1) & (boxes[:, 3] >= c0)
@@ -331,6 +403,7 @@ def shared_tiles(workspace: tuple[float, float], obstacles: tuple[Obstacle, ...]
     if hit is not None and hit.static is obstacles:
         return hit
     base = DistanceTiles(workspace, obstacles, resolution, cap, full_grid_cells=0, slotted=True)
+    base.keep(SHARED_KEPT_BYTES)
     base.static = obstacles  # held: no other tuple takes its id while the base lives
     _SHARED[key] = base
     return base

@@ -11,8 +11,10 @@ base is then a copy of the tiles' parts.
 Guarantee (``tests/test_static_field.py``): :meth:`StaticField.window` returns, bit for
 bit, what computing the window alone returns (``clearance_kernels.fill_field`` gives a
 window the whole grid's values for its nodes, and the border term is a function of a
-node's index). Memory grows with the tiles the windows touch, at most the whole grid
-(eight bytes a node).
+node's index). Memory grows with the tiles the windows touch, up to ``budget`` bytes
+(``STATIC_FIELD_BYTES`` by default): beyond it the tile used least recently is handed
+back (``distance_tiles.drop_tile``) and filled again, the same, when a window needs it;
+a window never drops a tile it reads itself, so one wider than the budget still fits.
 """
 
 from __future__ import annotations
@@ -23,14 +25,17 @@ from typing import Any
 import numpy as np
 
 from lamp.geometry.clearance_kernels import fill_field
-from lamp.geometry.distance_tiles import lazy_zeros
+from lamp.geometry.distance_tiles import drop_tile, lazy_zeros
 from lamp.geometry.geometry_set import GeometrySet
 from lamp.geometry.primitives import Obstacle
 
-__all__ = ["StaticField", "TILE", "clear_static_fields", "static_field", "window_base"]
+__all__ = ["STATIC_FIELD_BYTES", "StaticField", "TILE", "clear_static_fields", "static_field",
+           "window_base"]
 
 #: Nodes per tile side.
 TILE = 128
+#: Bytes of filled tiles a static field keeps (module doc): 384 tiles of 128 kB.
+STATIC_FIELD_BYTES = 48 * 2**20
 #: Static fields kept (one per map, workspace, resolution and cap): the most recent.
 _KEPT = 2
 
@@ -57,15 +62,20 @@ def window_base(workspace: tuple[float, float], obstacles: tuple[Obstacle, ...],
 
 class StaticField:
     """Clearances of the grid nodes of ``workspace`` (spacing ``h``, ``n_nodes`` = (NX,
-    NY)) to its border and ``obstacles``, capped at ``cap``, tiled (module doc)."""
+    NY)) to its border and ``obstacles``, capped at ``cap``, tiled, at most ``budget``
+    bytes of tiles kept (module doc)."""
 
     def __init__(self, workspace: tuple[float, float], obstacles: tuple[Obstacle, ...],
-                 h: float, cap: float, n_nodes: tuple[int, int]) -> None:
+                 h: float, cap: float, n_nodes: tuple[int, int],
+                 budget: int = STATIC_FIELD_BYTES) -> None:
         self.workspace, self.obstacles, self.h, self.cap = workspace, obstacles, h, cap
         self.geometry = GeometrySet(obstacles)
         self.n_nodes = n_nodes
         self.filled = np.zeros((-(-n_nodes[1] // TILE), -(-n_nodes[0] // TILE)), dtype=bool)
         self._store = lazy_zeros((self.filled.size, TILE, TILE), np.float64)
+        self.kept = max(1, int(budget) // (TILE * TILE * 8))  # tiles
+        self._used = np.zeros(self.filled.shape, dtype=np.int64)  # last window to read each
+        self._windows = 0
 
     @property
     def nbytes(self) -> int:
@@ -78,9 +88,12 @@ class StaticField:
         i0, j0, i1, j1 = nodes
         out = np.empty((j1 - j0 + 1, i1 - i0 + 1))
         ntx = self.filled.shape[1]
+        self._windows += 1
+        self._used[j0 // TILE:j1 // TILE + 1, i0 // TILE:i1 // TILE + 1] = self._windows
         for tr in range(j0 // TILE, j1 // TILE + 1):
             for tc in range(i0 // TILE, i1 // TILE + 1):
                 if not self.filled[tr, tc]:
+                    self._make_room()
                     self._fill(tr, tc)
                 a0, a1 = max(j0, tr * TILE), min(j1, tr * TILE + TILE - 1)
                 b0, b1 = max(i0, tc * TILE), min(i1, tc * TILE + TILE - 1)
@@ -88,6 +101,17 @@ class StaticField:
                     tr * ntx + tc, a0 - tr * TILE:a1 - tr * TILE + 1,
                     b0 - tc * TILE:b1 - tc * TILE + 1]
         return out
+
+    def _make_room(self) -> None:
+        """Hand back the tile read least recently (the first in row order among ties)
+        while ``kept`` are filled, never one the current window reads."""
+        while int(self.filled.sum()) >= self.kept:
+            stamps = np.where(self.filled, self._used, np.iinfo(np.int64).max)
+            flat = int(np.argmin(stamps))
+            if stamps.flat[flat] >= self._windows:
+                return  # every filled tile is the current window's
+            self.filled.flat[flat] = False
+            drop_tile(self._store, flat)
 
     def _fill(self, tr: int, tc: int) -> None:
         nx, ny = self.n_nodes
