@@ -115,3 +115,23 @@ def test_claims_missing_the_segments_box_give_the_same_admission(seed, gap, marg
         assert boxed == [(0, full, full)]
     else:
         assert boxed == plain
+
+
+@settings(max_examples=20, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1))
+def test_a_segments_ends_are_kept_with_their_rows(seed) -> None:
+    """``Segment.ends`` is asked at every event a segment waits: the second answer is the
+    first (kept), and once its rows are replaced (a rejoin) it is the new rows' ends, as
+    built from scratch."""
+    from lamp.fleet.regions import swept
+
+    rng = np.random.default_rng(seed)
+    seg = _segment(rng, 1, (1.0, 1.0))
+    first = seg.ends()
+    assert seg.ends() is first
+    seg.rows = seg.rows + rng.uniform(-0.2, 0.2, (seg.rows.shape[0], 1, 2))
+    again = seg.ends()
+    want = (swept(BOX, seg.poses[:1], seg.rows[:, :1], R),
+            swept(BOX, seg.poses[-1:], seg.rows[:, -1:], R))
+    assert again is not first
+    assert all(a.equals(b) for a, b in zip(again, want, strict=True))

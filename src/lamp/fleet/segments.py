@@ -85,8 +85,8 @@ class Segment:
     #: when a rejoin changes the rows)
     spaces: dict[str, shapely.Geometry] = field(default_factory=dict, init=False, repr=False,
                                                 compare=False)
-    #: boxes derived from its rows, filled on first use and kept with the rows they
-    #: came from (``spacetime.reach_box``)
+    #: boxes (and its :meth:`ends`) derived from its rows, filled on first use and kept
+    #: with the rows they came from (``spacetime.reach_box``)
     bounds: dict[str, tuple] = field(default_factory=dict, init=False, repr=False,
                                      compare=False)
 
@@ -154,10 +154,16 @@ class Segment:
 
     def ends(self) -> tuple[shapely.Geometry, shapely.Geometry]:
         """Where its bodies stand before and after it (with margins): its object at the
-        first and last planned pose, its robots at their first and last rows."""
-        before = swept(self.shape, self.poses[:1], self.rows[:, :1], self.robot_radius)
-        after = swept(self.shape, self.poses[-1:], self.rows[:, -1:], self.robot_radius)
-        return before, after
+        first and last planned pose, its robots at their first and last rows; kept in
+        ``bounds`` with the rows they came from (a waiting segment is asked at every
+        event)."""
+        cached = self.bounds.get("ends_bodies")
+        if cached is not None and cached[0] is self.rows:
+            return cached[1]
+        ends = (swept(self.shape, self.poses[:1], self.rows[:, :1], self.robot_radius),
+                swept(self.shape, self.poses[-1:], self.rows[:, -1:], self.robot_radius))
+        self.bounds["ends_bodies"] = (self.rows, ends)
+        return ends
 
     def core(self) -> shapely.Geometry:
         """Its bodies exactly as planned (``regions.swept(..., margins=False)``), prepared;
