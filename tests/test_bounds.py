@@ -185,8 +185,9 @@ def test_the_reach_goes_round_the_walls_and_below_any_drive(d):
 
 
 def test_round_a_wall_the_reach_is_the_way_to_the_reference_point_less_the_radii():
-    """A wall between the only robot and a disk object: the reach is the way round the
-    wall to the object's centre less both radii, longer than the straight gap."""
+    """A wall from the border between the only robot and a disk object: the reach is the
+    way over the wall's top to the object's centre less both radii (not through the
+    zero-width joint of wall and border), longer than the straight gap."""
     from lamp.scene.geodesic import GrownObstacles
 
     d = {"format": "lamp-scene/1", "name": "wall", "workspace": [4.0, 3.0],
@@ -194,7 +195,9 @@ def test_round_a_wall_the_reach_is_the_way_to_the_reference_point_less_the_radii
          "robots": {"radius": 0.05, "starts": [[1.0, 1.0]]},
          "objects": [{"type": "circle", "radius": 0.2, "start": [3.0, 1.0, 0.0],
                       "goal": [3.0, 1.0, 0.0]}]}
-    geo = GrownObstacles([shapely.box(1.9, 0.0, 2.1, 2.3)], 0.0, (4.0, 3.0)).distance(
-        (1.0, 1.0), (3.0, 1.0))
+    geo = GrownObstacles([shapely.box(1.9, 0.0, 2.1, 2.3)], 0.0, (4.0, 3.0),
+                         merge=True).distance((1.0, 1.0), (3.0, 1.0))
+    over_the_top = 2.0 * math.hypot(0.9, 1.3) + 0.2  # (the wall stands on the border)
     got = makespan_lower_bound(scene_from_dict(d)).seconds * 0.25
+    assert geo == pytest.approx(over_the_top, rel=1e-9)
     assert got == pytest.approx(geo - 0.25, rel=1e-9) and got > 2.0 - 0.25 + 1.0

@@ -9,6 +9,7 @@ import gc
 import numpy as np
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from pages import resident_bytes
 from test_object_space import object_shapes
 from test_object_space import obstacles as object_obstacles
 
@@ -133,5 +134,27 @@ def test_a_base_over_its_budget_hands_tiles_back_and_reads_the_same(static, owns
         np.testing.assert_array_equal(grids[k].values(rows, cols), refs[k].values(rows, cols))
         largest = max(largest, int((base._used == base._tick).sum()))
         assert base._n <= max(kept, largest) and base._n == int((base.table >= 0).sum())
-    for flat in np.flatnonzero(base.table.ravel() == -1):
+    for flat in np.flatnonzero(base.table.ravel() == -1):  # handed back: no pages held
+        assert resident_bytes(base._store[flat]) == 0
         assert not base._store[flat].any()
+
+
+def test_a_grid_keeping_a_budget_read_directly_keeps_the_tiles_it_reads() -> None:
+    """A slotted grid with a budget of one tile, asked directly for points over two tiles:
+    both are kept for that call (its reads see values, not -inf); a later call for a
+    third tile hands both back."""
+    static = (Obstacle(Circle(0.2), (0.5, 0.5, 0.0)),)
+    grid = DistanceTiles(WS, static, 0.004, cap=0.15, full_grid_cells=0, slotted=True)
+    ref = DistanceTiles(WS, static, 0.004, cap=0.15, full_grid_cells=0)
+    grid.keep(TILE * TILE * 4)
+    p = np.array([[0.3, 0.3], [0.3, 0.3 + TILE * 0.004]])
+    grid.ensure(p, 0.01)
+    ref.ensure(p, 0.01)
+    rows, cols = (p[:, 1] / 0.004).astype(int), (p[:, 0] / 0.004).astype(int)
+    np.testing.assert_array_equal(grid.values(rows, cols), ref.values(rows, cols))
+    assert grid._n == 2
+    grid.ensure(p[:1], 0.01)
+    grid.ensure(p[:1] + [TILE * 0.004, 0.0], 0.01)
+    assert grid._n == 1 and grid.table[0, 1] >= 0
+    assert grid.table[0, 0] == grid.table[1, 0] == -1
+    assert resident_bytes(grid._store[0]) == resident_bytes(grid._store[4]) == 0

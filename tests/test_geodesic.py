@@ -184,3 +184,13 @@ def test_distances_to_many_targets_are_the_distances_to_each(boxes, rho, a, targ
     short = want < below
     assert cut[short] == pytest.approx(want[short], rel=1e-12, abs=1e-12)
     assert np.all(cut[~short] >= below - 1e-12) and np.all(cut <= want + 1e-12)
+
+
+def test_a_corridor_exactly_two_radii_wide_is_open_unless_merged() -> None:
+    """Two walls whose grown outlines meet along an edge leave a corridor the disk fits
+    through exactly (grazing both): open without ``merge`` (a lower bound for grazing
+    paths too), closed with it (for paths that keep some distance)."""
+    walls = [shapely.box(0.0, 2.0, 1.0, 5.0), shapely.box(1.5, 2.0, 3.0, 5.0)]
+    a, b = (1.25, 1.0), (1.25, 6.0)
+    assert GrownObstacles(walls, 0.25, (3.0, 7.0)).distance(a, b) == pytest.approx(5.0)
+    assert GrownObstacles(walls, 0.25, (3.0, 7.0), merge=True).distance(a, b) > 5.0

@@ -25,7 +25,8 @@ read as "not free", so a missing tile can never make a colliding pose free).
   grid holds only the tiles its own obstacles change. The table tells: ``t >= 0`` the
   grid's tile ``t``, ``-1`` not filled, ``t <= -2`` the base's tile ``-2 - t``.
 * **A base keeps at most ``SHARED_KEPT_BYTES``** of tiles: filling one more hands back
-  the tile whose last :meth:`DistanceTiles.ensure` (by any grid over it) is oldest, and
+  the tile asked for longest ago (by an :meth:`DistanceTiles.ensure` of any grid over it;
+  a box a grid already knew filled is not asked for again), and
   every grid over it that pointed there reads it as not filled again, so its next
   ``ensure`` fills it again, the same. A tile some part of the ``ensure`` under way asked
   for is never handed back (that call's reads follow it), so a call that needs more
@@ -188,14 +189,14 @@ class DistanceTiles:
         self.kept = max(1, int(budget) // (TILE * TILE * self._store.itemsize))
 
     def _begin(self, flat: np.ndarray) -> None:
-        """An ``ensure`` starts that reads the tiles ``flat`` (table indices): those of the
-        base it reads are marked as used by the call now under way."""
-        base = self._base
-        if base is None or base.kept is None:
-            return
-        base._tick += 1
-        shared = flat[self.table.ravel()[flat] <= -2]
-        base._used.ravel()[shared] = base._tick
+        """An ``ensure`` starts that reads the tiles ``flat`` (table indices): those it
+        reads of a grid keeping a budget (its base's, its own) are marked as used by the
+        call now under way."""
+        t = self.table.ravel()[flat]
+        for grid, mine in ((self._base, t <= -2), (self, t >= 0)):
+            if grid is not None and grid.kept is not None:
+                grid._tick += 1
+                grid._used.ravel()[flat[mine]] = grid._tick
 
     def _make_room(self) -> None:
         """Hand back the tile used least recently (module doc) while ``kept`` are filled,
@@ -289,6 +290,7 @@ class DistanceTiles:
         else:
             out[:] = _round_down(np.array([self.cap - self.two_h]))[0]
         self.table[tr, tc] = slot
+        self._used[tr, tc] = self._tick
         self._n += 1
 
     def ensure_point(self, x: float, y: float, radius: float) -> None:
@@ -362,12 +364,15 @@ class DistanceTiles:
 
 
 def lazy_zeros(shape: tuple[int, ...], dtype: type) -> np.ndarray:
-    """Zeros whose pages the system provides as they are first written: an anonymous
-    mapping of its own, in small pages (numpy asks for huge pages on large arrays, which
-    would make one written tile hold 2 MB)."""
+    """Zeros whose pages the system provides as they are first written: a private
+    anonymous mapping of its own, in small pages (numpy asks for huge pages on large
+    arrays, which would make one written tile hold 2 MB); :func:`drop_tile` hands pages
+    back."""
     size = int(np.prod(shape)) * np.dtype(dtype).itemsize
-    return np.frombuffer(mmap.mmap(-1, max(1, size)), dtype=dtype,
-                         count=int(np.prod(shape))).reshape(shape)
+    private = getattr(mmap, "MAP_PRIVATE", None)  # (a shared mapping keeps dropped pages)
+    mapping = (mmap.mmap(-1, max(1, size)) if private is None else
+               mmap.mmap(-1, max(1, size), flags=private | mmap.MAP_ANONYMOUS))
+    return np.frombuffer(mapping, dtype=dtype, count=int(np.prod(shape))).reshape(shape)
 
 
 def drop_tile(store: np.ndarray, index: int) -> None:
@@ -375,8 +380,8 @@ def drop_tile(store: np.ndarray, index: int) -> None:
     :func:`lazy_zeros`, whose tiles are whole pages): they read as zeros again and take no
     memory until written."""
     owner = store.base
-    while isinstance(owner, np.ndarray):
-        owner = owner.base
+    while isinstance(owner, np.ndarray | memoryview):
+        owner = owner.obj if isinstance(owner, memoryview) else owner.base
     size = store[0].nbytes
     if isinstance(owner, mmap.mmap) and size % mmap.PAGESIZE == 0:
         owner.madvise(mmap.MADV_DONTNEED, index * size, size)

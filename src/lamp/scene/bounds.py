@@ -10,7 +10,8 @@ pushes it, and no robot drives faster than the scene's ``robots.speed`` ``v``. S
   ``min_i max(0, d(c_i, F_k) - r, g(c_i, p_k) - r - R_k)``, with ``c_i`` robot ``i``'s
   start, ``F_k`` the object's start footprint, ``r`` the robot radius, ``p_k`` the
   object's reference point, ``R_k`` its footprint's farthest point from ``p_k`` and ``g``
-  the shortest path round the obstacles themselves, not grown (``lamp.scene.geodesic``).
+  the shortest path round the obstacles themselves, not grown, merged where they meet
+  (``lamp.scene.geodesic``).
   The second term holds for footprints that are convex and contain ``p_k`` (circles,
   rectangles, such polygons; others get the first only): a robot whose centre drove ``L``
   to touch the object at ``q`` gives a path round the obstacles from ``c_i`` to ``p_k``
@@ -99,10 +100,11 @@ def travel_radius(shape: Shape) -> float:
 
 @lru_cache(maxsize=8)
 def grown_obstacles(obstacles: tuple[Obstacle, ...], workspace: tuple[float, float],
-                    rho: float) -> GrownObstacles:
-    """The scene's ``obstacles`` and the outside of its ``workspace`` grown by ``rho``
-    (built once per scene and radius: callers share it)."""
-    return GrownObstacles([_outline(b) for b in obstacles], rho, workspace)
+                    rho: float, merge: bool = False) -> GrownObstacles:
+    """The scene's ``obstacles`` and the outside of its ``workspace`` grown by ``rho``,
+    merged where they meet with ``merge`` (``GrownObstacles``; built once per scene,
+    radius and ``merge``: callers share it)."""
+    return GrownObstacles([_outline(b) for b in obstacles], rho, workspace, merge)
 
 
 def object_way(scene: Scene, k: int, pose: Sequence[float]) -> np.ndarray | None:
@@ -138,7 +140,9 @@ def _reach(scene: Scene, o: SceneObject, starts: np.ndarray, straight_line: bool
     star = None if straight_line else _star_radius(o.shape)
     if star is None or not scene.obstacles:
         return max(0.0, float(np.min(gap)))
-    space = grown_obstacles(tuple(scene.obstacles), tuple(scene.workspace), 0.0)
+    # merged: the robot's centre keeps its radius from the obstacles (a joint of zero
+    # width between two of them, or between one and the border, lets no robot through)
+    space = grown_obstacles(tuple(scene.obstacles), tuple(scene.workspace), 0.0, True)
 
     def longer(i: np.ndarray, below: float = math.inf) -> np.ndarray:  # robots i's terms
         round_ = space.distances(o.start[:2], starts[i], below + scene.robot_radius + star)

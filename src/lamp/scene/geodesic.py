@@ -10,9 +10,11 @@ Guarantee, what makes it a lower bound (``tests/test_geodesic.py``): the result 
 exceeds the length of any path of the disk's centre that keeps the disk clear of the
 obstacles, because every approximation errs on the short side: Shapely's round buffer
 is a polygon inscribed in the true grown outline (its vertices on the offset curve), the
-grown obstacles, merged where they meet, are shrunk by ``SHRINK`` before segments are
-tested against them (a path may graze them; it never slips between two that share an
-edge). With a ``workspace`` (W, H), the outside of ``[0, W] x [0, H]`` is an
+grown obstacles are shrunk by ``SHRINK`` before segments are tested against them (a path
+may graze them, and pass between two that touch). With ``merge``, obstacles that meet are
+merged first, so a way never slips through a joint of zero width: the result is then a
+lower bound for paths that keep some distance from the obstacles (a robot's centre
+keeps its radius), not for those that graze two at once. With a ``workspace`` (W, H), the outside of ``[0, W] x [0, H]`` is an
 obstacle too (a disk that must stay inside it). It is at least the straight-line
 distance, and equals it when the straight segment is clear. Deterministic.
 """
@@ -39,11 +41,12 @@ SHRINK = 1e-7
 
 class GrownObstacles:
     """``obstacles`` (Shapely geometries) grown by ``rho`` (m), and the outside of
-    ``workspace`` (W, H) when given, with the visibility graph of their vertices built
-    once; :meth:`distance` answers queries between free points."""
+    ``workspace`` (W, H) when given, merged where they meet with ``merge`` (module doc),
+    with the visibility graph of their vertices built once; :meth:`distance` answers
+    queries between free points."""
 
     def __init__(self, obstacles: Sequence[shapely.Geometry], rho: float,
-                 workspace: tuple[float, float] | None = None) -> None:
+                 workspace: tuple[float, float] | None = None, merge: bool = False) -> None:
         self.rho = max(0.0, float(rho))
         parts = [g for g in obstacles if not g.is_empty]
         if workspace is not None:  # the outside, as four strips
@@ -52,9 +55,8 @@ class GrownObstacles:
             parts += [shapely.box(-m, -m, 0, h + m), shapely.box(w, -m, w + m, h + m),
                       shapely.box(-m, -m, w + m, 0), shapely.box(-m, h, w + m, h + m)]
         grown = [g.buffer(self.rho, quad_segs=QUAD_SEGS) if self.rho > 0 else g for g in parts]
-        # merged first: two outlines that share an edge leave no gap when shrunk
-        merged = shapely.get_parts(shapely.union_all(grown)) if grown else []
-        self._pieces = [g.buffer(-SHRINK) for g in merged]
+        pieces = shapely.get_parts(shapely.union_all(grown)) if merge and grown else grown
+        self._pieces = [g.buffer(-SHRINK) for g in pieces]
         self._pieces = [g for g in self._pieces if not g.is_empty]
         self._tree = shapely.STRtree(self._pieces)
         rings = [np.asarray(shapely.get_coordinates(shapely.get_exterior_ring(g)))[:-1]
