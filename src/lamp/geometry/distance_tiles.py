@@ -26,9 +26,9 @@ read as "not free", so a missing tile can never make a colliding pose free).
   grid's tile ``t``, ``-1`` not filled, ``t <= -2`` the base's tile ``-2 - t``.
 * **A base keeps at most ``SHARED_KEPT_BYTES``** of tiles: filling one more hands back
   the tile asked for longest ago (by an :meth:`DistanceTiles.ensure` of any grid over it;
-  a box a grid already knew filled is not asked for again), and
-  every grid over it that pointed there reads it as not filled again, so its next
-  ``ensure`` fills it again, the same. A tile some part of the ``ensure`` under way asked
+  a box a grid already knew filled is not asked for again), and every grid over it that
+  pointed there reads it as not filled again, so its next ``ensure`` fills it again, the
+  same. A tile some part of the ``ensure`` under way asked
   for is never handed back (that call's reads follow it), so a call that needs more
   tiles than the budget still gets them all. Memory follows what the searches touch
   lately, not the map.
@@ -51,8 +51,7 @@ from lamp.geometry.primitives import Obstacle
 from lamp.geometry.shapes import obstacle_geometry
 
 __all__ = ["DistanceTiles", "TILE", "FULL_GRID_CELLS", "DEFAULT_GRID_CAP", "SHARED_KEPT_BYTES",
-           "obstacle_box",
-           "drop_tile", "lazy_zeros", "obstacle_cells", "shared_tiles"]
+           "drop_tile", "lazy_zeros", "obstacle_box", "obstacle_cells", "shared_tiles"]
 
 #: Cells per tile side.
 TILE = 128
