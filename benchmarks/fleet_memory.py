@@ -14,9 +14,11 @@ the searches' tables). What no inventory finds is
 the rest: Python objects not reached this way, the libraries (PyTorch, MuJoCo, Numba,
 GEOS) and the allocator's slack.
 
-Printed: the resident set before the inventory taken at the highest reading, and that
-inventory, largest first (taking one costs memory itself: read the process's peak with
-``/usr/bin/time -v lamp run`` instead).
+Printed: the resident set before the inventory taken at the highest reading, the segments
+running and waiting then, and that inventory, largest first, with each class's largest
+instances (an array shared by several counts for the first found holding it; taking an
+inventory costs memory itself: read the process's peak with ``/usr/bin/time -v lamp
+run`` instead).
 
 Run: ``python benchmarks/fleet_memory.py SCENE.yaml [--every 100] [-o OUT]``
 (the run's own files go to ``OUT``, a temporary folder by default).
@@ -92,8 +94,9 @@ def _dict_bytes(d: dict) -> int:
     return size
 
 
-def inventory() -> dict[str, tuple[int, int, int]]:
-    """{class: (array bytes, dict bytes, instances)} over every live ``lamp`` object."""
+def inventory(each: dict[str, list[int]] | None = None) -> dict[str, tuple[int, int, int]]:
+    """{class: (array bytes, dict bytes, instances)} over every live ``lamp`` object;
+    with ``each``, also every instance's bytes, by class."""
     seen: set[int] = set()
     out: dict[str, list[int]] = defaultdict(lambda: [0, 0, 0])
     for obj in gc.get_objects():
@@ -102,8 +105,10 @@ def inventory() -> dict[str, tuple[int, int, int]]:
         if not isinstance(module, str) or not module.startswith("lamp.") or not isinstance(
                 getattr(obj, "__dict__", None), dict):
             continue
-        row = out[f"{module}.{cls.__qualname__}"]
+        name = f"{module}.{cls.__qualname__}"
+        row = out[name]
         row[2] += 1
+        before = row[0] + row[1]
         for value in vars(obj).values():
             items = (list(value.values()) if isinstance(value, dict) else
                      list(value) if isinstance(value, list | tuple) else [value])
@@ -115,6 +120,8 @@ def inventory() -> dict[str, tuple[int, int, int]]:
                     if key not in seen:
                         seen.add(key)
                         row[0] += _array_bytes(a)
+        if each is not None:
+            each.setdefault(name, []).append(row[0] + row[1] - before)
     return {k: (v[0], v[1], v[2]) for k, v in out.items()}
 
 
@@ -128,7 +135,7 @@ def main() -> None:
     from lamp.cli import app
     from lamp.fleet import coordinator
 
-    peak = {"rss": 0, "at": 0.0, "inv": {}}
+    peak: dict = {"rss": 0, "at": 0.0, "inv": {}, "each": {}, "moving": 0, "waiting": 0}
     advance = coordinator.Fleet._advance
 
     def watched(self):
@@ -136,7 +143,10 @@ def main() -> None:
         if self.events % args.every == 0:
             rss = resident_bytes()
             if rss > 1.05 * peak["rss"]:
-                peak.update(rss=rss, at=self.clock, inv=inventory())
+                each: dict[str, list[int]] = {}
+                peak.update(rss=rss, at=self.clock, inv=inventory(each), each=each,
+                            moving=sum(o.running is not None for o in self.objects),
+                            waiting=sum(o.request is not None for o in self.objects))
     coordinator.Fleet._advance = watched
 
     out = args.out or tempfile.mkdtemp(prefix="fleet-memory-")
@@ -150,12 +160,15 @@ def main() -> None:
     inv = peak["inv"]
     total = sum(a + d for a, d, _ in inv.values())
     print(f"{Path(args.scene).name}: inventory at {peak['at']:.0f} s simulated, resident "
-          f"{peak['rss'] / mb:.0f} MB; arrays and dicts found {total / mb:.0f} MB")
-    print("| class | instances | arrays MB | dicts MB |")
-    print("|---|---|---|---|")
+          f"{peak['rss'] / mb:.0f} MB; arrays and dicts found {total / mb:.0f} MB; segments "
+          f"running {peak['moving']}, waiting for admission {peak['waiting']}")
+    print("| class | instances | arrays MB | dicts MB | largest instances (MB) |")
+    print("|---|---|---|---|---|")
     for name, (a, d, n) in sorted(inv.items(), key=lambda kv: -(kv[1][0] + kv[1][1])):
         if a + d >= mb:
-            print(f"| {name} | {n} | {a / mb:.0f} | {d / mb:.0f} |")
+            top = sorted(peak["each"].get(name, []), reverse=True)[:5]
+            print(f"| {name} | {n} | {a / mb:.0f} | {d / mb:.0f} | "
+                  f"{', '.join(f'{b / mb:.1f}' for b in top)} |")
 
 
 if __name__ == "__main__":
