@@ -51,7 +51,8 @@ from lamp.geometry.primitives import Obstacle
 from lamp.geometry.shapes import obstacle_geometry
 
 __all__ = ["DistanceTiles", "TILE", "FULL_GRID_CELLS", "DEFAULT_GRID_CAP", "SHARED_KEPT_BYTES",
-           "drop_tile", "lazy_zeros", "obstacle_box", "obstacle_cells", "shared_tiles"]
+           "drop_tile", "lazy_zeros", "obstacle_box", "obstacle_cells", "oldest_tile",
+           "shared_tiles"]
 
 #: Cells per tile side.
 TILE = 128
@@ -202,10 +203,8 @@ class DistanceTiles:
         never one the ``ensure`` under way reads; the grids over this one that pointed
         there forget it."""
         while self._n >= self.kept:
-            stamps = np.where(self.table.ravel() >= 0, self._used.ravel(),
-                              np.iinfo(np.int64).max)
-            flat = int(np.argmin(stamps))
-            if stamps[flat] >= self._tick:
+            flat = oldest_tile(self.table >= 0, self._used, self._tick)
+            if flat is None:
                 return
             self.table.flat[flat] = -1
             self._n -= 1
@@ -304,10 +303,9 @@ class DistanceTiles:
         if key in self._ready:
             return
         table = self.table
-        self._begin(np.array([tr * ntx + tc for tr in range(ty0, ty1 + 1)
-                              for tc in range(tx0, tx1 + 1)], dtype=np.int64))
-        todo = [(tr, tc) for tr in range(ty0, ty1 + 1) for tc in range(tx0, tx1 + 1)
-                if table[tr, tc] == -1]
+        box = [(tr, tc) for tr in range(ty0, ty1 + 1) for tc in range(tx0, tx1 + 1)]
+        self._begin(np.array([tr * ntx + tc for tr, tc in box], dtype=np.int64))
+        todo = [(tr, tc) for tr, tc in box if table[tr, tc] == -1]
         for tr, tc in todo:
             self._fill_tile(tr, tc)
         if todo:
@@ -372,6 +370,15 @@ def lazy_zeros(shape: tuple[int, ...], dtype: type) -> np.ndarray:
     mapping = (mmap.mmap(-1, max(1, size)) if private is None else
                mmap.mmap(-1, max(1, size), flags=private | mmap.MAP_ANONYMOUS))
     return np.frombuffer(mapping, dtype=dtype, count=int(np.prod(shape))).reshape(shape)
+
+
+def oldest_tile(filled: np.ndarray, used: np.ndarray, now: int) -> int | None:
+    """The flat index of the ``filled`` tile whose ``used`` stamp is oldest (the first in
+    row order among ties), or None when every filled one was used at ``now`` or later
+    (by the call under way: it must not be handed back)."""
+    stamps = np.where(filled, used, np.iinfo(np.int64).max).ravel()
+    flat = int(np.argmin(stamps))
+    return None if stamps[flat] >= now else flat
 
 
 def drop_tile(store: np.ndarray, index: int) -> None:

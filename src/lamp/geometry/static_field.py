@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from lamp.geometry.clearance_kernels import fill_field
-from lamp.geometry.distance_tiles import drop_tile, lazy_zeros
+from lamp.geometry.distance_tiles import drop_tile, lazy_zeros, oldest_tile
 from lamp.geometry.geometry_set import GeometrySet
 from lamp.geometry.primitives import Obstacle
 
@@ -106,9 +106,8 @@ class StaticField:
         """Hand back the tile read least recently (the first in row order among ties)
         while ``kept`` are filled, never one the current window reads."""
         while int(self.filled.sum()) >= self.kept:
-            stamps = np.where(self.filled, self._used, np.iinfo(np.int64).max)
-            flat = int(np.argmin(stamps))
-            if stamps.flat[flat] >= self._windows:
+            flat = oldest_tile(self.filled, self._used, self._windows)
+            if flat is None:
                 return  # every filled tile is the current window's
             self.filled.flat[flat] = False
             drop_tile(self._store, flat)
