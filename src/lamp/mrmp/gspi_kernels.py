@@ -29,6 +29,7 @@ import numba as nb
 import numpy as np
 
 from lamp.geometry.kernels import point_segment_distance
+from lamp.mrmp.borrow import borrowed
 from lamp.mrmp.goal_distances import hval
 from lamp.mrmp.gspi_swaps import break_deadlocks, swap_goals
 from lamp.mrmp.heuristic_reads import hval_fast, read_in
@@ -240,8 +241,11 @@ def _pibt_step(
     for the next step while the ancestor, which re-checks against it, waits or detours.
     Without it two robots 10 cm apart whose simultaneous moves would graze each other
     could block each other forever (the parent's wait always beating its detours).
-
-    """
+    The arguments are borrowed (:mod:`lamp.mrmp.borrow`): the helpers of every robot
+    and candidate bind them without counting references."""
+    (gr, hs, cur, goal, prio, nxt, cand, ncand, ci, status, stack, mode, nptr, nidx,
+     hvc) = borrowed((gr, hs, cur, goal, prio, nxt, cand, ncand, ci, status, stack, mode,
+                      nptr, nidx, hvc))
     coords = gr[0]
     N = cur.shape[0]
     keys = np.empty(cand.shape[1])
@@ -329,7 +333,10 @@ def run_steps(
     ``stuck[1]`` the steps it still sits out of goal swapping after a deadlock trade
     (all kept across calls); ``fleet``: the fleet rules of ``swap_goals`` and
     ``_build_cands`` (teams of :data:`ALL_PAIRS_BELOW` or more; the swaps and the deadlock
-    rule: :mod:`lamp.mrmp.gspi_swaps`)."""
+    rule: :mod:`lamp.mrmp.gspi_swaps`). The arguments are borrowed (:mod:`lamp.mrmp.
+    borrow`)."""
+    gr, hs, cur, goal, prio, hist, hsum, stuck, besth = borrowed(
+        (gr, hs, cur, goal, prio, hist, hsum, stuck, besth))
     N = cur.shape[0]
     nxt = np.empty(N, dtype=np.int64)
     cand = np.empty((N, maxc), dtype=np.int64)

@@ -8,6 +8,7 @@ import math
 import numba as nb
 import numpy as np
 
+from lamp.mrmp.borrow import borrowed
 from lamp.mrmp.goal_distances import hval
 from lamp.mrmp.heuristic_reads import hval_in
 
@@ -43,7 +44,10 @@ def swap_goals(gr: tuple, V: int, gv0: int, hs: tuple, cur: np.ndarray, goal: np
 
     In a fleet, TSWAP's rule: a pair swaps only when one of them rests on its goal (or has
     none), and only when the swap lowers the longer of their two distances, or keeps it
-    and lowers the sum: swaps never lengthen the longest way left."""
+    and lowers the sum: swaps never lengthen the longest way left. The arguments are
+    borrowed (:mod:`lamp.mrmp.borrow`): ``_h_now`` binds them once per pair."""
+    gr, hs, cur, goal, prio, sptr, sidx, cool, hcur, hgoal = borrowed(
+        (gr, hs, cur, goal, prio, sptr, sidx, cool, hcur, hgoal))
     coords = gr[0]
     win, va, vb, sdone, sval = hs[0], hs[11], hs[12], hs[9], hs[10]
     tabs = (win, va, vb, sdone, sval)
@@ -110,7 +114,10 @@ def break_deadlocks(gr: tuple, V: int, gv0: int, hs: tuple, cur: np.ndarray,
     on its goal nearer to the stuck robot's goal (it stands in the way); "within reach":
     closer than ``near``, so that the two can block each other. The summed
     heuristic may grow; what it buys is that neither blocks the other any more (two
-    robots each blocking the other's last move are otherwise stuck for good)."""
+    robots each blocking the other's last move are otherwise stuck for good). The
+    arguments are borrowed (:mod:`lamp.mrmp.borrow`)."""
+    gr, hs, cur, goal, prio, nptr, nidx, stuck, besth = borrowed(
+        (gr, hs, cur, goal, prio, nptr, nidx, stuck, besth))
     coords = gr[0]
     N = cur.shape[0]
     n = 0

@@ -37,6 +37,7 @@ import math
 import numba as nb
 import numpy as np
 
+from lamp.mrmp.borrow import borrowed
 from lamp.mrmp.goal_distances import hval
 from lamp.mrmp.heuristic_reads import goal_views, read_in
 from lamp.mrmp.neighbours import doubled
@@ -117,7 +118,9 @@ def _search(i: int, target: float, gr: tuple, V: int, gv0: int, hs: tuple, goal:
     """The cheapest way of robot i to its goal under the arrival proxy (moves' lengths,
     ``wait_cost`` per wait), cheaper than ``target``, within the rows of ``VX``, the robots
     not in ``skip`` fixed: (arrival row or -1, its cost, states expanded); its vertices
-    per row in ``out[:arrival + 1]``."""
+    per row in ``out[:arrival + 1]``. Arguments borrowed (:mod:`lamp.mrmp.borrow`)."""
+    gr, hs, goal, VX, hh, mark, pos, out, skip = borrowed(
+        (gr, hs, goal, VX, hh, mark, pos, out, skip))
     coords, nbr, _, xptr, xidx = gr
     K1 = VX.shape[0]
     m = goal[i]

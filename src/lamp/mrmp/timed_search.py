@@ -24,6 +24,7 @@ import math
 import numba as nb
 import numpy as np
 
+from lamp.mrmp.borrow import borrowed
 from lamp.mrmp.goal_distances import hval
 from lamp.mrmp.heuristic_reads import goal_views, read_in
 from lamp.mrmp.neighbours import doubled
@@ -183,12 +184,12 @@ def timed_search(i: int, m: int, gr: tuple, V: int, gv0: int, hs: tuple, X: np.n
     docstring): its vertices and their times in quanta (empty when none), and the
     states expanded. Knight moves between lattice nodes (:data:`KNIGHT`) are taken when
     their segment keeps the clearance ``ob[0]`` (exact; ``ob``: the obstacles' grid, and
-    ``ob[12]`` the knight moves' answers kept, :func:`_knight`).
-    ``alone``: 1, as if the others were only at their last positions from their
-    arrivals ``arr`` on; 2, as if there were no other robot (the ways the group repair
-    clears); there waiting never arrives earlier, so a vertex is kept at its earliest
-    time only and there are no waits;
-    ``tight``: the lower-bound heuristic (:data:`OCTILE_BOUND`), else :data:`OCTILE`."""
+    ``ob[12]`` the knight moves' answers kept, :func:`_knight`). ``alone``: 1, as if the
+    others were only at their last positions from their arrivals ``arr`` on; 2, as if
+    there were no other robot (the ways the group repair clears); there waiting never
+    arrives earlier, so a vertex is kept at its earliest time only and there are no
+    waits; ``tight``: the lower-bound heuristic (:data:`OCTILE_BOUND`), else OCTILE."""
+    gr, hs, X, Y, tt, hh, ob, ways = borrowed((gr, hs, X, Y, tt, hh, ob, ways))
     coords, nbr, _, xptr, xidx = gr
     va, vb, ids, sdone, sval = hs[11], hs[12], hs[13], hs[9], hs[10]
     g = gv0 + m

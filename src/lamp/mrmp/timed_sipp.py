@@ -58,6 +58,7 @@ import math
 import numba as nb
 import numpy as np
 
+from lamp.mrmp.borrow import borrowed
 from lamp.mrmp.goal_distances import hval
 from lamp.mrmp.heuristic_reads import goal_views, read_in
 from lamp.mrmp.neighbours import doubled
@@ -138,7 +139,10 @@ def sipp_search(i: int, m: int, gr: tuple, V: int, gv0: int, hs: tuple, X: np.nd
     :func:`~lamp.mrmp.timed_search.timed_search`'s (``alone`` 0) and the rows' segments
     ``segs`` (:func:`lamp.mrmp.safe_intervals.segment_index`). Returns its vertices
     and their times in quanta (a wait: a vertex twice; empty when none), the states
-    expanded, and the status."""
+    expanded, and the status. The arguments are borrowed (:mod:`lamp.mrmp.borrow`): each
+    state's expansion binds them without counting references."""
+    gr, hs, X, Y, tt, hh, ends_goal, ob, ways, segs = borrowed(
+        (gr, hs, X, Y, tt, hh, ends_goal, ob, ways, segs))
     coords = gr[0]
     g = gv0 + m
     none = np.zeros(0, np.int64)
