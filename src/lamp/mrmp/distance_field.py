@@ -289,7 +289,6 @@ class Lattice:
         cand = (self.nodes_near_all(pts, radius) if len(pts) > FEW
                 else [self.nodes_near(p, radius) for p in pts])
         counts = [len(c) for c in cand]
-        out: list[tuple[np.ndarray, np.ndarray]] = []
         if sum(counts) == 0:
             return [(np.zeros(0, np.int64), np.zeros(0)) for _ in points]
         allc = np.concatenate(cand)
@@ -305,13 +304,10 @@ class Lattice:
             ok = ends - 0.5 * lens >= thr
         todo = np.flatnonzero(~ok)
         ok[todo] = clear_segments(g, (W, H), src[todo], dst[todo], thr[todo])
-        start = 0
-        for c in counts:
-            sl = slice(start, start + c)
-            m = ok[sl]
-            out.append((allc[sl][m], lens[sl][m]))
-            start += c
-        return out
+        # each point's kept links: consecutive pieces of the kept ones (views of them)
+        ids, ln = allc[ok], lens[ok]
+        e = np.concatenate([[0], np.cumsum(ok)])[np.cumsum([0] + counts)].tolist()
+        return [(ids[a:b], ln[a:b]) for a, b in zip(e[:-1], e[1:], strict=True)]
 
     def field(self, seeds: np.ndarray, seed_cost: np.ndarray, key: Any = None) -> np.ndarray:
         """Lattice distance (V,) from the seed set (cached by ``key`` when given)."""

@@ -318,13 +318,15 @@ def _settle(target: int, lim: float, k: int, dlen: np.ndarray, dist: np.ndarray,
     long, so every node in the lowest non-empty bucket is final). Returns (bucket,
     status): 0 window entry ``target`` settled or ``lim`` reached, 1 queue empty, 2 a
     bucket may be full. (Kept apart from the growth of the buckets: an array variable
-    reassigned inside a Numba loop costs a reference count on every access.)"""
+    reassigned inside a Numba loop costs a reference count on every access. Indices are
+    unsigned, so that Numba adds no wraparound of negative ones to every access: a
+    negative offset wraps, and ``j + off`` wraps back to the entry; 5 % less time.)"""
     slots = cnt.shape[0]
     mask = slots - 1
     cap = bk.shape[1] - 8
     inv = 1.0 / step
-    off = da + db * P
-    buf = np.empty(8, dtype=np.int64)
+    off = (da + db * P).astype(np.uint64)
+    buf = np.empty(8, dtype=np.uint64)
     bnd = np.empty(8)
     left = 0
     high = 0
@@ -332,7 +334,7 @@ def _settle(target: int, lim: float, k: int, dlen: np.ndarray, dist: np.ndarray,
         left += cnt[q]
         high = max(high, cnt[q])
     while target < 0 or done[target] == 0:
-        s = k & mask
+        s = np.uint64(k & mask)
         if cnt[s] == 0:
             if left == 0:
                 return k, 1
@@ -345,7 +347,7 @@ def _settle(target: int, lim: float, k: int, dlen: np.ndarray, dist: np.ndarray,
         c = cnt[s] - 1
         cnt[s] = c
         left -= 1
-        j = bk[s, c]
+        j = np.uint64(bk[s, np.uint64(c)])
         if done[j]:
             continue
         done[j] = 1
@@ -353,21 +355,20 @@ def _settle(target: int, lim: float, k: int, dlen: np.ndarray, dist: np.ndarray,
         msk = em[j]
         # eight relaxations decided without branches (a settled neighbour or the ring is
         # never improved: module docstring), the improved ones queued in direction order
-        nb_ = 0
+        nb_ = np.uint64(0)
         for e in range(8):
             jw = j + off[e]
             nd = du + dlen[e]
-            ok = ((msk >> e) & 1) & (nd < dist[jw])
             buf[nb_] = jw
             bnd[nb_] = nd
-            nb_ += ok
+            nb_ += np.uint64(((msk >> e) & 1) & (nd < dist[jw]))
         for t in range(nb_):
             jw = buf[t]
             nd = bnd[t]
             dist[jw] = nd
-            q = max(int(nd * inv), k) & mask
+            q = np.uint64(max(int(nd * inv), k) & mask)
             cq = cnt[q] + 1
-            bk[q, cq - 1] = jw
+            bk[q, np.uint64(cq - 1)] = np.int32(jw)
             cnt[q] = cq
             left += 1
             if cq > high:
