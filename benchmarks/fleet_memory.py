@@ -8,9 +8,10 @@ NumPy array reachable from its attributes (directly, or inside a dict, list or t
 there) counted once, for the first class found holding it: an array of 128 kB or more
 by its pages resident in memory (``mincore(2)``: a zero-filled array mapped on its own,
 or ``distance_tiles.lazy_zeros``, costs only the pages written so far), a smaller one (on
-the malloc heap) by its size. Dicts of more than 64 items held by those objects are
-counted by ``sys.getsizeof`` of the dict and its items (the lattices' successor lists,
-the searches' tables). What no inventory finds is
+the malloc heap) by its size. Dicts and lists of more than 64 items held by those objects are
+counted by ``sys.getsizeof`` of the container and its items (the lattices' successor lists,
+the searches' tables and queues). Beside it, the objects the garbage collector tracks,
+by type (what no class inventory reaches shows there). What no inventory finds is
 the rest: Python objects not reached this way, the libraries (PyTorch, MuJoCo, Numba,
 GEOS) and the allocator's slack.
 
@@ -94,6 +95,27 @@ def _dict_bytes(d: dict) -> int:
     return size
 
 
+def _list_bytes(items: list) -> int:
+    size = sys.getsizeof(items)
+    for x in items:
+        size += sys.getsizeof(x)
+        if isinstance(x, tuple):
+            size += sum(sys.getsizeof(y) for y in x)
+    return size
+
+
+def tracked_types(top: int = 12) -> list[tuple[str, int, int]]:
+    """The ``top`` types of the objects the garbage collector tracks (containers:
+    tuples, lists, dicts, class instances; not floats nor ints), by their own bytes
+    (``sys.getsizeof``): (type, count, bytes)."""
+    count: dict[str, list[int]] = defaultdict(lambda: [0, 0])
+    for obj in gc.get_objects():
+        row = count[type(obj).__qualname__]
+        row[0] += 1
+        row[1] += sys.getsizeof(obj)
+    return sorted(((k, n, b) for k, (n, b) in count.items()), key=lambda r: -r[2])[:top]
+
+
 def inventory(each: dict[str, list[int]] | None = None) -> dict[str, tuple[int, int, int]]:
     """{class: (array bytes, dict bytes, instances)} over every live ``lamp`` object;
     with ``each``, also every instance's bytes, by class."""
@@ -114,6 +136,8 @@ def inventory(each: dict[str, list[int]] | None = None) -> dict[str, tuple[int, 
                      list(value) if isinstance(value, list | tuple) else [value])
             if isinstance(value, dict) and len(value) > 64:
                 row[1] += _dict_bytes(value)
+            elif isinstance(value, list) and len(value) > 64:
+                row[1] += _list_bytes(value)
             for a in items:
                 if isinstance(a, np.ndarray):
                     key = id(_root(a))
@@ -135,7 +159,8 @@ def main() -> None:
     from lamp.cli import app
     from lamp.fleet import coordinator
 
-    peak: dict = {"rss": 0, "at": 0.0, "inv": {}, "each": {}, "moving": 0, "waiting": 0}
+    peak: dict = {"rss": 0, "at": 0.0, "inv": {}, "each": {}, "moving": 0, "waiting": 0,
+                  "types": []}
     advance = coordinator.Fleet._advance
 
     def watched(self):
@@ -145,6 +170,7 @@ def main() -> None:
             if rss > 1.05 * peak["rss"]:
                 each: dict[str, list[int]] = {}
                 peak.update(rss=rss, at=self.clock, inv=inventory(each), each=each,
+                            types=tracked_types(),
                             moving=sum(o.running is not None for o in self.objects),
                             waiting=sum(o.request is not None for o in self.objects))
     coordinator.Fleet._advance = watched
@@ -162,13 +188,16 @@ def main() -> None:
     print(f"{Path(args.scene).name}: inventory at {peak['at']:.0f} s simulated, resident "
           f"{peak['rss'] / mb:.0f} MB; arrays and dicts found {total / mb:.0f} MB; segments "
           f"running {peak['moving']}, waiting for admission {peak['waiting']}")
-    print("| class | instances | arrays MB | dicts MB | largest instances (MB) |")
+    print("| class | instances | arrays MB | dicts, lists MB | largest instances (MB) |")
     print("|---|---|---|---|---|")
     for name, (a, d, n) in sorted(inv.items(), key=lambda kv: -(kv[1][0] + kv[1][1])):
         if a + d >= mb:
             top = sorted(peak["each"].get(name, []), reverse=True)[:5]
             print(f"| {name} | {n} | {a / mb:.0f} | {d / mb:.0f} | "
                   f"{', '.join(f'{b / mb:.1f}' for b in top)} |")
+    print("\n| tracked type | objects | own MB |\n|---|---|---|")
+    for name, n, b in peak["types"]:
+        print(f"| {name} | {n} | {b / mb:.0f} |")
 
 
 if __name__ == "__main__":

@@ -178,3 +178,28 @@ def test_lazy_pushes_a_box_through_a_tilted_corridor_two_centimetres_wider():
     scene = scene_from_dict(corridor_scene(17.0, 0.02))
     result = solve(scene, "lazy", seed=0).to_dict()
     assert result["success"], result["objects"][0]["failure_reason"]
+
+
+def test_refined_links_are_checked_when_asked_and_alike_in_any_order():
+    """Refinement proposes links and checks none; a vertex's links are checked when it is
+    first asked for, and every vertex gets the same links, in the same order, whatever
+    order the search asks in."""
+    scene = scene_from_dict(corridor_scene(-30.0, 0.03))
+    space = ObjectSpace.from_scene(scene, 0)
+    goal, start = scene.objects[0].goal, np.array(scene.objects[0].start)
+    a, b = RefinedLattice(space, goal), RefinedLattice(space, goal)
+    for lat in (a, b):
+        checks = lat.n_motion_checks
+        assert lat.refine(start) > 0
+        lat.refine(start + np.array([0.3, 0.1, 0.0]))
+        assert lat.n_motion_checks == checks  # nothing checked yet
+    u0 = a.n_nodes
+    a.successors(u0)
+    asked_one = a.n_motion_checks
+    assert asked_one > 0
+    extras = list(range(a.n_nodes, a.n_nodes + a.n_extra))
+    ends = sorted({v for u in extras for v, _ in a.successors(u)} | set(extras))
+    assert a.n_motion_checks > asked_one
+    order = np.random.default_rng(1).permutation(ends).tolist()
+    assert all(b.successors(u) == a.successors(u) for u in order)
+    assert b.n_motion_checks == a.n_motion_checks  # each link checked once

@@ -10,7 +10,10 @@ any, the refined lattice is exactly the lattice (same ids, edges, costs).
 Extra vertices get the ids ``n_nodes, n_nodes + 1, ...``; every method of the lattice
 (``pose``, ``successors``, ``heuristic``, ``start_connections``, ...) accepts them. An
 edge to or from an extra vertex is valid when ``ObjectSpace.motions_free`` or, where the
-grid's conservative answer is "not free", ``ExactSpace.motion_free`` says so; it costs the
+grid's conservative answer is "not free", ``ExactSpace.motion_free`` says so (checked
+lazily: :meth:`refine` proposes each vertex's links, and all the links of a vertex are
+checked together when it is first asked for, so the graph does not depend on the order of
+the questions: ``tests/test_narrow.py``); it costs the
 lattice's metric (``distance``) plus ``EDGE_OVERHEAD``, so the heuristic stays admissible
 and consistent, and chains of short refined edges are not preferred to the coarse lattice.
 Where the object is tight (less exact clearance than ``LINK_CLEARANCE`` at either end) an
@@ -66,7 +69,13 @@ class RefinedLattice(ObjectLattice):
         self._extra = np.zeros((0, 3))
         #: exact clearance (m) of each extra vertex
         self._clearance = np.zeros(0)
-        self._adj: dict[Node, list[tuple[Node, float]]] = {}
+        #: each vertex's candidate links in the order they were proposed: (other end,
+        #: link id); a link is checked when one of its ends is first asked for
+        self._cand: dict[Node, list[tuple[Node, int]]] = {}
+        #: each link: (vertex whose pose it starts from, other end, extra cost)
+        self._links: list[tuple[Node, Node, float]] = []
+        #: each link's cost once checked (``math.inf``: not free); None: not checked yet
+        self._cost: list[float | None] = []
         self._tree: cKDTree | None = None
         self._exact = exact
         self._windows: list[tuple[float, float, float, float]] = []
@@ -115,10 +124,37 @@ class RefinedLattice(ObjectLattice):
 
     def successors(self, u: Node) -> list[tuple[Node, float]]:
         if u >= self.n_nodes:
-            return self._adj.get(u, [])
+            return self._free_of(u)
         base = super().successors(u)
-        more = self._adj.get(u)
+        more = self._free_of(u) if u in self._cand else None
         return base + more if more else base
+
+    def _free_of(self, u: Node) -> list[tuple[Node, float]]:
+        """``u``'s free links to and from extra vertices, as ``(other end, cost)`` in the
+        order they were proposed; the links not checked yet are checked now, together."""
+        cand = self._cand.get(u)
+        if not cand:
+            return []
+        cost = self._cost
+        todo = [k for _, k in cand if cost[k] is None]
+        if todo:
+            self._check_links(todo)
+        return [(v, c) for v, k in cand if (c := cost[k]) != math.inf]  # type: ignore[misc]
+
+    def _check_links(self, ids: list[int]) -> None:
+        """Check links ``ids`` as :meth:`_free_links` does (the grid's answer first, the
+        exact checker's where the grid says no) and cost the free ones."""
+        links = [self._links[k] for k in ids]
+        starts = self.poses([u for u, _, _ in links])
+        ends = self.poses([v for _, v, _ in links])
+        free = self.space.motions_free(starts, ends)
+        self.n_motion_checks += len(ids)
+        for k, (u, v, extra), f, p, q in zip(ids, links, free, starts, ends, strict=True):
+            if not f:
+                self.n_exact_checks += 1
+                f = self.exact.motion_free(p, q)
+            self._cost[k] = (float(self.distance(self.pose(u), self.pose(v))) + EDGE_OVERHEAD
+                             + extra) if f else math.inf
 
     def nearest_nodes(self, pose: ArrayLike, max_dist: float,
                       valid_only: bool = True) -> list[tuple[Node, float]]:
@@ -211,8 +247,8 @@ class RefinedLattice(ObjectLattice):
             tight = self._clearance[u - self.n_nodes] < LINK_CLEARANCE
             if cand:
                 ok = np.asarray(self.in_model_range(q, self.poses(cand)), dtype=bool).reshape(-1)
-                for v in self._free_links(q, [v for v, k in zip(cand, ok, strict=True) if k]):
-                    self._link(u, v, self._turn_cost(q, v, tight))
+                for v in [v for v, k in zip(cand, ok, strict=True) if k]:
+                    self._propose(u, v, self._turn_cost(q, v, tight))
             # extra <-> lattice; where the object is still in the passage such a link costs
             # TIGHT_LINK_COST more, so that it turns onto (or off) the lattice in the open
             # and enters the passage straight whenever it can
@@ -222,8 +258,8 @@ class RefinedLattice(ObjectLattice):
                 nodes = nodes[np.asarray(self.in_model_range(q, super().poses(nodes)), bool)]
                 nodes = nodes[self._free_nodes(nodes)]
                 order = np.argsort(self.distance(q, super().poses(nodes)), kind="stable")
-                for v in self._free_links(q, [int(n) for n in nodes[order][:MAX_LATTICE_LINKS]]):
-                    self._link(u, v, extra_cost)
+                for v in nodes[order][:MAX_LATTICE_LINKS]:
+                    self._propose(u, int(v), extra_cost)
         return len(new)
 
     def _turn_cost(self, q: np.ndarray, v: Node, q_tight: bool) -> float:
@@ -247,7 +283,11 @@ class RefinedLattice(ObjectLattice):
         ks = sorted({s % self.n_headings for s in steps})
         return self.anchor[2] + self.dtheta * np.array(ks, dtype=float)
 
-    def _link(self, u: Node, v: Node, extra: float = 0.0) -> None:
-        c = float(self.distance(self.pose(u), self.pose(v))) + EDGE_OVERHEAD + extra
-        self._adj.setdefault(u, []).append((v, c))
-        self._adj.setdefault(v, []).append((u, c))
+    def _propose(self, u: Node, v: Node, extra: float = 0.0) -> None:
+        """A candidate link between extra vertex ``u`` and ``v`` (the motion from ``u``'s
+        pose), costing ``extra`` more than the metric; checked when first asked for."""
+        k = len(self._links)
+        self._links.append((u, v, extra))
+        self._cost.append(None)
+        self._cand.setdefault(u, []).append((v, k))
+        self._cand.setdefault(v, []).append((u, k))
