@@ -26,6 +26,7 @@ the heuristic stays admissible.
 from __future__ import annotations
 
 import math
+from array import array
 from collections.abc import Sequence
 
 import numpy as np
@@ -69,13 +70,14 @@ class RefinedLattice(ObjectLattice):
         self._extra = np.zeros((0, 3))
         #: exact clearance (m) of each extra vertex
         self._clearance = np.zeros(0)
-        #: each vertex's candidate links in the order they were proposed: (other end,
-        #: link id); a link is checked when one of its ends is first asked for
-        self._cand: dict[Node, list[tuple[Node, int]]] = {}
-        #: each link: (vertex whose pose it starts from, other end, extra cost)
-        self._links: list[tuple[Node, Node, float]] = []
-        #: each link's cost once checked (``math.inf``: not free); None: not checked yet
-        self._cost: list[float | None] = []
+        #: each vertex's candidate links (ids, packed: a large window proposes some 10^5)
+        #: in the order they were proposed; a link is checked when one of its ends is
+        #: first asked for
+        self._cand: dict[Node, array] = {}
+        #: each link: the vertex whose pose it starts from, its other end, its extra cost
+        self._from, self._to, self._extra_cost = array("q"), array("q"), array("d")
+        #: each link's cost once checked (``math.inf``: not free; NaN: not checked yet)
+        self._cost = array("d")
         self._tree: cKDTree | None = None
         self._exact = exact
         self._windows: list[tuple[float, float, float, float]] = []
@@ -135,26 +137,25 @@ class RefinedLattice(ObjectLattice):
         cand = self._cand.get(u)
         if not cand:
             return []
-        cost = self._cost
-        todo = [k for _, k in cand if cost[k] is None]
+        cost, a, b = self._cost, self._from, self._to
+        todo = [k for k in cand if math.isnan(cost[k])]
         if todo:
             self._check_links(todo)
-        return [(v, c) for v, k in cand if (c := cost[k]) != math.inf]  # type: ignore[misc]
+        return [(b[k] if a[k] == u else a[k], c) for k in cand if (c := cost[k]) != math.inf]
 
     def _check_links(self, ids: list[int]) -> None:
         """Check links ``ids`` as :meth:`_free_links` does (the grid's answer first, the
         exact checker's where the grid says no) and cost the free ones."""
-        links = [self._links[k] for k in ids]
-        starts = self.poses([u for u, _, _ in links])
-        ends = self.poses([v for _, v, _ in links])
+        us, vs = [self._from[k] for k in ids], [self._to[k] for k in ids]
+        starts, ends = self.poses(us), self.poses(vs)
         free = self.space.motions_free(starts, ends)
         self.n_motion_checks += len(ids)
-        for k, (u, v, extra), f, p, q in zip(ids, links, free, starts, ends, strict=True):
+        for k, u, v, f, p, q in zip(ids, us, vs, free, starts, ends, strict=True):
             if not f:
                 self.n_exact_checks += 1
                 f = self.exact.motion_free(p, q)
             self._cost[k] = (float(self.distance(self.pose(u), self.pose(v))) + EDGE_OVERHEAD
-                             + extra) if f else math.inf
+                             + self._extra_cost[k]) if f else math.inf
 
     def nearest_nodes(self, pose: ArrayLike, max_dist: float,
                       valid_only: bool = True) -> list[tuple[Node, float]]:
@@ -286,8 +287,13 @@ class RefinedLattice(ObjectLattice):
     def _propose(self, u: Node, v: Node, extra: float = 0.0) -> None:
         """A candidate link between extra vertex ``u`` and ``v`` (the motion from ``u``'s
         pose), costing ``extra`` more than the metric; checked when first asked for."""
-        k = len(self._links)
-        self._links.append((u, v, extra))
-        self._cost.append(None)
-        self._cand.setdefault(u, []).append((v, k))
-        self._cand.setdefault(v, []).append((u, k))
+        k = len(self._cost)
+        self._from.append(u)
+        self._to.append(v)
+        self._extra_cost.append(extra)
+        self._cost.append(math.nan)
+        for end in (u, v):
+            ids = self._cand.get(end)
+            if ids is None:
+                ids = self._cand[end] = array("q")
+            ids.append(k)
