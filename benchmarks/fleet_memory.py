@@ -86,22 +86,20 @@ def _array_bytes(a: np.ndarray) -> int:
     return resident_in(owner.ctypes.data, owner.nbytes)
 
 
-def _dict_bytes(d: dict) -> int:
-    size = sys.getsizeof(d)
-    for k, v in d.items():
-        size += sys.getsizeof(k) + sys.getsizeof(v)
-        if isinstance(v, list | tuple):
-            size += sum(sys.getsizeof(x) for x in v)
+def _item_bytes(x: object) -> int:
+    """``x``'s own size, and its items' when it is a list or tuple."""
+    size = sys.getsizeof(x)
+    if isinstance(x, list | tuple):
+        size += sum(sys.getsizeof(y) for y in x)
     return size
+
+
+def _dict_bytes(d: dict) -> int:
+    return sys.getsizeof(d) + sum(sys.getsizeof(k) + _item_bytes(v) for k, v in d.items())
 
 
 def _list_bytes(items: list) -> int:
-    size = sys.getsizeof(items)
-    for x in items:
-        size += sys.getsizeof(x)
-        if isinstance(x, tuple):
-            size += sum(sys.getsizeof(y) for y in x)
-    return size
+    return sys.getsizeof(items) + sum(_item_bytes(x) for x in items)
 
 
 def tracked_types(top: int = 12) -> list[tuple[str, int, int]]:

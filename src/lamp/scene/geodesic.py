@@ -15,8 +15,9 @@ may graze them, and pass between two that touch). With ``merge``, obstacles that
 merged first, so a way never slips through a joint of zero width: the result is then a
 lower bound for paths that keep some distance from the obstacles (a robot's centre
 keeps its radius), not for those that graze two at once. With a ``workspace`` (W, H),
-the outside of ``[0, W] x [0, H]`` is an obstacle too (a disk that must stay inside it). It is at least the straight-line
-distance, and equals it when the straight segment is clear. Deterministic.
+the outside of ``[0, W] x [0, H]`` is an obstacle too (a disk that must stay inside it).
+It is at least the straight-line distance, and equals it when the straight segment is
+clear. Deterministic.
 """
 
 from __future__ import annotations

@@ -144,16 +144,10 @@ class RefinedLattice(ObjectLattice):
         return [(b[k] if a[k] == u else a[k], c) for k in cand if (c := cost[k]) != math.inf]
 
     def _check_links(self, ids: list[int]) -> None:
-        """Check links ``ids`` as :meth:`_free_links` does (the grid's answer first, the
-        exact checker's where the grid says no) and cost the free ones."""
+        """Check links ``ids`` (:meth:`_motions_free`) and cost the free ones."""
         us, vs = [self._from[k] for k in ids], [self._to[k] for k in ids]
-        starts, ends = self.poses(us), self.poses(vs)
-        free = self.space.motions_free(starts, ends)
-        self.n_motion_checks += len(ids)
-        for k, u, v, f, p, q in zip(ids, us, vs, free, starts, ends, strict=True):
-            if not f:
-                self.n_exact_checks += 1
-                f = self.exact.motion_free(p, q)
+        free = self._motions_free(self.poses(us), self.poses(vs))
+        for k, u, v, f in zip(ids, us, vs, free, strict=True):
             self._cost[k] = (float(self.distance(self.pose(u), self.pose(v))) + EDGE_OVERHEAD
                              + self._extra_cost[k]) if f else math.inf
 
@@ -196,16 +190,21 @@ class RefinedLattice(ObjectLattice):
         if not nodes:
             return []
         targets = self.poses(nodes)
-        space = self.tolerant_space(tolerance)
-        free = space.motions_free(np.broadcast_to(p, targets.shape), targets)
-        self.n_motion_checks += len(nodes)
+        free = self._motions_free(np.broadcast_to(p, targets.shape), targets, tolerance)
+        return [v for v, f in zip(nodes, free, strict=True) if f]
+
+    def _motions_free(self, starts: np.ndarray, ends: np.ndarray,
+                      tolerance: float = 0.0) -> list[bool]:
+        """Whether each straight motion ``starts[m] -> ends[m]`` is free: the grid's answer
+        first, the exact checker's where the grid says no (tolerance 0 only)."""
+        free = self.tolerant_space(tolerance).motions_free(starts, ends)
+        self.n_motion_checks += len(free)
         out = []
-        for v, f, q in zip(nodes, free, targets, strict=True):
+        for f, p, q in zip(free, starts, ends, strict=True):
             if not f and tolerance == 0.0:
                 self.n_exact_checks += 1
                 f = self.exact.motion_free(p, q)
-            if f:
-                out.append(v)
+            out.append(bool(f))
         return out
 
     def refine(self, around: ArrayLike, params: NarrowParams | None = None) -> int:
