@@ -43,6 +43,7 @@ import numba as nb
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
+from lamp.mrmp.bottleneck import least_threshold, straight_line_bottleneck
 from lamp.mrmp.coarse import CoarseGraph, coarse_below
 from lamp.mrmp.goal_distances import GoalDistances, hval, hval_pairs, start_costs
 from lamp.mrmp.gspi_kernels import ALL_PAIRS_BELOW, Graph
@@ -140,49 +141,6 @@ def _grow_matching(ptr: np.ndarray, idx: np.ndarray, val: np.ndarray, t: float,
     return n
 
 
-def straight_line_bottleneck(S: np.ndarray, G: np.ndarray) -> float:
-    """The least, over the assignments giving every goal ``G[m]`` its own robot ``S[i]``,
-    of the longest straight-line start-goal distance (same units as the points).
-
-    A lower bound on the makespan at unit speed of any plan that brings robots with
-    interchangeable goals from ``S`` onto every goal, whatever the map: some robot must
-    cover at least this distance. Exact: bisection over the distinct distances between
-    the largest nearest-robot distance of a goal and the longest distance of a least-sum
-    assignment, each threshold tried as a least-sum assignment of the 0/1 matrix "longer
-    than the threshold" (dense; Hopcroft-Karp on the sparse pairs can take seconds when
-    one goal is left over); the result is one of the distances. Raises ``ValueError``
-    with fewer robots than goals.
-    """
-    S = np.asarray(S, dtype=float).reshape(-1, 2)
-    G = np.asarray(G, dtype=float).reshape(-1, 2)
-    N, M = len(S), len(G)
-    if M == 0:
-        return 0.0
-    if N < M:
-        raise ValueError(f"{N} robots cannot reach {M} goals")
-    E = np.hypot(G[:, None, 0] - S[None, :, 0], G[:, None, 1] - S[None, :, 1])  # (M, N)
-    floor = E.min(axis=1).max()  # every goal needs some robot
-    if N == M:
-        floor = max(floor, E.min(axis=0).max())  # and every robot some goal
-    rows, cols = linear_sum_assignment(E)
-    top = E[rows, cols].max()  # one assignment's longest distance
-    vals = np.unique(E[(floor <= E) & (top >= E)])
-    return float(vals[_least_threshold(E, vals, 0, len(vals) - 1)])
-
-
-def _least_threshold(C: np.ndarray, vals: np.ndarray, a: int, b: int) -> int:
-    """The least ``i`` in ``[a, b]`` such that the pairs with ``C <= vals[i]`` match every
-    row of ``C`` (binary search; ``b`` must be such an index)."""
-    while a < b:
-        mid = (a + b) // 2
-        rows, cols = linear_sum_assignment(vals[mid] < C)
-        if (C[rows, cols] > vals[mid]).any():
-            a = mid + 1
-        else:
-            b = mid
-    return a
-
-
 def unreached_reason(G: np.ndarray, no_link: np.ndarray, unreachable: np.ndarray) -> str:
     """Why the goals of ``no_link`` (no link to the lattice or a start) and
     ``unreachable`` (reachable from no start) cannot be reached, goal by goal."""
@@ -257,7 +215,7 @@ def _dense(gr: Graph, V: int, hs: GoalDistances, S: np.ndarray, G: np.ndarray,
         if C[rows, cols].max() <= floor:
             return _chosen(C, rows, cols)
     vals = np.unique(C[np.isfinite(C)])
-    a = _least_threshold(C, vals, 0 if bottleneck else len(vals) - 1, len(vals) - 1)
+    a = least_threshold(C, vals, 0 if bottleneck else len(vals) - 1, len(vals) - 1)
     W = np.where(vals[a] >= C, C, _BIG)
     rows, cols = linear_sum_assignment(W)
     if np.any(W[rows, cols] >= _BIG):

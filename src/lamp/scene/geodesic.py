@@ -29,8 +29,9 @@ import numpy as np
 import shapely
 from scipy.sparse import csr_array
 from scipy.sparse.csgraph import dijkstra
+from scipy.spatial import cKDTree
 
-__all__ = ["QUAD_SEGS", "SHRINK", "GrownObstacles"]
+__all__ = ["MATRIX_BLOCK", "QUAD_SEGS", "SHRINK", "GrownObstacles"]
 
 #: Segments per quarter circle of the grown outlines (Shapely's ``quad_segs``): more is
 #: tighter and slower; the bound is valid at any value.
@@ -38,6 +39,9 @@ QUAD_SEGS = 2
 #: How far (m) the grown obstacles shrink before visibility is tested: a segment that only
 #: touches an outline counts as clear.
 SHRINK = 1e-7
+#: Sources searched together by :meth:`GrownObstacles.distance_matrix` (memory: this many
+#: rows of distances to every vertex).
+MATRIX_BLOCK = 256
 
 
 class GrownObstacles:
@@ -168,6 +172,73 @@ class GrownObstacles:
         i, j, length = self._visible_pairs(t, self.vertices, offset=d, below=below)
         np.minimum.at(out, i, d[j] + length)
         return np.maximum(np.minimum(out, max(below, 0.0)), straight)
+
+    def _near_vertices(self, pts: np.ndarray, below: float
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(i, j, length) of the clear segments from ``pts[i]`` to vertex ``j`` shorter than
+        ``below``, tangent at the vertex (``inf``: every vertex)."""
+        if not math.isfinite(below):
+            return self._visible_pairs(pts, self.vertices)
+        near = cKDTree(self.vertices).query_ball_point(pts, below) if len(self.vertices) \
+            else [[] for _ in pts]
+        i = np.repeat(np.arange(len(pts)), [len(n) for n in near])
+        j = np.fromiter((v for n in near for v in n), np.int64, len(i))
+        keep = self._tangent(j, pts[i])
+        i, j = i[keep], j[keep]
+        ok = self._clear(pts[i], self.vertices[j])
+        i, j = i[ok], j[ok]
+        return i, j, np.hypot(*(pts[i] - self.vertices[j]).T)
+
+    def distance_matrix(self, P: np.ndarray, Q: np.ndarray, below: float = math.inf
+                        ) -> np.ndarray:
+        """``D[i, j]`` = :meth:`distance` from ``P[i]`` to ``Q[j]`` ((n, 2) and (m, 2)
+        points), for many pairs at once; where it is at least ``below`` it may be given
+        as ``max(below, straight line)`` instead, which is never more. A pair is searched
+        only when its straight line is shorter than ``below`` and not clear, and then
+        only over the vertices within ``below`` of its ends (a way shorter than ``below``
+        bends nowhere else): with a finite ``below`` the cost grows with the pairs and
+        vertices near each other, not with their product. One search per point of ``P``
+        with such a pair, :data:`MATRIX_BLOCK` at a time (SciPy's Dijkstra, cut at
+        ``below``)."""
+        P = np.asarray(P, float).reshape(-1, 2)
+        Q = np.asarray(Q, float).reshape(-1, 2)
+        straight = np.hypot(P[:, None, 0] - Q[None, :, 0], P[:, None, 1] - Q[None, :, 1])
+        out = np.maximum(straight, below)
+        pi, qj = np.nonzero(straight < below)
+        clear = self._clear(P[pi], Q[qj])
+        out[pi[clear], qj[clear]] = straight[pi[clear], qj[clear]]
+        pi, qj = pi[~clear], qj[~clear]
+        if len(pi) == 0:
+            return out
+        V = len(self.vertices)
+        src = np.unique(pi)
+        si, sv, sl = self._near_vertices(P[src], below)
+        ti, tv, tl = self._near_vertices(Q, below)
+        vi, vj, vd = self._edges
+        # nodes: the vertices, then each source of ``src`` joined to the vertices it sees
+        n = V + len(src)
+        graph = csr_array((np.maximum(np.concatenate([vd, vd, sl, sl]), 1e-12),
+                           (np.concatenate([vi, vj, V + si, sv]),
+                            np.concatenate([vj, vi, sv, V + si]))), shape=(n, n))
+        order = np.argsort(qj, kind="stable")
+        pi, qj = pi[order], qj[order]
+        t_order = np.argsort(ti, kind="stable")
+        tv, tl, t_start = tv[t_order], tl[t_order], np.searchsorted(ti[t_order], np.arange(len(Q) + 1))
+        row_of = np.searchsorted(src, pi)
+        for b0 in range(0, len(src), MATRIX_BLOCK):
+            rows = np.arange(b0, min(b0 + MATRIX_BLOCK, len(src)))
+            d = dijkstra(graph, directed=False, indices=V + rows, limit=below)[:, :V]
+            mine = (row_of >= b0) & (row_of < rows[-1] + 1)
+            bp, bq, br = pi[mine], qj[mine], row_of[mine] - b0
+            for q in np.unique(bq):
+                at = bq == q
+                seen = slice(t_start[q], t_start[q + 1])
+                if seen.start == seen.stop:
+                    continue
+                via = (d[br[at]][:, tv[seen]] + tl[seen]).min(axis=1)
+                out[bp[at], q] = np.maximum(np.minimum(via, out[bp[at], q]),
+                                            straight[bp[at], q])
+        return out
 
     def path(self, a: Sequence[float], b: Sequence[float]) -> np.ndarray | None:
         """The shortest path's points from ``a`` to ``b`` (x, y), ends included, whose
