@@ -18,6 +18,10 @@ the peak memory of the process.
 (``lamp.mrmp.assignment.straight_line_bottleneck``): any planner whose robots take
 interchangeable goals and move at unit speed needs at least this long, since some robot
 must cover it; it ignores obstacles and other robots, so no planner need reach it.
+``GLB`` (unless ``--no-geodesic``) is the same bottleneck over the shortest ways round the
+obstacles for disks of the robots' radius (``lamp.mrmp.bottleneck.geodesic_bottleneck``,
+the obstacles grown once per map, ``lamp.scene.bounds.grown_obstacles``): also a lower
+bound, at least ``LB``, and where the two differ, what the obstacles alone cost.
 
 With ``--tswap ADAPTER`` (``benchmarks/tswap/adapter.py``, which runs TSWAP's public
 implementation built from its source outside this repository: see
@@ -78,8 +82,10 @@ from fleet_checker import check_fleet_plan  # noqa: E402
 from lamp.geometry.robot_space import RobotSpace  # noqa: E402
 from lamp.mrmp import plan_paths  # noqa: E402
 from lamp.mrmp.assignment import straight_line_bottleneck  # noqa: E402
+from lamp.mrmp.bottleneck import geodesic_bottleneck  # noqa: E402
 from lamp.mrmp.distance_field import get_lattice  # noqa: E402
 from lamp.mrmp.gspi import warmup  # noqa: E402
+from lamp.scene.bounds import grown_obstacles  # noqa: E402
 from lamp.scene.mapf import load_grid_map, random_instance  # noqa: E402
 
 MAP_DIR = ROOT.parent / "shared" / "data" / "mapf"
@@ -227,6 +233,8 @@ def main() -> None:
     ap.add_argument("--tswap-modes", default="bottleneck,linear",
                     help="TSWAP modes run after its default, as extra columns")
     ap.add_argument("--no-check", action="store_true", help="skip the independent checker")
+    ap.add_argument("--geodesic", action=argparse.BooleanOptionalAction, default=True,
+                    help="the bound round the obstacles (GLB) beside LB (default: on)")
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--parts", action="store_true",
                     help="print where the makespan goes (waits, slow moves, detours)")
@@ -246,10 +254,12 @@ def main() -> None:
         modes = []
     warmup()
     print("map | robots | seed | time s | steps | makespan m | slowest path m | sum m | "
-          "Gspi B* m | LB m | makespan / LB | valid"
+          "Gspi B* m | LB m | makespan / LB"
+          + (" | GLB m | makespan / GLB" if a.geodesic else "") + " | valid"
           + "".join(f" | TSWAP {m}: makespan m / sum m / ms" for m in modes)
-          + (" | TSWAP default makespan / LB | makespan / TSWAP default | time / TSWAP default"
-             if modes else ""))
+          + (" | TSWAP default makespan / LB"
+             + (" | TSWAP default makespan / GLB" if a.geodesic else "")
+             + " | makespan / TSWAP default | time / TSWAP default" if modes else ""))
     summary: list[tuple] = []
     for name in maps:
         path = a.map_dir / f"{name}.map"
@@ -259,11 +269,15 @@ def main() -> None:
         for step in (0.05, 0.03, 0.02):
             get_lattice(space, step)
         setup = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        grown = (grown_obstacles(tuple(gm.scene.obstacles), tuple(gm.scene.workspace), RADIUS,
+                                 merge=True) if a.geodesic else None)
+        grown_s = time.perf_counter() - t0
         free = int((~gm.blocked).sum())
         print(f"# {name}: {gm.blocked.shape[1]} x {gm.blocked.shape[0]} cells, "
               f"{gm.scene.workspace[0]:.1f} x {gm.scene.workspace[1]:.1f} m, {free} free, "
               f"{len(gm.scene.obstacles)} obstacle rectangles; space + lattices "
-              f"{setup:.2f} s")
+              f"{setup:.2f} s" + (f"; grown obstacles for GLB {grown_s:.1f} s" if grown else ""))
         for n in robots:
             if n > free:
                 continue
@@ -278,6 +292,7 @@ def main() -> None:
                         dt, plan = time.perf_counter() - t, got
                 mk, slow, tot = plan_figures(plan.paths)
                 lb = straight_line_bottleneck(S, G)
+                glb = geodesic_bottleneck(grown, S, G) if grown else float("nan")
                 if a.no_check:
                     ok = "-"
                 else:
@@ -288,7 +303,8 @@ def main() -> None:
                 line = (f"{name} | {n} | {seed} | {dt:.3f} | {plan.iterations} | {mk:.2f} | "
                         f"{slow:.2f} | {tot:.1f} | "
                         f"{plan.stats.get('assignment_bound', float('nan')):.2f} | "
-                        f"{lb:.2f} | {mk / lb:.2f} | {ok}")
+                        f"{lb:.2f} | {mk / lb:.2f}"
+                        + (f" | {glb:.2f} | {mk / glb:.2f}" if grown else "") + f" | {ok}")
                 ts = {}
                 for mode in modes:
                     r = run_tswap(a.tswap, path, gm, S, G, mode, a.tswap_bin)
@@ -302,8 +318,11 @@ def main() -> None:
                     ts[mode] = r
                 if modes:
                     d = ts["default"]
-                    line += (f" | {d['makespan_m'] / lb:.2f} | {mk / d['makespan_m']:.2f}"
-                             if d.get("solved") and d["makespan"] > 0 else " | - | -")
+                    line += (f" | {d['makespan_m'] / lb:.2f}"
+                             + (f" | {d['makespan_m'] / glb:.2f}" if grown else "")
+                             + f" | {mk / d['makespan_m']:.2f}"
+                             if d.get("solved") and d["makespan"] > 0
+                             else " | -" * (3 if grown else 2))
                     line += (f" | {1e3 * dt / d['runtime_ms']:.2f}"
                              if d.get("solved") and d.get("runtime_ms", 0) > 0 else " | -")
                 print(line, flush=True)
@@ -313,24 +332,30 @@ def main() -> None:
                 if a.phases:
                     print("  phases ms: " + " | ".join(f"{k} {1e3 * v:.1f}"
                                                         for k, v in ph.items()), flush=True)
-                rows.append({"dt": dt, "mk": mk, "tot": tot, "good": good, "lb": lb,
+                rows.append({"dt": dt, "mk": mk, "tot": tot, "good": good, "lb": lb, "glb": glb,
                              "ts": ts, "ph": ph})
             summary.append((name, n, rows))
     print("\nmedians over the seeds (ratios: medians of the per-instance ratios)")
-    head = ("| map | robots | LB m | ours: solved, valid | time s | makespan m | / LB "
-            "| sum m")
+    geo = a.geodesic
+    head = ("| map | robots | LB m" + (" | GLB m" if geo else "")
+            + " | ours: solved, valid | time s | makespan m | / LB" + (" | / GLB" if geo else "")
+            + " | sum m")
     if modes:
-        head += (" | TSWAP default: solved | time ms | makespan m | / LB | sum m "
+        head += (" | TSWAP default: solved | time ms | makespan m | / LB"
+                 + (" | / GLB" if geo else "") + " | sum m "
                  "| ours / TSWAP default | time / TSWAP default"
                  + "".join(f" | TSWAP {m}: makespan m / ms" for m in modes[1:]))
     print(head + " |")
     for name, n, rows in summary:
         lb = [r["lb"] for r in rows]
-        line = (f"| {name} | {n} | {_med(lb)} | {sum(r['good'] for r in rows)}/{len(rows)} | "
+        line = (f"| {name} | {n} | {_med(lb)}"
+                + (f" | {_med([r['glb'] for r in rows])}" if geo else "")
+                + f" | {sum(r['good'] for r in rows)}/{len(rows)} | "
                 f"{np.median([r['dt'] for r in rows]):.3f} | "
                 f"{_med([r['mk'] for r in rows])} | "
-                f"{_med([r['mk'] / r['lb'] for r in rows])} | "
-                f"{np.median([r['tot'] for r in rows]):.0f}")
+                f"{_med([r['mk'] / r['lb'] for r in rows])}"
+                + (f" | {_med([r['mk'] / r['glb'] for r in rows])}" if geo else "")
+                + f" | {np.median([r['tot'] for r in rows]):.0f}")
         for k, mode in enumerate(modes):
             done = [r for r in rows if r["ts"][mode].get("solved")]
             ms = [r["ts"][mode]["runtime_ms"] for r in done]
@@ -340,6 +365,8 @@ def main() -> None:
                          + (f"{np.median(ms):.0f}" if ms else "-")
                          + f" | {_med(mks)} | "
                          f"{_med([r['ts'][mode]['makespan_m'] / r['lb'] for r in done])} | "
+                         + (f"{_med([r['ts'][mode]['makespan_m'] / r['glb'] for r in done])}"
+                            " | " if geo else "")
                          + (f"{np.median([r['ts'][mode]['sum_m'] for r in done]):.0f}"
                             if done else "-") + " | "
                          + _med([r["mk"] / r["ts"][mode]["makespan_m"] for r in done
