@@ -13,6 +13,7 @@ from scipy.sparse.csgraph import dijkstra
 
 from lamp.geometry.object_space import ObjectSpace
 from lamp.scene.model import Circle, Obstacle, Rectangle
+from lamp.search import dstar_lite
 from lamp.search.dstar_lite import DStarLite, SearchStatus
 from lamp.search.lattice import ObjectLattice
 
@@ -373,3 +374,67 @@ def test_a_lattice_keeping_few_successor_lists_plans_the_same(seed, kept):
         succ = [lat.successors(u) for u in range(0, lat.n_nodes, 7)]
         runs.append((paths, succ, lat.n_pose_checks, lat.n_motion_checks))
     assert runs[0] == runs[1]
+
+
+@settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(seed=st.integers(0, 2**31 - 1), slack=st.sampled_from([0.0, 0.1, 0.5]),
+       floor=st.sampled_from([0, 16]))
+def test_when_the_queue_is_rebuilt_changes_nothing(seed, slack, floor):
+    """The queue's rebuilds and the heuristic memo's bound (memory) change no path, no
+    expansion count and no order of expansions: a search rebuilding whenever a few stale
+    entries pile up, with a memo of 8 vertices, plans exactly as one that never rebuilds
+    and keeps every h, through penalties and a moving start; after a push that adds an
+    entry its heap never holds more than ``HEAP_SLACK`` times its live entries plus
+    ``HEAP_FLOOR`` stale ones, and its memo never more than ``H_KEPT`` vertices."""
+    rng = np.random.default_rng(seed)
+    space = ObjectSpace(Rectangle((0.2, 0.1)), (2.0, 2.0), [
+        Obstacle(Circle(float(rng.uniform(0.05, 0.2))), (*rng.uniform(0.4, 1.6, 2), 0.0))
+        for _ in range(3)])
+    goal = (*rng.uniform(0.3, 1.7, 2), float(rng.uniform(-math.pi, math.pi)))
+    p = rng.uniform([0.3, 0.3, -math.pi], [1.7, 1.7, math.pi])
+    ks = [int(v) for v in rng.integers(1, 10**6, 8)]
+    runs: list = []
+    for s, f, kept in ((slack, floor, 8), (1e18, 10**18, 10**18)):
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setattr(dstar_lite, "HEAP_SLACK", s)
+            mp.setattr(dstar_lite, "HEAP_FLOOR", f)
+            mp.setattr(dstar_lite, "H_KEPT", kept)
+            runs.append(_plan_along(space, goal, p, ks, s, f))
+    assert runs[0][:3] == runs[1][:3]
+    assert runs[1][3] == 0 and (runs[0][3] > 0 or floor > 0)  # rebuilt, or never
+
+
+def _plan_along(space, goal, p, ks, s, f):
+    """Paths, order of expansions, their count and the rebuilds of a search through
+    penalties."""
+    lat = ObjectLattice(space, goal)
+    dstar = DStarLite(lat)
+    order: list = []
+    rebuilds = [0]
+    top, push = dstar._top, dstar._push
+
+    def watched_top():
+        key, u = top()
+        order.append(u)
+        return key, u
+
+    def watched_push(u, key):
+        heap, before = dstar._heap, len(dstar._heap)
+        push(u, key)
+        rebuilds[0] += dstar._heap is not heap
+        if dstar._heap is not heap or len(heap) > before:  # an entry was added
+            assert len(dstar._heap) - len(dstar._open) <= s * len(dstar._open) + f
+        assert len(dstar._hcache) <= dstar_lite.H_KEPT
+
+    dstar._top, dstar._push = watched_top, watched_push
+    dstar.initialize(lat.goal_node)
+    start = (float(p[0]), float(p[1]), float(p[2]))
+    paths = [dstar.plan_shortest_path(start, lat.start_connections(start))]
+    for k in ks:
+        path = paths[-1]
+        if len(path) < 4:
+            break
+        i = 1 + k % (len(path) - 2)
+        dstar.penalize(path[i], path[i + 1], [0.05, 1.0, 1e4][k % 3])
+        paths.append(dstar.plan_shortest_path(path[1]))
+    return paths, order, dstar.stats.expansions, rebuilds[0]

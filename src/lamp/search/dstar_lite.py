@@ -39,10 +39,15 @@ Departures from the pseudocode, each for a reason:
 * ``UpdateVertex`` ({21'}, {28'}) is called only for vertices whose ``rhs`` changed: for
   the others g, rhs and queue membership are unchanged and a queued key, being a lower
   bound, stays valid ({14'} refreshes it). This saves most calls on a 26-connected lattice.
-* ``h(s_start, .)`` is memoised per start.
-* ``U`` is a ``heapq`` with lazy deletion (a dict holds each queued vertex's current key);
-  stale entries are skipped when they reach the top, and the heap is rebuilt when stale
-  entries dominate.
+* ``h(s_start, .)`` is memoised per start, for at most :data:`H_KEPT` vertices at once.
+* ``U`` is a ``heapq`` with lazy deletion: a dict holds each queued vertex's one current
+  heap entry (key, sequence number, vertex); any other entry is stale and skipped when it
+  reaches the top. Re-queueing a vertex with the key
+  it is queued with keeps its entry. Ties of keys go to the lower number, so the order in
+  which vertices leave the queue is fixed by the live entries alone, and the heap is
+  rebuilt from them, keeping their numbers, whenever the stale entries pass
+  :data:`HEAP_SLACK` times the live ones (and :data:`HEAP_FLOOR`): when it is rebuilt
+  changes nothing.
 * Expansion and time limits: ``compute_shortest_path`` stops with a status; its state stays
   consistent, so a later call simply continues.
 """
@@ -61,6 +66,12 @@ from typing import Protocol
 INF = math.inf
 #: relative tolerance on key comparisons in the termination test (see compute_shortest_path)
 KEY_RTOL = 1e-9
+#: The heap is rebuilt from its live entries when its stale ones pass this many times the
+#: live ones plus :data:`HEAP_FLOOR` (memory against the rebuilds' time; order unchanged).
+HEAP_SLACK, HEAP_FLOOR = 0.5, 1024
+#: The memo of h(s_start, .) is emptied when it holds this many vertices (memory; h is a
+#: function of the vertex and the start, so nothing else changes).
+H_KEPT = 1 << 14
 
 Key = tuple[float, float]
 
@@ -136,7 +147,7 @@ class DStarLite:
         self.g: dict[Hashable, float] = {}
         self.rhs: dict[Hashable, float] = {}
         self._heap: list[tuple[float, float, int, Hashable]] = []
-        self._open: dict[Hashable, Key] = {}
+        self._open: dict[Hashable, tuple[float, float, int, Hashable]] = {}  # its entry
         self._seq = itertools.count()
         self.start: Hashable | None = None
         self._hcache: dict[Hashable, float] = {}
@@ -186,10 +197,13 @@ class DStarLite:
     # ----------------------------------------------------------- queue
     def _h(self, s: Hashable) -> float:
         """h'(s) = max(0, h(s_start, s) - slack), memoised for the current start."""
-        h = self._hcache.get(s)
+        memo = self._hcache
+        h = memo.get(s)
         if h is None:
+            if len(memo) >= H_KEPT:
+                memo.clear()
             h = self.graph.heuristic(self.start, s) - self._hslack
-            h = self._hcache[s] = h if h > 0.0 else 0.0
+            h = memo[s] = h if h > 0.0 else 0.0
         return h
 
     def _start_slack(self, start: Hashable, edges: dict[Hashable, float]) -> float:
@@ -203,19 +217,22 @@ class DStarLite:
         return (m + self._h(s) + self.km, m)
 
     def _push(self, s: Hashable, key: Key) -> None:
-        self._open[s] = key
-        heapq.heappush(self._heap, (key[0], key[1], next(self._seq), s))
-        if len(self._heap) > 4 * len(self._open) + 1024:
-            self._heap = [(k[0], k[1], next(self._seq), n) for n, k in self._open.items()]
+        open_ = self._open
+        cur = open_.get(s)
+        if cur is not None and cur[0] == key[0] and cur[1] == key[1]:
+            return  # queued with this key: its entry stays current
+        entry = open_[s] = (key[0], key[1], next(self._seq), s)
+        heapq.heappush(self._heap, entry)
+        if len(self._heap) - len(open_) > HEAP_SLACK * len(open_) + HEAP_FLOOR:
+            self._heap = list(open_.values())
             heapq.heapify(self._heap)
 
     def _top(self) -> tuple[Key, Hashable | None]:
         heap, open_ = self._heap, self._open
         while heap:
-            k1, k2, _, s = heap[0]
-            cur = open_.get(s)
-            if cur is not None and cur[0] == k1 and cur[1] == k2:
-                return (k1, k2), s
+            entry = heap[0]
+            if open_.get(entry[3]) is entry:
+                return (entry[0], entry[1]), entry[3]
             heapq.heappop(heap)
         return (INF, INF), None
 
