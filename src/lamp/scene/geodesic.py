@@ -177,10 +177,9 @@ class GrownObstacles:
                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(i, j, length) of the clear segments from ``pts[i]`` to vertex ``j`` shorter than
         ``below``, tangent at the vertex (``inf``: every vertex)."""
-        if not math.isfinite(below):
+        if not math.isfinite(below) or len(self.vertices) == 0:
             return self._visible_pairs(pts, self.vertices)
-        near = cKDTree(self.vertices).query_ball_point(pts, below) if len(self.vertices) \
-            else [[] for _ in pts]
+        near = cKDTree(self.vertices).query_ball_point(pts, below)
         i = np.repeat(np.arange(len(pts)), [len(n) for n in near])
         j = np.fromiter((v for n in near for v in n), np.int64, len(i))
         keep = self._tangent(j, pts[i])
