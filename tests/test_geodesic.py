@@ -194,3 +194,20 @@ def test_a_corridor_exactly_two_radii_wide_is_open_unless_merged() -> None:
     a, b = (1.25, 1.0), (1.25, 6.0)
     assert GrownObstacles(walls, 0.25, (3.0, 7.0)).distance(a, b) == pytest.approx(5.0)
     assert GrownObstacles(walls, 0.25, (3.0, 7.0), merge=True).distance(a, b) > 5.0
+
+
+@pytest.mark.parametrize("block", [1, 3, 7])
+def test_the_visibility_graph_is_the_same_built_in_blocks(monkeypatch, block) -> None:
+    """The vertex pairs are tested ``MATRIX_BLOCK`` rows at a time (memory): any block
+    size gives the same edges, in the same order, as one block of every row."""
+    import lamp.scene.geodesic as geodesic
+
+    rng = np.random.default_rng(5)
+    geoms = [shapely.box(x, y, x + 0.3, y + 0.5) for x, y in rng.uniform([0.3, 0.3], [3.3, 2.2], (7, 2))]
+    monkeypatch.setattr(geodesic, "MATRIX_BLOCK", 10**6)
+    whole = GrownObstacles(geoms, 0.05, (W, H), merge=True)._edges
+    monkeypatch.setattr(geodesic, "MATRIX_BLOCK", block)
+    blocks = GrownObstacles(geoms, 0.05, (W, H), merge=True)._edges
+    assert len(whole[0]) > 50
+    for a, b in zip(whole, blocks, strict=True):
+        assert np.array_equal(a, b)

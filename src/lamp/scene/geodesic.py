@@ -39,7 +39,8 @@ QUAD_SEGS = 2
 #: How far (m) the grown obstacles shrink before visibility is tested: a segment that only
 #: touches an outline counts as clear.
 SHRINK = 1e-7
-#: Sources searched together by :meth:`GrownObstacles.distance_matrix` (memory: this many
+#: Rows handled together (memory): the vertices whose pairs the visibility graph tests at
+#: once, and the sources :meth:`GrownObstacles.distance_matrix` searches at once (this many
 #: rows of distances to every vertex).
 MATRIX_BLOCK = 256
 
@@ -77,7 +78,7 @@ class GrownObstacles:
             hit, _ = self._tree.query(shapely.points(points), predicate="intersects")
             keep[hit] = False
         self.vertices, self._prev, self._next = points[keep], prev[keep], nxt[keep]
-        self._edges = self._visible_pairs(self.vertices, self.vertices, same=True)
+        self._edges = self._vertex_edges()
 
     def _clear(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Whether each segment ``a[i]``-``b[i]`` misses the (shrunk) grown obstacles."""
@@ -100,20 +101,32 @@ class GrownObstacles:
         cn = d[:, 0] * f[:, 1] - d[:, 1] * f[:, 0]
         return cp * cn >= 0
 
-    def _visible_pairs(self, p: np.ndarray, q: np.ndarray, same: bool = False,
-                       offset: np.ndarray | None = None, below: float = math.inf
-                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(i, j, length) of the clear segments from ``p[i]`` to vertex ``q[j]`` that are
-        tangent at their vertex ends (``same``: the pairs i < j of the vertices); with
-        ``offset``, only those with ``offset[j] + length < below`` (the others are not
-        tested for clearance)."""
-        if same:
-            i, j = np.triu_indices(len(p), k=1)
+    def _vertex_edges(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(i, j, length) of the clear segments between vertices ``i < j`` tangent at both
+        ends, in the order of ``np.triu_indices``; :data:`MATRIX_BLOCK` rows of pairs at a
+        time (memory)."""
+        p, n = self.vertices, len(self.vertices)
+        parts = []
+        for r0 in range(0, n, MATRIX_BLOCK):
+            i, j = _rows_above(n, r0, min(r0 + MATRIX_BLOCK, n))
             t = self._tangent(i, p[j]) & self._tangent(j, p[i])
-        else:
-            i, j = (a.ravel() for a in np.meshgrid(np.arange(len(p)), np.arange(len(q)),
-                                                  indexing="ij"))
-            t = self._tangent(j, p[i])
+            i, j = i[t], j[t]
+            ok = self._clear(p[i], p[j])
+            i, j = i[ok], j[ok]
+            parts.append((i, j, np.hypot(*(p[i] - p[j]).T)))
+        if not parts:
+            return np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0)
+        i, j, d = (np.concatenate(c) for c in zip(*parts, strict=True))
+        return i, j, d
+
+    def _visible_pairs(self, p: np.ndarray, q: np.ndarray, offset: np.ndarray | None = None,
+                       below: float = math.inf) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(i, j, length) of the clear segments from ``p[i]`` to vertex ``q[j]`` that are
+        tangent at the vertex; with ``offset``, only those with ``offset[j] + length <
+        below`` (the others are not tested for clearance)."""
+        i, j = (a.ravel() for a in np.meshgrid(np.arange(len(p)), np.arange(len(q)),
+                                              indexing="ij"))
+        t = self._tangent(j, p[i])
         i, j = i[t], j[t]
         length = np.hypot(*(p[i] - q[j]).T)
         if offset is not None:
@@ -257,3 +270,13 @@ class GrownObstacles:
             n = int(pred[n])
         pts = np.vstack([self.vertices, a, b])
         return pts[nodes[::-1]]
+
+
+def _rows_above(n: int, r0: int, r1: int) -> tuple[np.ndarray, np.ndarray]:
+    """The pairs ``(i, j)``, ``r0 <= i < r1``, ``i < j < n``, in the order of
+    ``np.triu_indices(n, 1)``."""
+    counts = n - 1 - np.arange(r0, r1)
+    i = np.repeat(np.arange(r0, r1), counts)
+    start = np.cumsum(counts) - counts
+    j = np.arange(len(i)) - np.repeat(start, counts) + np.repeat(np.arange(r0, r1), counts) + 1
+    return i, j
