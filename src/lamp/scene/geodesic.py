@@ -65,6 +65,9 @@ class GrownObstacles:
         self._pieces = [g.buffer(-SHRINK) for g in pieces]
         self._pieces = [g for g in self._pieces if not g.is_empty]
         self._tree = shapely.STRtree(self._pieces)
+        # prepared once: a segment is then tested against a large outline in log time
+        self._prepared = np.array(self._pieces, dtype=object)
+        shapely.prepare(self._prepared)
         rings = [np.asarray(shapely.get_coordinates(shapely.get_exterior_ring(g)))[:-1]
                  for g in grown if isinstance(g, shapely.Polygon) and not g.is_empty]
         rings = [r for r in rings if len(r) >= 3]
@@ -86,8 +89,8 @@ class GrownObstacles:
         if len(a) == 0 or not self._pieces:
             return ok
         segs = shapely.linestrings(np.stack([a, b], axis=1))
-        hit, _ = self._tree.query(segs, predicate="intersects")
-        ok[hit] = False
+        seg, piece = self._tree.query(segs)  # boxes that meet
+        ok[seg[shapely.intersects(self._prepared[piece], segs[seg])]] = False
         return ok
 
     def _tangent(self, v: np.ndarray, other: np.ndarray) -> np.ndarray:
@@ -186,15 +189,31 @@ class GrownObstacles:
         np.minimum.at(out, i, d[j] + length)
         return np.maximum(np.minimum(out, max(below, 0.0)), straight)
 
-    def _near_vertices(self, pts: np.ndarray, below: float
-                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(i, j, length) of the clear segments from ``pts[i]`` to vertex ``j`` shorter than
-        ``below``, tangent at the vertex (``inf``: every vertex)."""
+    def _near_vertices(self, pts: np.ndarray, below: float, ends: np.ndarray,
+                       owner: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(i, j, length) of the clear segments from ``pts[i]`` to vertex ``j``, tangent at
+        the vertex, where a way from ``pts[i]`` through the vertex to one of its other ends
+        could be shorter than ``below``: ``|pts[i] - v| + |v - e| < below`` for some
+        ``e = ends[k]`` with ``owner[k] == i`` (``inf``: every vertex)."""
         if not math.isfinite(below) or len(self.vertices) == 0:
             return self._visible_pairs(pts, self.vertices)
         near = cKDTree(self.vertices).query_ball_point(pts, below)
-        i = np.repeat(np.arange(len(pts)), [len(n) for n in near])
-        j = np.fromiter((v for n in near for v in n), np.int64, len(i))
+        order = np.argsort(owner, kind="stable")
+        ends, first = ends[order], np.searchsorted(owner[order], np.arange(len(pts) + 1))
+        keep_i, keep_j = [], []
+        for a, cand in enumerate(near):
+            if not cand or first[a] == first[a + 1]:
+                continue
+            v = self.vertices[cand]
+            e = ends[first[a]:first[a + 1]]
+            via = np.hypot(*(v - pts[a]).T)[:, None] + np.hypot(
+                v[:, None, 0] - e[None, :, 0], v[:, None, 1] - e[None, :, 1])
+            c = np.asarray(cand)[via.min(axis=1) < below]
+            keep_i.append(np.full(len(c), a))
+            keep_j.append(c)
+        if not keep_i:
+            return np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0)
+        i, j = np.concatenate(keep_i), np.concatenate(keep_j).astype(np.int64)
         keep = self._tangent(j, pts[i])
         i, j = i[keep], j[keep]
         ok = self._clear(pts[i], self.vertices[j])
@@ -206,10 +225,11 @@ class GrownObstacles:
         """``D[i, j]`` = :meth:`distance` from ``P[i]`` to ``Q[j]`` ((n, 2) and (m, 2)
         points), for many pairs at once; where it is at least ``below`` it may be given
         as ``max(below, straight line)`` instead, which is never more. A pair is searched
-        only when its straight line is shorter than ``below`` and not clear, and then
-        only over the vertices within ``below`` of its ends (a way shorter than ``below``
-        bends nowhere else): with a finite ``below`` the cost grows with the pairs and
-        vertices near each other, not with their product. One search per point of ``P``
+        only when its straight line is shorter than ``below`` and not clear, and its ends
+        are joined only to the vertices in its ellipse ``|a - v| + |v - b| < below`` (a
+        way shorter than ``below`` leaves and reaches its ends from no other): with a
+        finite ``below`` the cost grows with the pairs and vertices near each other, not
+        with their product. One search per point of ``P``
         with such a pair, :data:`MATRIX_BLOCK` at a time (SciPy's Dijkstra, cut at
         ``below``)."""
         P = np.asarray(P, float).reshape(-1, 2)
@@ -224,8 +244,8 @@ class GrownObstacles:
             return out
         V = len(self.vertices)
         src = np.unique(pi)
-        si, sv, sl = self._near_vertices(P[src], below)
-        ti, tv, tl = self._near_vertices(Q, below)
+        si, sv, sl = self._near_vertices(P[src], below, Q[qj], np.searchsorted(src, pi))
+        ti, tv, tl = self._near_vertices(Q, below, P[pi], qj)
         vi, vj, vd = self._edges
         # nodes: the vertices, then each source of ``src`` joined to the vertices it sees
         n = V + len(src)
