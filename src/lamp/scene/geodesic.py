@@ -255,15 +255,17 @@ class GrownObstacles:
         order = np.argsort(qj, kind="stable")
         pi, qj = pi[order], qj[order]
         t_order = np.argsort(ti, kind="stable")
-        tv, tl, t_start = tv[t_order], tl[t_order], np.searchsorted(ti[t_order], np.arange(len(Q) + 1))
+        tv, tl = tv[t_order], tl[t_order]
+        t_start = np.searchsorted(ti[t_order], np.arange(len(Q) + 1))
         row_of = np.searchsorted(src, pi)
         for b0 in range(0, len(src), MATRIX_BLOCK):
             rows = np.arange(b0, min(b0 + MATRIX_BLOCK, len(src)))
             d = dijkstra(graph, directed=False, indices=V + rows, limit=below)[:, :V]
             mine = (row_of >= b0) & (row_of < rows[-1] + 1)
-            bp, bq, br = pi[mine], qj[mine], row_of[mine] - b0
-            for q in np.unique(bq):
-                at = bq == q
+            bp, bq, br = pi[mine], qj[mine], row_of[mine] - b0  # sorted by ``bq``
+            cuts = np.flatnonzero(np.diff(bq)) + 1
+            for lo, hi in zip(np.r_[0, cuts], np.r_[cuts, len(bq)], strict=True):
+                q, at = bq[lo], slice(lo, hi)
                 seen = slice(t_start[q], t_start[q + 1])
                 if seen.start == seen.stop:
                     continue
