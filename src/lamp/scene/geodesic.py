@@ -83,6 +83,11 @@ class GrownObstacles:
         self.vertices, self._prev, self._next = points[keep], prev[keep], nxt[keep]
         self._edges = self._vertex_edges()
 
+    @property
+    def n_edges(self) -> int:
+        """The visibility graph's edges between vertices (each pair once)."""
+        return len(self._edges[0])
+
     def _clear(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Whether each segment ``a[i]``-``b[i]`` misses the (shrunk) grown obstacles."""
         ok = np.ones(len(a), bool)
