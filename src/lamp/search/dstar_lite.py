@@ -42,12 +42,11 @@ Departures from the pseudocode, each for a reason:
 * ``h(s_start, .)`` is memoised per start, for at most :data:`H_KEPT` vertices at once.
 * ``U`` is a ``heapq`` with lazy deletion: a dict holds each queued vertex's one current
   heap entry (key, sequence number, vertex); any other entry is stale and skipped when it
-  reaches the top. Re-queueing a vertex with the key
-  it is queued with keeps its entry. Ties of keys go to the lower number, so the order in
-  which vertices leave the queue is fixed by the live entries alone, and the heap is
-  rebuilt from them, keeping their numbers, whenever the stale entries pass
-  :data:`HEAP_SLACK` times the live ones (and :data:`HEAP_FLOOR`): when it is rebuilt
-  changes nothing.
+  reaches the top. Re-queueing a vertex with the key it is queued with keeps its entry.
+  Ties of keys go to the lower number, so the order in which vertices leave the queue is
+  fixed by the live entries alone, and the heap is rebuilt from them, keeping their
+  numbers, whenever the stale entries pass :data:`HEAP_SLACK` times the live ones (and
+  :data:`HEAP_FLOOR`): when it is rebuilt changes nothing.
 * Expansion and time limits: ``compute_shortest_path`` stops with a status; its state stays
   consistent, so a later call simply continues.
 """
