@@ -98,7 +98,7 @@ def geodesic_bottleneck(grown: GrownObstacles, S: np.ndarray, G: np.ndarray) -> 
     searched (``GrownObstacles.distance_matrix``): the first cap :data:`FIRST_CAP` times
     the straight-line bottleneck, grown by :data:`GROW` until the bottleneck lies below
     it (then the longer pairs cannot change it), the whole matrix once the cap passes
-    every straight line's length."""
+    twice the longest straight line between any two of the points."""
     S, G = _points(S), _points(G)
     straight = straight_line_bottleneck(S, G)
     if len(G) == 0:
