@@ -183,7 +183,7 @@ def ray_hit(
     # solve o + t d = a + s e for (t, s) per edge
     den = d[0] * (-e[:, 1]) - d[1] * (-e[:, 0])
     rel = a - o
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # masked by ``ok``
         t = (rel[:, 0] * (-e[:, 1]) - rel[:, 1] * (-e[:, 0])) / den
         s = (d[0] * rel[:, 1] - d[1] * rel[:, 0]) / den
     ok = (np.abs(den) > 1e-12) & (s >= 0.0) & (s <= 1.0)
