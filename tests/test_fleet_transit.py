@@ -13,7 +13,20 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import lamp
-from lamp.fleet.transit import STAGING, TRANSIT_RADIUS, far_robots, hop, routes
+import shapely
+
+from lamp.fleet.transit import (
+    CLAIM_CLEARANCE,
+    CROSS_REACH,
+    HOP_LENGTH,
+    MIN_HOP,
+    STAGING,
+    TRANSIT_RADIUS,
+    clear_waypoint,
+    far_robots,
+    hop,
+    routes,
+)
 from lamp.record.safety import check_recording, recorded_teams
 from lamp.scene import scene_from_dict
 from lamp.scene.model import Obstacle, Rectangle, Scene, SceneObject
@@ -127,3 +140,63 @@ def test_a_team_behind_a_wall_drives_round_it_and_places_its_object_safely() -> 
     report = check_recording(rec.scene_model(), rec.arrays["times"], rec.arrays["robots"],
                              rec.arrays["objects"], robot_team=recorded_teams(rec))
     assert report.ok, report.summary()
+
+
+def reference_waypoint(route, along, n, keep_out, clear):
+    """``clear_waypoint`` point by point, from its docstring."""
+    def ok(i):
+        p = shapely.Point(route[i])
+        return all(region.distance(p) > clear for region in keep_out)
+
+    if not keep_out or ok(n - 1):
+        return n
+    for i in range(n, len(route)):
+        if along[i] > along[n - 1] + CROSS_REACH:
+            break
+        if ok(i):
+            return i + 1
+    for i in range(n - 2, -1, -1):
+        if along[i] >= MIN_HOP and ok(i):
+            return i + 1
+    return n
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.tuples(st.floats(0.0, 20.0), st.floats(0.0, 2.0), st.floats(0.1, 3.0)),
+                min_size=0, max_size=3),
+       st.integers(1, 150), st.floats(0.0, 0.3))
+def test_a_waypoint_moves_clear_of_the_claims_as_documented(strips, n, wiggle) -> None:
+    # a route along x with a little sideways wave, claims as boxes across it
+    x = np.arange(1, 200) * 0.1
+    route = np.c_[x, 1.0 + wiggle * np.sin(x)]
+    along = np.cumsum(np.hypot(*np.diff(np.vstack([[0.0, 1.0], route]), axis=0).T))
+    keep_out = [shapely.box(x0, y0 - 1.0, x0 + w, y0 + 1.5) for x0, y0, w in strips]
+    n = min(n, len(route))
+    got = clear_waypoint(route, along, n, keep_out, 0.1)
+    assert got == reference_waypoint(route, along, n, keep_out, 0.1)
+    assert 1 <= got <= len(route)
+
+
+def test_a_hop_crosses_a_claim_across_its_route_instead_of_stopping_in_it() -> None:
+    scene = u_scene()
+    poses = np.array(scene.object_starts())
+    pos = np.array(scene.robot_starts, float)
+    field = routes(scene, 0, poses)
+    far = far_robots(field, pos)
+    plain = hop(scene, 0, poses, pos, far, field)
+    assert plain is not None and plain.success
+    # a claim 1 m wide across the way, where the plain hop's robots end
+    ends = plain.paths[:, -1]
+    cx = float(ends[:, 0].mean())
+    claim = shapely.box(cx - 0.5, 0.0, cx + 0.5, 4.9)
+    clear = scene.robot_radius + CLAIM_CLEARANCE
+    assert shapely.dwithin(claim, shapely.points(ends), clear).any()
+    crossed = hop(scene, 0, poses, pos, far, field, keep_out=[claim])
+    assert crossed is not None and crossed.success
+    got = crossed.paths[:, -1]
+    assert not shapely.dwithin(claim, shapely.points(got), scene.robot_radius).any()
+    # they went through it, on along their routes (no farther than the reach allows)
+    before = np.array([field.length(p) for p in pos])
+    after = np.array([field.length(p) for p in got])
+    assert np.all(after < before - HOP_LENGTH) and np.all(before - after
+                                                            <= HOP_LENGTH + CROSS_REACH + 1.0)

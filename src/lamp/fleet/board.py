@@ -19,7 +19,7 @@ import numpy as np
 import shapely
 
 from lamp.contract.runner import WorldExecutor
-from lamp.fleet.admission import standing_in
+from lamp.fleet.admission import heeded_claims, standing_in
 from lamp.fleet.config import FleetConfig
 from lamp.fleet.desk import TaskDesk
 from lamp.fleet.parking import needed_by_others
@@ -127,6 +127,12 @@ class Board:
                            self.executor.object_poses if poses is None else poses,
                            self.executor.robot_positions,
                            {p.index: p.team for p in self.objects if p.unplaced})
+
+    def claims_above(self, k: int) -> list[shapely.Geometry]:
+        """The claims a segment of object ``k`` that does not move it (a transit hop) must
+        not end deeper in: those of the objects ranked above it that bind it, whole
+        (``admission.meets_moving`` with no way of its own)."""
+        return [full for _, full, _ in heeded_claims(self.objects, self.objects[k], 0.0, 0.0)]
 
     def needed_by_others(self, k: int) -> shapely.Geometry | None:
         """What the unplaced objects other than ``k`` still need (``parking``)."""

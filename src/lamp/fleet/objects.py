@@ -6,7 +6,8 @@ world changed around its plan.
 (``Fleet.view``), in the world as it is when the loop starts (``sub_scene``: every other
 robot a disk obstacle where it stands; once a loop's planner found no plan, only those
 within ``replan_near`` of its team, ``FleetConfig``). A team that stands far from its
-object first drives to it (``lamp.fleet.transit``); a team whose object is placed moves
+object first drives to it (``lamp.fleet.transit``; its hops cross the claims of objects
+ranked above rather than stop in them); a team whose object is placed moves
 out of the others' way before its robots go free (``lamp.fleet.parking``). A loop that
 ends with ``WORLD_CHANGED`` (its segment was declined, or it found no plan while others
 moved) or ``TEAM_CHANGED`` (a robot of its sub-team failed: ``Fleet`` took it out of the
@@ -88,6 +89,10 @@ class LoopHost(SharedWorld, Protocol):
         """What the other unplaced objects still need (``parking.needed_by_others``)."""
         ...
 
+    def claims_above(self, k: int) -> list[shapely.Geometry]:
+        """The claims object ``k``'s transit hops must not end in (``Board.claims_above``)."""
+        ...
+
     def following(self, k: int) -> dict[int, np.ndarray]:
         """The objects object ``k``'s new loop plans at other poses (``fleet.follow``)."""
         ...
@@ -151,7 +156,7 @@ def object_main(runner: ClosedLoopRunner, observe: Callable[[SegmentEvent], None
                       skip: Collection[int] = ()) -> Scene:
                 return sub_scene(scene, team, fleet.executor.robot_positions, near, skip)
 
-            hops, planning = transit(view, world, k, seed)
+            hops, planning = transit(view, world, k, seed, lambda: fleet.claims_above(k))
             fleet.stats.count("transit_hops", hops)
             fleet.stats.transit_planning_s += planning
             if view.team_changed:  # a robot failed or joined during transit

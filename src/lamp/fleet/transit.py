@@ -17,7 +17,11 @@ than ``TRANSIT_RADIUS`` therefore drives there in hops:
    The free cells come from Shapely (the workspace shrunk by the grown radius minus the
    obstacles grown by it), so a route is a guide, not a proof: Gspi checks every motion.
 2. **Hop.** Each far robot's waypoint is ``HOP_LENGTH`` along its route (or its end); its
-   goal is the free spot nearest the waypoint. The others keep their place. Gspi plans
+   goal is the free spot nearest the waypoint. A waypoint inside the claim of an object
+   ranked above (``keep_out``: admission would hold the hop until that object has gone
+   by) moves on along the route to the first point clear of every such claim, up to
+   ``CROSS_REACH`` further, so the hop crosses the claim; failing that, back to the last
+   clear point before it (at least ``MIN_HOP`` along the route). The others keep their place. Gspi plans
    the hop in the robot space over the route parts' bounding box grown by
    ``WINDOW_MARGIN``; robots standing far outside it hold still
    (``lamp.planners.bystanders``). A hop Gspi cannot plan is tried once at half the
@@ -33,7 +37,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Any
@@ -51,8 +55,9 @@ from lamp.planners.bystanders import BYSTANDER_GAP, bystanders, route_movers, st
 from lamp.planners.task import WINDOW_MARGIN, WINDOW_SNAP
 from lamp.scene.model import Scene
 
-__all__ = ["HOP_LENGTH", "TRANSIT_RADIUS", "Grid", "Routes", "far_robots", "free_grid", "hop",
-           "routes", "team_moves", "transit"]
+__all__ = ["CROSS_REACH", "HOP_LENGTH", "MIN_HOP", "TRANSIT_RADIUS", "Grid", "Routes",
+           "clear_waypoint", "far_robots", "free_grid", "hop", "routes", "team_moves",
+           "transit"]
 
 #: A robot whose route to its object's staging area is longer than this (m) drives there
 #: before its team pushes.
@@ -71,6 +76,14 @@ MAX_HOPS = 40
 TRANSIT_TIME_LIMIT = 10.0
 #: How far (m) from its waypoint a robot's goal may be.
 SPOT_SEARCH = 1.0
+#: How much further (m) than ``HOP_LENGTH`` a hop's waypoint may move along its route to
+#: end clear of a higher-ranked object's claim (:func:`clear_waypoint`).
+CROSS_REACH = HOP_LENGTH
+#: The least route length (m) a hop shortened to end before such a claim still covers.
+MIN_HOP = 0.5
+#: Clearance (m) beyond the robot radius a moved waypoint keeps from such a claim: more
+#: than the margin admission grows the robots' disks by (``regions.ROBOT_MARGIN``).
+CLAIM_CLEARANCE = 0.05
 
 
 @dataclass(frozen=True)
@@ -229,14 +242,40 @@ def _window(points: np.ndarray, scene: Scene) -> tuple[float, float, float, floa
             min(H, WINDOW_SNAP * math.ceil(hi[1] / WINDOW_SNAP)))
 
 
+def clear_waypoint(route: np.ndarray, along: np.ndarray, n: int,
+                   keep_out: Sequence[shapely.Geometry], clear: float) -> int:
+    """The number of ``route`` points (``along``: their distances along it) a hop takes
+    instead of ``n``: ``n`` when point ``n - 1`` lies farther than ``clear`` from every
+    region of ``keep_out``; else the least count whose last point does, within
+    ``CROSS_REACH`` beyond point ``n - 1``; else the greatest below ``n`` whose last point
+    does and lies at least ``MIN_HOP`` along; else ``n``."""
+    if not keep_out:
+        return n
+    stop = int(np.searchsorted(along, along[n - 1] + CROSS_REACH, side="right"))
+    pts = shapely.points(route[:max(stop, n)])
+    near = np.zeros(len(pts), bool)
+    for region in keep_out:
+        near |= shapely.dwithin(region, pts, clear)
+    if not near[n - 1]:
+        return n
+    ahead = np.flatnonzero(~near[n:])
+    if len(ahead):
+        return n + int(ahead[0]) + 1
+    back = np.flatnonzero(~near[:n - 1] & (along[:n - 1] >= MIN_HOP))
+    return int(back[-1]) + 1 if len(back) else n
+
+
 def hop(scene: Scene, k: int, object_poses: np.ndarray, positions: np.ndarray,
-        far: np.ndarray, field: Routes, length: float = HOP_LENGTH, seed: int = 0) -> Any:
+        far: np.ndarray, field: Routes, length: float = HOP_LENGTH, seed: int = 0,
+        keep_out: Sequence[shapely.Geometry] = ()) -> Any:
     """Gspi's plan (``MRMPPlan``; ``paths`` (N, T, 2)) that takes the ``far`` robots of
-    ``scene`` (at ``positions``) ``length`` metres along their routes, the others keeping
-    their place, or None when a far robot has no route or no free goal spot."""
+    ``scene`` (at ``positions``) ``length`` metres along their routes (each waypoint
+    moved clear of ``keep_out`` by :func:`clear_waypoint`), the others keeping their
+    place, or None when a far robot has no route or no free goal spot."""
     pos = np.asarray(positions, float).reshape(-1, 2)
     goals = pos.copy()
     parts = [pos[far]]
+    clear = float(scene.robot_radius) + CLAIM_CLEARANCE
     for i in np.flatnonzero(far):
         route = field.path(pos[i])
         if route is None:
@@ -244,7 +283,7 @@ def hop(scene: Scene, k: int, object_poses: np.ndarray, positions: np.ndarray,
         steps = np.hypot(*np.diff(np.vstack([pos[i], route]), axis=0).T)
         along = np.cumsum(steps)
         n = int(np.searchsorted(along, length, side="right"))
-        n = min(max(n, 1), len(route))
+        n = clear_waypoint(route, along, min(max(n, 1), len(route)), keep_out, clear)
         goals[i] = route[n - 1]
         parts.append(route[:n])
     return team_moves(scene, k, object_poses, pos, goals, far, np.vstack(parts), seed)
@@ -304,11 +343,13 @@ def far_robots(field: Routes, positions: np.ndarray) -> np.ndarray:
     return np.asarray([math.isfinite(d) and d > TRANSIT_RADIUS for d in lengths], bool)
 
 
-def transit(view: FleetView, world: Callable[[], Scene], k: int, seed: int = 0
+def transit(view: FleetView, world: Callable[[], Scene], k: int, seed: int = 0,
+            keep_out: Callable[[], Sequence[shapely.Geometry]] = tuple
             ) -> tuple[int, float]:
     """Drive object ``k``'s sub-team (``view``: its executor; ``world()``: the world as the
-    team plans in it now, its robots where they stand) to the object, hop by hop (module
-    docstring); returns the hops run and the wall-clock seconds spent planning them."""
+    team plans in it now, its robots where they stand; ``keep_out()``: the claims its
+    hops would wait on, now) to the object, hop by hop (module docstring); returns the
+    hops run and the wall-clock seconds spent planning them."""
     runs, planning = 0, 0.0
     for _ in range(MAX_HOPS):
         poses = np.asarray(view.object_poses, float)
@@ -321,9 +362,11 @@ def transit(view: FleetView, world: Callable[[], Scene], k: int, seed: int = 0
         far = far_robots(field, pos)
         plan = None
         if far.any():
-            plan = hop(scene, k, poses, pos, far, field, seed=seed)
+            claimed = keep_out()
+            plan = hop(scene, k, poses, pos, far, field, seed=seed, keep_out=claimed)
             if plan is None or not plan.success:
-                plan = hop(scene, k, poses, pos, far, field, HOP_LENGTH / 2, seed=seed)
+                plan = hop(scene, k, poses, pos, far, field, HOP_LENGTH / 2, seed=seed,
+                           keep_out=claimed)
         planning += time.perf_counter() - t0
         # the routes' grid spans the map (some 10 MB at 60 x 40 m): not held while the
         # hop runs, when every other team may be transiting too
