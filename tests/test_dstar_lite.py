@@ -143,6 +143,9 @@ def test_random_graphs_match_dijkstra(data, n_ops):
             expected = dist[start]
             s = start
             virtual = None
+        # g is kept apart from rhs only for inconsistent vertices, and those are queued
+        assert dstar._gx.keys() <= dstar._open.keys()
+        assert all(dstar.g_of(v) != dstar.rhs.get(v, INF) for v in dstar._gx)
         if expected == INF:
             assert path == [] and dstar.status is SearchStatus.NO_PATH
             assert dstar.path_cost() == INF

@@ -39,6 +39,12 @@ Departures from the pseudocode, each for a reason:
 * ``UpdateVertex`` ({21'}, {28'}) is called only for vertices whose ``rhs`` changed: for
   the others g, rhs and queue membership are unchanged and a queued key, being a lower
   bound, stays valid ({14'} refreshes it). This saves most calls on a 26-connected lattice.
+* ``g`` is stored only where it differs from ``rhs`` (``_gx``): a vertex is locally
+  inconsistent exactly when it has an entry there, and every other vertex's ``g`` is its
+  ``rhs``. Expanded vertices are consistent, so a search keeps one table of its closed
+  set, not two (on the depots' 300,000-expansion searches, ~300,000 entries fewer).
+  Every write to ``rhs`` keeps ``g`` as it was; the values and the order of expansions
+  are those of two tables.
 * ``h(s_start, .)`` is memoised per start, for at most :data:`H_KEPT` vertices at once.
 * ``U`` is a ``heapq`` with lazy deletion: a dict holds each queued vertex's one current
   heap entry (key, sequence number, vertex); any other entry is stale and skipped when it
@@ -73,6 +79,8 @@ HEAP_SLACK, HEAP_FLOOR = 0.5, 1024
 H_KEPT = 1 << 14
 
 Key = tuple[float, float]
+#: Marks a vertex with no entry in ``DStarLite._gx`` (its g is its rhs).
+_SAME = object()
 
 
 class Graph(Protocol):
@@ -143,7 +151,7 @@ class DStarLite:
 
     def _reset(self) -> None:
         self.km = 0.0
-        self.g: dict[Hashable, float] = {}
+        self._gx: dict[Hashable, float] = {}  # g where it differs from rhs (departures)
         self.rhs: dict[Hashable, float] = {}
         self._heap: list[tuple[float, float, int, Hashable]] = []
         self._open: dict[Hashable, tuple[float, float, int, Hashable]] = {}  # its entry
@@ -156,6 +164,27 @@ class DStarLite:
         self._vedges: dict[Hashable, float] = {}
         self._over_out: dict[Hashable, dict[Hashable, float]] = {}
         self._over_in: dict[Hashable, dict[Hashable, float]] = {}
+
+    def g_of(self, s: Hashable) -> float:
+        """g(s): its entry in ``_gx`` where it has one, else rhs(s) (``inf`` when unknown)."""
+        v = self._gx.get(s, _SAME)
+        return self.rhs.get(s, INF) if v is _SAME else v  # type: ignore[return-value]
+
+    def _set_rhs(self, s: Hashable, v: float) -> None:
+        """rhs(s) = v, g(s) unchanged."""
+        gx, rhs = self._gx, self.rhs
+        if s not in gx:
+            gx[s] = rhs.get(s, INF)
+        rhs[s] = v
+        if gx[s] == v:
+            del gx[s]
+
+    def _set_g(self, s: Hashable, v: float) -> None:
+        """g(s) = v."""
+        if v == self.rhs.get(s, INF):
+            self._gx.pop(s, None)
+        else:
+            self._gx[s] = v
 
     # ----------------------------------------------------------- edges
     def _succ(self, u: Hashable) -> Iterable[tuple[Hashable, float]]:
@@ -212,7 +241,10 @@ class DStarLite:
 
     def calculate_key(self, s: Hashable) -> Key:
         """{01'} [min(g, rhs) + h(s_start, s) + k_m; min(g, rhs)]."""
-        m = min(self.g.get(s, INF), self.rhs.get(s, INF))
+        m = self.rhs.get(s, INF)
+        g = self._gx.get(s, m)
+        if g < m:
+            m = g
         return (m + self._h(s) + self.km, m)
 
     def _push(self, s: Hashable, key: Key) -> None:
@@ -237,8 +269,7 @@ class DStarLite:
 
     def update_vertex(self, u: Hashable) -> None:
         """{07'}-{09'}: (re)queue ``u`` iff it is locally inconsistent."""
-        g, rhs = self.g.get(u, INF), self.rhs.get(u, INF)
-        if g != rhs:
+        if u in self._gx:  # g != rhs
             self._push(u, self.calculate_key(u))  # {07'} update / {08'} insert
         elif u in self._open:
             del self._open[u]  # {09'} remove (lazily from the heap)
@@ -251,7 +282,7 @@ class DStarLite:
         """
         self._reset()
         self.goal = goal
-        self.rhs[goal] = 0.0  # {05'}
+        self._set_rhs(goal, 0.0)  # {05'}
         self._push(goal, (0.0, 0.0))  # {06'}
         self.status = SearchStatus.NOT_INITIALIZED
 
@@ -281,7 +312,7 @@ class DStarLite:
         old_v = self._vstart
         if old_v is not None and (start_edges is None or old_v != start):
             # the previous virtual start has no in-edges: dropping it affects no rhs
-            self.g.pop(old_v, None)
+            self._gx.pop(old_v, None)
             self.rhs.pop(old_v, None)
             self._open.pop(old_v, None)
             self._over_out.pop(old_v, None)
@@ -296,7 +327,8 @@ class DStarLite:
             raise ValueError("a virtual start must not be the goal vertex")
         self._vstart, self._vedges = start, edges
         # rhs of the virtual start from its (possibly new) out-edges, {27'}-style
-        self.rhs[start] = min((c + self.g.get(v, INF) for v, c in self._succ(start)), default=INF)
+        g_of = self.g_of
+        self._set_rhs(start, min((c + g_of(v) for v, c in self._succ(start)), default=INF))
         self.update_vertex(start)
 
     def compute_shortest_path(self) -> SearchStatus:
@@ -305,7 +337,7 @@ class DStarLite:
             raise RuntimeError("call initialize(goal) and plan_shortest_path(start) first")
         t0 = time.perf_counter()
         start = self.start
-        g, rhs = self.g, self.rhs
+        gx, rhs, g_of = self._gx, self.rhs, self.g_of
         goal = self.goal
         n = 0
         max_exp = self.max_expansions
@@ -318,7 +350,7 @@ class DStarLite:
             # shortest path have k1 equal to the start's in exact arithmetic, and a stale one
             # left behind by an ulp would derail the path extraction
             tol = KEY_RTOL * (1.0 + abs(k_start[0])) if k_start[0] < INF else 0.0
-            if not (k_old[0] <= k_start[0] + tol or rhs.get(start, INF) != g.get(start, INF)):
+            if not (k_old[0] <= k_start[0] + tol or start in gx):
                 break
             if u is None:  # queue empty: the start cannot be made consistent
                 break
@@ -330,26 +362,32 @@ class DStarLite:
                 break
             n += 1
             k_new = self.calculate_key(u)  # {13'}
-            g_u, rhs_u = g.get(u, INF), rhs.get(u, INF)
+            rhs_u = rhs.get(u, INF)
+            g_u = gx.get(u, rhs_u)
             if k_old < k_new:  # {14'}
                 self._push(u, k_new)  # {15'}
             elif g_u > rhs_u:  # {16'} overconsistent
-                g[u] = rhs_u  # {17'}
+                del gx[u]  # {17'} g(u) = rhs(u)
                 del self._open[u]  # {18'}
                 for s, c in self._pred(u):  # {19'}
                     if s != goal:
                         v = c + rhs_u
-                        if v < rhs.get(s, INF):
-                            rhs[s] = v  # {20'}
+                        old = rhs.get(s, INF)
+                        if v < old:
+                            # {20'} rhs(s) = v, g(s) kept (``_set_rhs`` inline: hot loop)
+                            g_s = gx.setdefault(s, old)
+                            rhs[s] = v
+                            if g_s == v:
+                                del gx[s]
                             self.update_vertex(s)  # {21'} (only when rhs(s) changed)
             else:  # {22'} underconsistent
                 g_old = g_u  # {23'}
-                g[u] = INF  # {24'}
+                self._set_g(u, INF)  # {24'}
                 for s, c in self._pred(u):  # {25'}
                     if s != goal and rhs.get(s, INF) == c + g_old:  # {26'}
-                        rhs[s] = min(  # {27'}
-                            (c2 + g.get(s2, INF) for s2, c2 in self._succ(s)), default=INF
-                        )
+                        self._set_rhs(s, min(  # {27'}
+                            (c2 + g_of(s2) for s2, c2 in self._succ(s)), default=INF
+                        ))
                         self.update_vertex(s)  # {28'} (only when rhs(s) was recomputed)
                 self.update_vertex(u)  # {25'}-{28'} for s = u
         dt = time.perf_counter() - t0
@@ -380,7 +418,7 @@ class DStarLite:
         if status is not SearchStatus.SUCCESS:
             self.status = status
             return []
-        if self.g.get(start, INF) == INF:
+        if self.g_of(start) == INF:
             self.status = SearchStatus.NO_PATH
             return []
         self.status = SearchStatus.SUCCESS
@@ -388,18 +426,18 @@ class DStarLite:
 
     def path_cost(self, start: Hashable | None = None) -> float:
         """g(start): the cost of the current shortest path (``inf`` when none)."""
-        return self.g.get(self.start if start is None else start, INF)
+        return self.g_of(self.start if start is None else start)
 
     def _extract_path(self, start: Hashable) -> list[Hashable]:
         """{34'}: follow argmin_{s'} c(s, s') + g(s') from the start to the goal."""
         path = [start]
         s = start
         seen = {start}
-        g = self.g
+        g_of = self.g_of
         while s != self.goal:
             best, best_v = INF, None
             for v, c in self._succ(s):
-                val = c + g.get(v, INF)
+                val = c + g_of(v)
                 if val < best:
                     best, best_v = val, v
             if best_v is None or best_v in seen:
@@ -428,17 +466,18 @@ class DStarLite:
         self.stats.edge_updates += 1
         if u == self.goal:
             return
-        g_v = self.g.get(v, INF)
+        g_of = self.g_of
+        g_v = g_of(v)
         if c_old > new_cost:  # {43'}
             if new_cost + g_v < self.rhs.get(u, INF):
-                self.rhs[u] = new_cost + g_v  # {44'}
+                self._set_rhs(u, new_cost + g_v)  # {44'}
         elif self.rhs.get(u, INF) == c_old + g_v:  # {45'}
-            self.rhs[u] = min(  # {46'}
-                (c + self.g.get(s, INF) for s, c in self._succ(u)), default=INF
-            )
+            self._set_rhs(u, min(  # {46'}
+                (c + g_of(s) for s, c in self._succ(u)), default=INF
+            ))
         if self.start is not None:
             self.update_vertex(u)  # {47'}
-        elif self.g.get(u, INF) != self.rhs.get(u, INF):
+        elif u in self._gx:  # g(u) != rhs(u)
             self._push(u, (0.0, 0.0))  # no start yet: a lower-bound key, fixed by {14'}
 
     def penalize(self, u: Hashable, v: Hashable, penalty: float) -> float:
