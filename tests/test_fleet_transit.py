@@ -9,12 +9,11 @@ import heapq
 import math
 
 import numpy as np
+import shapely
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import lamp
-import shapely
-
 from lamp.fleet.transit import (
     CLAIM_CLEARANCE,
     CROSS_REACH,
@@ -99,12 +98,17 @@ def u_scene() -> Scene:
                  (SceneObject(BOX, (1.5, 8.5, 0.0), (3.0, 8.5, 0.0)),), (wall,))
 
 
-def test_hops_take_far_robots_round_the_wall() -> None:
+def u_start():
+    """``u_scene`` with its start poses and positions, its routes and far robots."""
     scene = u_scene()
     poses = np.array(scene.object_starts())
     pos = np.array(scene.robot_starts, float)
     field = routes(scene, 0, poses)
-    far = far_robots(field, pos)
+    return scene, poses, pos, field, far_robots(field, pos)
+
+
+def test_hops_take_far_robots_round_the_wall() -> None:
+    scene, poses, pos, field, far = u_start()
     # the straight way to the staging area is under 7 m: the route goes round the wall
     assert far.all() and field.dist[field.cell_of(pos[0])] > 12.0
     for _ in range(6):
@@ -178,11 +182,7 @@ def test_a_waypoint_moves_clear_of_the_claims_as_documented(strips, n, wiggle) -
 
 
 def test_a_hop_crosses_a_claim_across_its_route_instead_of_stopping_in_it() -> None:
-    scene = u_scene()
-    poses = np.array(scene.object_starts())
-    pos = np.array(scene.robot_starts, float)
-    field = routes(scene, 0, poses)
-    far = far_robots(field, pos)
+    scene, poses, pos, field, far = u_start()
     plain = hop(scene, 0, poses, pos, far, field)
     assert plain is not None and plain.success
     # a claim 1 m wide across the way, where the plain hop's robots end
