@@ -21,8 +21,8 @@ than ``TRANSIT_RADIUS`` therefore drives there in hops:
    ranked above (``keep_out``: admission would hold the hop until that object has gone
    by) moves on along the route to the first point clear of every such claim, up to
    ``CROSS_REACH`` further, so the hop crosses the claim; failing that, back to the last
-   clear point before it (at least ``MIN_HOP`` along the route). The others keep their place. Gspi plans
-   the hop in the robot space over the route parts' bounding box grown by
+   clear point before it (at least ``MIN_HOP`` along the route). The others keep their
+   place. Gspi plans the hop in the robot space over the route parts' bounding box grown by
    ``WINDOW_MARGIN``; robots standing far outside it hold still
    (``lamp.planners.bystanders``). A hop Gspi cannot plan is tried once at half the
    length; then transit ends and the loop starts from where the team stands.
@@ -55,7 +55,7 @@ from lamp.planners.bystanders import BYSTANDER_GAP, bystanders, route_movers, st
 from lamp.planners.task import WINDOW_MARGIN, WINDOW_SNAP
 from lamp.scene.model import Scene
 
-__all__ = ["CROSS_REACH", "HOP_LENGTH", "MIN_HOP", "TRANSIT_RADIUS", "Grid", "Routes",
+__all__ = ["CLAIM_CLEARANCE", "CROSS_REACH", "HOP_LENGTH", "MIN_HOP", "TRANSIT_RADIUS", "Grid", "Routes",
            "clear_waypoint", "far_robots", "free_grid", "hop", "routes", "team_moves",
            "transit"]
 
