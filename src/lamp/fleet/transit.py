@@ -55,9 +55,9 @@ from lamp.planners.bystanders import BYSTANDER_GAP, bystanders, route_movers, st
 from lamp.planners.task import WINDOW_MARGIN, WINDOW_SNAP
 from lamp.scene.model import Scene
 
-__all__ = ["CLAIM_CLEARANCE", "CROSS_REACH", "HOP_LENGTH", "MIN_HOP", "TRANSIT_RADIUS", "Grid", "Routes",
-           "clear_waypoint", "far_robots", "free_grid", "hop", "routes", "team_moves",
-           "transit"]
+__all__ = ["CLAIM_CLEARANCE", "CROSS_REACH", "HOP_LENGTH", "MIN_HOP", "TRANSIT_RADIUS",
+           "Grid", "Routes", "clear_waypoint", "far_robots", "free_grid", "hop", "routes",
+           "team_moves", "transit"]
 
 #: A robot whose route to its object's staging area is longer than this (m) drives there
 #: before its team pushes.

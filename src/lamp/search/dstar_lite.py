@@ -372,13 +372,8 @@ class DStarLite:
                 for s, c in self._pred(u):  # {19'}
                     if s != goal:
                         v = c + rhs_u
-                        old = rhs.get(s, INF)
-                        if v < old:
-                            # {20'} rhs(s) = v, g(s) kept (``_set_rhs`` inline: hot loop)
-                            g_s = gx.setdefault(s, old)
-                            rhs[s] = v
-                            if g_s == v:
-                                del gx[s]
+                        if v < rhs.get(s, INF):
+                            self._set_rhs(s, v)  # {20'}
                             self.update_vertex(s)  # {21'} (only when rhs(s) changed)
             else:  # {22'} underconsistent
                 g_old = g_u  # {23'}
