@@ -14,12 +14,14 @@ the violations the independent safety check finds in the recording
         [--points 12x4 24x8 48x16 96x32] [--time-cap 1800] [--out DIR]
     python benchmarks/bench_fleet_scale.py --map MAP [--cell 0.5] --points 18x6 36x12
 
-Finished points are kept in ``DIR`` and not rerun (delete a point's folder to rerun it).
+Finished points are kept in ``DIR`` and not rerun: a point's folder is named by its size and
+a digest of its scene file, so only the same scene reuses it (delete it to rerun).
 """
 
 from __future__ import annotations
 
 import argparse
+import hashlib
 import json
 import os
 import shutil
@@ -31,6 +33,7 @@ from pathlib import Path
 
 from lamp.record.safety import check_run_dir
 from lamp.scene.mapf import load_map
+from lamp.scene.model import Scene
 from lamp.scene.save import save_scene
 from lamp.suites.fleet import KINDS, generate_custom, generate_on_map
 
@@ -61,6 +64,18 @@ def run_point(scene: Path, out: Path, time_cap: float) -> tuple[float, float]:
     if os.waitstatus_to_exitcode(status) not in (0, 1):
         raise SystemExit(f"{' '.join(cmd)} exited with {os.waitstatus_to_exitcode(status)}")
     return wall, usage.ru_maxrss / 2**20  # kB -> GB (Linux)
+
+
+def point_folder(out: Path, n_robots: int, n_objects: int, scene: Scene) -> Path:
+    """The folder of a point's run: named by its size and a digest of its scene file, which
+    it holds (a point of another map, kind or size never reuses a finished run)."""
+    staged = out / f".{n_robots}r{n_objects}o.yaml"
+    save_scene(scene, staged)
+    digest = hashlib.sha256(staged.read_bytes()).hexdigest()[:12]
+    folder = out / f"{n_robots}r{n_objects}o-{digest}"
+    folder.mkdir(exist_ok=True)
+    staged.replace(folder / "scene.yaml")
+    return folder
 
 
 def main() -> None:
@@ -95,16 +110,14 @@ def main() -> None:
           "plan total (s) | peak RSS (GB) | safety violations")
     first = None
     for n_robots, n_objects in args.points:
-        folder = args.out / f"{n_robots}r{n_objects}o"
+        try:
+            gen = (generate_custom(args.kind, tuple(args.size), n_objects, n_robots)
+                   if base is None else generate_on_map(base, n_objects, n_robots))
+        except ValueError as err:
+            ap.error(str(err))
+        folder = point_folder(args.out, n_robots, n_objects, gen.scene)
         done = folder / "point.json"
         if not done.exists():
-            try:
-                gen = (generate_custom(args.kind, tuple(args.size), n_objects, n_robots)
-                       if base is None else generate_on_map(base, n_objects, n_robots))
-            except ValueError as err:
-                ap.error(str(err))
-            folder.mkdir(exist_ok=True)
-            save_scene(gen.scene, folder / "scene.yaml")
             wall, rss = run_point(folder / "scene.yaml", folder / "run", args.time_cap)
             done.write_text(json.dumps({"wall_s": wall, "peak_rss_gb": rss}))
         point_info = json.loads(done.read_text())

@@ -56,3 +56,21 @@ def test_plot_scale(tmp_path):
                          capture_output=True, text=True)
     assert bad.returncode == 2 and "mixed.json" in bad.stderr and "one varying" in bad.stderr
     assert not (tmp_path / "x.png").exists()
+
+
+def test_fleet_scale_points_of_other_scenes_never_share_a_folder(tmp_path):
+    """A finished point is reused only for the same scene: the same size on another map
+    (or kind, or map size) gets a folder of its own."""
+    from bench_fleet_scale import point_folder
+
+    from lamp.suites.fleet import generate_custom
+
+    a = generate_custom("aisles", (20.0, 15.0), 2, 6).scene
+    b = generate_custom("rooms", (20.0, 15.0), 2, 6).scene
+    fa = point_folder(tmp_path, 6, 2, a)
+    (fa / "point.json").write_text("{}")
+    assert point_folder(tmp_path, 6, 2, a) == fa  # the same scene: the finished run
+    fb = point_folder(tmp_path, 6, 2, b)
+    assert fb != fa and not (fb / "point.json").exists()
+    assert (fa / "scene.yaml").read_bytes() != (fb / "scene.yaml").read_bytes()
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([fa.name, fb.name])
