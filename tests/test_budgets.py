@@ -194,6 +194,7 @@ def test_lazy_expansion_budget_is_per_object_and_names_itself(proposer):
     assert plan.status is PlanStatus.BUDGET_EXHAUSTED and plan.limit == "lazy_max_expansions"
     assert plan.reason == "no plan found: lazy_max_expansions exhausted"
     assert short.stats.search_expansions == used - 1
+    assert len(planner.dstar.rhs) == 1  # the spent search gave its tables back
     assert planner.plan(q_O, q_R).limit == "lazy_max_expansions"  # nothing left: no search
     assert short.stats.search_expansions == short.stats.max_plan_expansions == used - 1
     total = type(task.stats)()

@@ -441,3 +441,39 @@ def _plan_along(space, goal, p, ks, s, f):
         dstar.penalize(path[i], path[i + 1], [0.05, 1.0, 1e4][k % 3])
         paths.append(dstar.plan_shortest_path(path[1]))
     return paths, order, dstar.stats.expansions, rebuilds[0]
+
+
+@settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(data=random_graphs(), n_pen=st.integers(0, 6))
+def test_release_keeps_goal_costs_status_and_counters(data, n_pen):
+    """``release`` drops the tables, keeps what its docstring says, and a later plan is
+    the shortest path under the penalised costs (Dijkstra from scratch)."""
+    graph, rng = data
+    n = len(graph.pts)
+    dstar = DStarLite(graph, max_expansions=3)
+    dstar.initialize(0)
+    dstar.plan_shortest_path(n - 1)
+    edges = list(graph.edges)
+    for _ in range(n_pen if edges else 0):
+        u, v = edges[int(rng.integers(len(edges)))]
+        dstar.penalize(u, v, float(rng.uniform(0.0, 20.0)))
+    costs = {e: dstar.cost(*e) for e in edges}
+    status, expansions, calls = dstar.status, dstar.stats.expansions, dstar.stats.calls
+    dstar.release()
+    assert dstar.rhs == {0: 0.0} and dstar._gx == {0: INF} and list(dstar._open) == [0]
+    assert not dstar._hcache and dstar.goal == 0
+    assert (dstar.status, dstar.stats.expansions, dstar.stats.calls) == (status, expansions, calls)
+    assert {e: dstar.cost(*e) for e in edges} == costs
+    dstar.max_expansions = None
+    start = int(rng.integers(n))
+    path = dstar.plan_shortest_path(start)
+    want = distances_to_goal(n, costs, 0)[start]
+    if want == INF:
+        assert path == []
+    else:
+        check_path(dstar, path, start, 0, want)
+
+
+def test_release_needs_a_goal():
+    with pytest.raises(RuntimeError, match="initialize"):
+        DStarLite(chain_graph(3)).release()

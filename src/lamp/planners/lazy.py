@@ -255,6 +255,7 @@ class LazyPlanner:
                 path = self.dstar.plan_shortest_path(start, edges)  # line 11: PlanShortestPath
                 stats.search_expansions += self.dstar.stats.last_expansions
             if left <= 0 or self.dstar.status is SearchStatus.EXPANSION_LIMIT:
+                self.dstar.release()  # its budget is spent: no later call searches again
                 return self._recover(q_O_now, q_R_now, Plan.failed(
                     PlanStatus.BUDGET_EXHAUSTED, self.penalised, "lazy_max_expansions"))
             if not path:

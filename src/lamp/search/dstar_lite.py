@@ -475,6 +475,19 @@ class DStarLite:
         elif u in self._gx:  # g(u) != rhs(u)
             self._push(u, (0.0, 0.0))  # no start yet: a lower-bound key, fixed by {14'}
 
+    def release(self) -> None:
+        """Forget the search (g, rhs, the queue and the memo of h), keeping the goal, the
+        edge costs ``update_change`` gave, the status and the counters: a search its
+        caller will not continue gives its memory back. A later ``plan_shortest_path``
+        searches anew from the goal, with those costs."""
+        if self.goal is None:
+            raise RuntimeError("call initialize(goal) before release")
+        over_out, over_in = self._over_out, self._over_in
+        status, stats = self.status, self.stats
+        self.initialize(self.goal)
+        self._over_out, self._over_in = over_out, over_in
+        self.status, self.stats = status, stats
+
     def penalize(self, u: Hashable, v: Hashable, penalty: float) -> float:
         """Increase the cost of u -> v by ``penalty`` (the paper's edge penalty); returns
         the new cost."""
