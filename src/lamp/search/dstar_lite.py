@@ -76,7 +76,7 @@ KEY_RTOL = 1e-9
 HEAP_SLACK, HEAP_FLOOR = 0.5, 1024
 #: The memo of h(s_start, .) is emptied when it holds this many vertices (memory; h is a
 #: function of the vertex and the start, so nothing else changes).
-H_KEPT = 1 << 14
+H_KEPT = 1 << 12
 
 Key = tuple[float, float]
 #: Marks a vertex with no entry in ``DStarLite._gx`` (its g is its rhs).
