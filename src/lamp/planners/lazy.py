@@ -223,6 +223,7 @@ class LazyPlanner:
         finally:
             stats.max_plan_expansions = max(stats.max_plan_expansions,
                                             stats.search_expansions - expanded_before)
+            self.dstar.pack()  # until the next call: its segments run meanwhile
 
     def _plan(self, q_O_now: np.ndarray, q_R_now: np.ndarray, deadline: float | None,
               verify_cap: tuple[int, str]) -> Plan:

@@ -9,8 +9,9 @@
 """
 
 from lamp.search.astar import AStarResult, weighted_astar
-from lamp.search.dstar_lite import DStarLite, Graph, SearchStatus
+from lamp.search.dstar_lite import DStarLite
 from lamp.search.gco_lattice import GCoLattice, gco_object_path, gco_search
+from lamp.search.graph import Graph, SearchStatus
 from lamp.search.lattice import PRIMITIVES, ObjectLattice
 
 __all__ = [

@@ -15,7 +15,7 @@ import time
 from collections.abc import Callable, Hashable
 from dataclasses import dataclass, field
 
-from lamp.search.dstar_lite import Graph, SearchStatus
+from lamp.search.graph import Graph, SearchStatus
 
 INF = math.inf
 

@@ -46,6 +46,8 @@ Departures from the pseudocode, each for a reason:
   Every write to ``rhs`` keeps ``g`` as it was; the values and the order of expansions
   are those of two tables.
 * ``h(s_start, .)`` is memoised per start, for at most :data:`H_KEPT` vertices at once.
+* Between calls a search may hold its tables in arrays (``pack``,
+  :mod:`lamp.search.dstar_tables`); the next call unpacks the same tables and queue order.
 * ``U`` is a ``heapq`` with lazy deletion: a dict holds each queued vertex's one current
   heap entry (key, sequence number, vertex); any other entry is stale and skipped when it
   reaches the top. Re-queueing a vertex with the key it is queued with keeps its entry.
@@ -59,14 +61,15 @@ Departures from the pseudocode, each for a reason:
 
 from __future__ import annotations
 
-import enum
 import heapq
 import itertools
 import math
 import time
 from collections.abc import Hashable, Iterable, Sequence
 from dataclasses import dataclass, field
-from typing import Protocol
+
+from lamp.search.dstar_tables import PackedTables
+from lamp.search.graph import Graph, SearchStatus
 
 INF = math.inf
 #: relative tolerance on key comparisons in the termination test (see compute_shortest_path)
@@ -77,36 +80,12 @@ HEAP_SLACK, HEAP_FLOOR = 0.5, 1024
 #: The memo of h(s_start, .) is emptied when it holds this many vertices (memory; h is a
 #: function of the vertex and the start, so nothing else changes).
 H_KEPT = 1 << 12
+#: ``pack`` holds a search's tables in arrays from this many vertices with an ``rhs`` on.
+PACK_FROM = 4096
 
 Key = tuple[float, float]
 #: Marks a vertex with no entry in ``DStarLite._gx`` (its g is its rhs).
 _SAME = object()
-
-
-class Graph(Protocol):
-    """What D* Lite and A* need from a graph. Vertices are hashable.
-
-    ``successors(u)`` / ``predecessors(v)`` list the finite-cost edges ``(u -> v)`` as
-    ``(v, cost)`` / ``(u, cost)`` pairs; ``cost(u, v)`` is ``inf`` when there is no edge;
-    ``heuristic(a, b)`` is a consistent lower bound of the cost from ``a`` to ``b`` with the
-    triangle inequality (a virtual start's edges may cost less: see the departures).
-    """
-
-    def successors(self, u: Hashable) -> Iterable[tuple[Hashable, float]]: ...
-
-    def predecessors(self, v: Hashable) -> Iterable[tuple[Hashable, float]]: ...
-
-    def cost(self, u: Hashable, v: Hashable) -> float: ...
-
-    def heuristic(self, a: Hashable, b: Hashable) -> float: ...
-
-
-class SearchStatus(enum.Enum):
-    SUCCESS = "success"
-    NO_PATH = "no_path"
-    EXPANSION_LIMIT = "expansion_limit"
-    TIME_LIMIT = "time_limit"
-    NOT_INITIALIZED = "not_initialized"
 
 
 @dataclass
@@ -164,6 +143,7 @@ class DStarLite:
         self._vedges: dict[Hashable, float] = {}
         self._over_out: dict[Hashable, dict[Hashable, float]] = {}
         self._over_in: dict[Hashable, dict[Hashable, float]] = {}
+        self._packed: PackedTables | None = None  # the tables while packed (``pack``)
 
     def g_of(self, s: Hashable) -> float:
         """g(s): its entry in ``_gx`` where it has one, else rhs(s) (``inf`` when unknown)."""
@@ -406,6 +386,7 @@ class DStarLite:
         """
         if self.goal is None:
             raise RuntimeError("call initialize(goal) before plan_shortest_path")
+        self._unpack()
         self.stats.calls += 1
         self._set_start(start, start_edges)
         status = self.compute_shortest_path()
@@ -421,6 +402,7 @@ class DStarLite:
 
     def path_cost(self, start: Hashable | None = None) -> float:
         """g(start): the cost of the current shortest path (``inf`` when none)."""
+        self._unpack()
         return self.g_of(self.start if start is None else start)
 
     def _extract_path(self, start: Hashable) -> list[Hashable]:
@@ -452,6 +434,7 @@ class DStarLite:
             raise RuntimeError("call initialize(goal) before update_change")
         if not (new_cost >= 0):
             raise ValueError(f"new_cost must be >= 0 (or inf), got {new_cost!r}")
+        self._unpack()
         if self.base_cost(u, v) == INF:
             raise ValueError(f"({u!r}, {v!r}) is not an edge of the graph")
         c_old = self.cost(u, v)  # {41'}
@@ -474,6 +457,21 @@ class DStarLite:
             self.update_vertex(u)  # {47'}
         elif u in self._gx:  # g(u) != rhs(u)
             self._push(u, (0.0, 0.0))  # no start yet: a lower-bound key, fixed by {14'}
+
+    def pack(self) -> None:
+        """Hold the tables in arrays (:mod:`lamp.search.dstar_tables`) until the next
+        ``plan_shortest_path``, ``update_change`` or ``path_cost``, which unpack them: the
+        same tables and queue order, so nothing changes; for a search waiting between
+        calls. Searches of fewer than :data:`PACK_FROM` vertices stay as they are."""
+        if self._packed is None and self.rhs is not None and len(self.rhs) >= PACK_FROM:
+            self._packed = PackedTables.of(self.rhs, self._gx, self._open)
+            self.rhs = self._gx = self._open = self._heap = None  # type: ignore[assignment]
+            self._hcache = {}
+
+    def _unpack(self) -> None:
+        if self._packed is not None:
+            self.rhs, self._gx, self._open, self._heap = self._packed.tables()
+            self._packed = None
 
     def release(self) -> None:
         """Forget the search (g, rhs, the queue and the memo of h), keeping the goal, the

@@ -17,7 +17,7 @@ import itertools
 import math
 from collections.abc import Hashable
 
-from lamp.search.dstar_lite import Graph
+from lamp.search.graph import Graph
 
 
 class ReverseDistance:

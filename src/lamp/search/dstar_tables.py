@@ -1,0 +1,92 @@
+"""D* Lite's tables in arrays, for a search that waits between calls (``DStarLite.pack``).
+
+A search keeps ``rhs``, the ``g`` values that differ from it and its queue in dicts: some
+110 bytes a vertex for ``rhs`` and 200 for a queued one (the int and float objects, the
+key tuple, the dict slots). Between two calls nothing reads them, and an object of a
+fleet spends most of its life there, its segment waiting or running. :class:`PackedTables`
+holds the same tables in NumPy arrays: 16 bytes a vertex and 32 a queued one. Vertices
+that are not ints (a virtual start, a pose tuple) stay in small dicts beside them.
+
+Guarantee (``tests/test_dstar_tables.py``): :meth:`PackedTables.tables` gives back dicts
+equal to those packed, and a queue whose entries are those of the live ones packed (the
+same keys and sequence numbers; stale entries are left out), so the order in which
+vertices leave the queue is unchanged.
+"""
+
+from __future__ import annotations
+
+import heapq
+from collections.abc import Hashable
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["PackedTables"]
+
+Entry = tuple[float, float, int, Hashable]
+
+
+def _split(table: dict[Hashable, float]) -> tuple[np.ndarray, np.ndarray, dict]:
+    """(int keys, their values, the entries whose key is not an int)."""
+    rest = {k: v for k, v in table.items() if type(k) is not int}
+    n = len(table) - len(rest)
+    keys = np.fromiter((k for k in table if type(k) is int), dtype=np.int64, count=n)
+    values = np.fromiter((v for k, v in table.items() if type(k) is int), dtype=np.float64,
+                         count=n)
+    return keys, values, rest
+
+
+@dataclass(frozen=True)
+class PackedTables:
+    """``rhs``, ``g`` where it differs from ``rhs``, and the queue's live entries."""
+
+    rhs_keys: np.ndarray
+    rhs_values: np.ndarray
+    rhs_rest: dict[Hashable, float]
+    g_keys: np.ndarray
+    g_values: np.ndarray
+    g_rest: dict[Hashable, float]
+    #: (n, 2) keys of the queued int vertices, their sequence numbers and the vertices
+    queue_keys: np.ndarray
+    queue_seq: np.ndarray
+    queue_vertex: np.ndarray
+    queue_rest: tuple[Entry, ...]
+
+    @classmethod
+    def of(cls, rhs: dict[Hashable, float], g: dict[Hashable, float],
+           queued: dict[Hashable, Entry]) -> PackedTables:
+        """The tables of a search: ``rhs``, ``g`` (``DStarLite._gx``) and its queued
+        vertices' current entries ``(k1, k2, seq, vertex)``."""
+        rk, rv, rr = _split(rhs)
+        gk, gv, gr = _split(g)
+        live = [e for e in queued.values() if type(e[3]) is int]
+        rest = tuple(e for e in queued.values() if type(e[3]) is not int)
+        n = len(live)
+        keys = np.fromiter((x for e in live for x in e[:2]), dtype=np.float64,
+                           count=2 * n).reshape(n, 2)
+        seq = np.fromiter((e[2] for e in live), dtype=np.int64, count=n)
+        vertex = np.fromiter((e[3] for e in live), dtype=np.int64, count=n)
+        return cls(rk, rv, rr, gk, gv, gr, keys, seq, vertex, rest)
+
+    @property
+    def nbytes(self) -> int:
+        """Bytes of the arrays (the dicts of other vertices not counted)."""
+        return sum(a.nbytes for a in (self.rhs_keys, self.rhs_values, self.g_keys,
+                                      self.g_values, self.queue_keys, self.queue_seq,
+                                      self.queue_vertex))
+
+    def tables(self) -> tuple[dict[Hashable, float], dict[Hashable, float],
+                              dict[Hashable, Entry], list[Entry]]:
+        """``rhs``, ``g``, the queued vertices' entries and the queue (a heap of those
+        entries), as dicts and a list again."""
+        rhs = dict(zip(self.rhs_keys.tolist(), self.rhs_values.tolist(), strict=True))
+        rhs.update(self.rhs_rest)
+        g = dict(zip(self.g_keys.tolist(), self.g_values.tolist(), strict=True))
+        g.update(self.g_rest)
+        k = self.queue_keys.tolist()
+        entries = [(a, b, s, v) for (a, b), s, v in zip(
+            k, self.queue_seq.tolist(), self.queue_vertex.tolist(), strict=True)]
+        entries.extend(self.queue_rest)
+        queued = {e[3]: e for e in entries}
+        heapq.heapify(entries)
+        return rhs, g, queued, entries
