@@ -79,7 +79,7 @@ KEY_RTOL = 1e-9
 HEAP_SLACK, HEAP_FLOOR = 0.5, 1024
 #: The memo of h(s_start, .) is emptied when it holds this many vertices (memory; h is a
 #: function of the vertex and the start, so nothing else changes).
-H_KEPT = 1 << 12
+H_KEPT = 1 << 14
 #: ``pack`` holds a search's tables in arrays from this many vertices with an ``rhs`` on.
 PACK_FROM = 4096
 
