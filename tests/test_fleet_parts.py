@@ -13,7 +13,7 @@ import threading
 import numpy as np
 import pytest
 import shapely
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from lamp.contract.model import MAX_ROBOTS
@@ -178,6 +178,8 @@ paths_st = st.integers(1, 3).flatmap(lambda n: st.lists(
 
 @settings(max_examples=80)
 @given(paths_st)
+@example([[(0.0, 6.102307671045676e-249)]])  # a leg GEOS cannot locate a point on
+@example([[(0.0, 0.0)], [(0.3, 0.0)]])
 def test_on_grid_keeps_the_route_and_steps_at_most_a_row(steps) -> None:
     """Reference: each robot's polyline; re-timed rows lie on it, in order, no step longer
     than the row step, and the last row is the paths' last."""
@@ -191,10 +193,11 @@ def test_on_grid_keeps_the_route_and_steps_at_most_a_row(steps) -> None:
     assert np.hypot(*np.moveaxis(np.diff(way, axis=1), 2, 0)).max() <= STEP + 1e-9
     for i in range(paths.shape[0]):
         pts = np.concatenate([start[i:i + 1], paths[i]])
-        pts = pts[np.r_[True, np.any(np.diff(pts, axis=0) != 0, axis=1)]]  # no 0-length legs
+        # legs under 1e-9 m left out: GEOS cannot locate a point on them
+        pts = pts[np.r_[True, np.hypot(*np.diff(pts, axis=0).T) > 1e-9]]
         if len(pts) < 2:
             np.testing.assert_allclose(rows[i], start[i][None].repeat(rows.shape[1], 0),
-                                       atol=1e-12)
+                                       atol=1e-8)
             continue
         line = shapely.LineString(pts)
         where = [line.project(shapely.Point(p)) for p in rows[i]]
