@@ -463,7 +463,7 @@ class DStarLite:
         ``plan_shortest_path``, ``update_change`` or ``path_cost``, which unpack them: the
         same tables and queue order, so nothing changes; for a search waiting between
         calls. Searches of fewer than :data:`PACK_FROM` vertices stay as they are."""
-        if self._packed is None and self.rhs is not None and len(self.rhs) >= PACK_FROM:
+        if self._packed is None and len(self.rhs) >= PACK_FROM:
             self._packed = PackedTables.of(self.rhs, self._gx, self._open)
             self.rhs = self._gx = self._open = self._heap = None  # type: ignore[assignment]
             self._hcache = {}

@@ -55,8 +55,9 @@ class PackedTables:
     g_keys: np.ndarray
     g_values: np.ndarray
     g_rest: dict[Hashable, float]
-    #: (n, 2) keys of the queued int vertices, their sequence numbers and the vertices
-    queue_keys: np.ndarray
+    #: the queued int vertices' two key components, sequence numbers and the vertices
+    queue_k1: np.ndarray
+    queue_k2: np.ndarray
     queue_seq: np.ndarray
     queue_vertex: np.ndarray
     queue_rest: tuple[Entry, ...]
@@ -74,15 +75,14 @@ class PackedTables:
         cols = list(zip(*entries, strict=True)) or [(), (), (), ()]
         k1, k2, seq, vertex = (np.fromiter(c, dtype=t, count=len(c)) for c, t in zip(
             cols, (np.float64, np.float64, np.int64, np.int64), strict=True))
-        keys = np.stack([k1, k2], axis=1)
-        return cls(rk, rv, rr, gk, gv, gr, keys, seq, vertex, rest)
+        return cls(rk, rv, rr, gk, gv, gr, k1, k2, seq, vertex, rest)
 
     @property
     def nbytes(self) -> int:
         """Bytes of the arrays (the dicts of other vertices not counted)."""
         return sum(a.nbytes for a in (self.rhs_keys, self.rhs_values, self.g_keys,
-                                      self.g_values, self.queue_keys, self.queue_seq,
-                                      self.queue_vertex))
+                                      self.g_values, self.queue_k1, self.queue_k2,
+                                      self.queue_seq, self.queue_vertex))
 
     def tables(self) -> tuple[dict[Hashable, float], dict[Hashable, float],
                               dict[Hashable, Entry], list[Entry]]:
@@ -92,7 +92,7 @@ class PackedTables:
         rhs.update(self.rhs_rest)
         g = dict(zip(self.g_keys.tolist(), self.g_values.tolist(), strict=True))
         g.update(self.g_rest)
-        entries = list(zip(self.queue_keys[:, 0].tolist(), self.queue_keys[:, 1].tolist(),
+        entries = list(zip(self.queue_k1.tolist(), self.queue_k2.tolist(),
                            self.queue_seq.tolist(), self.queue_vertex.tolist(), strict=True))
         entries.extend(self.queue_rest)
         queued = {e[3]: e for e in entries}
