@@ -352,11 +352,12 @@ def test_open_lattice_ties_penalties_along_path(seed):
 
 
 @settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(seed=st.integers(0, 2**31 - 1), kept=st.integers(1, 64))
+@given(seed=st.integers(0, 2**31 - 1), kept=st.integers(0, 64))
 def test_a_lattice_keeping_few_successor_lists_plans_the_same(seed, kept):
     """``succ_kept`` bounds the successor lists a lattice keeps (memory, not results): a
-    lattice that drops them every ``kept`` nodes gives D* Lite the same successors, the
-    same paths and the same pose and motion checks as one that keeps them all."""
+    lattice that drops them every ``kept`` nodes, or keeps none (0), gives D* Lite the
+    same successors, the same paths and the same pose and motion checks as one that keeps
+    them all."""
     rng = np.random.default_rng(seed)
     obstacles = [
         Obstacle(Circle(float(rng.uniform(0.03, 0.12))), (*rng.uniform(0, 1.0, 2), 0.0))
@@ -377,6 +378,12 @@ def test_a_lattice_keeping_few_successor_lists_plans_the_same(seed, kept):
         succ = [lat.successors(u) for u in range(0, lat.n_nodes, 7)]
         runs.append((paths, succ, lat.n_pose_checks, lat.n_motion_checks))
     assert runs[0] == runs[1]
+
+
+def test_a_negative_successor_budget_is_refused():
+    space = ObjectSpace(Rectangle((0.16, 0.08)), (1.0, 0.8), [])
+    with pytest.raises(ValueError, match="succ_kept"):
+        ObjectLattice(space, (0.5, 0.4, 0.0), succ_kept=-1)
 
 
 @settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow])

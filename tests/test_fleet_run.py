@@ -551,3 +551,26 @@ def test_lamp_check_passes_the_runs_and_fails_a_shove(rooms_runs, tmp_path: Path
     (tmp_path / "runs" / "broken" / "recording.json").write_text("{")
     res = CliRunner().invoke(app, ["check", str(tmp_path / "runs")])
     assert res.exit_code == 2 and "broken" in res.output and res.output.count("PASS") == 2
+
+
+def test_fleet_lattices_keep_no_successor_lists(monkeypatch) -> None:
+    """The fleet's objects plan on lattices that keep no successor lists
+    (``lamp.fleet.objects``: memory, not results; one object alone keeps its default)."""
+    from lamp.pipeline.warmup import ensure_warm
+    from lamp.search.lattice import SUCC_KEPT, ObjectLattice
+
+    ensure_warm()  # (the process's first run warms the compiled kernels on a scene of its own)
+    kept: list[int] = []
+    build = ObjectLattice.__init__
+
+    def spy(self, *args, succ_kept: int = SUCC_KEPT, **kwargs) -> None:
+        kept.append(succ_kept)
+        build(self, *args, succ_kept=succ_kept, **kwargs)
+
+    monkeypatch.setattr(ObjectLattice, "__init__", spy)
+    scene = scene_from_dict(copy.deepcopy(ROOMS))
+    assert lamp.solve(scene, "lazy", 0).success
+    assert kept and set(kept) == {0}
+    kept.clear()
+    assert lamp.solve(scene, "lazy", 0, schedule="sequential").success
+    assert kept and set(kept) == {SUCC_KEPT}

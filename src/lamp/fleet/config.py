@@ -17,9 +17,9 @@ from typing import Any
 from lamp.contract.params import apply_overrides, check_fields, param
 from lamp.errors import InputError
 
-__all__ = ["CLAIM_NEAR", "MIN_SPACE_CACHE_MB", "MIN_SUCCESSOR_CACHE_NODES", "PARAMS",
+__all__ = ["CLAIM_NEAR", "MIN_SPACE_CACHE_MB", "PARAMS",
            "PASS_MARGIN", "PLAN_NEAR", "PREFIX", "REJOIN_SLACK", "REPLAN_NEAR", "SPACE_CACHE_MB",
-           "SUCCESSOR_CACHE_NODES", "FleetConfig", "split_overrides"]
+           "FleetConfig", "split_overrides"]
 
 #: The near part of a claim (``regions.claims``): the footprints along this much (m) of an
 #: object's planned travel, which even a plan that only crosses its claim keeps out of
@@ -47,11 +47,6 @@ REJOIN_SLACK = 1.0
 #: near one sequential run's up to 48 objects moving at once.
 SPACE_CACHE_MB = 192.0
 MIN_SPACE_CACHE_MB = 4.0
-#: Lattice successor lists the objects moving at once share, as ``SPACE_CACHE_MB`` (each
-#: object's ``successor_cache_nodes`` at most its part, at least the minimum): some 1.5
-#: kB each, the largest part of what an object planning holds.
-SUCCESSOR_CACHE_NODES = 160_000
-MIN_SUCCESSOR_CACHE_NODES = 2_000
 #: The prefix of the fleet's settings among a planner's parameters.
 PREFIX = "fleet_"
 

@@ -115,11 +115,11 @@ class LoopConfig:
     space_cache_mb: float = param(96.0, "Robot configuration spaces (MB) one object's task "
                                   "keeps cached; a speed / memory trade, the results do "
                                   "not depend on it.", low=1.0)
-    #: Memory, not results, as ``space_cache_mb``: the fleet schedule shares
-    #: ``lamp.fleet.config.SUCCESSOR_CACHE_NODES`` among the objects moving at once.
+    #: Memory, not results, as ``space_cache_mb``; the fleet schedule's objects keep none
+    #: (``lamp.fleet.objects``).
     successor_cache_nodes: int = param(20_000, "Successor lists (about 1.5 kB each) one "
                                        "object's lattice keeps; a speed / memory trade, "
-                                       "the results do not depend on it.", low=1)
+                                       "the results do not depend on it; 0: none.", low=0)
 
     def __post_init__(self) -> None:
         check_fields(self)

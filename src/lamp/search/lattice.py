@@ -103,6 +103,8 @@ class ObjectLattice:
         landmark: (x, y) of a landmark (LAMP: the object's start); the metric then also
             bounds the translation by the landmark potential (:mod:`lamp.search.landmark`),
             which sees the detours obstacles force. None: the octile metric alone.
+        succ_kept: successor lists kept (a speed / memory trade; the lists are a function
+            of the validity store, so a dropped one is rebuilt the same); 0: none.
     """
 
     def __init__(
@@ -156,7 +158,9 @@ class ObjectLattice:
         self._store = lazy_zeros((edge_words(self.n_i, self.n_j, self.n_headings),),
                                  STORE_DTYPE)
         self._succ: dict[Node, list[tuple[Node, float]]] = {}
-        self._succ_kept = max(1, int(succ_kept))
+        if succ_kept < 0:
+            raise ValueError(f"succ_kept must be >= 0, got {succ_kept!r}")
+        self._succ_kept = int(succ_kept)
         self._tolerant: dict[float, ObjectSpace] = {}
         #: statistics: poses and motions checked so far
         self.n_pose_checks = 0
@@ -296,9 +300,10 @@ class ObjectLattice:
         cost = self._prim_cost_list
         ids = self._out_ids[:n].tolist()
         out = list(zip(ids, [cost[p] for p in self._out_prim[:n].tolist()], strict=True))
-        if len(self._succ) >= self._succ_kept:
-            self._succ.clear()  # recomputing from the validity caches is cheap
-        self._succ[u] = out
+        if self._succ_kept:
+            if len(self._succ) >= self._succ_kept:
+                self._succ.clear()  # recomputing from the validity caches is cheap
+            self._succ[u] = out
         return out
 
     def predecessors(self, v: Node) -> list[tuple[Node, float]]:
