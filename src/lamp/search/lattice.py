@@ -79,8 +79,7 @@ from lamp.search.metric import OCTILE_MINOR, TWO_PI, lattice_metric, motion_cost
 Node = int
 VirtualNode = tuple[float, float, float]
 
-#: Successor lists a lattice keeps by default (they take ~1.5 kB a node; validity stays
-#: cached regardless, so a dropped list is rebuilt the same).
+#: Successor lists a lattice keeps by default (~1.5 kB a node).
 SUCC_KEPT = 20_000
 
 #: the manipulation model's trained range (object frame): |dx|, |dy| and |dtheta|
@@ -103,8 +102,7 @@ class ObjectLattice:
         landmark: (x, y) of a landmark (LAMP: the object's start); the metric then also
             bounds the translation by the landmark potential (:mod:`lamp.search.landmark`),
             which sees the detours obstacles force. None: the octile metric alone.
-        succ_kept: successor lists kept (a speed / memory trade; the lists are a function
-            of the validity store, so a dropped one is rebuilt the same); 0: none.
+        succ_kept: successor lists kept (speed only: a dropped one is rebuilt the same); 0: none.
     """
 
     def __init__(
@@ -120,7 +118,7 @@ class ObjectLattice:
         succ_kept: int = SUCC_KEPT,
     ) -> None:
         anchor, w_rot, dtheta = check_lattice_args(space, anchor, step, n_headings, w_rot,
-                                                   max_translation, max_rotation)
+                                                   max_translation, max_rotation, succ_kept)
         self.space = space
         self.anchor = anchor.copy()
         self.anchor[2] = se2.wrap_angle(anchor[2])
@@ -158,8 +156,6 @@ class ObjectLattice:
         self._store = lazy_zeros((edge_words(self.n_i, self.n_j, self.n_headings),),
                                  STORE_DTYPE)
         self._succ: dict[Node, list[tuple[Node, float]]] = {}
-        if succ_kept < 0:
-            raise ValueError(f"succ_kept must be >= 0, got {succ_kept!r}")
         self._succ_kept = int(succ_kept)
         self._tolerant: dict[float, ObjectSpace] = {}
         #: statistics: poses and motions checked so far
@@ -300,9 +296,9 @@ class ObjectLattice:
         cost = self._prim_cost_list
         ids = self._out_ids[:n].tolist()
         out = list(zip(ids, [cost[p] for p in self._out_prim[:n].tolist()], strict=True))
+        if len(self._succ) >= self._succ_kept:
+            self._succ.clear()  # recomputing from the validity caches is cheap
         if self._succ_kept:
-            if len(self._succ) >= self._succ_kept:
-                self._succ.clear()  # recomputing from the validity caches is cheap
             self._succ[u] = out
         return out
 
@@ -316,10 +312,7 @@ class ObjectLattice:
         ``u`` is not a lattice node, e.g. a virtual start)."""
         if not self.is_node(u):
             return math.inf
-        for w, c in self.successors(u):
-            if w == v:
-                return c
-        return math.inf
+        return next((c for w, c in self.successors(u) if w == v), math.inf)
 
     def primitive(self, u: Node, v: Node) -> np.ndarray:
         """The object-frame motion (dx, dy, dtheta) from node/pose ``u`` to ``v``: the

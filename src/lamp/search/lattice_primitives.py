@@ -98,11 +98,13 @@ def word_state(store: np.ndarray, w: int, shift: int) -> int:
 
 def check_lattice_args(
     space: ObjectSpace, anchor: ArrayLike, step: float, n_headings: int, w_rot: float | None,
-    max_translation: float, max_rotation: float,
+    max_translation: float, max_rotation: float, succ_kept: int = 0,
 ) -> tuple[np.ndarray, float, float]:
     """``ObjectLattice``'s arguments checked: (anchor as a float array, rotation weight
     (default: the object's bounding radius), heading bin width). ValueError when one is
     malformed or a primitive leaves the model's range."""
+    if not succ_kept >= 0:
+        raise ValueError(f"succ_kept must be >= 0, got {succ_kept!r}")
     anchor = np.asarray(anchor, dtype=float)
     if anchor.shape != (3,) or not np.all(np.isfinite(anchor)):
         raise ValueError(f"anchor must be a finite (x, y, theta) pose, got {anchor!r}")
