@@ -296,9 +296,9 @@ class ObjectLattice:
         cost = self._prim_cost_list
         ids = self._out_ids[:n].tolist()
         out = list(zip(ids, [cost[p] for p in self._out_prim[:n].tolist()], strict=True))
-        if len(self._succ) >= self._succ_kept:
-            self._succ.clear()  # recomputing from the validity caches is cheap
         if self._succ_kept:
+            if len(self._succ) >= self._succ_kept:
+                self._succ.clear()  # recomputing from the validity caches is cheap
             self._succ[u] = out
         return out
 
